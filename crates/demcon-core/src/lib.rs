@@ -1,0 +1,38 @@
+//! Shared vocabulary of demcon: particles, containers and regions, face/region selectors,
+//! materials, and the error type for bad input.
+//!
+//! Every other crate builds on these plain types; none of them does file I/O.
+//!
+//! ```
+//! use demcon_core::{Container, Face, ParticleSet, Selector, Vec3};
+//!
+//! // Two touching unit-diameter spheres in a 1 × 1 × 2 box.
+//! let container = Container::Box { size: [1.0, 1.0, 2.0] };
+//! let p = ParticleSet::new(
+//!     vec![Vec3::new(0.5, 0.5, 0.5), Vec3::new(0.5, 0.5, 1.5)],
+//!     vec![0.5, 0.5],
+//! ).unwrap();
+//! let bottom = Selector::Face(Face::ZMin).select(&p, &container).unwrap();
+//! assert_eq!(bottom, vec![0]);
+//! assert!((p.solid_volume() / container.volume() - std::f64::consts::PI / 6.0).abs() < 1e-12);
+//! ```
+#![warn(missing_docs)]
+
+mod error;
+mod material;
+mod morton;
+mod particles;
+mod region;
+mod selector;
+mod shape;
+
+pub use error::CoreError;
+pub use material::{Material, MaterialTable};
+pub use morton::morton_order;
+pub use particles::{ParticleSet, RadiusStats};
+pub use region::Region;
+pub use selector::{DEFAULT_FACE_GAP, Face, Selector};
+pub use shape::{Aabb, Axis, Container};
+
+/// A point or vector in 3-D space (m).
+pub type Vec3 = nalgebra::Vector3<f64>;

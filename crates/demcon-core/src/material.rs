@@ -1,0 +1,148 @@
+//! Materials (one per phase) and their validation.
+
+use crate::CoreError;
+use crate::error::positive;
+
+/// The bulk properties of one phase of the continuous material, SI units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// Name used in scene files and messages.
+    pub name: String,
+    /// Thermal conductivity λ (W/(m·K)).
+    pub conductivity: f64,
+    /// Density of the continuous material ρ_c (kg/m³).
+    pub density: f64,
+    /// Specific heat c (J/(kg·K)).
+    pub specific_heat: f64,
+    /// Electric resistivity ρ_e at the reference temperature (Ω·m); `None` for a pure thermal material.
+    pub resistivity: Option<f64>,
+    /// Temperature coefficient β of the resistivity (1/K): ρ_e(T) = ρ_e0 (1 + β (T − T_ref)).
+    pub resistivity_temp_coeff: f64,
+    /// Reference temperature T_ref of the resistivity (°C or K, as the scene's temperatures).
+    pub resistivity_ref_temp: f64,
+}
+
+impl Material {
+    /// A thermal-only material.
+    pub fn thermal(name: &str, conductivity: f64, density: f64, specific_heat: f64) -> Self {
+        Self {
+            name: name.to_string(),
+            conductivity,
+            density,
+            specific_heat,
+            resistivity: None,
+            resistivity_temp_coeff: 0.0,
+            resistivity_ref_temp: 0.0,
+        }
+    }
+
+    /// Thermal diffusivity a = λ / (ρ_c c) (m²/s).
+    pub fn diffusivity(&self) -> f64 {
+        self.conductivity / (self.density * self.specific_heat)
+    }
+
+    /// Resistivity (Ω·m) at temperature `t`; `None` when the material has none.
+    pub fn resistivity_at(&self, t: f64) -> Option<f64> {
+        self.resistivity
+            .map(|r0| r0 * (1.0 + self.resistivity_temp_coeff * (t - self.resistivity_ref_temp)))
+    }
+
+    /// Checks every property; errors name `materials[<name>].<field>`.
+    pub fn validate(&self) -> Result<(), CoreError> {
+        let f = |field: &str| format!("materials[{}].{field}", self.name);
+        positive(&f("conductivity"), self.conductivity)?;
+        positive(&f("density"), self.density)?;
+        positive(&f("specific_heat"), self.specific_heat)?;
+        if let Some(r) = self.resistivity {
+            positive(&f("resistivity"), r)?;
+        }
+        if !self.resistivity_temp_coeff.is_finite() {
+            return Err(CoreError::invalid(
+                f("resistivity_temp_coeff"),
+                self.resistivity_temp_coeff,
+                "must be finite (1/K)",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Materials indexed by phase id (phase 0 = the first material).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct MaterialTable {
+    /// The materials; a particle of phase `p` is made of `materials[p]`.
+    pub materials: Vec<Material>,
+}
+
+impl MaterialTable {
+    /// A table; every material is validated.
+    pub fn new(materials: Vec<Material>) -> Result<Self, CoreError> {
+        if materials.is_empty() {
+            return Err(CoreError::invalid(
+                "materials",
+                "[]",
+                "at least one material is needed",
+            ));
+        }
+        for m in &materials {
+            m.validate()?;
+        }
+        Ok(Self { materials })
+    }
+
+    /// The material of phase `phase`, or an error if it is not defined.
+    pub fn get(&self, phase: u16) -> Result<&Material, CoreError> {
+        self.materials.get(phase as usize).ok_or_else(|| {
+            CoreError::invalid(
+                "phase",
+                phase,
+                format!("only {} material(s) are defined", self.materials.len()),
+            )
+        })
+    }
+
+    /// Phase id of the material called `name`.
+    pub fn phase_of(&self, name: &str) -> Result<u16, CoreError> {
+        self.materials
+            .iter()
+            .position(|m| m.name == name)
+            .map(|p| p as u16)
+            .ok_or_else(|| {
+                let names: Vec<&str> = self.materials.iter().map(|m| m.name.as_str()).collect();
+                CoreError::invalid(
+                    "material",
+                    name,
+                    format!("defined materials are [{}]", names.join(", ")),
+                )
+            })
+    }
+
+    /// Checks that every phase used by `phases` has a material.
+    pub fn check_phases(&self, phases: &[u16]) -> Result<(), CoreError> {
+        match phases.iter().copied().max() {
+            Some(p) => self.get(p).map(|_| ()),
+            None => Ok(()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn validation() {
+        let mut m = Material::thermal("steel", 33.0, 7800.0, 0.9);
+        assert!(m.validate().is_ok());
+        m.conductivity = -1.0;
+        let e = m.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("materials[steel].conductivity") && e.contains("-1"),
+            "{e}"
+        );
+        let t = MaterialTable::new(vec![Material::thermal("a", 1.0, 1.0, 1.0)]).unwrap();
+        assert!(t.get(1).is_err());
+        assert!(t.phase_of("b").is_err());
+        assert!(t.check_phases(&[0, 0]).is_ok());
+    }
+}
