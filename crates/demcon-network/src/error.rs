@@ -1,0 +1,146 @@
+//! Errors of the network crate: bad input apart from numerical failure.
+
+/// Why a network could not be built or solved.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// A parameter or input value is outside its allowed range.
+    #[error("invalid {field} = {value}: {allowed}")]
+    InvalidParameter {
+        /// The input's name (e.g. `conductances[17]`).
+        field: String,
+        /// The offending value, formatted.
+        value: String,
+        /// What would have been accepted.
+        allowed: String,
+    },
+    /// An input vector does not have one entry per node (or per edge).
+    #[error("{what} has {got} entries, expected {expected}")]
+    LengthMismatch {
+        /// Which input.
+        what: String,
+        /// Expected length.
+        expected: usize,
+        /// Actual length.
+        got: usize,
+    },
+    /// A node index is not below the number of nodes.
+    #[error("{what} refers to node {node}, but the network has {n_nodes} nodes")]
+    NodeOutOfRange {
+        /// Where the index was found (e.g. `edges[12]`, `fixed set 1`).
+        what: String,
+        /// The offending node index.
+        node: u64,
+        /// Number of nodes of the network.
+        n_nodes: usize,
+    },
+    /// An edge joins a node to itself.
+    #[error("edges[{edge}] joins node {node} to itself")]
+    SelfLoop {
+        /// Edge index.
+        edge: usize,
+        /// The node.
+        node: u32,
+    },
+    /// A set of fixed values selects no node.
+    #[error("fixed set {set} selects no node")]
+    EmptyFixedSet {
+        /// Index of the set in the caller's list.
+        set: usize,
+    },
+    /// One node receives two different fixed values.
+    #[error("node {node} is fixed to {first} by set {first_set} and to {second} by set {second_set}")]
+    ConflictingFixed {
+        /// The node.
+        node: u32,
+        /// First value (K or V).
+        first: f64,
+        /// Set that gave the first value.
+        first_set: usize,
+        /// Second value (K or V).
+        second: f64,
+        /// Set that gave the second value.
+        second_set: usize,
+    },
+    /// No node has a fixed value: a steady problem would be singular.
+    #[error(
+        "no node has a fixed value: a steady solve needs at least one fixed value (temperature or potential)"
+    )]
+    NoFixedValue,
+    /// Some connected clusters reach no fixed value (their steady state is undetermined).
+    #[error(
+        "{nodes} node(s) in {clusters} cluster(s) reach no fixed value (largest cluster: {largest} nodes, e.g. node {example}); exclude them (FloatingPolicy::Exclude) or add a fixed value"
+    )]
+    FloatingCluster {
+        /// Number of floating clusters.
+        clusters: usize,
+        /// Total number of nodes in them.
+        nodes: usize,
+        /// Size of the largest one.
+        largest: usize,
+        /// One node of the largest floating cluster.
+        example: u32,
+    },
+    /// An iterative solve stopped before reaching its tolerance.
+    #[error(
+        "{method} did not converge: relative residual {relative_residual:.3e} > tolerance {tolerance:.1e} after {iterations} iterations"
+    )]
+    NotConverged {
+        /// Method name.
+        method: &'static str,
+        /// Iterations done.
+        iterations: usize,
+        /// Relative residual reached, ‖b − Ax‖/‖b‖.
+        relative_residual: f64,
+        /// Requested tolerance.
+        tolerance: f64,
+    },
+    /// The operator was found not positive definite (a numerical breakdown).
+    #[error("{method} broke down at iteration {iteration}: the system is not positive definite ({detail})")]
+    Breakdown {
+        /// Method name.
+        method: &'static str,
+        /// Iteration at which it happened.
+        iteration: usize,
+        /// What was seen.
+        detail: String,
+    },
+    /// The direct factorisation failed.
+    #[error("sparse Cholesky failed: {0}")]
+    Factorization(String),
+}
+
+impl SolveError {
+    /// Shorthand for [`SolveError::InvalidParameter`].
+    pub fn invalid(field: impl Into<String>, value: impl ToString, allowed: impl Into<String>) -> Self {
+        Self::InvalidParameter {
+            field: field.into(),
+            value: value.to_string(),
+            allowed: allowed.into(),
+        }
+    }
+}
+
+/// Checks a per-node or per-edge vector's length.
+pub(crate) fn check_len(what: &str, got: usize, expected: usize) -> Result<(), SolveError> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(SolveError::LengthMismatch {
+            what: what.to_string(),
+            expected,
+            got,
+        })
+    }
+}
+
+/// Checks that every entry is finite; names the first offending index.
+pub(crate) fn check_finite(what: &str, v: &[f64]) -> Result<(), SolveError> {
+    match v.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(SolveError::invalid(
+            format!("{what}[{i}]"),
+            v[i],
+            "must be a finite number",
+        )),
+    }
+}

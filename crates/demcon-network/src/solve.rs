@@ -1,0 +1,507 @@
+//! Steady and shifted solves of the network: parameters, reports, and the prepared
+//! linear system shared by the conjugate-gradient and Cholesky paths.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::constraints::{Constraints, NodeKind};
+use crate::error::{SolveError, check_finite, check_len};
+use crate::network::Network;
+use crate::par::{CHUNK, dot, ordered_sum};
+use crate::{cholesky, faer_cg};
+
+/// How the linear system is solved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Method {
+    /// Jacobi-preconditioned conjugate gradient, hand-written with fused parallel sweeps
+    /// (deterministic for any thread count). Stops when ‖b − Ax‖/‖b‖ ≤ `rel_tol` (checked
+    /// on the true residual, not only the recursive one).
+    Cg {
+        /// Relative residual tolerance, in (0, 1).
+        rel_tol: f64,
+        /// Maximum number of iterations, ≥ 1.
+        max_iter: usize,
+    },
+    /// The same Jacobi-preconditioned CG run by `faer::matrix_free::conjugate_gradient`
+    /// around this crate's parallel operator (kept for comparison; slower per iteration).
+    FaerCg {
+        /// Relative residual tolerance, in (0, 1).
+        rel_tol: f64,
+        /// Maximum number of iterations, ≥ 1.
+        max_iter: usize,
+    },
+    /// Direct sparse Cholesky (faer, AMD ordering). The factorisation is reused by every
+    /// solve of one [`LinearSystem`]; practical to ~10⁵ unknowns.
+    Cholesky,
+}
+
+impl Default for Method {
+    fn default() -> Self {
+        Self::Cg {
+            rel_tol: 1e-8,
+            max_iter: 20_000,
+        }
+    }
+}
+
+impl Method {
+    /// Short name, for reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Cg { .. } => "jacobi-pcg",
+            Self::FaerCg { .. } => "faer-cg",
+            Self::Cholesky => "cholesky",
+        }
+    }
+
+    fn validate(&self) -> Result<(), SolveError> {
+        match *self {
+            Self::Cg { rel_tol, max_iter } | Self::FaerCg { rel_tol, max_iter } => {
+                if !(rel_tol.is_finite() && rel_tol > 0.0 && rel_tol < 1.0) {
+                    return Err(SolveError::invalid(
+                        "method.rel_tol",
+                        rel_tol,
+                        "must be in (0, 1), e.g. 1e-8",
+                    ));
+                }
+                if max_iter == 0 {
+                    return Err(SolveError::invalid("method.max_iter", 0, "must be ≥ 1"));
+                }
+                Ok(())
+            }
+            Self::Cholesky => Ok(()),
+        }
+    }
+}
+
+/// Inputs of a solve besides the system itself.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SolveParams {
+    /// Solution method.
+    pub method: Method,
+}
+
+/// What a solve did and what it cost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolveReport {
+    /// Method name ([`Method::name`]).
+    pub method: &'static str,
+    /// Iterations (0 for Cholesky).
+    pub iterations: usize,
+    /// True relative residual ‖b − Ax‖₂/‖b‖₂ over the unknowns, with the fixed values moved
+    /// to b (0 when b = 0).
+    pub relative_residual: f64,
+    /// Wall time of this solve (s), excluding [`Self::setup_s`].
+    pub wall_s: f64,
+    /// Wall time of preparing the system (s): gathering values and, for Cholesky, the
+    /// factorisation. Shared by every solve of one [`LinearSystem`].
+    pub setup_s: f64,
+    /// Number of unknowns.
+    pub n_unknowns: usize,
+    /// Number of excluded (floating) nodes.
+    pub n_excluded: usize,
+}
+
+/// A nodal solution.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Solution {
+    /// Value at every node (K or V). Fixed nodes carry their fixed value. Excluded nodes
+    /// carry their initial guess when one was given, else 0; they are listed in
+    /// [`Self::excluded`] and must not be read as results.
+    pub values: Vec<f64>,
+    /// Excluded (floating) nodes, sorted.
+    pub excluded: Vec<u32>,
+    /// Cost and accuracy.
+    pub report: SolveReport,
+}
+
+/// The system (D + K) x = b restricted to the free nodes of `constraints`, with the fixed
+/// values moved to the right-hand side; prepared once, solved for many right-hand sides
+/// (implicit time steps, several load cases).
+///
+/// D is an optional non-negative diagonal (e.g. C_p/Δt, W/K) — absent for a steady solve.
+#[derive(Debug)]
+pub struct LinearSystem<'a> {
+    pub(crate) net: &'a Network,
+    pub(crate) constraints: &'a Constraints,
+    /// Conductance per compressed-row entry (W/K or S).
+    pub(crate) vals: Vec<f64>,
+    /// Diagonal Σg + D at every node.
+    pub(crate) diag: Vec<f64>,
+    /// 1/diag at free nodes, 0 elsewhere (Jacobi preconditioner and free mask).
+    pub(crate) inv_diag: Vec<f64>,
+    pub(crate) free: Vec<bool>,
+    method: Method,
+    factor: Option<cholesky::Factor>,
+    setup_s: f64,
+}
+
+impl<'a> LinearSystem<'a> {
+    /// Prepares the system: checks inputs, gathers conductances into row order and, for
+    /// [`Method::Cholesky`], factorises.
+    ///
+    /// `conductances`: one per edge (W/K or S), finite and > 0. `shift`: optional D, one
+    /// finite value ≥ 0 per node (W/K or S).
+    ///
+    /// # Errors
+    /// Bad input (lengths, values, method parameters); [`SolveError::FloatingCluster`] when
+    /// floating clusters were kept ([`crate::FloatingPolicy::Keep`]) and a node of them has
+    /// no positive shift (the system would be singular); factorisation failures.
+    pub fn new(
+        net: &'a Network,
+        conductances: &[f64],
+        shift: Option<&[f64]>,
+        constraints: &'a Constraints,
+        params: &SolveParams,
+    ) -> Result<Self, SolveError> {
+        let start = Instant::now();
+        params.method.validate()?;
+        net.check_conductances(conductances)?;
+        check_len("constraints (nodes)", constraints.kinds().len(), net.n_nodes())?;
+        if let Some(d) = shift {
+            check_len("shift", d.len(), net.n_nodes())?;
+            if let Some(p) = d.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+                return Err(SolveError::invalid(
+                    format!("shift[{p}]"),
+                    d[p],
+                    "must be a finite number ≥ 0",
+                ));
+            }
+        }
+        let kept = constraints.floating_kept();
+        let unanchored = match shift {
+            None => kept.first().copied(),
+            Some(d) => kept.iter().copied().find(|&p| d[p as usize] <= 0.0),
+        };
+        if let Some(example) = unanchored {
+            return Err(SolveError::FloatingCluster {
+                clusters: 1,
+                nodes: kept.len(),
+                largest: kept.len(),
+                example,
+            });
+        }
+        let vals = net.entry_values(conductances);
+        let mut diag = net.row_sums(conductances);
+        if let Some(d) = shift {
+            diag.par_iter_mut()
+                .zip(d.par_iter())
+                .with_min_len(CHUNK)
+                .for_each(|(a, b)| *a += b);
+        }
+        let free: Vec<bool> = constraints.kinds().iter().map(|k| *k == NodeKind::Free).collect();
+        // A free node of degree 0 with no shift is a floating cluster of one: already
+        // caught above, so diag > 0 on free nodes.
+        let inv_diag = diag
+            .iter()
+            .zip(&free)
+            .map(|(&d, &f)| if f && d > 0.0 { 1.0 / d } else { 0.0 })
+            .collect();
+        let mut sys = Self {
+            net,
+            constraints,
+            vals,
+            diag,
+            inv_diag,
+            free,
+            method: params.method,
+            factor: None,
+            setup_s: 0.0,
+        };
+        if params.method == Method::Cholesky {
+            sys.factor = Some(cholesky::Factor::new(&sys)?);
+        }
+        sys.setup_s = start.elapsed().as_secs_f64();
+        Ok(sys)
+    }
+
+    /// Number of unknowns.
+    pub fn n_unknowns(&self) -> usize {
+        self.constraints.n_free()
+    }
+
+    /// Wall time spent preparing (and factorising) the system (s).
+    pub fn setup_s(&self) -> f64 {
+        self.setup_s
+    }
+
+    /// Solves (D + K) x = b on the free nodes, x = fixed value on fixed nodes.
+    ///
+    /// `rhs`: b, one value per node (W or A injected; for an implicit step D·x_old + Q).
+    /// Entries at fixed and excluded nodes are ignored. `x0`: optional initial guess (warm
+    /// start for CG; ignored by Cholesky except at excluded nodes).
+    ///
+    /// # Errors
+    /// Bad input; [`SolveError::NotConverged`] and [`SolveError::Breakdown`] for iterative
+    /// failure; a non-finite result is reported as [`SolveError::Breakdown`].
+    pub fn solve(&self, rhs: &[f64], x0: Option<&[f64]>) -> Result<Solution, SolveError> {
+        let start = Instant::now();
+        let n = self.net.n_nodes();
+        check_len("rhs", rhs.len(), n)?;
+        check_finite("rhs", rhs)?;
+        let mut x = match x0 {
+            Some(v) => {
+                check_len("x0", v.len(), n)?;
+                check_finite("x0", v)?;
+                v.to_vec()
+            }
+            None => vec![0.0; n],
+        };
+        self.constraints.impose(&mut x);
+        // ‖b_eff‖: the residual with the free unknowns at zero.
+        let mut lift = vec![0.0; n];
+        self.constraints.impose(&mut lift);
+        let mut r = vec![0.0; n];
+        self.residual(rhs, &lift, &mut r);
+        let b_norm = dot(&r, &r).sqrt();
+        if x0.is_some() {
+            // Residual at the initial guess.
+            self.residual(rhs, &x, &mut r);
+        }
+        let (iterations, rel) = if b_norm == 0.0 {
+            x.iter_mut()
+                .zip(&self.free)
+                .filter(|(_, f)| **f)
+                .for_each(|(v, _)| *v = 0.0);
+            (0, 0.0)
+        } else {
+            match self.method {
+                Method::Cg { rel_tol, max_iter } => {
+                    self.pcg(rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
+                }
+                Method::FaerCg { rel_tol, max_iter } => {
+                    faer_cg::solve(self, rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
+                }
+                Method::Cholesky => {
+                    let factor = self.factor.as_ref().ok_or_else(|| {
+                        SolveError::Factorization("system prepared without a factor".into())
+                    })?;
+                    factor.solve(self, &r, &mut x);
+                    self.residual(rhs, &x, &mut r);
+                    (0, dot(&r, &r).sqrt() / b_norm)
+                }
+            }
+        };
+        if let Some(p) = x.iter().position(|v| !v.is_finite()) {
+            return Err(SolveError::Breakdown {
+                method: self.method.name(),
+                iteration: iterations,
+                detail: format!("non-finite value at node {p}"),
+            });
+        }
+        Ok(Solution {
+            values: x,
+            excluded: self.constraints.excluded().to_vec(),
+            report: SolveReport {
+                method: self.method.name(),
+                iterations,
+                relative_residual: rel,
+                wall_s: start.elapsed().as_secs_f64(),
+                setup_s: self.setup_s,
+                n_unknowns: self.n_unknowns(),
+                n_excluded: self.constraints.excluded().len(),
+            },
+        })
+    }
+
+    /// r = b − A x on free rows (x holds fixed values at fixed nodes), 0 elsewhere.
+    pub(crate) fn residual(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
+        r.par_chunks_mut(CHUNK).enumerate().for_each(|(c, rc)| {
+            let base = c * CHUNK;
+            for (k, ri) in rc.iter_mut().enumerate() {
+                let i = base + k;
+                *ri = if self.free[i] {
+                    b[i] - self.row_apply(i, x)
+                } else {
+                    0.0
+                };
+            }
+        });
+    }
+
+    /// (A x)_i for one row.
+    #[inline]
+    pub(crate) fn row_apply(&self, i: usize, x: &[f64]) -> f64 {
+        let (lo, hi) = (self.net.row_ptr()[i], self.net.row_ptr()[i + 1]);
+        let mut s = self.diag[i] * x[i];
+        for (&q, &g) in self.net.cols()[lo..hi].iter().zip(&self.vals[lo..hi]) {
+            s -= g * x[q as usize];
+        }
+        s
+    }
+
+    /// q = A p on free rows (0 elsewhere); returns p·q. `p` must be 0 off the free nodes.
+    pub(crate) fn apply_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
+        let partials: Vec<f64> = q
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(c, qc)| {
+                let base = c * CHUNK;
+                let mut acc = 0.0;
+                for (k, qi) in qc.iter_mut().enumerate() {
+                    let i = base + k;
+                    *qi = if self.free[i] {
+                        let v = self.row_apply(i, p);
+                        acc += v * p[i];
+                        v
+                    } else {
+                        0.0
+                    };
+                }
+                acc
+            })
+            .collect();
+        ordered_sum(&partials)
+    }
+
+    /// Fused Jacobi-PCG on the correction; `r` holds b − A x on entry.
+    fn pcg(
+        &self,
+        b: &[f64],
+        x: &mut [f64],
+        r: &mut [f64],
+        b_norm: f64,
+        rel_tol: f64,
+        max_iter: usize,
+    ) -> Result<(usize, f64), SolveError> {
+        let n = x.len();
+        let name = self.method.name();
+        let mut z = vec![0.0; n];
+        let mut p = vec![0.0; n];
+        let mut q = vec![0.0; n];
+        let mut iterations = 0usize;
+        let mut true_rel = dot(r, r).sqrt() / b_norm;
+        // Outer loop: restart from the true residual if the recursive one drifted.
+        while true_rel > rel_tol && iterations < max_iter {
+            let mut rz = self.precondition(r, &mut z).0;
+            p.copy_from_slice(&z);
+            loop {
+                let pq = self.apply_dot(&p, &mut q);
+                iterations += 1;
+                if !(pq > 0.0 && pq.is_finite()) {
+                    return Err(SolveError::Breakdown {
+                        method: name,
+                        iteration: iterations,
+                        detail: format!("p·Ap = {pq:e}"),
+                    });
+                }
+                let alpha = rz / pq;
+                let (rz_new, rr) = self.update(alpha, &p, &q, x, r, &mut z);
+                if rr.sqrt() <= rel_tol * b_norm || iterations >= max_iter {
+                    break;
+                }
+                let beta = rz_new / rz;
+                rz = rz_new;
+                p.par_chunks_mut(CHUNK)
+                    .zip(z.par_chunks(CHUNK))
+                    .for_each(|(pc, zc)| {
+                        for (pi, zi) in pc.iter_mut().zip(zc) {
+                            *pi = zi + beta * *pi;
+                        }
+                    });
+            }
+            self.residual(b, x, r);
+            true_rel = dot(r, r).sqrt() / b_norm;
+        }
+        if true_rel > rel_tol {
+            return Err(SolveError::NotConverged {
+                method: name,
+                iterations,
+                relative_residual: true_rel,
+                tolerance: rel_tol,
+            });
+        }
+        Ok((iterations, true_rel))
+    }
+
+    /// z = D⁻¹ r on free nodes; returns (r·z, r·r).
+    fn precondition(&self, r: &[f64], z: &mut [f64]) -> (f64, f64) {
+        let partials: Vec<(f64, f64)> = z
+            .par_chunks_mut(CHUNK)
+            .zip(r.par_chunks(CHUNK))
+            .zip(self.inv_diag.par_chunks(CHUNK))
+            .map(|((zc, rc), dc)| {
+                let (mut rz, mut rr) = (0.0, 0.0);
+                for ((zi, ri), di) in zc.iter_mut().zip(rc).zip(dc) {
+                    *zi = ri * di;
+                    rz += ri * *zi;
+                    rr += ri * ri;
+                }
+                (rz, rr)
+            })
+            .collect();
+        partials.iter().fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d))
+    }
+
+    /// x += αp, r −= αq, z = D⁻¹ r; returns (r·z, r·r).
+    fn update(
+        &self,
+        alpha: f64,
+        p: &[f64],
+        q: &[f64],
+        x: &mut [f64],
+        r: &mut [f64],
+        z: &mut [f64],
+    ) -> (f64, f64) {
+        let partials: Vec<(f64, f64)> = (
+            x.par_chunks_mut(CHUNK),
+            r.par_chunks_mut(CHUNK),
+            z.par_chunks_mut(CHUNK),
+            p.par_chunks(CHUNK),
+            q.par_chunks(CHUNK),
+            self.inv_diag.par_chunks(CHUNK),
+        )
+            .into_par_iter()
+            .map(|(xc, rc, zc, pc, qc, dc)| {
+                let (mut rz, mut rr) = (0.0, 0.0);
+                for k in 0..xc.len() {
+                    xc[k] += alpha * pc[k];
+                    rc[k] -= alpha * qc[k];
+                    zc[k] = rc[k] * dc[k];
+                    rz += rc[k] * zc[k];
+                    rr += rc[k] * rc[k];
+                }
+                (rz, rr)
+            })
+            .collect();
+        partials.iter().fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d))
+    }
+}
+
+/// Steady solve of K x = s on the free nodes with the fixed values of `constraints`.
+///
+/// `sources`: imposed flow injected at each node (W or A; positive = into the network);
+/// ignored at fixed and excluded nodes. Floating clusters must have been excluded (or
+/// refused) by [`crate::resolve_fixed`].
+///
+/// # Errors
+/// See [`LinearSystem::new`] and [`LinearSystem::solve`].
+pub fn solve_steady(
+    net: &Network,
+    conductances: &[f64],
+    constraints: &Constraints,
+    sources: &[f64],
+    params: &SolveParams,
+) -> Result<Solution, SolveError> {
+    let sys = LinearSystem::new(net, conductances, None, constraints, params)?;
+    sys.solve(sources, None)
+}
+
+/// Shifted solve (D + K) x = b on the free nodes, e.g. one implicit time step with
+/// D = C/Δt (W/K) and b = D x_old + Q (W). `x0` warm-starts CG.
+///
+/// # Errors
+/// See [`LinearSystem::new`] and [`LinearSystem::solve`].
+pub fn solve_shifted(
+    net: &Network,
+    conductances: &[f64],
+    shift: &[f64],
+    rhs: &[f64],
+    constraints: &Constraints,
+    x0: Option<&[f64]>,
+    params: &SolveParams,
+) -> Result<Solution, SolveError> {
+    let sys = LinearSystem::new(net, conductances, Some(shift), constraints, params)?;
+    sys.solve(rhs, x0)
+}
