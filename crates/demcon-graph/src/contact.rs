@@ -1,0 +1,558 @@
+//! Contact detection: from a packing to the contact graph with each contact's geometry
+//! (d_pq, unit normal p→q, gap, R_m), the tolerance used and a report.
+
+use std::borrow::Cow;
+use std::time::Instant;
+
+use demcon_core::{Container, CoreError, ParticleSet, Vec3};
+use rayon::prelude::*;
+
+use crate::components::Components;
+use crate::error::{GraphError, positive};
+use crate::search::{Candidate, NeighbourSearch, candidates, separation, wrap};
+
+/// Which pairs count as contacts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactTolerance {
+    /// Contact iff gap g_pq = d_pq − R_p − R_q ≤ ε·(R_p + R_q); ε is dimensionless, > 0.
+    Relative(f64),
+    /// The smallest ε for which the mean coordination number Z = 2·contacts/N reaches this
+    /// target (contacts per particle, > 0). The paper's value is 7.5.
+    TargetCoordination(f64),
+}
+
+impl Default for ContactTolerance {
+    fn default() -> Self {
+        Self::TargetCoordination(7.5)
+    }
+}
+
+/// Inputs of [`detect_contacts`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactParams {
+    /// The contact rule. Default: target coordination 7.5.
+    pub tolerance: ContactTolerance,
+    /// With a target coordination: how far above the target the reached Z may be (contacts
+    /// per particle) before a [`Diagnostic::CoordinationOvershoot`] is reported. Z can only
+    /// overshoot when several pairs share the selected gap (lattices). Default 0.01.
+    pub coordination_tolerance: f64,
+    /// With a target coordination: the first relative tolerance searched (dimensionless);
+    /// it doubles until the target is reached or `max_epsilon` is passed. Default 0.1.
+    pub initial_epsilon: f64,
+    /// With a target coordination: the largest relative tolerance tried (dimensionless).
+    /// Default 1.0.
+    pub max_epsilon: f64,
+    /// The neighbour-search structure. Default: cell grid.
+    pub search: NeighbourSearch,
+}
+
+impl Default for ContactParams {
+    fn default() -> Self {
+        Self {
+            tolerance: ContactTolerance::default(),
+            coordination_tolerance: 0.01,
+            initial_epsilon: 0.1,
+            max_epsilon: 1.0,
+            search: NeighbourSearch::default(),
+        }
+    }
+}
+
+impl ContactParams {
+    /// Default parameters with a fixed relative tolerance ε (dimensionless).
+    pub fn relative(epsilon: f64) -> Self {
+        Self {
+            tolerance: ContactTolerance::Relative(epsilon),
+            ..Self::default()
+        }
+    }
+
+    /// Default parameters with a target mean coordination number (contacts per particle).
+    pub fn target(coordination: f64) -> Self {
+        Self {
+            tolerance: ContactTolerance::TargetCoordination(coordination),
+            ..Self::default()
+        }
+    }
+
+    /// Checks every field; the error names it.
+    pub fn validate(&self) -> Result<(), GraphError> {
+        match self.tolerance {
+            ContactTolerance::Relative(e) => {
+                positive("tolerance.relative", e)?;
+            }
+            ContactTolerance::TargetCoordination(z) => {
+                positive("tolerance.target_coordination", z)?;
+            }
+        }
+        positive("coordination_tolerance", self.coordination_tolerance)?;
+        positive("initial_epsilon", self.initial_epsilon)?;
+        positive("max_epsilon", self.max_epsilon)?;
+        Ok(())
+    }
+}
+
+/// Geometry of one contact, computed once; thermal and electric models only read it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactGeometry {
+    /// Centre distance d_pq (m), minimum image in a periodic box.
+    pub distance: f64,
+    /// Unit normal from p to q (dimensionless).
+    pub normal: Vec3,
+    /// Gap g_pq = d_pq − R_p − R_q (m); negative for overlapping spheres.
+    pub gap: f64,
+    /// Mean radius R_m = (R_p + R_q)/2 (m).
+    pub mean_radius: f64,
+}
+
+/// A non-fatal finding of contact detection, for the user to read.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Diagnostic {
+    /// Particles with no contact (rattlers); they make a network singular if not excluded.
+    Rattlers {
+        /// How many.
+        count: usize,
+    },
+    /// Particles with exactly one contact (dead ends of the network).
+    SingleContact {
+        /// How many.
+        count: usize,
+    },
+    /// Pairs whose spheres overlap (negative gap).
+    Overlaps {
+        /// How many pairs.
+        count: usize,
+        /// Largest overlap relative to R_p + R_q (dimensionless, > 0).
+        max_relative: f64,
+    },
+    /// The reached coordination exceeds the target by more than the tolerance, because
+    /// several pairs share the selected gap.
+    CoordinationOvershoot {
+        /// Requested Z (contacts per particle).
+        target: f64,
+        /// Reached Z (contacts per particle).
+        reached: f64,
+    },
+    /// The graph has more than one connected component (rattlers included).
+    Disconnected {
+        /// Number of components.
+        components: usize,
+        /// Particles in the largest component.
+        largest: usize,
+    },
+}
+
+impl std::fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Diagnostic::Rattlers { count } => write!(f, "{count} rattlers (particles with no contact)"),
+            Diagnostic::SingleContact { count } => write!(f, "{count} particles with a single contact"),
+            Diagnostic::Overlaps { count, max_relative } => write!(
+                f,
+                "{count} overlapping pairs, largest overlap {:.3} % of R_p + R_q",
+                100.0 * max_relative
+            ),
+            Diagnostic::CoordinationOvershoot { target, reached } => write!(
+                f,
+                "coordination {reached:.4} overshoots the target {target} (pairs with equal gaps)"
+            ),
+            Diagnostic::Disconnected { components, largest } => write!(
+                f,
+                "{components} connected components; the largest holds {largest} particles"
+            ),
+        }
+    }
+}
+
+/// What contact detection did and found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactReport {
+    /// Relative tolerance ε used (dimensionless): contact iff gap ≤ ε·(R_p + R_q). With a
+    /// target coordination, the midpoint between the last accepted and the first rejected
+    /// relative gap, so that the same ε reproduces the same contacts.
+    pub epsilon: f64,
+    /// The requested coordination, if any (contacts per particle).
+    pub target_coordination: Option<f64>,
+    /// Mean coordination number reached Z = 2·contacts/N (contacts per particle).
+    pub coordination: f64,
+    /// Number of contacts.
+    pub n_contacts: usize,
+    /// Ids of the particles with no contact, ascending.
+    pub rattlers: Vec<u32>,
+    /// Number of particles with fewer than 2 contacts (rattlers included).
+    pub under_two_contacts: usize,
+    /// Number of overlapping pairs (gap < 0).
+    pub overlaps: usize,
+    /// Number of connected components (each rattler is one).
+    pub n_components: usize,
+    /// Particles in the largest connected component.
+    pub largest_component: usize,
+    /// Neighbour-search structure used.
+    pub search: NeighbourSearch,
+    /// Candidate searches run: 1 for a relative tolerance; with a target, one per doubling
+    /// of the search tolerance. The tolerance itself is then exact (see [`detect_contacts`]).
+    pub search_rounds: u32,
+    /// Candidate pairs examined in the last search round (pairs within the search tolerance).
+    pub candidates: usize,
+    /// Wall time of the whole detection (s).
+    pub wall_time_s: f64,
+    /// Non-fatal findings.
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+/// The contact graph of a packing: pairs, their geometry, and the detection report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactGraph {
+    /// Number of particles (graph vertices).
+    pub n_particles: usize,
+    /// Contacts `[p, q]` with p < q, sorted ascending: deterministic.
+    pub pairs: Vec<[u32; 2]>,
+    /// Geometry of each contact, same order as `pairs`.
+    pub geometry: Vec<ContactGeometry>,
+    /// What detection did and found.
+    pub report: ContactReport,
+}
+
+impl ContactGraph {
+    /// Number of contacts of each particle.
+    pub fn degrees(&self) -> Vec<u32> {
+        let mut d = vec![0u32; self.n_particles];
+        for &[p, q] in &self.pairs {
+            d[p as usize] += 1;
+            d[q as usize] += 1;
+        }
+        d
+    }
+
+    /// Mean coordination number Z = 2·contacts/N (contacts per particle); 0 for no particle.
+    pub fn coordination(&self) -> f64 {
+        if self.n_particles == 0 {
+            0.0
+        } else {
+            2.0 * self.pairs.len() as f64 / self.n_particles as f64
+        }
+    }
+
+    /// Connected components: a label per particle (0 = largest), their sizes.
+    pub fn components(&self) -> Components {
+        Components::from_pairs(self.n_particles, &self.pairs)
+    }
+
+    /// Branch vector of contact `k`: d_pq · e_pq, from p to its (minimum-image) neighbour q (m).
+    pub fn branch(&self, k: usize) -> Vec3 {
+        let g = &self.geometry[k];
+        g.normal * g.distance
+    }
+
+    /// Number of contacts.
+    pub fn len(&self) -> usize {
+        self.pairs.len()
+    }
+
+    /// Whether there is no contact.
+    pub fn is_empty(&self) -> bool {
+        self.pairs.is_empty()
+    }
+
+    /// The graph restricted to the particles `keep` (ascending, unique ids), renumbered
+    /// 0, 1, … in that order — the same numbering as [`ParticleSet::retain`] or
+    /// [`ParticleSet::permuted`] with these ids. Contacts with a removed end are dropped;
+    /// the report is kept, with its counts updated.
+    pub fn induced(&self, keep: &[u32]) -> Result<ContactGraph, GraphError> {
+        if let Some(w) = keep.windows(2).position(|w| w[0] >= w[1]) {
+            return Err(CoreError::invalid(
+                format!("keep[{}]", w + 1),
+                keep[w + 1],
+                "particle ids must be strictly ascending",
+            )
+            .into());
+        }
+        if let Some(&last) = keep.last()
+            && last as usize >= self.n_particles
+        {
+            return Err(CoreError::invalid(
+                format!("keep[{}]", keep.len() - 1),
+                last,
+                format!("particle ids must be below {}", self.n_particles),
+            )
+            .into());
+        }
+        let mut new_id = vec![u32::MAX; self.n_particles];
+        for (k, &i) in keep.iter().enumerate() {
+            new_id[i as usize] = k as u32;
+        }
+        let mut pairs = Vec::new();
+        let mut geometry = Vec::new();
+        for (&[p, q], g) in self.pairs.iter().zip(&self.geometry) {
+            let (a, b) = (new_id[p as usize], new_id[q as usize]);
+            if a != u32::MAX && b != u32::MAX {
+                pairs.push([a, b]);
+                geometry.push(*g);
+            }
+        }
+        let mut graph = ContactGraph {
+            n_particles: keep.len(),
+            pairs,
+            geometry,
+            report: self.report.clone(),
+        };
+        summarise(&mut graph);
+        Ok(graph)
+    }
+}
+
+/// Fills the report's counts and diagnostics from the graph (all but the search fields).
+fn summarise(graph: &mut ContactGraph) {
+    let degrees = graph.degrees();
+    let comps = graph.components();
+    let r = &mut graph.report;
+    r.coordination = if graph.n_particles == 0 {
+        0.0
+    } else {
+        2.0 * graph.pairs.len() as f64 / graph.n_particles as f64
+    };
+    r.n_contacts = graph.pairs.len();
+    r.rattlers = (0..graph.n_particles as u32)
+        .filter(|&i| degrees[i as usize] == 0)
+        .collect();
+    r.under_two_contacts = degrees.iter().filter(|&&d| d < 2).count();
+    let single = degrees.iter().filter(|&&d| d == 1).count();
+    let (mut overlaps, mut max_rel) = (0usize, 0.0f64);
+    for g in &graph.geometry {
+        if g.gap < 0.0 {
+            overlaps += 1;
+            max_rel = max_rel.max(-g.gap / (2.0 * g.mean_radius));
+        }
+    }
+    r.overlaps = overlaps;
+    r.n_components = comps.count();
+    r.largest_component = comps.largest();
+    r.diagnostics
+        .retain(|d| matches!(d, Diagnostic::CoordinationOvershoot { .. }));
+    if !r.rattlers.is_empty() {
+        r.diagnostics.push(Diagnostic::Rattlers {
+            count: r.rattlers.len(),
+        });
+    }
+    if single > 0 {
+        r.diagnostics.push(Diagnostic::SingleContact { count: single });
+    }
+    if overlaps > 0 {
+        r.diagnostics.push(Diagnostic::Overlaps {
+            count: overlaps,
+            max_relative: max_rel,
+        });
+    }
+    if comps.count() > 1 {
+        r.diagnostics.push(Diagnostic::Disconnected {
+            components: comps.count(),
+            largest: comps.largest(),
+        });
+    }
+}
+
+/// Checks the arrays of a particle set (they are public fields, so may disagree).
+fn validate_particles(particles: &ParticleSet) -> Result<(), GraphError> {
+    let n = particles.centres.len();
+    if n == 0 && particles.radii.is_empty() {
+        return Err(GraphError::EmptyParticleSet);
+    }
+    crate::error::same_len("particles.radii", particles.radii.len(), n, "centre")?;
+    crate::error::same_len("particles.phases", particles.phases.len(), n, "centre")?;
+    if n > u32::MAX as usize {
+        return Err(CoreError::invalid("particles", n, "at most 2^32 − 1 particles").into());
+    }
+    if let Some(i) = particles
+        .centres
+        .iter()
+        .position(|c| !c.iter().all(|v| v.is_finite()))
+    {
+        return Err(CoreError::invalid(
+            format!("particles.centres[{i}]"),
+            format!("{:?}", particles.centres[i].as_slice()),
+            "must be finite (m)",
+        )
+        .into());
+    }
+    if let Some(i) = particles.radii.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
+        return Err(CoreError::invalid(
+            format!("particles.radii[{i}]"),
+            particles.radii[i],
+            "must be a finite number > 0 (m)",
+        )
+        .into());
+    }
+    Ok(())
+}
+
+/// Finds the contacts of a packing.
+///
+/// A pair (p, q) is a contact when its gap g_pq = d_pq − R_p − R_q is at most ε·(R_p + R_q),
+/// with d_pq the centre distance (minimum image in a periodic box). Walls make no contacts.
+///
+/// With [`ContactTolerance::TargetCoordination`] the candidate pairs within a search
+/// tolerance (`initial_epsilon`, doubled up to `max_epsilon` until there are enough) are
+/// ranked by relative gap and ε is set exactly: the fewest contacts giving Z ≥ target, i.e.
+/// ⌈Z·N/2⌉ contacts, so Z overshoots by less than 2/N unless pairs share the same gap.
+/// Z(ε) is a step function known exactly from the candidates, so this selection is the limit
+/// of a bisection on ε, without its iterations.
+///
+/// Errors: invalid parameters or particles (named), an empty set, coincident centres, a
+/// periodic box shorter than 4·R_max·(1 + ε) (contacts would have two images), an
+/// unreachable target (with the largest Z found).
+pub fn detect_contacts(
+    particles: &ParticleSet,
+    container: &Container,
+    params: &ContactParams,
+) -> Result<ContactGraph, GraphError> {
+    let start = Instant::now();
+    params.validate()?;
+    container.validate()?;
+    validate_particles(particles)?;
+    let n = particles.len();
+    let radii = &particles.radii;
+    let rmax = radii.iter().copied().fold(0.0, f64::max);
+    let period = container.period();
+    let pos: Cow<[Vec3]> = match period {
+        Some(l) => Cow::Owned(
+            particles
+                .centres
+                .par_iter()
+                .map(|c| Vec3::new(wrap(c.x, l[0]), wrap(c.y, l[1]), wrap(c.z, l[2])))
+                .collect(),
+        ),
+        None => Cow::Borrowed(&particles.centres),
+    };
+    // In a periodic box every contact distance, at most 2·R_max·(1 + ε), must stay below half
+    // the smallest period so that the minimum image is the only image in contact.
+    let eps_limit = match period {
+        Some(l) => {
+            let lmin = l.iter().copied().fold(f64::INFINITY, f64::min);
+            let limit = lmin / (4.0 * rmax) - 1.0;
+            if limit <= 0.0 {
+                return Err(CoreError::invalid(
+                    "container.size",
+                    format!("{lmin} (smallest period)"),
+                    format!(
+                        "each period must exceed 4 × the largest radius ({}) so that every contact has a single minimum image",
+                        4.0 * rmax
+                    ),
+                )
+                .into());
+            }
+            limit * (1.0 - 1e-9)
+        }
+        None => f64::INFINITY,
+    };
+    let search = |eps: f64| candidates(params.search, &pos, radii, period, eps);
+
+    let (cands, epsilon, rounds, target, overshoot): (Vec<Candidate>, f64, u32, Option<f64>, bool) =
+        match params.tolerance {
+            ContactTolerance::Relative(eps) => {
+                if eps > eps_limit {
+                    return Err(CoreError::invalid(
+                        "tolerance.relative",
+                        eps,
+                        format!(
+                            "at most {eps_limit:.6} in this periodic box: the largest contact distance 2·R_max·(1 + ε) must stay under half the smallest period"
+                        ),
+                    )
+                    .into());
+                }
+                (search(eps), eps, 1, None, false)
+            }
+            ContactTolerance::TargetCoordination(z) => {
+                let need = (z * n as f64 / 2.0).ceil();
+                let all_pairs = n as f64 * (n as f64 - 1.0) / 2.0;
+                let cap = params.max_epsilon.min(eps_limit);
+                let mut eps_s = params.initial_epsilon.min(cap);
+                let mut rounds = 0;
+                let cands = loop {
+                    rounds += 1;
+                    let c = search(eps_s);
+                    if c.len() as f64 >= need {
+                        break c;
+                    }
+                    if eps_s >= cap || c.len() as f64 >= all_pairs {
+                        return Err(GraphError::UnreachableCoordination {
+                            target: z,
+                            max_coordination: 2.0 * c.len() as f64 / n as f64,
+                            max_epsilon: eps_s,
+                        });
+                    }
+                    eps_s = (2.0 * eps_s).min(cap);
+                };
+                let k = need as usize - 1;
+                let mut rel: Vec<f64> = cands.iter().map(|c| c.rel_gap).collect();
+                let (_, kth, right) = rel.select_nth_unstable_by(k, f64::total_cmp);
+                let eps_k = *kth;
+                let next = right.iter().copied().min_by(f64::total_cmp);
+                let epsilon = match next {
+                    Some(nx) if nx > eps_k => {
+                        let mid = 0.5 * (eps_k + nx);
+                        if mid >= eps_k && mid < nx { mid } else { eps_k }
+                    }
+                    _ => eps_k,
+                };
+                let accepted = cands.iter().filter(|c| c.rel_gap <= epsilon).count();
+                let reached = 2.0 * accepted as f64 / n as f64;
+                let overshoot = reached - z > params.coordination_tolerance;
+                (cands, epsilon, rounds, Some(z), overshoot)
+            }
+        };
+    let n_candidates = cands.len();
+    let accepted: Vec<Candidate> = cands.into_iter().filter(|c| c.rel_gap <= epsilon).collect();
+    if let Some(c) = accepted.iter().find(|c| c.rel_gap <= -1.0 + 1e-12) {
+        let (p, q) = (c.p(), c.q());
+        let d = separation(&pos[p as usize], &pos[q as usize], period.as_ref()).norm();
+        return Err(GraphError::CoincidentCentres { p, q, distance: d });
+    }
+    let per = period.as_ref();
+    let (pairs, geometry): (Vec<[u32; 2]>, Vec<ContactGeometry>) = accepted
+        .par_iter()
+        .map(|c| {
+            let (p, q) = (c.p() as usize, c.q() as usize);
+            let sep = separation(&pos[p], &pos[q], per);
+            let distance = sep.norm_squared().sqrt();
+            let geom = ContactGeometry {
+                distance,
+                normal: sep / distance,
+                gap: distance - radii[p] - radii[q],
+                mean_radius: 0.5 * (radii[p] + radii[q]),
+            };
+            ([p as u32, q as u32], geom)
+        })
+        .unzip();
+    let mut diagnostics = Vec::new();
+    let mut graph = ContactGraph {
+        n_particles: n,
+        pairs,
+        geometry,
+        report: ContactReport {
+            epsilon,
+            target_coordination: target,
+            coordination: 0.0,
+            n_contacts: 0,
+            rattlers: Vec::new(),
+            under_two_contacts: 0,
+            overlaps: 0,
+            n_components: 0,
+            largest_component: 0,
+            search: params.search,
+            search_rounds: rounds,
+            candidates: n_candidates,
+            wall_time_s: 0.0,
+            diagnostics: Vec::new(),
+        },
+    };
+    if overshoot {
+        diagnostics.push(Diagnostic::CoordinationOvershoot {
+            target: target.unwrap_or(0.0),
+            reached: graph.coordination(),
+        });
+    }
+    graph.report.diagnostics = diagnostics;
+    summarise(&mut graph);
+    graph.report.wall_time_s = start.elapsed().as_secs_f64();
+    Ok(graph)
+}
