@@ -1,0 +1,226 @@
+//! Implicit transients (backward Euler, Crank–Nicolson): unconditionally stable, one
+//! linear solve per step through the network (CG warm-started, or a reused Cholesky
+//! factor), and the steady state solved directly.
+
+use std::time::Instant;
+
+use demcon_network::{Constraints, LinearSystem, Network, NodeKind, Solution, SolveParams, solve_steady};
+
+use crate::capacity::stable_dt_bound;
+use crate::error::{ThermalError, check_finite, check_len};
+use crate::transient::{
+    Transient, TransientReport, boundary_edges, boundary_power, check_inputs, close_ledger, source_power,
+    stops,
+};
+
+/// Implicit time discretisation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Scheme {
+    /// First order, L-stable (no oscillation): (C/Δt + K) T' = C/Δt T + Q.
+    #[default]
+    BackwardEuler,
+    /// Second order, A-stable (may oscillate for Δt far above the explicit bound):
+    /// (2C/Δt + K) T' = (2C/Δt − K) T + 2Q.
+    CrankNicolson,
+}
+
+impl Scheme {
+    fn name(self) -> &'static str {
+        match self {
+            Self::BackwardEuler => "backward-euler",
+            Self::CrankNicolson => "crank-nicolson",
+        }
+    }
+}
+
+/// Parameters of [`run_implicit`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImplicitParams {
+    /// Simulated duration (s), > 0.
+    pub t_end: f64,
+    /// Time step (s), > 0; shortened uniformly within a segment to land on output times.
+    pub dt: f64,
+    /// Scheme.
+    pub scheme: Scheme,
+    /// Times (s, ascending, in [0, t_end]) at which the observer sees the temperatures.
+    pub output_times: Vec<f64>,
+    /// Linear solver of each step.
+    pub solve: SolveParams,
+}
+
+impl Default for ImplicitParams {
+    fn default() -> Self {
+        Self {
+            t_end: 1.0,
+            dt: 0.01,
+            scheme: Scheme::default(),
+            output_times: Vec::new(),
+            solve: SolveParams::default(),
+        }
+    }
+}
+
+/// Implicit transient from `t_init` to `params.t_end`; inputs as in
+/// [`crate::run_explicit`]. Floating clusters may be kept
+/// ([`demcon_network::FloatingPolicy::Keep`]): their heat capacity makes each step well
+/// posed.
+///
+/// # Errors
+/// Bad input; linear-solver failures ([`ThermalError::Network`]).
+#[allow(clippy::too_many_arguments)]
+pub fn run_implicit(
+    net: &Network,
+    conductances: &[f64],
+    capacities: &[f64],
+    constraints: &Constraints,
+    sources: &[f64],
+    t_init: &[f64],
+    params: &ImplicitParams,
+    mut observer: impl FnMut(f64, &[f64]),
+) -> Result<Transient, ThermalError> {
+    let start = Instant::now();
+    check_inputs(net, conductances, capacities, constraints, sources, t_init)?;
+    let stops = stops(params.t_end, &params.output_times)?;
+    if !(params.dt.is_finite() && params.dt > 0.0) {
+        return Err(ThermalError::invalid(
+            "dt",
+            params.dt,
+            "must be a finite time > 0 (s)",
+        ));
+    }
+    let bound = stable_dt_bound(net, conductances, capacities, constraints)?;
+    let n = net.n_nodes();
+    let cn = params.scheme == Scheme::CrankNicolson;
+    let factor = if cn { 2.0 } else { 1.0 };
+    let mut report = TransientReport::new(params.scheme.name(), params.dt, bound, None);
+    let edges_b = boundary_edges(net, conductances, constraints);
+    let p_src = source_power(constraints, sources);
+    let kinds = constraints.kinds();
+
+    let mut cur = t_init.to_vec();
+    constraints.impose(&mut cur);
+    let t0 = cur.clone();
+    if params.output_times.first() == Some(&0.0) {
+        observer(0.0, &cur);
+    }
+    let mut shift = vec![0.0; n];
+    let mut rhs = vec![0.0; n];
+    let mut system: Option<(f64, LinearSystem<'_>)> = None;
+    let mut t_start = 0.0;
+    for &stop in &stops {
+        let span = stop - t_start;
+        let n_steps = (span / params.dt * (1.0 - 1e-12)).ceil().max(1.0) as u64;
+        let h = span / n_steps as f64;
+        let reuse = matches!(&system, Some((dt, _)) if (dt - h).abs() <= 1e-12 * h);
+        if !reuse {
+            for p in 0..n {
+                shift[p] = factor * capacities[p] / h;
+            }
+            system = Some((
+                h,
+                LinearSystem::new(net, conductances, Some(&shift), constraints, &params.solve)?,
+            ));
+        }
+        let sys = match &system {
+            Some((_, s)) => s,
+            None => unreachable!("system built above"),
+        };
+        for _ in 0..n_steps {
+            let p_b_old = boundary_power(&edges_b, &cur);
+            if cn {
+                let k_t = net.apply_laplacian(conductances, &cur)?;
+                for p in 0..n {
+                    rhs[p] = shift[p] * cur[p] - k_t[p] + 2.0 * sources[p];
+                }
+            } else {
+                for p in 0..n {
+                    rhs[p] = shift[p] * cur[p] + sources[p];
+                }
+            }
+            let Solution {
+                values, report: r, ..
+            } = sys.solve(&rhs, Some(&cur))?;
+            let mut next = values;
+            // Excluded nodes keep their value (they are not part of the solve).
+            for p in constraints.excluded() {
+                next[*p as usize] = cur[*p as usize];
+            }
+            let p_b_new = boundary_power(&edges_b, &next);
+            report.energy_boundary_j += if cn {
+                0.5 * h * (p_b_old + p_b_new)
+            } else {
+                h * p_b_new
+            };
+            report.energy_sources_j += h * p_src;
+            report.solver_iterations += r.iterations as u64;
+            report.max_relative_residual = report.max_relative_residual.max(r.relative_residual);
+            report.steps += 1;
+            cur = next;
+        }
+        t_start = stop;
+        if stop < params.t_end || params.output_times.last() == Some(&stop) {
+            observer(stop, &cur);
+        }
+    }
+    debug_assert!(kinds.len() == n);
+    report.t_end = params.t_end;
+    report.wall_s = start.elapsed().as_secs_f64();
+    close_ledger(&mut report, constraints, capacities, &t0, &cur);
+    Ok(Transient {
+        temperatures: cur,
+        report,
+    })
+}
+
+/// Steady temperatures and the heat balance that checks them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SteadyTemperature {
+    /// Temperatures (K), with excluded nodes listed (value 0, not a result) and the solve
+    /// report.
+    pub solution: Solution,
+    /// Heat leaving the free nodes into the fixed-temperature nodes (W); equals the total
+    /// source power at steady state.
+    pub heat_to_fixed_w: f64,
+    /// Σ Q over free nodes (W).
+    pub source_power_w: f64,
+    /// |heat_to_fixed − source_power| / max(|heat_to_fixed|, |source_power|) (0 if both 0).
+    pub balance_error: f64,
+}
+
+/// Steady state K T = Q with the fixed temperatures of `constraints` (K), solved directly
+/// through the network (CG or Cholesky per `params`).
+///
+/// # Errors
+/// Bad input, floating clusters that were not excluded, solver failures.
+pub fn solve_steady_temperature(
+    net: &Network,
+    conductances: &[f64],
+    constraints: &Constraints,
+    sources: &[f64],
+    params: &SolveParams,
+) -> Result<SteadyTemperature, ThermalError> {
+    check_len("sources", sources.len(), net.n_nodes())?;
+    check_finite("sources", sources)?;
+    let solution = solve_steady(net, conductances, constraints, sources, params)?;
+    let edges_b = boundary_edges(net, conductances, constraints);
+    let heat_to_fixed_w = -boundary_power(&edges_b, &solution.values);
+    let source_power_w: f64 = constraints
+        .kinds()
+        .iter()
+        .zip(sources)
+        .filter(|(k, _)| **k == NodeKind::Free)
+        .map(|(_, q)| q)
+        .sum();
+    let scale = heat_to_fixed_w.abs().max(source_power_w.abs());
+    let balance_error = if scale > 0.0 {
+        (heat_to_fixed_w - source_power_w).abs() / scale
+    } else {
+        0.0
+    };
+    Ok(SteadyTemperature {
+        solution,
+        heat_to_fixed_w,
+        source_power_w,
+        balance_error,
+    })
+}

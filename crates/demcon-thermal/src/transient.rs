@@ -1,0 +1,196 @@
+//! Pieces shared by the transient solvers: input checks, output times, the energy ledger.
+
+use demcon_network::{Constraints, Network, NodeKind};
+
+use crate::error::{ThermalError, check_finite, check_len, check_positive};
+
+/// Result of a transient run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Transient {
+    /// Temperatures at `t_end` (K). Fixed nodes hold their value; excluded nodes keep their
+    /// initial value.
+    pub temperatures: Vec<f64>,
+    /// What happened and what it cost.
+    pub report: TransientReport,
+}
+
+/// Cost, step and energy balance of a transient run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TransientReport {
+    /// Scheme name (`forward-euler`, `backward-euler`, `crank-nicolson`).
+    pub scheme: &'static str,
+    /// Number of time steps taken.
+    pub steps: u64,
+    /// Nominal time step (s).
+    pub dt: f64,
+    /// Forward-Euler positivity bound min_p C_p/Σ_q H_pq (s).
+    pub dt_bound: f64,
+    /// Node that sets `dt_bound`.
+    pub dt_bound_node: u32,
+    /// The paper's eq. 16 estimate, when the caller supplied it (s).
+    pub paper_dt: Option<f64>,
+    /// Final time (s).
+    pub t_end: f64,
+    /// Wall time (s).
+    pub wall_s: f64,
+    /// Total linear-solver iterations (implicit schemes; 0 for explicit).
+    pub solver_iterations: u64,
+    /// Largest relative residual of the linear solves (implicit schemes; 0 for explicit).
+    pub max_relative_residual: f64,
+    /// Contact updates per second of wall time (explicit scheme; 0 otherwise).
+    pub contacts_per_s: f64,
+    /// Heat stored in the free nodes, Σ C_p (T_end − T_0) (J).
+    pub energy_stored_j: f64,
+    /// Heat injected by the sources into free nodes, ∫ Σ Q_p dt (J).
+    pub energy_sources_j: f64,
+    /// Heat received from fixed-temperature nodes, ∫ Σ H_pq (T_fixed − T_p) dt (J).
+    pub energy_boundary_j: f64,
+    /// |stored − sources − boundary| / max(|stored|, |sources| + |boundary|) (0 if all 0).
+    pub energy_balance_error: f64,
+    /// Smallest and largest temperature at the end (K).
+    pub t_range: [f64; 2],
+}
+
+impl TransientReport {
+    /// A report with the step data filled and everything measured set to zero.
+    pub(crate) fn new(scheme: &'static str, dt: f64, bound: crate::DtBound, paper_dt: Option<f64>) -> Self {
+        Self {
+            scheme,
+            steps: 0,
+            dt,
+            dt_bound: bound.dt_max,
+            dt_bound_node: bound.node,
+            paper_dt,
+            t_end: 0.0,
+            wall_s: 0.0,
+            solver_iterations: 0,
+            max_relative_residual: 0.0,
+            contacts_per_s: 0.0,
+            energy_stored_j: 0.0,
+            energy_sources_j: 0.0,
+            energy_boundary_j: 0.0,
+            energy_balance_error: 0.0,
+            t_range: [0.0, 0.0],
+        }
+    }
+}
+
+/// Checks the common inputs of a transient solve.
+pub(crate) fn check_inputs(
+    net: &Network,
+    conductances: &[f64],
+    capacities: &[f64],
+    constraints: &Constraints,
+    sources: &[f64],
+    t_init: &[f64],
+) -> Result<(), ThermalError> {
+    let n = net.n_nodes();
+    net.check_conductances(conductances)?;
+    check_len("capacities", capacities.len(), n)?;
+    check_positive("capacities", capacities)?;
+    check_len("constraints", constraints.kinds().len(), n)?;
+    check_len("sources", sources.len(), n)?;
+    check_finite("sources", sources)?;
+    check_len("initial temperatures", t_init.len(), n)?;
+    check_finite("initial temperatures", t_init)?;
+    Ok(())
+}
+
+/// Checks `t_end` and the output times; returns the stops: the sorted output times in
+/// (0, t_end] followed by t_end, deduplicated.
+pub(crate) fn stops(t_end: f64, output_times: &[f64]) -> Result<Vec<f64>, ThermalError> {
+    if !(t_end.is_finite() && t_end > 0.0) {
+        return Err(ThermalError::invalid(
+            "t_end",
+            t_end,
+            "must be a finite time > 0 (s)",
+        ));
+    }
+    let mut out = Vec::with_capacity(output_times.len() + 1);
+    let mut last = 0.0;
+    for (k, &t) in output_times.iter().enumerate() {
+        if !(t.is_finite() && t >= last && t <= t_end) {
+            return Err(ThermalError::invalid(
+                format!("output_times[{k}]"),
+                t,
+                format!("must be ascending times in [0, t_end = {t_end}] (s)"),
+            ));
+        }
+        last = t;
+        if t > 0.0 && out.last() != Some(&t) {
+            out.push(t);
+        }
+    }
+    if out.last() != Some(&t_end) {
+        out.push(t_end);
+    }
+    Ok(out)
+}
+
+/// Edges between a free node and a fixed node, as (free, fixed, H): the boundary of the
+/// energy ledger.
+pub(crate) fn boundary_edges(
+    net: &Network,
+    conductances: &[f64],
+    constraints: &Constraints,
+) -> Vec<(u32, u32, f64)> {
+    let k = constraints.kinds();
+    net.edges()
+        .iter()
+        .zip(conductances)
+        .filter_map(|(&[p, q], &g)| match (k[p as usize], k[q as usize]) {
+            (NodeKind::Free, NodeKind::Fixed) => Some((p, q, g)),
+            (NodeKind::Fixed, NodeKind::Free) => Some((q, p, g)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Heat flow into the free nodes from the fixed ones (W).
+pub(crate) fn boundary_power(edges: &[(u32, u32, f64)], t: &[f64]) -> f64 {
+    edges
+        .iter()
+        .map(|&(free, fixed, g)| g * (t[fixed as usize] - t[free as usize]))
+        .sum()
+}
+
+/// Σ over free nodes of Q_p (W).
+pub(crate) fn source_power(constraints: &Constraints, sources: &[f64]) -> f64 {
+    constraints
+        .kinds()
+        .iter()
+        .zip(sources)
+        .filter(|(k, _)| **k == NodeKind::Free)
+        .map(|(_, q)| q)
+        .sum()
+}
+
+/// Fills the energy fields and the range of a report from the start and end states.
+pub(crate) fn close_ledger(
+    report: &mut TransientReport,
+    constraints: &Constraints,
+    capacities: &[f64],
+    t0: &[f64],
+    t1: &[f64],
+) {
+    let stored: f64 = constraints
+        .kinds()
+        .iter()
+        .enumerate()
+        .filter(|(_, k)| **k == NodeKind::Free)
+        .map(|(p, _)| capacities[p] * (t1[p] - t0[p]))
+        .sum();
+    report.energy_stored_j = stored;
+    let scale = stored
+        .abs()
+        .max(report.energy_sources_j.abs() + report.energy_boundary_j.abs());
+    report.energy_balance_error = if scale > 0.0 {
+        (stored - report.energy_sources_j - report.energy_boundary_j).abs() / scale
+    } else {
+        0.0
+    };
+    let (lo, hi) = t1.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+        (a.min(v), b.max(v))
+    });
+    report.t_range = [lo, hi];
+}

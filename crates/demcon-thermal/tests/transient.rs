@@ -1,0 +1,363 @@
+//! Integration tests of the thermal solvers on hand-built networks: exact two-node
+//! exchange, energy balance, maximum principle, explicit/implicit/steady agreement,
+//! stability refusal and divergence detection, determinism, bad input.
+
+use demcon_network::{FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
+use demcon_thermal::{
+    ExplicitParams, ImplicitParams, Scheme, ThermalError, TimeStep, paper_dt_estimate, run_explicit,
+    run_implicit, solve_steady_temperature, stable_dt_bound,
+};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// An n×n×n lattice with random extra diagonals, conductances in [0.5, 2] W/K and
+/// capacities in [0.2, 3] J/K (a polydisperse-like spread of C/ΣH).
+fn lattice(n: usize, seed: u64) -> (Network, Vec<f64>, Vec<f64>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let id = |i: usize, j: usize, k: usize| (i * n * n + j * n + k) as u32;
+    let mut edges = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                if i + 1 < n {
+                    edges.push([id(i, j, k), id(i + 1, j, k)]);
+                }
+                if j + 1 < n {
+                    edges.push([id(i, j, k), id(i, j + 1, k)]);
+                }
+                if k + 1 < n {
+                    edges.push([id(i, j, k), id(i, j, k + 1)]);
+                }
+                if j + 1 < n && k + 1 < n && rng.random::<f64>() < 0.3 {
+                    edges.push([id(i, j, k), id(i, j + 1, k + 1)]);
+                }
+            }
+        }
+    }
+    let g = (0..edges.len()).map(|_| rng.random_range(0.5..2.0)).collect();
+    let c = (0..n * n * n).map(|_| rng.random_range(0.2..3.0)).collect();
+    (Network::new(n * n * n, &edges).unwrap(), g, c)
+}
+
+fn face(n: usize, i: usize) -> Vec<u32> {
+    (0..n * n).map(|r| (i * n * n + r) as u32).collect()
+}
+
+#[test]
+fn two_nodes_follow_the_discrete_forward_euler_solution() {
+    let net = Network::new(2, &[[0, 1]]).unwrap();
+    let free = resolve_fixed(&net, &[], FloatingPolicy::Keep).unwrap();
+    let params = ExplicitParams {
+        t_end: 1.0,
+        dt: TimeStep::Fixed {
+            dt: 0.1,
+            allow_unstable: false,
+        },
+        ..Default::default()
+    };
+    let run = run_explicit(
+        &net,
+        &[1.0],
+        &[1.0, 1.0],
+        &free,
+        &[0.0; 2],
+        &[0.0, 1.0],
+        &params,
+        |_, _| {},
+    )
+    .unwrap();
+    // ΔT_n = (1 − 2Δt)^n, mean conserved.
+    let diff = run.temperatures[1] - run.temperatures[0];
+    assert!((diff - 0.8f64.powi(10)).abs() < 1e-12, "{diff}");
+    assert!((run.temperatures[0] + run.temperatures[1] - 1.0).abs() < 1e-14);
+    assert_eq!(run.report.steps, 10);
+    assert_eq!(run.report.dt_bound, 1.0);
+}
+
+#[test]
+fn explicit_conserves_energy_and_obeys_the_maximum_principle() {
+    let n = 8;
+    let (net, g, c) = lattice(n, 2);
+    let bcs = resolve_fixed(
+        &net,
+        &[(face(n, 0), 300.0), (face(n, n - 1), 350.0)],
+        FloatingPolicy::Fail,
+    )
+    .unwrap();
+    let t0 = vec![300.0; net.n_nodes()];
+    let params = ExplicitParams {
+        t_end: 5.0,
+        output_times: vec![0.0, 0.37, 2.0],
+        ..Default::default()
+    };
+    let mut seen = Vec::new();
+    let run = run_explicit(
+        &net,
+        &g,
+        &c,
+        &bcs,
+        &vec![0.0; net.n_nodes()],
+        &t0,
+        &params,
+        |t, temps| {
+            seen.push(t);
+            // Maximum principle: every value within [300, 350] K.
+            assert!(temps.iter().all(|&v| (300.0 - 1e-9..=350.0 + 1e-9).contains(&v)));
+        },
+    )
+    .unwrap();
+    assert_eq!(seen, vec![0.0, 0.37, 2.0]);
+    let r = &run.report;
+    assert!(
+        r.energy_boundary_j > 0.0 && r.energy_balance_error < 1e-10,
+        "{r:?}"
+    );
+    assert!(r.dt <= 0.8 * r.dt_bound * (1.0 + 1e-15));
+    assert!(r.t_range[0] >= 300.0 && r.t_range[1] <= 350.0);
+    // With sources: Σ C ΔT = ∫ Q + boundary inflow.
+    let q: Vec<f64> = (0..net.n_nodes()).map(|p| ((p % 3) as f64 - 0.5) * 2.0).collect();
+    let run = run_explicit(&net, &g, &c, &bcs, &q, &t0, &params, |_, _| {}).unwrap();
+    assert!(run.report.energy_sources_j.abs() > 1.0);
+    assert!(run.report.energy_balance_error < 1e-10, "{:?}", run.report);
+}
+
+#[test]
+fn explicit_implicit_and_steady_agree() {
+    let n = 6;
+    let (net, g, c) = lattice(n, 4);
+    let bcs = resolve_fixed(
+        &net,
+        &[(face(n, 0), 0.0), (face(n, n - 1), 1.0)],
+        FloatingPolicy::Fail,
+    )
+    .unwrap();
+    let q = vec![0.05; net.n_nodes()];
+    let t0 = vec![0.0; net.n_nodes()];
+    let t_mid = 3.0;
+    let ex = run_explicit(
+        &net,
+        &g,
+        &c,
+        &bcs,
+        &q,
+        &t0,
+        &ExplicitParams {
+            t_end: t_mid,
+            dt: TimeStep::Auto { safety: 0.1 },
+            ..Default::default()
+        },
+        |_, _| {},
+    )
+    .unwrap();
+    let implicit = |scheme, dt, method, t_end| {
+        run_implicit(
+            &net,
+            &g,
+            &c,
+            &bcs,
+            &q,
+            &t0,
+            &ImplicitParams {
+                t_end,
+                dt,
+                scheme,
+                output_times: vec![],
+                solve: SolveParams { method },
+            },
+            |_, _| {},
+        )
+        .unwrap()
+    };
+    let cg = Method::Cg {
+        rel_tol: 1e-12,
+        max_iter: 1000,
+    };
+    let cn = implicit(Scheme::CrankNicolson, ex.report.dt_bound, cg, t_mid);
+    let be = implicit(
+        Scheme::BackwardEuler,
+        ex.report.dt_bound * 0.1,
+        Method::Cholesky,
+        t_mid,
+    );
+    let max_diff = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    let range = ex.report.t_range[1] - ex.report.t_range[0];
+    assert!(max_diff(&ex.temperatures, &cn.temperatures) < 2e-3 * range);
+    assert!(max_diff(&ex.temperatures, &be.temperatures) < 5e-3 * range);
+    assert!(cn.report.energy_balance_error < 1e-8 && be.report.energy_balance_error < 1e-8);
+    assert!(cn.report.solver_iterations > 0 && cn.report.max_relative_residual <= 1e-12);
+    // Long implicit run with big steps reaches the steady state.
+    let steady = solve_steady_temperature(&net, &g, &bcs, &q, &SolveParams::default()).unwrap();
+    assert!(steady.balance_error < 1e-7, "{}", steady.balance_error);
+    let late = implicit(Scheme::BackwardEuler, 50.0, cg, 5000.0);
+    assert!(max_diff(&late.temperatures, &steady.solution.values) < 1e-7);
+}
+
+#[test]
+fn a_step_above_the_bound_is_refused_and_divergence_is_detected() {
+    // Chain of 12 nodes, C = 1 J/K, H = 1 W/K, ends fixed: bound = 0.5 s, 2/λ_max > 0.5 s.
+    let m = 12;
+    let edges: Vec<[u32; 2]> = (0..m - 1).map(|i| [i as u32, i as u32 + 1]).collect();
+    let net = Network::new(m, &edges).unwrap();
+    let g = vec![1.0; m - 1];
+    let c = vec![1.0; m];
+    let bcs = resolve_fixed(
+        &net,
+        &[(vec![0], 0.0), (vec![m as u32 - 1], 1.0)],
+        FloatingPolicy::Fail,
+    )
+    .unwrap();
+    let b = stable_dt_bound(&net, &g, &c, &bcs).unwrap();
+    assert_eq!(b.dt_max, 0.5);
+    let t0: Vec<f64> = (0..m).map(|i| if i % 2 == 0 { 0.2 } else { 0.8 }).collect();
+    let fixed = |dt, allow_unstable| ExplicitParams {
+        t_end: 100.0,
+        dt: TimeStep::Fixed { dt, allow_unstable },
+        paper_dt: Some(paper_dt_estimate(1.0, 1.0, 2.0, 1.0)),
+        ..Default::default()
+    };
+    let run = |p: &ExplicitParams| run_explicit(&net, &g, &c, &bcs, &vec![0.0; m], &t0, p, |_, _| {});
+    match run(&fixed(0.75, false)) {
+        Err(ThermalError::Unstable { dt, dt_max, .. }) => assert_eq!((dt, dt_max), (0.75, 0.5)),
+        other => panic!("expected Unstable, got {other:?}"),
+    }
+    // 0.75 s > 2/λ_max (λ_max → 4): the oscillating mode grows and is caught early.
+    match run(&fixed(0.75, true)) {
+        Err(ThermalError::Diverged {
+            step, value, lo, hi, ..
+        }) => {
+            assert!(step < 200, "caught late: step {step}");
+            assert!(!(lo..=hi).contains(&value));
+        }
+        other => panic!("expected Diverged, got {other:?}"),
+    }
+    // At the bound it is fine, and the paper estimate is reported.
+    let ok = run(&ExplicitParams {
+        t_end: 1000.0,
+        ..fixed(0.5, false)
+    })
+    .unwrap();
+    assert_eq!(ok.report.paper_dt, Some(1.0 / 3.0));
+    assert!((ok.temperatures[6] - 6.0 / 11.0).abs() < 1e-9);
+}
+
+#[test]
+fn explicit_does_not_depend_on_thread_count() {
+    let n = 18; // 5832 nodes: two parallel chunks.
+    let (net, g, c) = lattice(n, 9);
+    let bcs = resolve_fixed(&net, &[(face(n, 0), 1.0)], FloatingPolicy::Fail).unwrap();
+    let params = ExplicitParams {
+        t_end: 2.0,
+        ..Default::default()
+    };
+    let go = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                run_explicit(
+                    &net,
+                    &g,
+                    &c,
+                    &bcs,
+                    &vec![0.01; net.n_nodes()],
+                    &vec![0.0; net.n_nodes()],
+                    &params,
+                    |_, _| {},
+                )
+                .unwrap()
+            })
+    };
+    assert_eq!(go(1).temperatures, go(2).temperatures);
+}
+
+#[test]
+fn floating_clusters_evolve_alone_when_kept() {
+    // 0-1 fixed chain end; 2 isolated with a source; 3-4 floating pair.
+    let net = Network::new(5, &[[0, 1], [3, 4]]).unwrap();
+    let bcs = resolve_fixed(&net, &[(vec![0], 10.0)], FloatingPolicy::Keep).unwrap();
+    let q = [0.0, 0.0, 2.0, 0.0, 0.0];
+    let t0 = [0.0, 0.0, 0.0, 0.0, 4.0];
+    let c = [1.0, 1.0, 4.0, 1.0, 1.0];
+    let g = [1.0, 1.0];
+    let ex = run_explicit(
+        &net,
+        &g,
+        &c,
+        &bcs,
+        &q,
+        &t0,
+        &ExplicitParams {
+            t_end: 40.0,
+            ..Default::default()
+        },
+        |_, _| {},
+    )
+    .unwrap();
+    let im = run_implicit(
+        &net,
+        &g,
+        &c,
+        &bcs,
+        &q,
+        &t0,
+        &ImplicitParams {
+            t_end: 40.0,
+            dt: 0.5,
+            ..Default::default()
+        },
+        |_, _| {},
+    )
+    .unwrap();
+    for t in [&ex.temperatures, &im.temperatures] {
+        assert!((t[2] - 20.0).abs() < 1e-9, "isolated node heats at Q/C: {}", t[2]);
+        assert!((t[3] - 2.0).abs() < 1e-6 && (t[4] - 2.0).abs() < 1e-6);
+        assert!((t[1] - 10.0).abs() < 1e-6);
+    }
+    // A steady solve refuses them.
+    assert!(matches!(
+        solve_steady_temperature(&net, &g, &bcs, &q, &SolveParams::default()),
+        Err(ThermalError::Network(
+            demcon_network::SolveError::FloatingCluster { .. }
+        ))
+    ));
+}
+
+#[test]
+fn bad_input_is_named() {
+    let net = Network::new(2, &[[0, 1]]).unwrap();
+    let free = resolve_fixed(&net, &[], FloatingPolicy::Keep).unwrap();
+    let go = |t0: &[f64], c: &[f64], p: &ExplicitParams| {
+        run_explicit(&net, &[1.0], c, &free, &[0.0; 2], t0, p, |_, _| {})
+    };
+    let d = ExplicitParams::default();
+    assert!(matches!(go(&[0.0, f64::NAN], &[1.0; 2], &d),
+        Err(ThermalError::InvalidParameter { ref field, .. }) if field == "initial temperatures[1]"));
+    assert!(matches!(go(&[0.0; 2], &[1.0, 0.0], &d),
+        Err(ThermalError::InvalidParameter { ref field, .. }) if field == "capacities[1]"));
+    let p = ExplicitParams {
+        output_times: vec![0.5, 0.2],
+        ..Default::default()
+    };
+    assert!(matches!(go(&[0.0; 2], &[1.0; 2], &p),
+        Err(ThermalError::InvalidParameter { ref field, .. }) if field == "output_times[1]"));
+    let p = ExplicitParams {
+        t_end: -1.0,
+        ..Default::default()
+    };
+    assert!(matches!(
+        go(&[0.0; 2], &[1.0; 2], &p),
+        Err(ThermalError::InvalidParameter { .. })
+    ));
+    let p = ExplicitParams {
+        dt: TimeStep::Fixed {
+            dt: 1e-9,
+            allow_unstable: false,
+        },
+        t_end: 1.0,
+        max_steps: 1000,
+        ..Default::default()
+    };
+    assert!(matches!(go(&[0.0; 2], &[1.0; 2], &p),
+        Err(ThermalError::InvalidParameter { ref field, .. }) if field == "dt"));
+}
