@@ -508,21 +508,22 @@ pub fn detect_contacts(
         return Err(GraphError::CoincidentCentres { p, q, distance: d });
     }
     let per = period.as_ref();
-    let (pairs, geometry): (Vec<[u32; 2]>, Vec<ContactGeometry>) = accepted
+    let pairs: Vec<[u32; 2]> = accepted.par_iter().map(|c| [c.p(), c.q()]).collect();
+    let geometry: Vec<ContactGeometry> = pairs
         .par_iter()
-        .map(|c| {
-            let (p, q) = (c.p() as usize, c.q() as usize);
+        .map(|&[p, q]| {
+            let (p, q) = (p as usize, q as usize);
             let sep = separation(&pos[p], &pos[q], per);
             let distance = sep.norm_squared().sqrt();
-            let geom = ContactGeometry {
+            ContactGeometry {
                 distance,
                 normal: sep / distance,
                 gap: distance - radii[p] - radii[q],
                 mean_radius: 0.5 * (radii[p] + radii[q]),
-            };
-            ([p as u32, q as u32], geom)
+            }
         })
-        .unzip();
+        .collect();
+    drop(accepted);
     let mut diagnostics = Vec::new();
     let mut graph = ContactGraph {
         n_particles: n,
