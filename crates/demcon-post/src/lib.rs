@@ -31,7 +31,7 @@
 //! // Halo smoothing over 2 radii: the ends average with the middle.
 //! let domain = Domain::of_container(&Container::Box { size: [6.0 * r, 2.0 * r, 2.0 * r] }).unwrap();
 //! let d = particle_dipoles(&pairs, &branches, &g, &t).unwrap();
-//! let h = halo_flux(&p, &d, &vrep, &domain, &HaloParams { ratio: 2.0 }).unwrap();
+//! let h = halo_flux(&p, &d, &vrep, &domain, &HaloParams::ratio(2.0)).unwrap();
 //! assert!((h.flux[0].x + 0.75 * lambda * 1000.0).abs() < 1e-9); // (0.5 + 1) / 2 of λ∇T
 //! assert!(h.truncated[0]);
 //!
@@ -56,7 +56,7 @@ pub use csv::{read_csv, write_csv};
 pub use domain::{Domain, Plane};
 pub use error::PostError;
 pub use flux::{PlaneFlow, flow_across_plane, particle_dipoles, particle_flux};
-pub use halo::{HaloField, HaloParams, HaloReport, halo_flux};
+pub use halo::{HaloField, HaloParams, HaloReport, HaloScale, halo_flux};
 pub use probe::{Line, ProbeIndex, ProbeMethod, line_points, probe, profile};
 pub use slice::{Grid, SliceParams, slice_grid};
 pub use stats::{coefficient_of_variation, components, effective_conductivity, magnitudes};

@@ -19,7 +19,7 @@ fn halo_of_a_uniform_field_is_that_field() {
     let d: Vec<Vec3> = vrep.iter().map(|v| -2.0 * v * q0).collect();
     let domain = Domain::of_container(&Container::Box { size: [12.0; 3] }).unwrap();
     for k in [0.0, 1.0, 4.0, 11.0] {
-        let h = halo_flux(&p, &d, &vrep, &domain, &HaloParams { ratio: k }).unwrap();
+        let h = halo_flux(&p, &d, &vrep, &domain, &HaloParams::ratio(k)).unwrap();
         for f in &h.flux {
             assert!((f - q0).norm() < 1e-12 * q0.norm(), "k={k}: {f:?}");
         }
@@ -40,7 +40,7 @@ fn halo_on_a_cubic_lattice_is_exact_away_from_walls_and_flags_truncation() {
     };
     let domain = Domain::of_container(&container).unwrap();
     let k = 4.0;
-    let h = halo_flux(&p, &d, &vrep, &domain, &HaloParams { ratio: k }).unwrap();
+    let h = halo_flux(&p, &d, &vrep, &domain, &HaloParams::ratio(k)).unwrap();
     let expected = -LAMBDA * grad;
     let mut exact = 0;
     for (i, c) in p.centres.iter().enumerate() {
@@ -72,7 +72,7 @@ fn halo_ratio_zero_equals_the_particle_flux() {
     let q = particle_flux(&pairs, &branches, &g, &vrep, &t).unwrap();
     let d = particle_dipoles(&pairs, &branches, &g, &t).unwrap();
     let domain = Domain::around(&p).unwrap();
-    let h = halo_flux(&p, &d, &vrep, &domain, &HaloParams { ratio: 0.0 }).unwrap();
+    let h = halo_flux(&p, &d, &vrep, &domain, &HaloParams::ratio(0.0)).unwrap();
     assert_eq!(h.flux, q);
     assert_eq!(h.report.n_truncated, 0);
 }
@@ -95,7 +95,7 @@ fn halo_does_not_depend_on_the_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| halo_flux(&p, &d, &vrep, &domain, &HaloParams { ratio: 6.0 }).unwrap())
+        pool.install(|| halo_flux(&p, &d, &vrep, &domain, &HaloParams::ratio(6.0)).unwrap())
     };
     let one = run(1);
     let three = run(3);
