@@ -1,0 +1,56 @@
+//! Errors of demcon-packing: bad input (with the field, value and what is allowed), file
+//! problems (with the path and line), and numerical failures.
+
+use std::path::PathBuf;
+
+use demcon_core::CoreError;
+
+/// Everything that can go wrong while packing, carving or reading/writing packings.
+#[derive(Debug, thiserror::Error)]
+pub enum PackingError {
+    /// A parameter is out of range (names the field, the value and what is allowed).
+    #[error(transparent)]
+    Invalid(#[from] CoreError),
+    /// The container cannot hold the requested particles.
+    #[error("container too small: {reason}")]
+    ContainerTooSmall {
+        /// What does not fit, with the numbers (m).
+        reason: String,
+    },
+    /// The random initial placement (random sequential addition) did not succeed.
+    #[error("could not place {count} particles at random without overlap, even at volume fraction {phi:.3}")]
+    Placement {
+        /// Number of particles requested.
+        count: usize,
+        /// Lowest starting volume fraction tried.
+        phi: f64,
+    },
+    /// The event-driven run left overlapping spheres: an internal numerical failure.
+    #[error(
+        "numerical failure: spheres overlap by {overlap:.3e} of the smaller radius (allowed {allowed:.0e})"
+    )]
+    Overlap {
+        /// Largest overlap divided by the smaller radius.
+        overlap: f64,
+        /// The largest overlap accepted.
+        allowed: f64,
+    },
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The system error.
+        source: std::io::Error,
+    },
+    /// A packing file is malformed.
+    #[error("{}:{line}: {message}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// Line number, from 1.
+        line: usize,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+}

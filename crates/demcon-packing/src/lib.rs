@@ -1,0 +1,41 @@
+//! Dense random sphere packings for demcon: the Lubachevsky–Stillinger algorithm (LSA)
+//! with radii growing in proportion, in a box, cylinder, sphere or periodic box; radius
+//! distributions; carving of packings by regions; plain-text `x y z r` files.
+//!
+//! ```
+//! use demcon_core::Container;
+//! use demcon_packing::{PackingParams, RadiusDistribution, StopReason, pack};
+//!
+//! // 300 spheres, Gaussian radii (std/mean 0.3), in a 1 mm periodic box at φ = 0.55.
+//! let params = PackingParams::new(
+//!     Container::Periodic { size: [1e-3; 3] },
+//!     300,
+//!     0.55,
+//!     RadiusDistribution::gaussian(0.3),
+//! );
+//! let (spheres, report) = pack(&params, 42, None).unwrap();
+//! assert_eq!(report.stop, StopReason::TargetReached);
+//! assert_eq!(spheres.len(), 300);
+//! assert!((report.packing.phi - 0.55).abs() < 1e-9);
+//! assert!(report.packing.max_overlap < 1e-9);
+//! println!("{report}");
+//! ```
+#![warn(missing_docs)]
+
+mod carve;
+mod error;
+mod lsa;
+mod params;
+mod radius;
+mod report;
+mod xyzr;
+
+pub use carve::carve;
+pub use error::PackingError;
+pub use lsa::{MAX_OVERLAP, pack, predict};
+pub use params::{MAX_PHI_ABOVE_JAMMING, PackProgress, PackingParams, StopReason};
+pub use radius::{DEFAULT_TRUNCATION_SIGMAS, MIN_RATIO_FLOOR, RadiusDistribution, jamming_estimate};
+pub use report::{PackingReport, PackingSummary, RadiusSummary, bulk_phi, max_overlap, summarize};
+pub use xyzr::{
+    XyzrFile, parse_xyzr, read_xyzr, read_xyzr_file, write_atomic, write_xyzr, write_xyzr_with_notes,
+};

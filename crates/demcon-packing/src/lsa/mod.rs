@@ -1,0 +1,644 @@
+//! The Lubachevsky–Stillinger packing: event-driven hard-sphere dynamics with radii
+//! growing in proportion.
+//!
+//! Scheme (single-event, after Smallenburg 2022): every particle holds exactly one
+//! scheduled event, the earliest of (a) a collision with a neighbour, (b) a wall hit,
+//! (c) leaving its neighbour-list bounding sphere. Events sit in an indexed heap keyed by
+//! `(time, id)`. A collision event stores its partner's collision counter and is discarded
+//! as stale when the partner has collided since. Particles are advanced lazily (each keeps
+//! its own time stamp). Neighbour lists: each particle owns a bounding sphere (its radius
+//! plus a skin) fixed in space until it would leave it; two particles are neighbours iff
+//! their bounding spheres overlap, found through a cell grid on the sphere centres. All
+//! radii follow `R_i(t) = a_i s(t)` with `s(t) = s0 + g t`, so the distribution is kept;
+//! `s = 1` is the target. A velocity-rescaling thermostat keeps the growth rate relative
+//! to the thermal speed fixed (growth injects kinetic energy). The collision virial gives
+//! the reduced pressure that detects jamming.
+
+pub(crate) mod grid;
+pub(crate) mod heap;
+pub mod predict;
+
+use std::time::Instant;
+
+use demcon_core::{Container, ParticleSet, Vec3, morton_order};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+use crate::error::PackingError;
+use crate::params::{PackProgress, PackingParams, StopReason};
+use crate::radius::jamming_estimate;
+use crate::report::{PackingReport, summarize};
+use grid::CellGrid;
+use heap::EventHeap;
+use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay, plane_delay};
+
+/// Largest overlap (relative to the smaller radius) accepted in a finished packing before
+/// it is reported as a numerical failure.
+pub const MAX_OVERLAP: f64 = 1e-9;
+
+/// Wall index of the radial wall of a cylinder or sphere (box walls are `2k` and `2k + 1`).
+const RADIAL: u8 = 6;
+
+#[derive(Debug, Clone, Copy)]
+enum Ev {
+    Pair { j: u32, cj: u32 },
+    Wall(u8),
+    Exit,
+}
+
+struct Engine {
+    container: Container,
+    period: Option<Vec3>,
+    /// Radius of each particle at s = 1, i.e. at the target (m).
+    a: Vec<f64>,
+    a_mean: f64,
+    x: Vec<Vec3>,
+    v: Vec<Vec3>,
+    t: Vec<f64>,
+    s0: f64,
+    g: f64,
+    count: Vec<u32>,
+    ev: Vec<Ev>,
+    heap: EventHeap,
+    nb: Vec<Vec<u32>>,
+    bc: Vec<Vec3>,
+    brad: Vec<f64>,
+    grid: CellGrid,
+    skin: f64,
+    ke: f64,
+    ke_target: f64,
+    // statistics
+    collisions: u64,
+    wall_collisions: u64,
+    rebuilds: u64,
+    stale: u64,
+    rescales: u64,
+    virial: f64,
+}
+
+/// Packs `params.count` spheres by the Lubachevsky–Stillinger algorithm.
+///
+/// Returns the packing renumbered along a Morton curve (absolute radii and centres, m) and
+/// the report. Deterministic: the same parameters and seed give the same packing, bit for
+/// bit. `progress` is called about five times a second. A run that stops short of the
+/// target (jamming, budgets) is not an error: check [`PackingReport::stop`].
+///
+/// Errors: bad parameters ([`PackingError::Invalid`]), a container that cannot hold the
+/// particles, a failed initial placement, or overlaps left by round-off
+/// ([`PackingError::Overlap`], above [`MAX_OVERLAP`]).
+pub fn pack(
+    params: &PackingParams,
+    seed: u64,
+    progress: Option<&dyn Fn(&PackProgress)>,
+) -> Result<(ParticleSet, PackingReport), PackingError> {
+    let start = Instant::now();
+    params.validate()?;
+    let n = params.count;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let rel = params.radii.sample(n, &mut rng);
+    let vol = params.container.volume();
+    let rel_vol: f64 = rel.iter().map(|r| r.powi(3)).sum::<f64>() * 4.0 / 3.0 * std::f64::consts::PI;
+    let scale = (params.target_phi * vol / rel_vol).cbrt();
+    let a: Vec<f64> = rel.iter().map(|r| r * scale).collect();
+    let a_max = a.iter().copied().fold(0.0, f64::max);
+    let a_mean = a.iter().sum::<f64>() / n as f64;
+    check_fits(params, a_max, a_mean)?;
+
+    let mut eng = Engine::start(params, a, a_mean, &mut rng)?;
+    let loop_start = Instant::now();
+    let (stop, p_red) = eng.run(params, &start, progress);
+    let loop_s = loop_start.elapsed().as_secs_f64();
+
+    let (s_final, now) = match stop {
+        StopReason::TargetReached => (1.0, (1.0 - eng.s0) / eng.g),
+        _ => {
+            let now = eng.latest_time();
+            (eng.s(now), now)
+        }
+    };
+    for i in 0..n {
+        eng.advance(i, now);
+    }
+    let radii: Vec<f64> = eng.a.iter().map(|a| a * s_final).collect();
+    let raw = ParticleSet::new(eng.x.clone(), radii)?;
+    let order = morton_order(&raw.centres, &params.container.bounds());
+    let particles = raw.permuted(&order);
+
+    let packing = summarize(&particles, &params.container, params.bulk_margin_diameters);
+    if packing.max_overlap > MAX_OVERLAP {
+        return Err(PackingError::Overlap {
+            overlap: packing.max_overlap,
+            allowed: MAX_OVERLAP,
+        });
+    }
+    let events = eng.collisions + eng.wall_collisions + eng.rebuilds;
+    let report = PackingReport {
+        packing,
+        target_phi: params.target_phi,
+        jamming_estimate: jamming_estimate(&params.radii),
+        stop,
+        events,
+        collisions: eng.collisions,
+        wall_collisions: eng.wall_collisions,
+        stale_events: eng.stale,
+        thermostat_rescales: eng.rescales,
+        reduced_pressure: p_red,
+        events_per_s: events as f64 / loop_s.max(1e-9),
+        wall_s: start.elapsed().as_secs_f64(),
+        growth_rate: params.growth_rate,
+        seed,
+    };
+    Ok((particles, report))
+}
+
+/// Rejects containers that cannot hold the largest particle, and periodic boxes too small
+/// for the nearest-image convention of the neighbour lists.
+fn check_fits(params: &PackingParams, a_max: f64, a_mean: f64) -> Result<(), PackingError> {
+    let c = &params.container;
+    if a_max >= c.inradius() {
+        return Err(PackingError::ContainerTooSmall {
+            reason: format!(
+                "at φ = {} the largest of the {} particles has radius {a_max:.4e} m, but the {} \
+                 only fits spheres of radius below {:.4e} m; use more particles or a larger container",
+                params.target_phi,
+                params.count,
+                c.kind(),
+                c.inradius()
+            ),
+        });
+    }
+    if let Some(p) = c.period() {
+        let reach = 4.0 * (a_max + params.neighbour_skin * a_mean);
+        let lmin = p.iter().copied().fold(f64::INFINITY, f64::min);
+        if reach >= lmin {
+            return Err(PackingError::ContainerTooSmall {
+                reason: format!(
+                    "a periodic box needs each period above 4 × (largest radius + neighbour skin) \
+                     = {reach:.4e} m, but the smallest is {lmin:.4e} m with {} particles at φ = {}; \
+                     use more particles",
+                    params.count, params.target_phi
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Uniform random point at which a sphere of radius `r` lies inside the container.
+fn random_point(c: &Container, r: f64, rng: &mut ChaCha8Rng) -> Vec3 {
+    let b = c.bounds();
+    loop {
+        let u = Vec3::new(rng.random(), rng.random(), rng.random());
+        let p = match c {
+            Container::Periodic { .. } => b.min + u.component_mul(&b.extent()),
+            _ => {
+                let lo = b.min + Vec3::repeat(r);
+                lo + u.component_mul(&(b.extent() - Vec3::repeat(2.0 * r)))
+            }
+        };
+        if matches!(c, Container::Periodic { .. }) || c.wall_distance(&p) >= r {
+            return p;
+        }
+    }
+}
+
+impl Engine {
+    /// Random sequential placement at a low volume fraction, velocities, lists, events.
+    fn start(
+        params: &PackingParams,
+        a: Vec<f64>,
+        a_mean: f64,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Self, PackingError> {
+        let n = a.len();
+        let c = params.container;
+        let period = c.period().map(|p| Vec3::new(p[0], p[1], p[2]));
+        let a_max = a.iter().copied().fold(0.0, f64::max);
+        let mut phi0 = params.initial_phi.min(0.9 * params.target_phi);
+        // Largest first; ties by id.
+        let mut by_size: Vec<u32> = (0..n as u32).collect();
+        by_size.sort_by(|&i, &j| a[j as usize].total_cmp(&a[i as usize]).then(i.cmp(&j)));
+        let x = 'attempt: loop {
+            let s0 = (phi0 / params.target_phi).cbrt();
+            let mut grid = CellGrid::new(&c.bounds(), 2.0 * a_max * s0, period.is_some(), n, 4 * n + 64);
+            let mut x = vec![Vec3::zeros(); n];
+            for &i in &by_size {
+                let i = i as usize;
+                let ri = a[i] * s0;
+                let mut placed = false;
+                for _ in 0..20_000 {
+                    let p = random_point(&c, ri, rng);
+                    let mut free = true;
+                    grid.for_each_near(&p, |j| {
+                        if free {
+                            let d = min_image(period, x[j] - p);
+                            let s = ri + a[j] * s0;
+                            free = d.norm_squared() >= s * s;
+                        }
+                    });
+                    if free {
+                        x[i] = p;
+                        grid.insert(i, &p);
+                        placed = true;
+                        break;
+                    }
+                }
+                if !placed {
+                    phi0 *= 0.7;
+                    if phi0 < 1e-3 {
+                        return Err(PackingError::Placement {
+                            count: n,
+                            phi: phi0 / 0.7,
+                        });
+                    }
+                    continue 'attempt;
+                }
+            }
+            break x;
+        };
+        let s0 = (phi0 / params.target_phi).cbrt();
+        // Renumber along a Morton curve: neighbours in space become neighbours in memory.
+        let order = morton_order(&x, &c.bounds());
+        let x: Vec<Vec3> = order.iter().map(|&i| x[i as usize]).collect();
+        let a: Vec<f64> = order.iter().map(|&i| a[i as usize]).collect();
+        let mut v: Vec<Vec3> = (0..n)
+            .map(|_| {
+                Vec3::new(
+                    StandardNormal.sample(rng),
+                    StandardNormal.sample(rng),
+                    StandardNormal.sample(rng),
+                ) * a_mean
+            })
+            .collect();
+        let drift = v.iter().sum::<Vec3>() / n as f64;
+        if n > 1 {
+            v.iter_mut().for_each(|vi| *vi -= drift);
+        }
+        let ke_target = 1.5 * n as f64 * a_mean * a_mean;
+        let ke = 0.5 * v.iter().map(|v| v.norm_squared()).sum::<f64>();
+        let scale = if ke > 0.0 { (ke_target / ke).sqrt() } else { 1.0 };
+        v.iter_mut().for_each(|vi| *vi *= scale);
+
+        let skin = params.neighbour_skin;
+        let cell = 2.0 * (a_max + skin * a_mean);
+        let grid = CellGrid::new(&c.bounds(), cell, period.is_some(), n, 2 * n + 64);
+        let mut eng = Engine {
+            container: c,
+            period,
+            a,
+            a_mean,
+            x,
+            v,
+            t: vec![0.0; n],
+            s0,
+            g: params.growth_rate,
+            count: vec![0; n],
+            ev: vec![Ev::Exit; n],
+            heap: EventHeap::new(vec![f64::INFINITY; n]),
+            nb: vec![Vec::new(); n],
+            bc: vec![Vec3::zeros(); n],
+            brad: vec![0.0; n],
+            grid,
+            skin,
+            ke: ke_target,
+            ke_target,
+            collisions: 0,
+            wall_collisions: 0,
+            rebuilds: 0,
+            stale: 0,
+            rescales: 0,
+            virial: 0.0,
+        };
+        for i in 0..n {
+            eng.bc[i] = eng.x[i];
+            eng.brad[i] = (eng.a[i] + skin * a_mean) * s0;
+            let p = eng.bc[i];
+            eng.grid.insert(i, &p);
+        }
+        for i in 0..n {
+            let mut list = std::mem::take(&mut eng.nb[i]);
+            eng.find_neighbours(i, &mut list);
+            list.retain(|&j| j as usize > i);
+            for &j in &list {
+                eng.nb[j as usize].push(i as u32);
+            }
+            eng.nb[i].extend(list);
+        }
+        eng.predict_all(0.0);
+        Ok(eng)
+    }
+
+    #[inline]
+    fn s(&self, t: f64) -> f64 {
+        self.s0 + self.g * t
+    }
+
+    #[inline]
+    fn pos(&self, j: usize, now: f64) -> Vec3 {
+        self.x[j] + self.v[j] * (now - self.t[j])
+    }
+
+    /// Time of the latest processed event (the clock of the most recently updated particle).
+    fn latest_time(&self) -> f64 {
+        self.t.iter().copied().fold(0.0, f64::max)
+    }
+
+    #[inline]
+    fn advance(&mut self, i: usize, now: f64) {
+        let mut p = self.x[i] + self.v[i] * (now - self.t[i]);
+        if let Some(l) = self.period {
+            for k in 0..3 {
+                if p[k] >= l[k] {
+                    p[k] -= l[k];
+                } else if p[k] < 0.0 {
+                    p[k] += l[k];
+                }
+            }
+        }
+        self.x[i] = p;
+        self.t[i] = now;
+    }
+
+    /// Particles whose bounding spheres overlap that of `i` (written into `out`).
+    fn find_neighbours(&self, i: usize, out: &mut Vec<u32>) {
+        out.clear();
+        let (ci, ri) = (self.bc[i], self.brad[i]);
+        self.grid.for_each_near(&ci, |j| {
+            if j != i {
+                let d = min_image(self.period, self.bc[j] - ci);
+                let s = ri + self.brad[j];
+                if d.norm_squared() < s * s {
+                    out.push(j as u32);
+                }
+            }
+        });
+    }
+
+    /// New bounding sphere and neighbour list for `i` (synchronised at `now`).
+    fn rebuild(&mut self, i: usize, now: f64) {
+        let mut list = std::mem::take(&mut self.nb[i]);
+        for &j in &list {
+            let l = &mut self.nb[j as usize];
+            if let Some(k) = l.iter().position(|&q| q as usize == i) {
+                l.swap_remove(k);
+            }
+        }
+        self.grid.remove(i);
+        self.bc[i] = self.x[i];
+        self.brad[i] = (self.a[i] + self.skin * self.a_mean) * self.s(now);
+        let p = self.bc[i];
+        self.grid.insert(i, &p);
+        self.find_neighbours(i, &mut list);
+        for &j in &list {
+            self.nb[j as usize].push(i as u32);
+        }
+        self.nb[i] = list;
+        self.rebuilds += 1;
+    }
+
+    /// The earliest event of particle `i` (synchronised at `now`): time and kind.
+    #[inline]
+    fn next_event(&self, i: usize, now: f64) -> (f64, Ev) {
+        let (xi, vi) = (self.x[i], self.v[i]);
+        let s = self.s(now);
+        let ri = self.a[i] * s;
+        let gi = self.a[i] * self.g;
+        // Leaving the bounding sphere.
+        let p = min_image(self.period, xi - self.bc[i]);
+        let room = self.brad[i] - ri;
+        let mut best = if room - p.norm() <= 0.0 {
+            0.0
+        } else {
+            inside_ball_delay(&p, &vi, room, gi)
+        };
+        let mut kind = Ev::Exit;
+        // Walls.
+        let mut wall = |d: f64, w: u8| {
+            if d < best {
+                best = d;
+                kind = Ev::Wall(w);
+            }
+        };
+        match self.container {
+            Container::Box { size } => {
+                for k in 0..3 {
+                    wall(plane_delay(xi[k] - ri, vi[k], gi), 2 * k as u8);
+                    wall(plane_delay(size[k] - xi[k] - ri, -vi[k], gi), 2 * k as u8 + 1);
+                }
+            }
+            Container::Cylinder { radius, length } => {
+                wall(plane_delay(xi.z - ri, vi.z, gi), 4);
+                wall(plane_delay(length - xi.z - ri, -vi.z, gi), 5);
+                let pr = Vec3::new(xi.x, xi.y, 0.0);
+                let vr = Vec3::new(vi.x, vi.y, 0.0);
+                wall(inside_ball_delay(&pr, &vr, radius - ri, gi), RADIAL);
+            }
+            Container::Sphere { radius } => {
+                wall(inside_ball_delay(&xi, &vi, radius - ri, gi), RADIAL);
+            }
+            Container::Periodic { .. } => {}
+        }
+        // Neighbours.
+        for &j in &self.nb[i] {
+            let j = j as usize;
+            let r = min_image(self.period, self.pos(j, now) - xi);
+            let sa = self.a[i] + self.a[j];
+            let d = pair_delay(&r, &(self.v[j] - vi), sa * s, sa * self.g);
+            if d < best {
+                best = d;
+                kind = Ev::Pair {
+                    j: j as u32,
+                    cj: self.count[j],
+                };
+            }
+        }
+        (now + best, kind)
+    }
+
+    #[inline]
+    fn predict(&mut self, i: usize, now: f64) {
+        let (t, kind) = self.next_event(i, now);
+        self.ev[i] = kind;
+        self.heap.update(i, t);
+    }
+
+    /// Recomputes every particle's event (all synchronised at `now`) and rebuilds the heap.
+    fn predict_all(&mut self, now: f64) {
+        let n = self.a.len();
+        let mut times = Vec::with_capacity(n);
+        for i in 0..n {
+            let (t, kind) = self.next_event(i, now);
+            self.ev[i] = kind;
+            times.push(t);
+        }
+        self.heap = EventHeap::new(times);
+    }
+
+    /// Inward unit normal of wall `w` at the position of particle `i`.
+    fn wall_normal(&self, i: usize, w: u8) -> Vec3 {
+        if w == RADIAL {
+            let mut p = self.x[i];
+            if matches!(self.container, Container::Cylinder { .. }) {
+                p.z = 0.0;
+            }
+            let n = p.norm();
+            if n > 0.0 { -p / n } else { Vec3::zeros() }
+        } else {
+            let k = (w / 2) as usize;
+            let mut e = Vec3::zeros();
+            e[k] = if w.is_multiple_of(2) { 1.0 } else { -1.0 };
+            e
+        }
+    }
+
+    /// Synchronises everyone at `now`, restarts the clock at 0 and rescales the velocities to
+    /// the target kinetic energy; recomputes all events.
+    fn thermostat(&mut self, now: f64) {
+        let n = self.a.len();
+        for i in 0..n {
+            self.advance(i, now);
+            self.t[i] = 0.0;
+        }
+        self.s0 = self.s(now);
+        let ke = 0.5 * self.v.iter().map(|v| v.norm_squared()).sum::<f64>();
+        if ke > 0.0 {
+            let f = (self.ke_target / ke).sqrt();
+            self.v.iter_mut().for_each(|v| *v *= f);
+        }
+        self.ke = self.ke_target;
+        self.rescales += 1;
+        self.predict_all(0.0);
+    }
+
+    /// The event loop. Returns the stop reason and the last reduced pressure.
+    fn run(
+        &mut self,
+        params: &PackingParams,
+        start: &Instant,
+        progress: Option<&dyn Fn(&PackProgress)>,
+    ) -> (StopReason, f64) {
+        let n = self.a.len();
+        let ke_limit = |e: &Engine| e.ke_target * (1.0 + params.thermostat_tolerance);
+        // Pressure window: virial and elapsed time since its start (time units).
+        let mut win_elapsed_before = 0.0; // time accumulated before the last clock restart
+        let mut win_start = 0.0;
+        let mut win_collisions = 0u64;
+        let mut p_red = 0.0;
+        let mut last_progress = 0.0;
+        let mut checks = 0u64;
+        loop {
+            let (i, te) = self.heap.top();
+            let t_target = (1.0 - self.s0) / self.g;
+            if te >= t_target {
+                return (StopReason::TargetReached, p_red);
+            }
+            match self.ev[i] {
+                Ev::Pair { j, cj } => {
+                    let j = j as usize;
+                    if self.count[j] != cj {
+                        self.stale += 1;
+                        self.advance(i, te);
+                        self.predict(i, te);
+                        continue;
+                    }
+                    self.advance(i, te);
+                    self.advance(j, te);
+                    let r = min_image(self.period, self.x[j] - self.x[i]);
+                    let dist = r.norm();
+                    let nrm = r / dist;
+                    let gamma = (self.a[i] + self.a[j]) * self.g;
+                    let (mut vi, mut vj) = (self.v[i], self.v[j]);
+                    let imp = collide_pair(&mut vi, &mut vj, &nrm, gamma);
+                    self.v[i] = vi;
+                    self.v[j] = vj;
+                    self.ke += imp * gamma;
+                    self.virial += imp * dist;
+                    self.count[i] += 1;
+                    self.count[j] += 1;
+                    self.collisions += 1;
+                    win_collisions += 1;
+                    self.predict(i, te);
+                    self.predict(j, te);
+                }
+                Ev::Wall(w) => {
+                    self.advance(i, te);
+                    let nrm = self.wall_normal(i, w);
+                    let w0 = self.v[i].dot(&nrm);
+                    let mut vi = self.v[i];
+                    let dw = collide_wall(&mut vi, &nrm, self.a[i] * self.g);
+                    self.v[i] = vi;
+                    self.ke += dw * w0 + 0.5 * dw * dw;
+                    self.count[i] += 1;
+                    self.wall_collisions += 1;
+                    self.predict(i, te);
+                }
+                Ev::Exit => {
+                    self.advance(i, te);
+                    self.rebuild(i, te);
+                    self.predict(i, te);
+                }
+            }
+            let mut now = te;
+            if self.ke > ke_limit(self) {
+                // Pressure over the window, with the mean temperature of the window.
+                let kt = (self.ke + self.ke_target) / (3.0 * n as f64);
+                let dt = win_elapsed_before + now - win_start;
+                if win_collisions >= n as u64 && dt > 0.0 {
+                    p_red = 1.0 + self.virial / (3.0 * n as f64 * kt * dt);
+                    self.virial = 0.0;
+                    win_collisions = 0;
+                    win_elapsed_before = 0.0;
+                } else {
+                    win_elapsed_before += now - win_start;
+                }
+                self.thermostat(now);
+                now = 0.0;
+                win_start = 0.0;
+                if p_red >= params.jam_pressure {
+                    return (StopReason::Jammed, p_red);
+                }
+            }
+            checks += 1;
+            if checks.is_multiple_of(1024) {
+                let events = self.collisions + self.wall_collisions + self.rebuilds;
+                if events >= params.max_events {
+                    return (StopReason::EventBudget, p_red);
+                }
+                let wall = start.elapsed().as_secs_f64();
+                if wall >= params.max_wall_s {
+                    return (StopReason::TimeBudget, p_red);
+                }
+                if let Some(cb) = progress
+                    && wall - last_progress >= 0.2
+                {
+                    last_progress = wall;
+                    let s = self.s(now);
+                    cb(&PackProgress {
+                        phi: params.target_phi * s * s * s,
+                        target_phi: params.target_phi,
+                        events,
+                        wall_s: wall,
+                        reduced_pressure: p_red,
+                    });
+                }
+            }
+        }
+    }
+}
+
+/// Nearest periodic image of a difference vector (unchanged without a period).
+#[inline]
+fn min_image(period: Option<Vec3>, mut d: Vec3) -> Vec3 {
+    if let Some(l) = period {
+        for k in 0..3 {
+            let h = 0.5 * l[k];
+            if d[k] > h {
+                d[k] -= l[k];
+            } else if d[k] < -h {
+                d[k] += l[k];
+            }
+        }
+    }
+    d
+}

@@ -1,0 +1,207 @@
+//! `demcon pack`: flags → `PackingParams`, a progress bar, the packing file and the report.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use demcon_core::Container;
+use demcon_packing::{
+    PackProgress, PackingParams, RadiusDistribution, pack, write_atomic, write_xyzr_with_notes,
+};
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// Exit status when the target volume fraction was not reached and `--allow-short` was not given.
+pub const EXIT_SHORT: u8 = 3;
+
+/// Container kinds accepted by `--container`.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ContainerKind {
+    /// Box with hard walls spanning [0, LX]×[0, LY]×[0, LZ] (`--size`).
+    Box,
+    /// Cylinder along z, hard walls (`--radius`, `--length`).
+    Cylinder,
+    /// Sphere centred at the origin, hard wall (`--radius`).
+    Sphere,
+    /// Periodic box [0, LX]×[0, LY]×[0, LZ] (`--size`).
+    Periodic,
+}
+
+/// Flags of `demcon pack`.
+#[derive(Debug, Args)]
+pub struct PackArgs {
+    /// Container kind.
+    #[arg(long, value_enum)]
+    container: ContainerKind,
+    /// Box or periodic box edge lengths LX,LY,LZ (m).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    size: Option<Vec<f64>>,
+    /// Cylinder or sphere radius (m).
+    #[arg(long, allow_negative_numbers = true)]
+    radius: Option<f64>,
+    /// Cylinder length along z (m).
+    #[arg(long, allow_negative_numbers = true)]
+    length: Option<f64>,
+    /// Number of particles.
+    #[arg(long, allow_negative_numbers = true)]
+    count: i64,
+    /// Target volume fraction.
+    #[arg(long, allow_negative_numbers = true)]
+    phi: f64,
+    /// Std/mean of the Gaussian radius distribution (0: monodisperse).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    radius_cov: f64,
+    /// Smallest radius over the mean (default max(1 − 2.5·cov, 0.1)).
+    #[arg(long)]
+    radius_min_ratio: Option<f64>,
+    /// Largest radius over the mean (default 1 + 2.5·cov).
+    #[arg(long)]
+    radius_max_ratio: Option<f64>,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output packing file (`x y z r`, written atomically).
+    #[arg(long)]
+    out: PathBuf,
+    /// Growth rate of the mean radius over the thermal speed.
+    #[arg(long)]
+    growth_rate: Option<f64>,
+    /// Stop after this many events.
+    #[arg(long)]
+    max_events: Option<u64>,
+    /// Stop after this many seconds.
+    #[arg(long)]
+    max_time: Option<f64>,
+    /// Reduced pressure PV/(NkT) taken as jamming.
+    #[arg(long)]
+    jam_pressure: Option<f64>,
+    /// Exit with status 0 even when the target φ was not reached (jammed or out of budget).
+    #[arg(long)]
+    allow_short: bool,
+    /// Also write the report as JSON to this file.
+    #[arg(long)]
+    report_json: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+fn container(a: &PackArgs) -> anyhow::Result<Container> {
+    let size = || -> anyhow::Result<[f64; 3]> {
+        match &a.size {
+            Some(s) if s.len() == 3 => Ok([s[0], s[1], s[2]]),
+            Some(s) => bail!("--size needs three lengths LX,LY,LZ (m), got {}", s.len()),
+            None => bail!("--container {:?} needs --size LX,LY,LZ (m)", a.container),
+        }
+    };
+    let need = |v: Option<f64>, flag: &str| {
+        v.with_context(|| format!("--container {:?} needs {flag}", a.container).to_lowercase())
+    };
+    let c = match a.container {
+        ContainerKind::Box => Container::Box { size: size()? },
+        ContainerKind::Periodic => Container::Periodic { size: size()? },
+        ContainerKind::Cylinder => Container::Cylinder {
+            radius: need(a.radius, "--radius R (m)")?,
+            length: need(a.length, "--length L (m)")?,
+        },
+        ContainerKind::Sphere => Container::Sphere {
+            radius: need(a.radius, "--radius R (m)")?,
+        },
+    };
+    c.validate()?;
+    Ok(c)
+}
+
+/// Runs `demcon pack`.
+pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
+    let container = container(&a)?;
+    if a.count <= 0 {
+        bail!("invalid count = {}: must be ≥ 1", a.count);
+    }
+    let mut radii = RadiusDistribution::gaussian(a.radius_cov);
+    if let RadiusDistribution::Gaussian {
+        min_ratio, max_ratio, ..
+    } = &mut radii
+    {
+        *min_ratio = a.radius_min_ratio.unwrap_or(*min_ratio);
+        *max_ratio = a.radius_max_ratio.unwrap_or(*max_ratio);
+    } else if a.radius_cov < 0.0 || !a.radius_cov.is_finite() {
+        bail!("invalid radius-cov = {}: must be ≥ 0", a.radius_cov);
+    }
+    let mut params = PackingParams::new(container, a.count as usize, a.phi, radii);
+    if let Some(g) = a.growth_rate {
+        params.growth_rate = g;
+    }
+    if let Some(m) = a.max_events {
+        params.max_events = m;
+    }
+    if let Some(t) = a.max_time {
+        params.max_wall_s = t;
+    }
+    if let Some(p) = a.jam_pressure {
+        params.jam_pressure = p;
+    }
+    params.validate()?;
+
+    let bar = if a.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(1000);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {msg}")
+                .context("progress bar template")?,
+        );
+        b
+    };
+    let update = |p: &PackProgress| {
+        bar.set_position((1000.0 * p.phi / p.target_phi) as u64);
+        bar.set_message(format!(
+            "φ {:.4}/{:.4}  {} events  {:.2e}/s  p* {:.2e}",
+            p.phi,
+            p.target_phi,
+            p.events,
+            p.events as f64 / p.wall_s.max(1e-9),
+            p.reduced_pressure
+        ));
+    };
+    let result = pack(&params, a.seed, Some(&update));
+    bar.finish_and_clear();
+    let (particles, report) = result.context("packing")?;
+
+    let notes = vec![
+        format!(
+            "generator demcon-packing {} (Lubachevsky–Stillinger), seed {}, growth rate {}",
+            env!("CARGO_PKG_VERSION"),
+            a.seed,
+            params.growth_rate
+        ),
+        format!(
+            "target phi {} reached phi {} stop {:?}",
+            params.target_phi, report.packing.phi, report.stop
+        ),
+    ];
+    write_xyzr_with_notes(&a.out, &particles, &container, &notes)
+        .with_context(|| format!("writing packing {}", a.out.display()))?;
+    if let Some(path) = &a.report_json {
+        let json = serde_json::to_string_pretty(&report)?;
+        write_atomic(path, json.as_bytes()).with_context(|| format!("writing report {}", path.display()))?;
+    }
+    println!("{report}");
+    println!("written            {}", a.out.display());
+    if report.reached_target() {
+        return Ok(ExitCode::SUCCESS);
+    }
+    eprintln!(
+        "{}: target φ = {} NOT reached; stopped at φ = {:.5} ({}). The packing was written anyway.",
+        if a.allow_short { "warning" } else { "error" },
+        params.target_phi,
+        report.packing.phi,
+        report.stop
+    );
+    if a.allow_short {
+        Ok(ExitCode::SUCCESS)
+    } else {
+        eprintln!("pass --allow-short to accept a packing below the target");
+        Ok(ExitCode::from(EXIT_SHORT))
+    }
+}
