@@ -36,5 +36,5 @@ pub use constraints::{Constraints, Diagnostic, FloatingPolicy, NodeKind, resolve
 pub use error::SolveError;
 pub use flows::{boundary_flow, edge_flows};
 pub use network::{Components, Network};
-pub use par::CHUNK;
+pub use par::{CHUNK, MIN_TASK_CHUNKS};
 pub use solve::{LinearSystem, Method, Solution, SolveParams, SolveReport, solve_shifted, solve_steady};

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use crate::constraints::{Constraints, NodeKind};
 use crate::error::{SolveError, check_finite, check_len};
 use crate::network::Network;
-use crate::par::{CHUNK, dot, ordered_sum};
+use crate::par::{CHUNK, MIN_TASK_CHUNKS, dot, ordered_sum};
 use crate::{cholesky, faer_cg};
 
 /// How the linear system is solved.
@@ -175,10 +175,20 @@ impl<'a> LinearSystem<'a> {
             Some(d) => kept.iter().copied().find(|&p| d[p as usize] <= 0.0),
         };
         if let Some(example) = unanchored {
+            let (clusters, largest) = constraints
+                .diagnostics()
+                .iter()
+                .find_map(|d| match d {
+                    crate::Diagnostic::FloatingKept {
+                        clusters, largest, ..
+                    } => Some((*clusters, *largest)),
+                    _ => None,
+                })
+                .unwrap_or((1, kept.len()));
             return Err(SolveError::FloatingCluster {
-                clusters: 1,
+                clusters,
                 nodes: kept.len(),
-                largest: kept.len(),
+                largest,
                 example,
             });
         }
@@ -307,17 +317,20 @@ impl<'a> LinearSystem<'a> {
 
     /// r = b − A x on free rows (x holds fixed values at fixed nodes), 0 elsewhere.
     pub(crate) fn residual(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
-        r.par_chunks_mut(CHUNK).enumerate().for_each(|(c, rc)| {
-            let base = c * CHUNK;
-            for (k, ri) in rc.iter_mut().enumerate() {
-                let i = base + k;
-                *ri = if self.free[i] {
-                    b[i] - self.row_apply(i, x)
-                } else {
-                    0.0
-                };
-            }
-        });
+        r.par_chunks_mut(CHUNK)
+            .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .for_each(|(c, rc)| {
+                let base = c * CHUNK;
+                for (k, ri) in rc.iter_mut().enumerate() {
+                    let i = base + k;
+                    *ri = if self.free[i] {
+                        b[i] - self.row_apply(i, x)
+                    } else {
+                        0.0
+                    };
+                }
+            });
     }
 
     /// (A x)_i for one row.
@@ -336,6 +349,7 @@ impl<'a> LinearSystem<'a> {
         let partials: Vec<f64> = q
             .par_chunks_mut(CHUNK)
             .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
             .map(|(c, qc)| {
                 let base = c * CHUNK;
                 let mut acc = 0.0;
@@ -395,6 +409,7 @@ impl<'a> LinearSystem<'a> {
                 rz = rz_new;
                 p.par_chunks_mut(CHUNK)
                     .zip(z.par_chunks(CHUNK))
+                    .with_min_len(MIN_TASK_CHUNKS)
                     .for_each(|(pc, zc)| {
                         for (pi, zi) in pc.iter_mut().zip(zc) {
                             *pi = zi + beta * *pi;
@@ -421,6 +436,7 @@ impl<'a> LinearSystem<'a> {
             .par_chunks_mut(CHUNK)
             .zip(r.par_chunks(CHUNK))
             .zip(self.inv_diag.par_chunks(CHUNK))
+            .with_min_len(MIN_TASK_CHUNKS)
             .map(|((zc, rc), dc)| {
                 let (mut rz, mut rr) = (0.0, 0.0);
                 for ((zi, ri), di) in zc.iter_mut().zip(rc).zip(dc) {
@@ -453,6 +469,7 @@ impl<'a> LinearSystem<'a> {
             self.inv_diag.par_chunks(CHUNK),
         )
             .into_par_iter()
+            .with_min_len(MIN_TASK_CHUNKS)
             .map(|(xc, rc, zc, pc, qc, dc)| {
                 let (mut rz, mut rr) = (0.0, 0.0);
                 for k in 0..xc.len() {

@@ -143,7 +143,7 @@ fn cg_residual_and_agreement_with_cholesky_and_faer() {
 
 #[test]
 fn results_do_not_depend_on_thread_count() {
-    let n = 20; // 8000 nodes: several parallel chunks.
+    let n = 34; // 39 304 nodes: ten chunks, more than one parallel task.
     let (net, g) = lattice(n, 11);
     let bcs = resolve_fixed(&net, &faces(n), FloatingPolicy::Fail).unwrap();
     let s = vec![0.01; net.n_nodes()];

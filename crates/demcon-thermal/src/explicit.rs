@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use demcon_network::{CHUNK, Constraints, Network, NodeKind};
+use demcon_network::{CHUNK, Constraints, MIN_TASK_CHUNKS, Network, NodeKind};
 use rayon::prelude::*;
 
 use crate::capacity::{DtBound, stable_dt_bound};
@@ -153,6 +153,7 @@ impl<'a> ExplicitStepper<'a> {
         let partials: Vec<(f64, f64, bool)> = t_new
             .par_chunks_mut(CHUNK)
             .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
             .map(|(c, out)| {
                 let base = c * CHUNK;
                 let (mut lo, mut hi, mut bad) = (f64::INFINITY, f64::NEG_INFINITY, false);

@@ -242,11 +242,11 @@ fn a_step_above_the_bound_is_refused_and_divergence_is_detected() {
 
 #[test]
 fn explicit_does_not_depend_on_thread_count() {
-    let n = 18; // 5832 nodes: two parallel chunks.
+    let n = 34; // 39 304 nodes: ten chunks, more than one parallel task.
     let (net, g, c) = lattice(n, 9);
     let bcs = resolve_fixed(&net, &[(face(n, 0), 1.0)], FloatingPolicy::Fail).unwrap();
     let params = ExplicitParams {
-        t_end: 2.0,
+        t_end: 0.3,
         ..Default::default()
     };
     let go = |threads| {
