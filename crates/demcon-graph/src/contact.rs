@@ -385,33 +385,18 @@ fn validate_particles(particles: &ParticleSet) -> Result<(), GraphError> {
     Ok(())
 }
 
-/// Finds the contacts of a packing.
-///
-/// A pair (p, q) is a contact when its gap g_pq = d_pq − R_p − R_q is at most ε·(R_p + R_q),
-/// with d_pq the centre distance (minimum image in a periodic box). Walls make no contacts.
-///
-/// With [`ContactTolerance::TargetCoordination`] the candidate pairs within a search
-/// tolerance (`initial_epsilon`, doubled up to `max_epsilon` until there are enough) are
-/// ranked by relative gap and ε is set exactly: the fewest contacts giving Z ≥ target, i.e.
-/// ⌈Z·N/2⌉ contacts, so Z overshoots by less than 2/N unless pairs share the same gap.
-/// Z(ε) is a step function known exactly from the candidates, so this selection is the limit
-/// of a bisection on ε, without its iterations.
-///
-/// Errors: invalid parameters or particles (named), an empty set, coincident centres, a
-/// periodic box shorter than 4·R_max·(1 + ε) (contacts would have two images), an
-/// unreachable target (with the largest Z found).
-pub fn detect_contacts(
-    particles: &ParticleSet,
-    container: &Container,
-    params: &ContactParams,
-) -> Result<ContactGraph, GraphError> {
-    let start = Instant::now();
-    params.validate()?;
+/// Validated inputs of a search: positions (wrapped into a periodic box), the period, and
+/// the largest relative tolerance the period allows.
+struct Prepared<'a> {
+    pos: Cow<'a, [Vec3]>,
+    period: Option<[f64; 3]>,
+    eps_limit: f64,
+}
+
+fn prepare<'a>(particles: &'a ParticleSet, container: &Container) -> Result<Prepared<'a>, GraphError> {
     container.validate()?;
     validate_particles(particles)?;
-    let n = particles.len();
-    let radii = &particles.radii;
-    let rmax = radii.iter().copied().fold(0.0, f64::max);
+    let rmax = particles.radii.iter().copied().fold(0.0, f64::max);
     let period = container.period();
     let pos: Cow<[Vec3]> = match period {
         Some(l) => Cow::Owned(
@@ -444,7 +429,103 @@ pub fn detect_contacts(
         }
         None => f64::INFINITY,
     };
-    let search = |eps: f64| candidates(params.search, &pos, radii, period, eps);
+    Ok(Prepared {
+        pos,
+        period,
+        eps_limit,
+    })
+}
+
+/// One point of the coordination-versus-tolerance curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CoordinationPoint {
+    /// Relative gap tolerance ε (dimensionless).
+    pub epsilon: f64,
+    /// Mean coordination number Z at ε (contacts per particle).
+    pub coordination: f64,
+    /// Fraction of particles with fewer than 2 contacts at ε (dimensionless).
+    pub under_two_fraction: f64,
+}
+
+/// Mean coordination Z(ε) and the fraction of particles with fewer than 2 contacts, for each
+/// relative tolerance in `epsilons` (each finite and > 0), from one search at the largest.
+/// This is the curve that [`ContactTolerance::TargetCoordination`] inverts.
+///
+/// Errors: as [`detect_contacts`] with the largest ε.
+pub fn coordination_curve(
+    particles: &ParticleSet,
+    container: &Container,
+    epsilons: &[f64],
+    search: NeighbourSearch,
+) -> Result<Vec<CoordinationPoint>, GraphError> {
+    for (k, &e) in epsilons.iter().enumerate() {
+        positive(&format!("epsilons[{k}]"), e)?;
+    }
+    let prepared = prepare(particles, container)?;
+    let Some(emax) = epsilons.iter().copied().reduce(f64::max) else {
+        return Ok(Vec::new());
+    };
+    if emax > prepared.eps_limit {
+        return Err(CoreError::invalid(
+            "epsilons",
+            emax,
+            format!("at most {:.6} in this periodic box: the largest contact distance 2·R_max·(1 + ε) must stay under half the smallest period", prepared.eps_limit),
+        )
+        .into());
+    }
+    let cands = candidates(search, &prepared.pos, &particles.radii, prepared.period, emax);
+    let n = particles.len();
+    Ok(epsilons
+        .iter()
+        .map(|&eps| {
+            let mut degree = vec![0u32; n];
+            let mut count = 0usize;
+            for c in cands.iter().filter(|c| c.rel_gap <= eps) {
+                degree[c.p() as usize] += 1;
+                degree[c.q() as usize] += 1;
+                count += 1;
+            }
+            CoordinationPoint {
+                epsilon: eps,
+                coordination: 2.0 * count as f64 / n as f64,
+                under_two_fraction: degree.iter().filter(|&&d| d < 2).count() as f64 / n as f64,
+            }
+        })
+        .collect())
+}
+
+/// Finds the contacts of a packing.
+///
+/// A pair (p, q) is a contact when its gap g_pq = d_pq − R_p − R_q is at most ε·(R_p + R_q),
+/// with d_pq the centre distance (minimum image in a periodic box). Walls make no contacts.
+///
+/// With [`ContactTolerance::TargetCoordination`] the candidate pairs within a search
+/// tolerance (`initial_epsilon`, doubled up to `max_epsilon` until there are enough) are
+/// ranked by relative gap and ε is set exactly: the fewest contacts giving Z ≥ target, i.e.
+/// ⌈Z·N/2⌉ contacts, so Z overshoots by less than 2/N unless pairs share the same gap.
+/// Z(ε) is a step function known exactly from the candidates, so this selection is the limit
+/// of a bisection on ε, without its iterations.
+///
+/// Errors: invalid parameters or particles (named), an empty set, coincident centres, a
+/// periodic box shorter than 4·R_max·(1 + ε) (contacts would have two images), an
+/// unreachable target (with the largest Z found).
+pub fn detect_contacts(
+    particles: &ParticleSet,
+    container: &Container,
+    params: &ContactParams,
+) -> Result<ContactGraph, GraphError> {
+    let start = Instant::now();
+    params.validate()?;
+    let prepared = prepare(particles, container)?;
+    let Prepared {
+        pos,
+        period,
+        eps_limit,
+    } = &prepared;
+    let (period, eps_limit) = (*period, *eps_limit);
+    let n = particles.len();
+    let radii = &particles.radii;
+    let search = |eps: f64| candidates(params.search, pos, radii, period, eps);
 
     let (cands, epsilon, rounds, target, overshoot): (Vec<Candidate>, f64, u32, Option<f64>, bool) =
         match params.tolerance {

@@ -50,8 +50,8 @@ mod terreros;
 pub use calibrated::surface_calibrated;
 pub use components::Components;
 pub use contact::{
-    ContactGeometry, ContactGraph, ContactParams, ContactReport, ContactTolerance, Diagnostic,
-    detect_contacts,
+    ContactGeometry, ContactGraph, ContactParams, ContactReport, ContactTolerance, CoordinationPoint,
+    Diagnostic, coordination_curve, detect_contacts,
 };
 pub use error::GraphError;
 pub use interface::{InterfaceRule, conductances, contact_property, interface_value};

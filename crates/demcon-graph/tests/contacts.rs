@@ -366,3 +366,24 @@ fn bad_input_gets_a_clear_error() {
     .unwrap_err();
     assert!(e.to_string().contains("size.y"), "{e}");
 }
+
+#[test]
+fn coordination_curve_matches_detection() {
+    let (p, l) = jittered_fcc(6, 8);
+    let container = Container::Periodic { size: [l; 3] };
+    let eps = [0.02, 0.05, 0.1, 0.2, 0.3];
+    let curve = coordination_curve(&p, &container, &eps, NeighbourSearch::CellGrid).unwrap();
+    assert_eq!(curve.len(), eps.len());
+    for (pt, &e) in curve.iter().zip(&eps) {
+        let g = detect_contacts(&p, &container, &ContactParams::relative(e)).unwrap();
+        assert_eq!(pt.epsilon, e);
+        assert_eq!(pt.coordination, g.coordination());
+        assert_eq!(
+            pt.under_two_fraction,
+            g.report.under_two_contacts as f64 / p.len() as f64
+        );
+    }
+    assert!(curve.windows(2).all(|w| w[0].coordination <= w[1].coordination));
+    let e = coordination_curve(&p, &container, &[0.1, -1.0], NeighbourSearch::CellGrid).unwrap_err();
+    assert!(e.to_string().contains("epsilons[1]"), "{e}");
+}
