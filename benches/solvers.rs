@@ -1,0 +1,333 @@
+//! Criterion benchmarks of the network solvers: the explicit heat step (contacts/s, Morton
+//! vs random particle order) against a STREAM-like triad, the steady heat solve, and the
+//! electric solve with CG, faer's CG and sparse Cholesky, over a size ladder.
+//!
+//! Networks are packing-like random geometric graphs built here (Poisson points of unit
+//! density, links within r = 1.214, mean coordination ≈ 7.5), so the benchmark does not
+//! depend on the packing crate. Run one group with e.g.
+//! `cargo bench -p demcon-benches --bench solvers -- explicit_step`.
+//! Before the groups, a one-off measurement prints the explicit step's effective bandwidth
+//! as a fraction of the triad's.
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use demcon_core::{Vec3, morton_order};
+use demcon_electric::{ElectricParams, solve_potential};
+use demcon_network::{
+    Constraints, FloatingPolicy, Method, Network, SolveParams, resolve_fixed, solve_steady,
+};
+use demcon_thermal::{ExplicitStepper, stable_dt_bound};
+use rand::seq::SliceRandom;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Link distance for a mean coordination of 7.5 at unit density: 4/3 π r³ = 7.5.
+const LINK: f64 = 1.2143;
+
+/// A packing-like network of `n` nodes: node ids in Morton order, or randomly permuted.
+struct Case {
+    net: Network,
+    g: Vec<f64>,
+    caps: Vec<f64>,
+    /// Nodes with x < 1 and x > L − 1 (the two "electrodes"/fixed faces).
+    faces: [Vec<u32>; 2],
+}
+
+fn build(n: usize, random_order: bool, seed: u64) -> Case {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let l = (n as f64).cbrt();
+    let pts: Vec<Vec3> = (0..n)
+        .map(|_| {
+            Vec3::new(
+                rng.random::<f64>() * l,
+                rng.random::<f64>() * l,
+                rng.random::<f64>() * l,
+            )
+        })
+        .collect();
+    let bounds = demcon_core::Aabb {
+        min: Vec3::zeros(),
+        max: Vec3::new(l, l, l),
+    };
+    let mut order: Vec<u32> = morton_order(&pts, &bounds);
+    if random_order {
+        order.shuffle(&mut rng);
+    }
+    let pts: Vec<Vec3> = order.iter().map(|&i| pts[i as usize]).collect();
+    // Cell grid of size LINK.
+    let m = ((l / LINK).floor() as usize).max(1);
+    let cell = |p: &Vec3| -> [usize; 3] { [0, 1, 2].map(|a| ((p[a] / l * m as f64) as usize).min(m - 1)) };
+    let mut heads = vec![u32::MAX; m * m * m];
+    let mut next = vec![u32::MAX; n];
+    for (i, p) in pts.iter().enumerate() {
+        let [a, b, c] = cell(p);
+        let k = (a * m + b) * m + c;
+        next[i] = heads[k];
+        heads[k] = i as u32;
+    }
+    let mut edges = Vec::new();
+    for (i, p) in pts.iter().enumerate() {
+        let [a, b, c] = cell(p);
+        for da in a.saturating_sub(1)..=(a + 1).min(m - 1) {
+            for db in b.saturating_sub(1)..=(b + 1).min(m - 1) {
+                for dc in c.saturating_sub(1)..=(c + 1).min(m - 1) {
+                    let mut j = heads[(da * m + db) * m + dc];
+                    while j != u32::MAX {
+                        if (j as usize) > i && (pts[j as usize] - p).norm() < LINK {
+                            edges.push([i as u32, j]);
+                        }
+                        j = next[j as usize];
+                    }
+                }
+            }
+        }
+    }
+    let g = edges
+        .iter()
+        .map(|&[p, q]| 1.0 / (pts[p as usize] - pts[q as usize]).norm().max(0.1))
+        .collect();
+    let caps = (0..n).map(|_| rng.random_range(0.5..2.0)).collect();
+    let lo = pts
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.x < 1.0)
+        .map(|(i, _)| i as u32)
+        .collect();
+    let hi = pts
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.x > l - 1.0)
+        .map(|(i, _)| i as u32)
+        .collect();
+    Case {
+        net: Network::new(n, &edges).expect("valid generated network"),
+        g,
+        caps,
+        faces: [lo, hi],
+    }
+}
+
+fn constraints(case: &Case) -> Constraints {
+    resolve_fixed(
+        &case.net,
+        &[(case.faces[0].clone(), 0.0), (case.faces[1].clone(), 1.0)],
+        FloatingPolicy::Exclude,
+    )
+    .expect("two non-empty faces")
+}
+
+/// STREAM triad a = b + s c over `len` doubles; returns GB/s (24 bytes per element).
+fn triad_gbs(len: usize, reps: usize) -> f64 {
+    let b = vec![1.0f64; len];
+    let c = vec![2.0f64; len];
+    let mut a = vec![0.0f64; len];
+    let mut best = f64::INFINITY;
+    for _ in 0..reps {
+        let t = Instant::now();
+        triad(&mut a, &b, &c, 3.0);
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    black_box(&a);
+    24.0 * len as f64 / best / 1e9
+}
+
+fn triad(a: &mut [f64], b: &[f64], c: &[f64], s: f64) {
+    use rayon::prelude::*;
+    a.par_chunks_mut(1 << 16)
+        .zip(b.par_chunks(1 << 16))
+        .zip(c.par_chunks(1 << 16))
+        .for_each(|((a, b), c)| {
+            for ((x, y), z) in a.iter_mut().zip(b).zip(c) {
+                *x = y + s * z;
+            }
+        });
+}
+
+/// Bytes one explicit step must move at least: 12 per row entry (u32 column + f64 weight),
+/// 40 per row (row pointer, centre and source coefficients, read T_p, write T'_p); the
+/// neighbour gathers are assumed to hit the cache.
+fn step_bytes(net: &Network) -> f64 {
+    12.0 * net.cols().len() as f64 + 40.0 * net.n_nodes() as f64
+}
+
+fn stepper<'a>(case: &'a Case, bcs: &Constraints) -> ExplicitStepper<'a> {
+    let dt = stable_dt_bound(&case.net, &case.g, &case.caps, bcs)
+        .expect("valid inputs")
+        .dt_max;
+    let zeros = vec![0.0; case.net.n_nodes()];
+    ExplicitStepper::new(&case.net, &case.g, &case.caps, bcs, &zeros, 0.8 * dt).expect("valid inputs")
+}
+
+/// One-off: effective bandwidth of the explicit step vs the triad, printed.
+fn bandwidth_summary() {
+    let gbs = triad_gbs(1 << 24, 10);
+    println!("triad bandwidth: {gbs:.2} GB/s (3 x 128 MiB arrays, best of 10)");
+    for (n, random) in [(1_000_000, false), (1_000_000, true)] {
+        let case = build(n, random, 1);
+        let bcs = constraints(&case);
+        let st = stepper(&case, &bcs);
+        let mut a = vec![0.5; n];
+        let mut b = vec![0.0; n];
+        let mut best = f64::INFINITY;
+        for _ in 0..10 {
+            let t = Instant::now();
+            black_box(st.step(&a, &mut b));
+            best = best.min(t.elapsed().as_secs_f64());
+            std::mem::swap(&mut a, &mut b);
+        }
+        let eff = step_bytes(&case.net) / best / 1e9;
+        println!(
+            "explicit step n = {n} ({}), {} contacts: {:.3} ms, {:.0} M contacts/s, {:.2} GB/s = {:.0} % of triad",
+            if random { "random order" } else { "Morton order" },
+            case.net.n_edges(),
+            best * 1e3,
+            case.net.n_edges() as f64 / best / 1e6,
+            eff,
+            100.0 * eff / gbs
+        );
+    }
+}
+
+fn bench_triad(c: &mut Criterion) {
+    bandwidth_summary();
+    let len = 1 << 24;
+    let b = vec![1.0f64; len];
+    let cc = vec![2.0f64; len];
+    let mut a = vec![0.0f64; len];
+    let mut group = c.benchmark_group("stream_triad");
+    group.sample_size(20);
+    group.throughput(Throughput::Bytes(24 * len as u64));
+    group.bench_function("16M", |bch| bch.iter(|| triad(&mut a, &b, &cc, 3.0)));
+    group.finish();
+}
+
+fn bench_explicit(c: &mut Criterion) {
+    let mut group = c.benchmark_group("explicit_step");
+    group.sample_size(20);
+    for n in [100_000usize, 1_000_000] {
+        for random in [false, true] {
+            let case = build(n, random, 1);
+            let bcs = constraints(&case);
+            let st = stepper(&case, &bcs);
+            let mut a = vec![0.5; n];
+            let mut b = vec![0.0; n];
+            // Elements = contacts, so criterion reports contacts per second.
+            group.throughput(Throughput::Elements(case.net.n_edges() as u64));
+            let label = if random { "random" } else { "morton" };
+            group.bench_with_input(BenchmarkId::new(label, n), &n, |bch, _| {
+                bch.iter(|| {
+                    black_box(st.step(&a, &mut b));
+                    std::mem::swap(&mut a, &mut b);
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+fn cg(rel_tol: f64) -> Method {
+    Method::Cg {
+        rel_tol,
+        max_iter: 100_000,
+    }
+}
+
+fn bench_steady(c: &mut Criterion) {
+    let mut group = c.benchmark_group("steady_solve");
+    group.sample_size(10);
+    let n = 100_000;
+    let case = build(n, false, 2);
+    let bcs = constraints(&case);
+    let q = vec![0.0; n];
+    for method in [
+        cg(1e-8),
+        Method::FaerCg {
+            rel_tol: 1e-8,
+            max_iter: 100_000,
+        },
+    ] {
+        let p = SolveParams { method };
+        let r = solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges");
+        println!(
+            "steady n = {n}, {} contacts, {}: {} iterations, residual {:.1e}, {:.3} s",
+            case.net.n_edges(),
+            method.name(),
+            r.report.iterations,
+            r.report.relative_residual,
+            r.report.wall_s + r.report.setup_s
+        );
+        group.bench_with_input(BenchmarkId::new(method.name(), n), &n, |bch, _| {
+            bch.iter(|| solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges"))
+        });
+    }
+    group.finish();
+}
+
+fn bench_electric(c: &mut Criterion) {
+    let mut group = c.benchmark_group("electric_solve");
+    group.sample_size(10);
+    let ladder: [(usize, &[Method]); 3] = [
+        (
+            5_000,
+            &[
+                Method::Cg {
+                    rel_tol: 1e-8,
+                    max_iter: 100_000,
+                },
+                Method::FaerCg {
+                    rel_tol: 1e-8,
+                    max_iter: 100_000,
+                },
+                Method::Cholesky,
+            ],
+        ),
+        (
+            100_000,
+            &[
+                Method::Cg {
+                    rel_tol: 1e-8,
+                    max_iter: 100_000,
+                },
+                Method::Cholesky,
+            ],
+        ),
+        (
+            1_000_000,
+            &[Method::Cg {
+                rel_tol: 1e-8,
+                max_iter: 100_000,
+            }],
+        ),
+    ];
+    for (n, methods) in ladder {
+        let case = build(n, false, 3);
+        let electrodes = [(case.faces[0].clone(), 1.0), (case.faces[1].clone(), 0.0)];
+        for &method in methods {
+            let p = ElectricParams {
+                floating: FloatingPolicy::Exclude,
+                solve: SolveParams { method },
+            };
+            let r = solve_potential(&case.net, &case.g, &electrodes, &p).expect("solves");
+            println!(
+                "electric n = {n}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s, R = {:.6e} ohm, in/out mismatch {:.1e}",
+                case.net.n_edges(),
+                method.name(),
+                r.report.iterations,
+                r.report.relative_residual,
+                r.report.setup_s,
+                r.report.wall_s,
+                r.resistance_ohm.unwrap_or(f64::NAN),
+                r.current_mismatch
+            );
+            group.bench_with_input(BenchmarkId::new(method.name(), n), &n, |bch, _| {
+                bch.iter(|| solve_potential(&case.net, &case.g, &electrodes, &p).expect("solves"))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_triad, bench_explicit, bench_steady, bench_electric);
+criterion_main!(benches);
