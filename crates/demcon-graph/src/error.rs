@@ -27,7 +27,7 @@ pub enum GraphError {
     #[error(
         "target coordination Z = {target} is unreachable: the largest tolerance tried, \
          epsilon = {max_epsilon} (relative gap), gives Z = {max_coordination}; \
-         lower the target or raise max_epsilon"
+         lower the target, raise max_epsilon, or (periodic box) enlarge the box"
     )]
     UnreachableCoordination {
         /// Requested mean coordination number.
