@@ -26,6 +26,16 @@ use rand_chacha::ChaCha8Rng;
 /// Link distance for a mean coordination of 7.5 at unit density: 4/3 π r³ = 7.5.
 const LINK: f64 = 1.2143;
 
+/// Whether criterion's name filter (the first positional argument, a regex; matched here
+/// as a plain substring) selects `id`, so unselected cases are neither built nor
+/// summarised.
+fn wanted(id: &str) -> bool {
+    let filter = std::env::args()
+        .skip(1)
+        .find(|a| !a.starts_with('-') && a != "--bench");
+    filter.is_none_or(|f| f.split('|').any(|part| id.contains(part)))
+}
+
 /// A packing-like network of `n` nodes: node ids in Morton order, or randomly permuted.
 struct Case {
     net: Network,
@@ -191,7 +201,9 @@ fn bandwidth_summary() {
 }
 
 fn bench_triad(c: &mut Criterion) {
-    bandwidth_summary();
+    if wanted("stream_triad/summary") {
+        bandwidth_summary();
+    }
     let len = 1 << 24;
     let b = vec![1.0f64; len];
     let cc = vec![2.0f64; len];
@@ -208,6 +220,10 @@ fn bench_explicit(c: &mut Criterion) {
     group.sample_size(20);
     for n in [100_000usize, 1_000_000] {
         for random in [false, true] {
+            let label = if random { "random" } else { "morton" };
+            if !wanted(&format!("explicit_step/{label}/{n}")) {
+                continue;
+            }
             let case = build(n, random, 1);
             let bcs = constraints(&case);
             let st = stepper(&case, &bcs);
@@ -215,7 +231,6 @@ fn bench_explicit(c: &mut Criterion) {
             let mut b = vec![0.0; n];
             // Elements = contacts, so criterion reports contacts per second.
             group.throughput(Throughput::Elements(case.net.n_edges() as u64));
-            let label = if random { "random" } else { "morton" };
             group.bench_with_input(BenchmarkId::new(label, n), &n, |bch, _| {
                 bch.iter(|| {
                     black_box(st.step(&a, &mut b));
@@ -238,6 +253,12 @@ fn bench_steady(c: &mut Criterion) {
     let mut group = c.benchmark_group("steady_solve");
     group.sample_size(10);
     let n = 100_000;
+    if !["jacobi-pcg", "faer-cg"]
+        .iter()
+        .any(|m| wanted(&format!("steady_solve/{m}/{n}")))
+    {
+        return;
+    }
     let case = build(n, false, 2);
     let bcs = constraints(&case);
     let q = vec![0.0; n];
@@ -248,6 +269,9 @@ fn bench_steady(c: &mut Criterion) {
             max_iter: 100_000,
         },
     ] {
+        if !wanted(&format!("steady_solve/{}/{n}", method.name())) {
+            continue;
+        }
         let p = SolveParams { method };
         let r = solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges");
         println!(
@@ -302,9 +326,18 @@ fn bench_electric(c: &mut Criterion) {
         ),
     ];
     for (n, methods) in ladder {
+        if !methods
+            .iter()
+            .any(|m| wanted(&format!("electric_solve/{}/{n}", m.name())))
+        {
+            continue;
+        }
         let case = build(n, false, 3);
         let electrodes = [(case.faces[0].clone(), 1.0), (case.faces[1].clone(), 0.0)];
         for &method in methods {
+            if !wanted(&format!("electric_solve/{}/{n}", method.name())) {
+                continue;
+            }
             let p = ElectricParams {
                 floating: FloatingPolicy::Exclude,
                 solve: SolveParams { method },
