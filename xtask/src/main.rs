@@ -1,5 +1,73 @@
 //! `cargo xtask`: project automation in Rust (no loose shell scripts).
+//!
+//! - `cargo xtask ci` — exactly what `.ci/run` runs: format check, clippy with warnings as
+//!   errors, the workspace tests.
+//! - `cargo xtask validate [CASE…] [--quick | --full] [--out DIR]` — the papers' validation
+//!   cases in release mode; writes `<case>.json`, charts and `REPORT.md`.
+//! - `cargo xtask bench [NAME]` — the criterion benchmarks.
 
-fn main() -> anyhow::Result<()> {
+mod ci;
+
+use std::process::Command;
+
+use anyhow::{Result, bail};
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (cmd, rest) = match args.split_first() {
+        Some((c, r)) => (c.as_str(), r.to_vec()),
+        None => ("help", Vec::new()),
+    };
+    match cmd {
+        "ci" => ci::run(&rest),
+        "validate" => validate(&rest),
+        "bench" => bench(&rest),
+        "help" | "--help" | "-h" => {
+            println!(
+                "usage: cargo xtask <command>\n\n  ci                         format check, clippy -D warnings, cargo test --workspace\n  \
+                 validate [CASE…] [--quick|--full] [--out DIR] [--list]\n                             run the validation cases (release build)\n  \
+                 bench [NAME]               run the criterion benchmarks (all, or benches/NAME.rs)"
+            );
+            Ok(())
+        }
+        other => bail!("unknown xtask command `{other}`; try `cargo xtask help`"),
+    }
+}
+
+/// Runs a command, failing with its name if it fails.
+pub(crate) fn run(cmd: &mut Command) -> Result<()> {
+    eprintln!("$ {cmd:?}");
+    let status = cmd.status()?;
+    if !status.success() {
+        bail!("command failed ({status}): {cmd:?}");
+    }
     Ok(())
+}
+
+pub(crate) fn cargo() -> Command {
+    Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+}
+
+pub(crate) fn validate(rest: &[String]) -> Result<()> {
+    run(cargo()
+        .args([
+            "run",
+            "--release",
+            "--quiet",
+            "-p",
+            "validation",
+            "--bin",
+            "validate",
+            "--",
+        ])
+        .args(rest))
+}
+
+fn bench(rest: &[String]) -> Result<()> {
+    let mut c = cargo();
+    c.args(["bench", "-p", "demcon-benches"]);
+    if let Some(name) = rest.first() {
+        c.args(["--bench", name]);
+    }
+    run(&mut c)
 }

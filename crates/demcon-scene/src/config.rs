@@ -1,0 +1,535 @@
+//! The RON scene schema (file-facing `…Config` types). Only this crate knows RON; the
+//! conversion to the lower crates' plain types lives in `build.rs`.
+//!
+//! Every struct denies unknown fields, so a misspelt field is an error with its line.
+
+use serde::{Deserialize, Serialize};
+
+/// A whole scene: which packing, which contacts and surfaces, which materials and phases,
+/// which physics with which boundary conditions and solver, and which outputs.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneConfig {
+    /// Free-text name, copied into `summary.json`.
+    #[serde(default)]
+    pub name: String,
+    /// Seed of every random choice (packing, inclusion placement).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Where the particles come from.
+    pub packing: PackingConfig,
+    /// Keep only the particles whose sphere lies inside this region (e.g. a grooved cylinder).
+    #[serde(default)]
+    pub carve: Option<RegionConfig>,
+    /// How contacts are found.
+    #[serde(default)]
+    pub contacts: ContactsConfig,
+    /// Transmission-surface model of the thermal network.
+    #[serde(default)]
+    pub surface: SurfaceConfig,
+    /// Materials; the first is the matrix (phase 0) unless phases say otherwise.
+    pub materials: Vec<MaterialConfig>,
+    /// Phase assignments applied in order on top of phase 0.
+    #[serde(default)]
+    pub phases: Vec<PhaseConfig>,
+    /// Conductivity of contacts between two phases.
+    #[serde(default)]
+    pub interface: InterfaceConfig,
+    /// What to do with particle clusters connected to no fixed value.
+    #[serde(default)]
+    pub floating: FloatingConfig,
+    /// Heat conduction (omit for a pure electric scene).
+    #[serde(default)]
+    pub thermal: Option<ThermalConfig>,
+    /// Electric conduction and Joule heating (omit for a pure thermal scene).
+    #[serde(default)]
+    pub electric: Option<ElectricConfig>,
+    /// What to write.
+    #[serde(default)]
+    pub outputs: OutputsConfig,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// Where the particles come from.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+pub enum PackingConfig {
+    /// Grow a Lubachevsky–Stillinger packing.
+    Generate {
+        /// The container.
+        container: ContainerConfig,
+        /// Number of particles.
+        count: usize,
+        /// Target volume fraction.
+        phi: f64,
+        /// Radius standard deviation / mean (0 = monodisperse).
+        #[serde(default = "default_cov")]
+        radius_cov: f64,
+        /// Truncation of the Gaussian radii, as ratios (min, max) to the mean.
+        #[serde(default)]
+        radius_range: Option<(f64, f64)>,
+        /// Accept a packing that stopped short of `phi` (jammed or out of budget).
+        #[serde(default)]
+        allow_short: bool,
+    },
+    /// Read a plain-text `x y z r` file (relative paths are relative to the scene file).
+    File {
+        /// The file.
+        path: String,
+        /// The container, if the file's header does not give it.
+        #[serde(default)]
+        container: Option<ContainerConfig>,
+    },
+}
+
+fn default_cov() -> f64 {
+    0.3
+}
+
+/// A container (m). A box spans `[0, size]`; a cylinder is along z from z = 0 with its axis at
+/// x = y = 0; a sphere is centred at the origin.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+pub enum ContainerConfig {
+    /// Box with hard walls.
+    Box {
+        /// Edge lengths (m).
+        size: (f64, f64, f64),
+    },
+    /// Cylinder along z.
+    Cylinder {
+        /// Radius (m).
+        radius: f64,
+        /// Length (m).
+        length: f64,
+    },
+    /// Sphere centred at the origin.
+    Sphere {
+        /// Radius (m).
+        radius: f64,
+    },
+    /// Periodic box.
+    Periodic {
+        /// Periods (m).
+        size: (f64, f64, f64),
+    },
+}
+
+/// A coordinate axis.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+pub enum AxisConfig {
+    /// x.
+    X,
+    /// y.
+    Y,
+    /// z.
+    Z,
+}
+
+/// A region of space (m).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+pub enum RegionConfig {
+    /// Axis-aligned box.
+    Box {
+        /// Lower corner (m).
+        min: (f64, f64, f64),
+        /// Upper corner (m).
+        max: (f64, f64, f64),
+    },
+    /// Cylinder from `base` along `axis`.
+    Cylinder {
+        /// Centre of the start cap (m).
+        base: (f64, f64, f64),
+        /// Axis direction.
+        axis: AxisConfig,
+        /// Radius (m).
+        radius: f64,
+        /// Length (m).
+        length: f64,
+    },
+    /// Ball.
+    Sphere {
+        /// Centre (m).
+        centre: (f64, f64, f64),
+        /// Radius (m).
+        radius: f64,
+    },
+    /// First minus second.
+    Difference(Box<RegionConfig>, Box<RegionConfig>),
+    /// Any of.
+    Union(Vec<RegionConfig>),
+    /// All of.
+    Intersection(Vec<RegionConfig>),
+}
+
+/// How contacts are found: give `coordination` (target mean Z, the gap tolerance is found by
+/// bisection) or `tolerance` (gap ≤ tolerance·(R_p + R_q)), not both. Default: Z = 7.5.
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactsConfig {
+    /// Target mean coordination number.
+    #[serde(default)]
+    pub coordination: Option<f64>,
+    /// Relative gap tolerance.
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+}
+
+/// The calibration constant C_t.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+pub enum CtConfig {
+    /// Calibrate on this packing first (Haddad §2.1: flux on top, fixed temperature below).
+    Auto,
+    /// Use this value.
+    Value(f64),
+}
+
+/// Transmission-surface model.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+pub enum SurfaceConfig {
+    /// S = C_t π R_m² (Haddad 2021).
+    Calibrated {
+        /// The constant.
+        c_t: CtConfig,
+    },
+    /// S = √(α(n_p) R_p² α(n_q) R_q²) (Terreros, Hubert 2017).
+    TerrerosAlpha,
+}
+
+impl Default for SurfaceConfig {
+    fn default() -> Self {
+        SurfaceConfig::Calibrated { c_t: CtConfig::Auto }
+    }
+}
+
+/// A material (SI units).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialConfig {
+    /// Name used by phases and messages.
+    pub name: String,
+    /// λ (W/(m·K)).
+    pub conductivity: f64,
+    /// ρ_c (kg/m³).
+    pub density: f64,
+    /// c (J/(kg·K)).
+    pub specific_heat: f64,
+    /// ρ_e (Ω·m), needed by electric scenes.
+    #[serde(default)]
+    pub resistivity: Option<f64>,
+    /// β (1/K) in ρ_e(T) = ρ_e0 (1 + β (T − T_ref)).
+    #[serde(default)]
+    pub resistivity_temp_coeff: f64,
+    /// T_ref (°C) of the resistivity.
+    #[serde(default = "default_ref_temp")]
+    pub resistivity_ref_temp: f64,
+}
+
+fn default_ref_temp() -> f64 {
+    20.0
+}
+
+/// A phase assignment.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+pub enum PhaseConfig {
+    /// Particles whose centre lies in `region` get `material`.
+    Region {
+        /// Material name.
+        material: String,
+        /// The region.
+        region: RegionConfig,
+    },
+    /// Monodisperse non-overlapping spherical inclusions placed by the LS algorithm in the
+    /// container's bounding box (Haddad §5).
+    Inclusions {
+        /// Material name.
+        material: String,
+        /// Inclusion volume fraction f.
+        fraction: f64,
+        /// Box edge / inclusion diameter (6 in the paper).
+        size_ratio: f64,
+    },
+}
+
+/// Contact conductivity between two phases.
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize)]
+pub enum InterfaceConfig {
+    /// 2 λ_a λ_b / (λ_a + λ_b) (Haddad eq. 24, perfect interface).
+    #[default]
+    Harmonic,
+    /// (λ_a + λ_b)/2 (overestimates, kept for comparison).
+    Arithmetic,
+}
+
+/// Clusters connected to no fixed value.
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize)]
+pub enum FloatingConfig {
+    /// Exclude them from the solve with a warning (their values are reported as missing).
+    #[default]
+    Exclude,
+    /// Fail the run.
+    Fail,
+}
+
+/// A face of the container.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+pub enum FaceConfig {
+    /// x = min.
+    XMin,
+    /// x = max.
+    XMax,
+    /// y = min.
+    YMin,
+    /// y = max.
+    YMax,
+    /// z = min.
+    ZMin,
+    /// z = max.
+    ZMax,
+    /// Curved wall of a cylinder or sphere.
+    Outer,
+}
+
+/// Which particles.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+pub enum SelectorConfig {
+    /// All particles.
+    All,
+    /// Particles touching a face (surface within half a radius of it).
+    Face(FaceConfig),
+    /// Particles whose centre lies in a region.
+    Region(RegionConfig),
+    /// Particles of a material.
+    Material(String),
+    /// Explicit ids.
+    Particles(Vec<u32>),
+}
+
+/// Heat conduction.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ThermalConfig {
+    /// Initial temperature (°C) of every particle not fixed.
+    #[serde(default)]
+    pub initial_temperature: f64,
+    /// Boundary conditions; faces without one are adiabatic.
+    pub bcs: Vec<ThermalBcConfig>,
+    /// Volumetric heat sources.
+    #[serde(default)]
+    pub sources: Vec<SourceConfig>,
+    /// Time integration or steady state.
+    pub solver: ThermalSolverConfig,
+}
+
+/// A thermal boundary condition.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+pub enum ThermalBcConfig {
+    /// Fixed temperature (°C) on the selected particles.
+    FixedTemperature {
+        /// Which particles.
+        select: SelectorConfig,
+        /// Temperature (°C).
+        value: f64,
+    },
+    /// Heat flux density (W/m², positive into the body) through a face, shared among the
+    /// face's particles in proportion to their projected area.
+    HeatFlux {
+        /// The face.
+        face: FaceConfig,
+        /// Flux density (W/m²).
+        flux: f64,
+    },
+}
+
+/// A volumetric heat source.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SourceConfig {
+    /// Which particles.
+    pub select: SelectorConfig,
+    /// Power density (W/m³ of material).
+    pub power_density: f64,
+}
+
+/// Time step of the explicit solver.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+pub enum TimeStepConfig {
+    /// `safety` × the exact positivity bound min_p C_p/Σ_q H_pq.
+    Auto {
+        /// Fraction of the bound, in (0, 1].
+        safety: f64,
+    },
+    /// A fixed step (s); above the bound it is refused unless `allow_unstable`.
+    Fixed {
+        /// Step (s).
+        dt: f64,
+        /// Run even above the stability bound (blow-up is then detected and reported).
+        #[serde(default)]
+        allow_unstable: bool,
+    },
+    /// The heat paper's eq. 16 estimate (for comparison; usually unstable on polydisperse packings).
+    Paper {
+        /// Run even above the stability bound.
+        #[serde(default)]
+        allow_unstable: bool,
+    },
+}
+
+/// Implicit scheme.
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize)]
+pub enum ImplicitSchemeConfig {
+    /// First order, L-stable.
+    #[default]
+    BackwardEuler,
+    /// Second order, A-stable.
+    CrankNicolson,
+}
+
+/// Thermal solver.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+pub enum ThermalSolverConfig {
+    /// Forward Euler (Haddad eq. 6).
+    Explicit {
+        /// End time (s).
+        t_end: f64,
+        /// Time step choice.
+        dt: TimeStepConfig,
+    },
+    /// Implicit (one CG solve per step).
+    Implicit {
+        /// End time (s).
+        t_end: f64,
+        /// Step (s).
+        dt: f64,
+        /// Scheme.
+        #[serde(default)]
+        scheme: ImplicitSchemeConfig,
+    },
+    /// Steady state by one linear solve.
+    Steady,
+}
+
+/// Electric conduction.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ElectricConfig {
+    /// Fixed potentials.
+    pub electrodes: Vec<ElectrodeConfig>,
+    /// Fraction η of the Joule power that heats the particles (in [0, 1]).
+    #[serde(default = "default_eta")]
+    pub eta: f64,
+    /// Transmission-surface model of the electric network (default: Terreros α, as Hubert 2017).
+    #[serde(default = "default_electric_surface")]
+    pub surface: SurfaceConfig,
+    /// Re-solve the potential when temperatures moved by more than this (K), for ρ_e(T).
+    #[serde(default)]
+    pub recouple_tolerance: Option<f64>,
+}
+
+fn default_eta() -> f64 {
+    1.0
+}
+
+fn default_electric_surface() -> SurfaceConfig {
+    SurfaceConfig::TerrerosAlpha
+}
+
+/// A fixed potential.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ElectrodeConfig {
+    /// Which particles.
+    pub select: SelectorConfig,
+    /// Potential (V).
+    pub potential: f64,
+}
+
+/// How a probe reads a field.
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize)]
+pub enum ProbeMethodConfig {
+    /// The particle whose centre is nearest.
+    #[default]
+    Nearest,
+    /// Average over the particles whose centre lies in a ball of this radius (m).
+    Ball(f64),
+}
+
+/// A probe point.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProbeConfig {
+    /// Name (e.g. `A`).
+    pub name: String,
+    /// Point (m).
+    pub point: (f64, f64, f64),
+    /// Method.
+    #[serde(default)]
+    pub method: ProbeMethodConfig,
+}
+
+/// A profile along a segment.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProfileConfig {
+    /// Name.
+    pub name: String,
+    /// Start (m).
+    pub from: (f64, f64, f64),
+    /// End (m).
+    pub to: (f64, f64, f64),
+    /// Number of points.
+    pub points: usize,
+    /// Method.
+    #[serde(default)]
+    pub method: ProbeMethodConfig,
+}
+
+/// Outputs.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputsConfig {
+    /// Times (s) at which transient fields are recorded (probes, profiles, files).
+    #[serde(default)]
+    pub times: Vec<f64>,
+    /// Probe points.
+    #[serde(default)]
+    pub probes: Vec<ProbeConfig>,
+    /// Profiles.
+    #[serde(default)]
+    pub profiles: Vec<ProfileConfig>,
+    /// Per-particle CSV of the final fields.
+    #[serde(default)]
+    pub particles_csv: bool,
+    /// VTK `.vtu` of the final fields (ParaView).
+    #[serde(default = "yes")]
+    pub vtk: bool,
+    /// Compute the per-particle heat flux (and write it).
+    #[serde(default)]
+    pub flux: bool,
+    /// Halo smoothing ratio k of the flux (implies `flux`).
+    #[serde(default)]
+    pub halo: Option<f64>,
+    /// Effective conductivity along this axis from a steady run (fixed temperatures on its two faces).
+    #[serde(default)]
+    pub etc_axis: Option<AxisConfig>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl Default for OutputsConfig {
+    fn default() -> Self {
+        Self {
+            times: Vec::new(),
+            probes: Vec::new(),
+            profiles: Vec::new(),
+            particles_csv: false,
+            vtk: true,
+            flux: false,
+            halo: None,
+            etc_axis: None,
+        }
+    }
+}

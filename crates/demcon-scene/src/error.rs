@@ -1,0 +1,86 @@
+//! Scene errors: bad input names the file, line or field; numerical failures keep the lower
+//! crate's error (with its values) as the source.
+
+use std::path::PathBuf;
+
+use demcon_core::CoreError;
+
+/// Why a scene could not be loaded or run.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The RON text does not parse or has an unknown/missing field.
+    #[error("{path}:{line}:{col}: {message}")]
+    Parse {
+        /// The scene file.
+        path: PathBuf,
+        /// Line (1-based).
+        line: usize,
+        /// Column (1-based).
+        col: usize,
+        /// What is wrong (from the RON parser: unknown field, expected type…).
+        message: String,
+    },
+    /// A value is not allowed.
+    #[error("scene field `{field}` = {value}: {allowed}")]
+    Invalid {
+        /// Field path, e.g. `materials[1].conductivity`.
+        field: String,
+        /// The value.
+        value: String,
+        /// What would be accepted.
+        allowed: String,
+    },
+    /// A lower-level input error, with the scene field it came from.
+    #[error("scene field `{field}`: {source}")]
+    Core {
+        /// Field path.
+        field: String,
+        /// The error.
+        source: CoreError,
+    },
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The error.
+        source: std::io::Error,
+    },
+    /// Packing failed (or stopped short without `allow_short`).
+    #[error("packing: {0}")]
+    Packing(String),
+    /// Contact detection or surfaces failed.
+    #[error("contacts: {0}")]
+    Graph(#[from] demcon_graph::GraphError),
+    /// A linear solve or boundary-condition resolution failed.
+    #[error("network: {0}")]
+    Solve(#[from] demcon_network::SolveError),
+    /// The thermal solver failed (instability, divergence…).
+    #[error("thermal: {0}")]
+    Thermal(#[from] demcon_thermal::ThermalError),
+    /// The electric solver failed.
+    #[error("electric: {0}")]
+    Electric(#[from] demcon_electric::ElectricError),
+    /// Post-processing failed (probe outside, bad Halo ratio…).
+    #[error("post-processing: {0}")]
+    Post(#[from] demcon_post::PostError),
+}
+
+impl SceneError {
+    /// An invalid value at `field`.
+    pub fn invalid(field: &str, value: impl std::fmt::Display, allowed: impl Into<String>) -> Self {
+        Self::Invalid {
+            field: field.into(),
+            value: value.to_string(),
+            allowed: allowed.into(),
+        }
+    }
+
+    /// A core error at `field`.
+    pub fn at(field: &str, source: CoreError) -> Self {
+        Self::Core {
+            field: field.into(),
+            source,
+        }
+    }
+}

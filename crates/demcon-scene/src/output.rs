@@ -1,0 +1,185 @@
+//! Files of a run: `summary.json`, `probes.csv`, `profiles.csv`, `particles.csv` and
+//! `particles.vtu` (ParaView), each written atomically. Values that are not results
+//! (particles excluded from a solve) are never written as NaN: a `solved` column flags them.
+
+use std::path::Path;
+
+use demcon_post::{Field, write_csv, write_vtu};
+use serde::Serialize;
+use serde_json::json;
+
+use crate::error::SceneError;
+use crate::run::RunResult;
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> SceneError + '_ {
+    move |source| SceneError::Io {
+        path: path.into(),
+        source,
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary file and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).map_err(io(&tmp))?;
+    std::fs::rename(&tmp, path).map_err(io(path))?;
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct Stats {
+    n_particles: usize,
+    domain_volume_m3: f64,
+    phi: f64,
+}
+
+/// The run summary as JSON (also what `summary.json` holds).
+pub fn summary_json(name: &str, r: &RunResult) -> serde_json::Value {
+    let m = &r.model;
+    json!({
+        "scene": name,
+        "model": Stats { n_particles: m.particles.len(), domain_volume_m3: m.domain_volume, phi: m.phi },
+        "build": m.report,
+        "c_t": r.thermal_setup.as_ref().and_then(|s| match s.surface {
+            demcon_graph::SurfaceModel::Calibrated { c_t } => Some(c_t),
+            _ => None,
+        }),
+        "calibration": r.thermal_setup.as_ref().and_then(|s| s.calibration.clone()),
+        "thermal": r.thermal.as_ref().map(|t| &t.report),
+        "electric": r.electric.as_ref().map(|e| &e.report),
+        "etc": r.etc,
+        "halo": r.halo.as_ref().map(|h| h.2),
+        "probes": r.probes,
+        "profiles": r.profiles,
+        "diagnostics": r.diagnostics,
+        "post_s": r.post_s,
+        "wall_s": r.wall_s,
+    })
+}
+
+/// Writes every output the scene asks for into `dir` (created if needed); returns the files.
+pub fn write_outputs(
+    name: &str,
+    outputs: &crate::config::OutputsConfig,
+    r: &RunResult,
+    dir: &Path,
+) -> Result<Vec<String>, SceneError> {
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let mut written = Vec::new();
+    let m = &r.model;
+    let n = m.particles.len();
+    let mut solved = vec![1i32; n];
+    let mut excluded: Vec<u32> = Vec::new();
+    if let Some(e) = &r.electric {
+        excluded.extend(&e.excluded);
+    }
+    for &p in &excluded {
+        solved[p as usize] = 0;
+    }
+    // Scalar and vector fields.
+    let radius = m.particles.radii.clone();
+    let phase: Vec<f64> = m.particles.phases.iter().map(|&p| p as f64).collect();
+    let degree: Vec<i32> = m.graph.degrees().iter().map(|&d| d as i32).collect();
+    let mut scalars: Vec<(&str, Vec<f64>)> = Vec::new();
+    if let Some(t) = &r.thermal {
+        scalars.push(("temperature", t.temperatures.clone()));
+    }
+    if let Some(e) = &r.electric {
+        scalars.push(("potential", e.potentials.clone()));
+        scalars.push(("joule_power", e.joule.clone()));
+        // Current density magnitude from the branch currents, as the flux of eq. 20:
+        // j_p = (1/(2 V_rep)) |Σ_q I_pq ℓ_pq|.
+        let mut d = vec![demcon_core::Vec3::zeros(); n];
+        for (k, &[p, q]) in m.graph.pairs.iter().enumerate() {
+            let l = m.graph.branch(k) * e.branch_currents[k];
+            d[p as usize] += l;
+            d[q as usize] += l;
+        }
+        let vrep: Vec<f64> = (0..n).map(|p| m.particles.volume(p) / m.phi).collect();
+        scalars.push((
+            "current_density",
+            d.iter().zip(&vrep).map(|(v, w)| v.norm() / (2.0 * w)).collect(),
+        ));
+    }
+    let mut vectors: Vec<(&str, &[demcon_core::Vec3])> = Vec::new();
+    if let Some(f) = &r.flux {
+        vectors.push(("heat_flux", f));
+    }
+    if let Some((h, _, _)) = &r.halo {
+        vectors.push(("halo_flux", h));
+    }
+    let halo_cut: Option<Vec<i32>> = r
+        .halo
+        .as_ref()
+        .map(|h| h.1.iter().map(|&b| i32::from(b)).collect());
+    if outputs.vtk {
+        let path = dir.join("particles.vtu");
+        let mut fields = vec![
+            Field::ints("coordination", &degree),
+            Field::ints("solved", &solved),
+        ];
+        for (name, v) in &scalars {
+            fields.push(Field::scalars(name, v));
+        }
+        for (name, v) in &vectors {
+            fields.push(Field::vectors(name, v));
+        }
+        if let Some(c) = &halo_cut {
+            fields.push(Field::ints("halo_truncated", c));
+        }
+        write_vtu(&path, &m.particles, &fields)?;
+        written.push("particles.vtu".into());
+    }
+    if outputs.particles_csv {
+        let path = dir.join("particles.csv");
+        let x: Vec<f64> = m.particles.centres.iter().map(|c| c.x).collect();
+        let y: Vec<f64> = m.particles.centres.iter().map(|c| c.y).collect();
+        let z: Vec<f64> = m.particles.centres.iter().map(|c| c.z).collect();
+        let solved_f: Vec<f64> = solved.iter().map(|&s| s as f64).collect();
+        let mut header = vec!["x", "y", "z", "radius", "phase", "solved"];
+        let mut cols: Vec<&[f64]> = vec![&x, &y, &z, &radius, &phase, &solved_f];
+        for (name, v) in &scalars {
+            header.push(name);
+            cols.push(v);
+        }
+        let comps: Vec<(String, Vec<f64>)> = vectors
+            .iter()
+            .flat_map(|(name, v)| {
+                (0..3).map(move |k| {
+                    (
+                        format!("{name}_{}", ["x", "y", "z"][k]),
+                        v.iter().map(|u| u[k]).collect(),
+                    )
+                })
+            })
+            .collect();
+        for (name, v) in &comps {
+            header.push(name);
+            cols.push(v);
+        }
+        write_csv(&path, &header, &cols)?;
+        written.push("particles.csv".into());
+    }
+    if !r.probes.is_empty() {
+        let mut s = String::from("probe,field,t_s,value\n");
+        for p in &r.probes {
+            s.push_str(&format!("{},{},{},{:.10e}\n", p.name, p.field, p.t, p.value));
+        }
+        write_atomic(&dir.join("probes.csv"), s.as_bytes())?;
+        written.push("probes.csv".into());
+    }
+    if !r.profiles.is_empty() {
+        let mut s = String::from("profile,field,t_s,distance_m,value\n");
+        for p in &r.profiles {
+            for (d, v) in &p.points {
+                s.push_str(&format!("{},{},{},{:.10e},{:.10e}\n", p.name, p.field, p.t, d, v));
+            }
+        }
+        write_atomic(&dir.join("profiles.csv"), s.as_bytes())?;
+        written.push("profiles.csv".into());
+    }
+    let summary = serde_json::to_vec_pretty(&summary_json(name, r)).expect("summary serialises");
+    write_atomic(&dir.join("summary.json"), &summary)?;
+    written.push("summary.json".into());
+    Ok(written)
+}

@@ -1,0 +1,645 @@
+//! Thermal part of a scene: surfaces (with the C_t calibration), conductances, heat
+//! capacities, boundary conditions and the three solvers.
+
+use std::time::Instant;
+
+use demcon_core::{Axis, Container, Face, Selector};
+use demcon_graph::{
+    InterfaceRule, SurfaceModel, conductances, contact_property, contact_surfaces, representative_volumes,
+};
+use demcon_network::{Constraints, FloatingPolicy, Method, SolveParams, SolveReport, resolve_fixed};
+use demcon_thermal::{
+    ExplicitParams, ImplicitParams, RepresentativeVolume, Scheme, TimeStep, capacities, face_flux_sources,
+    paper_dt_estimate, run_explicit, run_implicit, solve_steady_temperature,
+};
+use serde::Serialize;
+
+use crate::config::*;
+use crate::convert;
+use crate::error::SceneError;
+use crate::model::Model;
+
+/// Default steady/implicit solver: Jacobi-PCG to a relative residual of 1e-10.
+pub fn default_solve_params() -> SolveParams {
+    SolveParams {
+        method: Method::Cg {
+            rel_tol: 1e-10,
+            max_iter: 200_000,
+        },
+    }
+}
+
+/// Result of a C_t calibration (Haddad 2021 §2.1, eqs. 7–9).
+#[derive(Debug, Clone, Serialize)]
+pub struct CtCalibration {
+    /// Calibrated C_t = C_t,arb λ / λ_e (C_t,arb = 1), with L the sample length (the paper's definition).
+    pub c_t: f64,
+    /// The same with L the distance between the mean centres of the two boundary layers.
+    pub c_t_centres: f64,
+    /// How it was measured: `flux-y` (box), `flux-z` (cylinder) or `source` (sphere, uniform source).
+    pub method: String,
+    /// Effective conductivity measured with C_t,arb = 1 (W/(m·K)).
+    pub lambda_e_arb: f64,
+    /// Material conductivity λ (W/(m·K)).
+    pub lambda: f64,
+    /// Temperature rise measured (K).
+    pub delta_t: f64,
+    /// Steady-solve report.
+    #[serde(skip)]
+    pub solve: Option<SolveReport>,
+    /// Steady-solve wall time (s).
+    pub solve_s: f64,
+    /// Steady-solve iterations.
+    pub iterations: usize,
+}
+
+fn model_for(cfg: &SurfaceConfig, c_t: Option<f64>) -> SurfaceModel {
+    match cfg {
+        SurfaceConfig::TerrerosAlpha => SurfaceModel::TerrerosAlpha,
+        SurfaceConfig::Calibrated { .. } => SurfaceModel::Calibrated {
+            c_t: c_t.unwrap_or(1.0),
+        },
+    }
+}
+
+fn per_particle<T: Copy>(model: &Model, f: impl Fn(&demcon_core::Material) -> T) -> Vec<T> {
+    model
+        .particles
+        .phases
+        .iter()
+        .map(|&p| f(&model.materials.materials[p as usize]))
+        .collect()
+}
+
+fn interface_rule(i: InterfaceConfig) -> InterfaceRule {
+    match i {
+        InterfaceConfig::Harmonic => InterfaceRule::HarmonicMean,
+        InterfaceConfig::Arithmetic => InterfaceRule::ArithmeticMean,
+    }
+}
+
+/// Particles touching the two faces normal to `axis` (min side, max side).
+fn axis_faces(axis: Axis) -> (Face, Face) {
+    match axis {
+        Axis::X => (Face::XMin, Face::XMax),
+        Axis::Y => (Face::YMin, Face::YMax),
+        Axis::Z => (Face::ZMin, Face::ZMax),
+    }
+}
+
+/// Cross-section area (m²) of the container normal to `axis` and its length along it (m).
+pub fn section_and_length(container: &Container, axis: Axis) -> Option<(f64, f64)> {
+    let e = container.bounds().extent();
+    let k = axis.index();
+    match container {
+        Container::Box { .. } | Container::Periodic { .. } => Some((e.x * e.y * e.z / e[k], e[k])),
+        Container::Cylinder { radius, length } if axis == Axis::Z => {
+            Some((std::f64::consts::PI * radius * radius, *length))
+        }
+        _ => None,
+    }
+}
+
+/// Turns steady temperatures into (λ_e with the sample length, λ_e with the centre-to-centre length).
+type Measure = Box<dyn Fn(&[f64]) -> (f64, f64)>;
+
+/// Calibrates C_t on the model's own packing (never copied from the paper): with C_t,arb = 1,
+/// impose a flux on the top face and a fixed temperature on the bottom (box: along y;
+/// cylinder: along its axis z), solve the steady state, measure λ_e = φ L / ΔT with ΔT the
+/// mean top-layer temperature rise, and return C_t = λ / λ_e. For a sphere container, a
+/// uniform volumetric source q with the surface held fixed gives the mean temperature rise
+/// q R² / (15 λ_e).
+pub fn calibrate_ct(model: &Model) -> Result<CtCalibration, SceneError> {
+    let t0 = Instant::now();
+    let lambda = 1.0;
+    let graph = &model.graph;
+    let s = contact_surfaces(graph, &model.particles, &SurfaceModel::Calibrated { c_t: 1.0 })?;
+    let lam = vec![lambda; graph.pairs.len()];
+    let g = conductances(graph, &s.area, &lam)?;
+    let n = model.particles.len();
+    let (method, fixed_ids, sources, measure): (String, Vec<u32>, Vec<f64>, Measure) = match model.container {
+        Container::Sphere { radius } => {
+            let ids = Selector::Face(Face::Outer)
+                .select_nonempty(
+                    &model.particles,
+                    &model.container,
+                    "calibration: fixed temperature on the sphere surface",
+                )
+                .map_err(|e| SceneError::at("surface.c_t", e))?;
+            let q = 1.0; // W/m³ of solid
+            let src: Vec<f64> = (0..n)
+                .map(|p| q * model.particles.volume(p) / model.phi)
+                .collect();
+            let fixed: Vec<bool> = {
+                let mut f = vec![false; n];
+                ids.iter().for_each(|&i| f[i as usize] = true);
+                f
+            };
+            let vols: Vec<f64> = (0..n).map(|p| model.particles.volume(p)).collect();
+            let meas = move |t: &[f64]| {
+                // Volume-weighted mean over all particles (fixed ones at 0) of the rise.
+                let (mut s, mut w) = (0.0, 0.0);
+                for p in 0..t.len() {
+                    s += vols[p] * if fixed[p] { 0.0 } else { t[p] };
+                    w += vols[p];
+                }
+                let mean = s / w;
+                let lam_e = q * radius * radius / (15.0 * mean);
+                (lam_e, lam_e)
+            };
+            ("source".to_string(), ids, src, Box::new(meas))
+        }
+        Container::Box { .. } | Container::Cylinder { .. } => {
+            let axis = if matches!(model.container, Container::Box { .. }) {
+                Axis::Y
+            } else {
+                Axis::Z
+            };
+            let (lo, hi) = axis_faces(axis);
+            let (area, length) = section_and_length(&model.container, axis).expect("box or cylinder");
+            let what = |f: Face| format!("calibration: particles touching face {}", f.name());
+            let bottom = Selector::Face(lo)
+                .select_nonempty(&model.particles, &model.container, &what(lo))
+                .map_err(|e| SceneError::at("surface.c_t", e))?;
+            let top = Selector::Face(hi)
+                .select_nonempty(&model.particles, &model.container, &what(hi))
+                .map_err(|e| SceneError::at("surface.c_t", e))?;
+            let q = 1.0; // W/m²
+            let src = face_flux_sources(&model.particles, &top, q * area)?;
+            let k = axis.index();
+            let mean_pos = |ids: &[u32]| {
+                ids.iter()
+                    .map(|&i| model.particles.centres[i as usize][k])
+                    .sum::<f64>()
+                    / ids.len() as f64
+            };
+            let l_centres = mean_pos(&top) - mean_pos(&bottom);
+            let radii: Vec<f64> = top.iter().map(|&i| model.particles.radii[i as usize]).collect();
+            let top_ids = top.clone();
+            let meas = move |t: &[f64]| {
+                // Projected-area-weighted mean temperature of the top layer (the flux
+                // is shared the same way).
+                let (mut s, mut w) = (0.0, 0.0);
+                for (j, &i) in top_ids.iter().enumerate() {
+                    let a = radii[j] * radii[j];
+                    s += a * t[i as usize];
+                    w += a;
+                }
+                let dt = s / w;
+                (q * length / dt, q * l_centres / dt)
+            };
+            (
+                format!("flux-{}", if axis == Axis::Y { "y" } else { "z" }),
+                bottom,
+                src,
+                Box::new(meas),
+            )
+        }
+        Container::Periodic { .. } => {
+            return Err(SceneError::invalid(
+                "surface.c_t",
+                "Auto",
+                "C_t calibration needs a box, cylinder or sphere container; give `c_t: Value(..)` for periodic packings",
+            ));
+        }
+    };
+    let constraints = resolve_fixed(&model.network, &[(fixed_ids, 0.0)], FloatingPolicy::Exclude)?;
+    let steady = solve_steady_temperature(
+        &model.network,
+        &g,
+        &constraints,
+        &sources,
+        &default_solve_params(),
+    )?;
+    let (lam_e, lam_e_c) = measure(&steady.solution.values);
+    let report = steady.solution.report.clone();
+    let delta_t = steady.solution.values.iter().copied().fold(0.0, f64::max);
+    let _ = t0;
+    Ok(CtCalibration {
+        c_t: lambda / lam_e,
+        c_t_centres: lambda / lam_e_c,
+        method,
+        lambda_e_arb: lam_e,
+        lambda,
+        delta_t,
+        solve_s: report.wall_s + report.setup_s,
+        iterations: report.iterations,
+        solve: Some(report),
+    })
+}
+
+/// Conductances, capacities and volumes of the thermal network.
+#[derive(Debug, Clone)]
+pub struct ThermalSetup {
+    /// The surface model used (C_t resolved).
+    pub surface: SurfaceModel,
+    /// Calibration, when C_t was `Auto`.
+    pub calibration: Option<CtCalibration>,
+    /// Transmission surface per contact (m²).
+    pub areas: Vec<f64>,
+    /// Contact conductivity λ per contact (W/(m·K)), interface rule applied.
+    pub contact_lambda: Vec<f64>,
+    /// Contact conductance H = λ S / d per contact (W/K).
+    pub conductances: Vec<f64>,
+    /// Representative volume per particle (m³).
+    pub rep_volumes: Vec<f64>,
+    /// Heat capacity per particle (J/K).
+    pub capacities: Vec<f64>,
+    /// Particles whose neighbour count lay outside the Terreros table (clamped).
+    pub clamped: usize,
+    /// Haddad eq. 16 estimate of the critical step (s), for comparison only.
+    pub paper_dt: Option<f64>,
+}
+
+/// Builds the thermal network values for a surface model (calibrating C_t when asked).
+pub fn thermal_setup(
+    model: &Model,
+    surface: &SurfaceConfig,
+    interface: InterfaceConfig,
+) -> Result<ThermalSetup, SceneError> {
+    let (c_t, calibration) = match surface {
+        SurfaceConfig::Calibrated { c_t: CtConfig::Auto } => {
+            let cal = calibrate_ct(model)?;
+            (Some(cal.c_t), Some(cal))
+        }
+        SurfaceConfig::Calibrated {
+            c_t: CtConfig::Value(v),
+        } => {
+            if !(v.is_finite() && *v > 0.0) {
+                return Err(SceneError::invalid(
+                    "surface.c_t",
+                    v,
+                    "must be a finite number > 0",
+                ));
+            }
+            (Some(*v), None)
+        }
+        SurfaceConfig::TerrerosAlpha => (None, None),
+    };
+    let sm = model_for(surface, c_t);
+    let s = contact_surfaces(&model.graph, &model.particles, &sm)?;
+    let lam_phase: Vec<f64> = model.materials.materials.iter().map(|m| m.conductivity).collect();
+    let contact_lambda = contact_property(
+        &model.graph,
+        &model.particles.phases,
+        &lam_phase,
+        interface_rule(interface),
+    )?;
+    let g = conductances(&model.graph, &s.area, &contact_lambda)?;
+    let rep = representative_volumes(&model.graph, &model.particles, &sm, model.phi)?;
+    let vols: Vec<f64> = (0..model.particles.len())
+        .map(|p| model.particles.volume(p))
+        .collect();
+    let fv: Vec<f64> = vols.iter().zip(&rep).map(|(v, r)| (v / r).min(1.0)).collect();
+    let c = per_particle(model, |m| m.specific_heat);
+    let rho = per_particle(model, |m| m.density);
+    let caps = capacities(&vols, &c, &rho, RepresentativeVolume::VolumeFraction(&fv))?;
+    let paper_dt = c_t.and_then(|ct| {
+        let d_min = model
+            .graph
+            .geometry
+            .iter()
+            .map(|g| g.distance)
+            .fold(f64::INFINITY, f64::min);
+        // Diffusivity of the particle material a = λ/(c ρ_d), ρ_d = ρ_c/φ (Haddad eq. 10–16);
+        // the largest over the phases.
+        let a = model
+            .materials
+            .materials
+            .iter()
+            .map(|m| m.conductivity * model.phi / (m.specific_heat * m.density))
+            .fold(0.0, f64::max);
+        let z = model.graph.coordination();
+        (d_min.is_finite() && z > 0.0).then(|| paper_dt_estimate(d_min, a, z, ct))
+    });
+    Ok(ThermalSetup {
+        surface: sm,
+        calibration,
+        areas: s.area,
+        contact_lambda,
+        conductances: g,
+        rep_volumes: rep,
+        capacities: caps,
+        clamped: s.clamped,
+        paper_dt,
+    })
+}
+
+/// Resolved thermal boundary conditions and sources.
+#[derive(Debug, Clone)]
+pub struct ThermalBcs {
+    /// Fixed temperatures and excluded floating clusters.
+    pub constraints: Constraints,
+    /// Heat sources per particle (W): imposed fluxes and volumetric sources.
+    pub sources: Vec<f64>,
+    /// Named fixed sets (label, ids, value °C) — for reporting and ETC.
+    pub fixed_sets: Vec<(String, Vec<u32>, f64)>,
+}
+
+/// Floating policy of the scene.
+pub fn floating_policy(f: FloatingConfig) -> FloatingPolicy {
+    match f {
+        FloatingConfig::Exclude => FloatingPolicy::Exclude,
+        FloatingConfig::Fail => FloatingPolicy::Fail,
+    }
+}
+
+/// Resolves the thermal boundary conditions of `cfg` on the model.
+pub fn thermal_bcs(
+    model: &Model,
+    cfg: &ThermalConfig,
+    floating: FloatingConfig,
+) -> Result<ThermalBcs, SceneError> {
+    let n = model.particles.len();
+    let mut sources = vec![0.0; n];
+    let mut sets = Vec::new();
+    let mut fixed_sets = Vec::new();
+    for (i, bc) in cfg.bcs.iter().enumerate() {
+        let field = format!("thermal.bcs[{i}]");
+        match bc {
+            ThermalBcConfig::FixedTemperature { select, value } => {
+                if !value.is_finite() {
+                    return Err(SceneError::invalid(
+                        &format!("{field}.value"),
+                        value,
+                        "must be a finite temperature",
+                    ));
+                }
+                let sel = convert::selector(select, &model.materials, &format!("{field}.select"))?;
+                let ids = sel
+                    .select_nonempty(
+                        &model.particles,
+                        &model.container,
+                        &format!("{field} (FixedTemperature)"),
+                    )
+                    .map_err(|e| SceneError::at(&format!("{field}.select"), e))?;
+                fixed_sets.push((format!("{select:?}"), ids.clone(), *value));
+                sets.push((ids, *value));
+            }
+            ThermalBcConfig::HeatFlux { face, flux } => {
+                if !flux.is_finite() {
+                    return Err(SceneError::invalid(
+                        &format!("{field}.flux"),
+                        flux,
+                        "must be a finite flux density (W/m²)",
+                    ));
+                }
+                let f = convert::face(*face);
+                let ids = Selector::Face(f)
+                    .select_nonempty(&model.particles, &model.container, &format!("{field} (HeatFlux)"))
+                    .map_err(|e| SceneError::at(&format!("{field}.face"), e))?;
+                let area = face_area(&model.container, f).ok_or_else(|| {
+                    SceneError::invalid(
+                        &format!("{field}.face"),
+                        f.name(),
+                        "this container has no such face",
+                    )
+                })?;
+                let s = face_flux_sources(&model.particles, &ids, flux * area)?;
+                sources.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+            }
+        }
+    }
+    for (i, src) in cfg.sources.iter().enumerate() {
+        let field = format!("thermal.sources[{i}]");
+        if !src.power_density.is_finite() {
+            return Err(SceneError::invalid(
+                &format!("{field}.power_density"),
+                src.power_density,
+                "must be finite (W/m³)",
+            ));
+        }
+        let sel = convert::selector(&src.select, &model.materials, &format!("{field}.select"))?;
+        let ids = sel
+            .select_nonempty(&model.particles, &model.container, &field)
+            .map_err(|e| SceneError::at(&format!("{field}.select"), e))?;
+        for &p in &ids {
+            sources[p as usize] += src.power_density * model.particles.volume(p as usize) / model.phi;
+        }
+    }
+    if sets.is_empty()
+        && !matches!(
+            cfg.solver,
+            ThermalSolverConfig::Explicit { .. } | ThermalSolverConfig::Implicit { .. }
+        )
+    {
+        return Err(SceneError::invalid(
+            "thermal.bcs",
+            "no FixedTemperature",
+            "a steady thermal solve needs at least one fixed temperature",
+        ));
+    }
+    let policy = match cfg.solver {
+        // A transient run is well posed without fixed values: heat capacity holds each cluster.
+        ThermalSolverConfig::Explicit { .. } | ThermalSolverConfig::Implicit { .. } if sets.is_empty() => {
+            FloatingPolicy::Keep
+        }
+        _ => floating_policy(floating),
+    };
+    let constraints = resolve_fixed(&model.network, &sets, policy)?;
+    Ok(ThermalBcs {
+        constraints,
+        sources,
+        fixed_sets,
+    })
+}
+
+/// Area (m²) of a container face.
+pub fn face_area(c: &Container, f: Face) -> Option<f64> {
+    use std::f64::consts::PI;
+    match (c, f) {
+        (Container::Box { size }, _) if f != Face::Outer => {
+            let k = match f {
+                Face::XMin | Face::XMax => 0,
+                Face::YMin | Face::YMax => 1,
+                _ => 2,
+            };
+            Some(size[0] * size[1] * size[2] / size[k])
+        }
+        (Container::Cylinder { radius, .. }, Face::ZMin | Face::ZMax) => Some(PI * radius * radius),
+        (Container::Cylinder { radius, length }, Face::Outer) => Some(2.0 * PI * radius * length),
+        (Container::Sphere { radius }, Face::Outer) => Some(4.0 * PI * radius * radius),
+        _ => None,
+    }
+}
+
+/// What a thermal solve did and cost.
+#[derive(Debug, Clone, Serialize)]
+pub struct ThermalSolveReport {
+    /// `forward-euler`, `backward-euler`, `crank-nicolson` or `steady`.
+    pub scheme: String,
+    /// Time steps (transient).
+    pub steps: u64,
+    /// Time step (s) (transient).
+    pub dt: f64,
+    /// Exact forward-Euler positivity bound min_p C_p / Σ H (s).
+    pub dt_bound: f64,
+    /// Haddad eq. 16 estimate (s).
+    pub dt_paper: Option<f64>,
+    /// Linear-solver iterations (implicit, steady).
+    pub iterations: u64,
+    /// Largest relative residual of the linear solves.
+    pub residual: f64,
+    /// Wall time (s).
+    pub wall_s: f64,
+    /// Explicit throughput (contact updates per second).
+    pub contacts_per_s: f64,
+    /// Energy balance error (fraction).
+    pub energy_balance_error: f64,
+    /// Particles excluded from the solve (floating clusters).
+    pub excluded: usize,
+}
+
+/// Temperatures of a thermal solve.
+#[derive(Debug, Clone)]
+pub struct ThermalRun {
+    /// Final temperatures (°C). Excluded particles keep their initial temperature.
+    pub temperatures: Vec<f64>,
+    /// Snapshots at the requested output times (t, temperatures).
+    pub snapshots: Vec<(f64, Vec<f64>)>,
+    /// Cost and step data.
+    pub report: ThermalSolveReport,
+}
+
+/// Runs the thermal solver of `solver` with `extra_sources` (W per particle, e.g. Joule heat)
+/// added to the boundary sources.
+pub fn solve_thermal(
+    model: &Model,
+    setup: &ThermalSetup,
+    bcs: &ThermalBcs,
+    solver: &ThermalSolverConfig,
+    initial: f64,
+    output_times: &[f64],
+    extra_sources: Option<&[f64]>,
+) -> Result<ThermalRun, SceneError> {
+    let n = model.particles.len();
+    let mut sources = bcs.sources.clone();
+    if let Some(x) = extra_sources {
+        sources.iter_mut().zip(x).for_each(|(a, b)| *a += b);
+    }
+    if !initial.is_finite() {
+        return Err(SceneError::invalid(
+            "thermal.initial_temperature",
+            initial,
+            "must be finite",
+        ));
+    }
+    let mut t_init = vec![initial; n];
+    bcs.constraints.impose(&mut t_init);
+    let mut snapshots = Vec::new();
+    let excluded = bcs.constraints.excluded().len();
+    let net = &model.network;
+    let g = &setup.conductances;
+    let caps = &setup.capacities;
+    let report_of = |r: &demcon_thermal::TransientReport| ThermalSolveReport {
+        scheme: r.scheme.to_string(),
+        steps: r.steps,
+        dt: r.dt,
+        dt_bound: r.dt_bound,
+        dt_paper: setup.paper_dt,
+        iterations: r.solver_iterations,
+        residual: r.max_relative_residual,
+        wall_s: r.wall_s,
+        contacts_per_s: r.contacts_per_s,
+        energy_balance_error: r.energy_balance_error,
+        excluded,
+    };
+    match *solver {
+        ThermalSolverConfig::Explicit { t_end, dt } => {
+            let step = match dt {
+                TimeStepConfig::Auto { safety } => TimeStep::Auto { safety },
+                TimeStepConfig::Fixed { dt, allow_unstable } => TimeStep::Fixed { dt, allow_unstable },
+                TimeStepConfig::Paper { allow_unstable } => {
+                    let dt = setup.paper_dt.ok_or_else(|| {
+                        SceneError::invalid(
+                            "thermal.solver.dt",
+                            "Paper",
+                            "the paper's estimate needs the Calibrated surface model",
+                        )
+                    })?;
+                    TimeStep::Fixed { dt, allow_unstable }
+                }
+            };
+            let params = ExplicitParams {
+                t_end,
+                dt: step,
+                output_times: output_times.to_vec(),
+                paper_dt: setup.paper_dt,
+                ..ExplicitParams::default()
+            };
+            let tr = run_explicit(
+                net,
+                g,
+                caps,
+                &bcs.constraints,
+                &sources,
+                &t_init,
+                &params,
+                |t, v| snapshots.push((t, v.to_vec())),
+            )?;
+            Ok(ThermalRun {
+                report: report_of(&tr.report),
+                temperatures: tr.temperatures,
+                snapshots,
+            })
+        }
+        ThermalSolverConfig::Implicit { t_end, dt, scheme } => {
+            let params = ImplicitParams {
+                t_end,
+                dt,
+                scheme: match scheme {
+                    ImplicitSchemeConfig::BackwardEuler => Scheme::BackwardEuler,
+                    ImplicitSchemeConfig::CrankNicolson => Scheme::CrankNicolson,
+                },
+                output_times: output_times.to_vec(),
+                solve: SolveParams {
+                    method: Method::Cg {
+                        rel_tol: 1e-10,
+                        max_iter: 100_000,
+                    },
+                },
+            };
+            let tr = run_implicit(
+                net,
+                g,
+                caps,
+                &bcs.constraints,
+                &sources,
+                &t_init,
+                &params,
+                |t, v| snapshots.push((t, v.to_vec())),
+            )?;
+            Ok(ThermalRun {
+                report: report_of(&tr.report),
+                temperatures: tr.temperatures,
+                snapshots,
+            })
+        }
+        ThermalSolverConfig::Steady => {
+            let st = solve_steady_temperature(net, g, &bcs.constraints, &sources, &default_solve_params())?;
+            let mut temps = st.solution.values;
+            for &p in bcs.constraints.excluded() {
+                temps[p as usize] = initial;
+            }
+            let r = &st.solution.report;
+            let bound = demcon_thermal::stable_dt_bound(net, g, caps, &bcs.constraints)?;
+            Ok(ThermalRun {
+                report: ThermalSolveReport {
+                    scheme: "steady".into(),
+                    steps: 0,
+                    dt: 0.0,
+                    dt_bound: bound.dt_max,
+                    dt_paper: setup.paper_dt,
+                    iterations: r.iterations as u64,
+                    residual: r.relative_residual,
+                    wall_s: r.wall_s + r.setup_s,
+                    contacts_per_s: 0.0,
+                    energy_balance_error: st.balance_error,
+                    excluded,
+                },
+                temperatures: temps,
+                snapshots,
+            })
+        }
+    }
+}

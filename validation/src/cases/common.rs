@@ -1,0 +1,146 @@
+//! Scene builders and comparison helpers shared by the heat-paper cases.
+
+use std::path::PathBuf;
+
+use demcon_scene::config::*;
+pub use demcon_scene::{Model, RunResult, SceneConfig};
+use demcon_scene::{Scene, build_model, run_on_model};
+
+/// Haddad 2021 Table 1 "steel" (ρ = 7800 kg/m³, λ = 33 W/(m·K), c = 0.9 J/(kg·K): the
+/// paper's unphysically small c sets its 0.05–0.2 s time scale).
+pub fn table1_steel() -> MaterialConfig {
+    material("steel", 33.0, 7800.0, 0.9)
+}
+
+/// A thermal-only material.
+pub fn material(name: &str, conductivity: f64, density: f64, specific_heat: f64) -> MaterialConfig {
+    MaterialConfig {
+        name: name.into(),
+        conductivity,
+        density,
+        specific_heat,
+        resistivity: None,
+        resistivity_temp_coeff: 0.0,
+        resistivity_ref_temp: 20.0,
+    }
+}
+
+/// A Gaussian-0.3 LS packing recipe of `count` particles at φ = 0.64 in `container`.
+pub fn packing(container: ContainerConfig, count: usize) -> PackingConfig {
+    PackingConfig::Generate {
+        container,
+        count,
+        phi: 0.64,
+        radius_cov: 0.3,
+        radius_range: None,
+        allow_short: false,
+    }
+}
+
+/// Fixed temperature on a face.
+pub fn fixed(face: FaceConfig, value: f64) -> ThermalBcConfig {
+    ThermalBcConfig::FixedTemperature {
+        select: SelectorConfig::Face(face),
+        value,
+    }
+}
+
+/// A scene skeleton: packing, Z = 7.5 contacts, calibrated surfaces (C_t from our own
+/// calibration), materials, thermal physics, no files.
+pub fn thermal_scene(
+    name: &str,
+    seed: u64,
+    packing: PackingConfig,
+    materials: Vec<MaterialConfig>,
+    thermal: ThermalConfig,
+) -> SceneConfig {
+    SceneConfig {
+        name: name.into(),
+        seed,
+        packing,
+        carve: None,
+        contacts: ContactsConfig {
+            coordination: Some(7.5),
+            tolerance: None,
+        },
+        surface: SurfaceConfig::Calibrated { c_t: CtConfig::Auto },
+        materials,
+        phases: Vec::new(),
+        interface: InterfaceConfig::Harmonic,
+        floating: FloatingConfig::Exclude,
+        thermal: Some(thermal),
+        electric: None,
+        outputs: OutputsConfig {
+            vtk: false,
+            ..OutputsConfig::default()
+        },
+    }
+}
+
+/// Validates a scene built in code and builds its model.
+pub fn model_of(cfg: &SceneConfig) -> anyhow::Result<Model> {
+    let scene = Scene::from_config(cfg.clone(), PathBuf::new())?;
+    Ok(build_model(&scene.config, &scene.base_dir, None)?)
+}
+
+/// Runs the physics of `cfg` on a clone of `model`.
+pub fn run_with(cfg: &SceneConfig, model: &Model) -> anyhow::Result<RunResult> {
+    Scene::from_config(cfg.clone(), PathBuf::new())?;
+    Ok(run_on_model(cfg, model.clone())?)
+}
+
+/// Volume-weighted layer averages of `values` along axis `k` over `[lo, hi]` in `bins`
+/// layers: (mean coordinate, mean value) of each non-empty layer, skipping `skip` particles.
+pub fn layer_profile(
+    model: &Model,
+    values: &[f64],
+    k: usize,
+    lo: f64,
+    hi: f64,
+    bins: usize,
+    skip: &[bool],
+) -> Vec<(f64, f64)> {
+    let mut acc = vec![(0.0, 0.0, 0.0); bins];
+    for (p, c) in model.particles.centres.iter().enumerate() {
+        if skip[p] {
+            continue;
+        }
+        let b = (((c[k] - lo) / (hi - lo)) * bins as f64).floor();
+        if b < 0.0 || b >= bins as f64 {
+            continue;
+        }
+        let v = model.particles.volume(p);
+        let a = &mut acc[b as usize];
+        a.0 += v * c[k];
+        a.1 += v * values[p];
+        a.2 += v;
+    }
+    acc.into_iter()
+        .filter(|a| a.2 > 0.0)
+        .map(|a| (a.0 / a.2, a.1 / a.2))
+        .collect()
+}
+
+/// Mask of the fixed (boundary-condition) particles of a run's thermal constraints.
+pub fn fixed_mask(model: &Model, fixed_sets: &[(String, Vec<u32>, f64)]) -> Vec<bool> {
+    let mut m = vec![false; model.particles.len()];
+    for (_, ids, _) in fixed_sets {
+        for &i in ids {
+            m[i as usize] = true;
+        }
+    }
+    m
+}
+
+/// Population coefficient of variation of `v` (fraction).
+pub fn cov(v: &[f64]) -> f64 {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
+    var.sqrt() / mean.abs()
+}
+
+/// Rounds to 4 significant digits for JSON metrics keyed by size.
+pub fn key(n: usize) -> String {
+    n.to_string()
+}

@@ -1,0 +1,161 @@
+//! `ct-calibration` — Haddad et al. 2021 §2.1, Fig. 3: the calibration constant C_t of the
+//! transmission surface S = C_t π R_m² (eqs. 7–9), measured on OUR packings (cubes, LS,
+//! Gaussian radii std/mean 0.3, φ = 0.64, Z = 7.5): flux on the top face, fixed temperature
+//! on the bottom, steady state (one linear solve), C_t = C_t,arb λ / λ_e.
+//!
+//! Compared: C_t against N (4 realisations each) and its coefficient of variation. The paper
+//! finds C_t between 0.75 and 0.84 rising with N (0.806 at 10⁵, 0.834 at 10⁶) with CoV
+//! < 0.2 %. Our packing protocol (growth rate, contact tolerance) is not theirs, so C_t is
+//! not expected to be equal: we accept 10 % from the paper's value at the same N as
+//! "the same model", and a CoV below 1 % (an order of magnitude on the paper's, since our
+//! smallest N is 10⁴).
+
+use std::time::Instant;
+
+use demcon_scene::config::*;
+use demcon_scene::thermal::calibrate_ct;
+use serde_json::{Map, Value};
+
+use super::common::*;
+use crate::chart::{Chart, Scale, Series, draw};
+use crate::{CaseOutcome, Comparison, Ctx, Table};
+
+fn scene(n: usize, seed: u64) -> SceneConfig {
+    thermal_scene(
+        "ct-calibration",
+        seed,
+        packing(
+            ContainerConfig::Box {
+                size: (0.1, 0.1, 0.1),
+            },
+            n,
+        ),
+        vec![table1_steel()],
+        ThermalConfig {
+            initial_temperature: 0.0,
+            bcs: vec![fixed(FaceConfig::YMin, 0.0)],
+            sources: Vec::new(),
+            solver: ThermalSolverConfig::Steady,
+        },
+    )
+}
+
+/// The paper's C_t at N (Fig. 3, read at the two values the text states; linear in log N).
+fn paper_ct(n: usize) -> f64 {
+    let (n1, c1, n2, c2) = (1e5f64, 0.806, 1e6f64, 0.834);
+    c1 + (c2 - c1) * ((n as f64).log10() - n1.log10()) / (n2.log10() - n1.log10())
+}
+
+/// Runs the case.
+pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
+    let sizes: Vec<usize> = ctx.pick(
+        vec![10_000, 30_000, 100_000],
+        vec![10_000, 30_000, 100_000, 300_000, 1_000_000],
+    );
+    let realisations = 4;
+    let mut out = CaseOutcome::new("ct-calibration", ctx.mode);
+    let mut ct = Map::new();
+    let mut ct_centres = Map::new();
+    let mut covs = Map::new();
+    let mut worst_cov = 0.0f64;
+    let mut table = Table {
+        title: "C_t on our packings (4 realisations each)".into(),
+        header: vec![
+            "N".into(),
+            "C_t mean".into(),
+            "CoV".into(),
+            "C_t (centre-to-centre L)".into(),
+            "ε (gap/(R_p+R_q))".into(),
+            "Z".into(),
+            "pack (s)".into(),
+            "solve (s)".into(),
+            "CG iter.".into(),
+            "paper C_t".into(),
+        ],
+        rows: Vec::new(),
+    };
+    let mut points = Vec::new();
+    for &n in &sizes {
+        let (mut vals, mut vals_c, mut eps, mut z, mut pack_s, mut solve_s, mut iters) =
+            (vec![], vec![], 0.0, 0.0, 0.0, 0.0, 0);
+        for k in 0..realisations {
+            let t0 = Instant::now();
+            let model = model_of(&scene(n, ctx.seed + k))?;
+            pack_s += t0.elapsed().as_secs_f64();
+            let cal = calibrate_ct(&model)?;
+            vals.push(cal.c_t);
+            vals_c.push(cal.c_t_centres);
+            eps += model.graph.report.epsilon;
+            z += model.graph.coordination();
+            solve_s += cal.solve_s;
+            iters += cal.iterations;
+            out.n_particles = out.n_particles.max(model.particles.len());
+        }
+        let r = realisations as f64;
+        let mean = vals.iter().sum::<f64>() / r;
+        let mean_c = vals_c.iter().sum::<f64>() / r;
+        let c = cov(&vals);
+        worst_cov = worst_cov.max(c);
+        ct.insert(key(n), Value::from(mean));
+        ct_centres.insert(key(n), Value::from(mean_c));
+        covs.insert(key(n), Value::from(c));
+        points.push((n as f64, mean));
+        table.rows.push(vec![
+            n.to_string(),
+            format!("{mean:.4}"),
+            format!("{:.3} %", 100.0 * c),
+            format!("{mean_c:.4}"),
+            format!("{:.4}", eps / r),
+            format!("{:.3}", z / r),
+            format!("{:.1}", pack_s / r),
+            format!("{:.3}", solve_s / r),
+            format!("{}", iters / realisations as usize),
+            format!("{:.3}", paper_ct(n)),
+        ]);
+        out.compare(Comparison::relative(
+            &format!("C_t at N = {n}"),
+            mean,
+            paper_ct(n),
+            0.10,
+            "Haddad 2021 Fig. 3",
+        ));
+    }
+    out.metric("ct", Value::Object(ct));
+    out.metric("ct_cov", worst_cov);
+    out.metric("ct_centres", Value::Object(ct_centres));
+    out.metric("ct_cov_by_n", Value::Object(covs));
+    out.reference("ct", "0.75–0.84 rising with N (0.806 at 1e5, 0.834 at 1e6)");
+    out.reference("ct_cov", 0.002);
+    out.reference("source", "Haddad 2021 §2.1 Fig. 3");
+    out.compare(Comparison::at_most(
+        "largest CoV of C_t over N",
+        worst_cov,
+        0.01,
+        "paper < 0.2 %",
+    ));
+    out.tables.push(table);
+    let paper: Vec<(f64, f64)> = [1e4, 3e4, 1e5, 3e5, 1e6]
+        .iter()
+        .map(|&n| (n, paper_ct(n as usize)))
+        .collect();
+    draw(
+        &Chart {
+            title: "C_t against N (Haddad 2021 Fig. 3)".into(),
+            x_label: "N (particles)".into(),
+            y_label: "C_t".into(),
+            x_scale: Scale::Log,
+            y_scale: Scale::Linear,
+            series: vec![
+                Series::line("demcon (mean of 4)", points),
+                Series::markers("paper (interpolated in log N)", paper),
+            ],
+        },
+        &ctx.out.join("ct-calibration.png"),
+    )?;
+    out.charts.push("ct-calibration.png".into());
+    out.note(
+        "C_t uses L = the sample length (the paper's definition); the column 'centre-to-centre L' uses the distance between the mean \
+         centres of the two boundary layers instead, which removes most of the N dependence (the boundary layers are thinner at larger N).",
+    );
+    Ok(out)
+}
