@@ -133,3 +133,23 @@ pub(crate) fn check_point(field: &str, p: &demcon_core::Vec3) -> Result<(), Post
         ))
     }
 }
+
+/// Checks a particle set whose fields may have been filled by hand: arrays of equal length,
+/// finite centres, finite radii > 0.
+pub(crate) fn check_particles(p: &demcon_core::ParticleSet) -> Result<(), PostError> {
+    let n = p.radii.len();
+    if p.centres.len() != n || p.phases.len() != n {
+        return Err(PostError::invalid(
+            "particles",
+            format!(
+                "{} centres, {} radii, {} phases",
+                p.centres.len(),
+                n,
+                p.phases.len()
+            ),
+            "arrays of equal length",
+        ));
+    }
+    check_finite_vec("particles.centres", &p.centres)?;
+    check_positive("particles.radii", &p.radii)
+}

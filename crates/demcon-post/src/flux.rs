@@ -5,7 +5,7 @@ use demcon_core::{ParticleSet, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::Plane;
-use crate::error::{PostError, check_finite, check_finite_vec, check_len, check_positive};
+use crate::error::{PostError, check_finite, check_finite_vec, check_len, check_particles, check_positive};
 
 /// Checks the contact arrays against each other and against `n` particles.
 fn check_contacts(
@@ -125,6 +125,7 @@ pub fn flow_across_plane(
     period: Option<f64>,
 ) -> Result<PlaneFlow, PostError> {
     let Plane { axis, position } = plane;
+    check_particles(particles)?;
     let n = particles.len();
     check_len("values", values.len(), n)?;
     check_finite("values", values)?;

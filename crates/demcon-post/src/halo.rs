@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::domain::Domain;
-use crate::error::{PostError, check_finite_vec, check_len, check_positive};
+use crate::error::{PostError, check_finite_vec, check_len, check_particles, check_positive};
 
 /// Which radius the Halo ratio multiplies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -131,6 +131,7 @@ pub fn halo_flux(
         ));
     }
     domain.validate()?;
+    check_particles(particles)?;
     check_len("dipoles", dipoles.len(), n)?;
     check_finite_vec("dipoles", dipoles)?;
     check_len("rep_volumes", rep_volumes.len(), n)?;
@@ -153,6 +154,24 @@ pub fn halo_flux(
         HaloScale::ParticleRadius => k * particles.radii[i],
         HaloScale::MeanRadius => k * mean_r,
     };
+    if let Some(l) = domain.period {
+        // Each extra period of halo radius multiplies the images to visit: keep it bounded.
+        let largest = match params.scale {
+            HaloScale::ParticleRadius => k * particles.radii.iter().copied().fold(0.0, f64::max),
+            HaloScale::MeanRadius => k * mean_r,
+        };
+        let period = l[0].min(l[1]).min(l[2]);
+        if largest > period {
+            return Err(PostError::invalid(
+                "ratio",
+                k,
+                format!(
+                    "in a periodic box the largest halo radius ({largest:.4e} m) must not exceed the \
+                     smallest period ({period:.4e} m)"
+                ),
+            ));
+        }
+    }
     let grid = ColumnGrid::build(particles, domain, k);
     // Per-particle data in grid order: position, and (D, V).
     let pos: Vec<Vec3> = grid.order.iter().map(|&i| grid.centres[i as usize]).collect();
@@ -548,6 +567,13 @@ mod tests {
             let e = halo_flux(&p, &d, &v, &dom, &HaloParams::ratio(bad)).unwrap_err();
             assert!(e.to_string().contains("ratio"), "{e}");
         }
+        let periodic = Domain::of_container(&Container::Periodic { size: [5.0; 3] }).unwrap();
+        let e = halo_flux(&p, &d, &v, &periodic, &HaloParams::ratio(20.0)).unwrap_err();
+        assert!(e.to_string().contains("smallest period"), "{e}");
+        let mut bad = p.clone();
+        bad.centres.pop();
+        let e = halo_flux(&bad, &d, &v, &dom, &HaloParams::default()).unwrap_err();
+        assert!(e.to_string().contains("particles"), "{e}");
         let e = halo_flux(&p, &d[1..], &v, &dom, &HaloParams::default()).unwrap_err();
         assert!(e.to_string().contains("dipoles"), "{e}");
     }

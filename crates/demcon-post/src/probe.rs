@@ -7,7 +7,7 @@ use rstar::primitives::GeomWithData;
 use serde::{Deserialize, Serialize};
 
 use crate::domain::Domain;
-use crate::error::{PostError, check_len, check_positive};
+use crate::error::{PostError, check_len, check_particles, check_positive};
 
 /// How a probe turns particle values into a value at a point.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -55,6 +55,7 @@ impl<'a> ProbeIndex<'a> {
         domain: &'a Domain,
     ) -> Result<Self, PostError> {
         domain.validate()?;
+        check_particles(particles)?;
         if particles.is_empty() {
             return Err(PostError::invalid(
                 "particles",

@@ -3,7 +3,7 @@
 use demcon_core::{Axis, ParticleSet, Vec3};
 
 use crate::domain::{Domain, Plane};
-use crate::error::{PostError, check_finite, check_len};
+use crate::error::{PostError, check_finite, check_len, check_particles};
 
 /// Inputs of [`slice_grid`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,6 +76,7 @@ pub fn slice_grid(
     params: &SliceParams,
 ) -> Result<Grid, PostError> {
     domain.validate()?;
+    check_particles(particles)?;
     check_len("values", values.len(), particles.len())?;
     check_finite("values", values)?;
     let Plane { axis, position } = params.plane;

@@ -229,19 +229,8 @@ pub fn write_vtu(
     particles: &ParticleSet,
     fields: &[Field],
 ) -> Result<u64, PostError> {
+    crate::error::check_particles(particles)?;
     let n = particles.len();
-    if particles.centres.len() != n || particles.phases.len() != n {
-        return Err(PostError::invalid(
-            "particles",
-            format!(
-                "{} centres, {} radii, {} phases",
-                particles.centres.len(),
-                n,
-                particles.phases.len()
-            ),
-            "arrays of equal length",
-        ));
-    }
     let mut seen: Vec<&str> = Vec::new();
     for f in fields {
         check_field(f, n, &seen)?;
