@@ -44,7 +44,9 @@ pub struct PackingParams {
     /// fraction of the mean radius (dimensionless, in (0, 2]). Default 0.4.
     pub neighbour_skin: f64,
     /// Kinetic-energy rise (fraction, > 0) that triggers a thermostat rescale back to the
-    /// initial temperature. Default 0.1.
+    /// initial temperature. Each rescale recomputes every event (cost ≈ N predictions), so
+    /// a small value is slow; the growth rate relative to the thermal speed then drifts by
+    /// at most `√(1 + tol)`. Default 0.5.
     pub thermostat_tolerance: f64,
     /// Width of the wall layer excluded from the bulk volume fraction, in mean diameters
     /// (≥ 0). Default 2.
@@ -66,7 +68,7 @@ impl PackingParams {
             jam_pressure: 1e6,
             initial_phi: 0.3,
             neighbour_skin: 0.4,
-            thermostat_tolerance: 0.1,
+            thermostat_tolerance: 0.5,
             bulk_margin_diameters: 2.0,
         }
     }

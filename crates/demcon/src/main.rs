@@ -1,7 +1,9 @@
 //! The `demcon` binary: a thin dispatcher to one module per subcommand.
 
+mod calibrate;
 mod info;
 mod pack;
+mod run;
 
 use std::process::ExitCode;
 
@@ -21,6 +23,21 @@ enum Command {
     Pack(Box<pack::PackArgs>),
     /// Print the report of a packing file (`x y z r`).
     Info(info::InfoArgs),
+    /// Run a scene file (RON): packing, contacts, thermal and/or electric solve, outputs.
+    Run(run::RunArgs),
+    /// Calibrate the transmission-surface constant C_t on our own packings (Haddad 2021 §2.1).
+    Calibrate(calibrate::CalibrateArgs),
+}
+
+/// Sets the size of the global worker pool (default: all cores).
+pub(crate) fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
+    if let Some(n) = threads {
+        if n == 0 {
+            anyhow::bail!("invalid --threads 0: give at least 1");
+        }
+        rayon::ThreadPoolBuilder::new().num_threads(n).build_global()?;
+    }
+    Ok(())
 }
 
 fn main() -> ExitCode {
@@ -28,6 +45,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Pack(args) => pack::run(*args),
         Command::Info(args) => info::run(args),
+        Command::Run(args) => run::run(args),
+        Command::Calibrate(args) => calibrate::run(args),
     };
     match result {
         Ok(code) => code,

@@ -75,6 +75,12 @@ pub struct PackArgs {
     /// Reduced pressure PV/(NkT) taken as jamming.
     #[arg(long)]
     jam_pressure: Option<f64>,
+    /// Neighbour-list skin, as a fraction of the mean radius.
+    #[arg(long)]
+    neighbour_skin: Option<f64>,
+    /// Kinetic-energy rise (fraction) that triggers a thermostat rescale.
+    #[arg(long)]
+    thermostat_tolerance: Option<f64>,
     /// Exit with status 0 even when the target φ was not reached (jammed or out of budget).
     #[arg(long)]
     allow_short: bool,
@@ -140,6 +146,12 @@ pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
     }
     if let Some(p) = a.jam_pressure {
         params.jam_pressure = p;
+    }
+    if let Some(k) = a.neighbour_skin {
+        params.neighbour_skin = k;
+    }
+    if let Some(t) = a.thermostat_tolerance {
+        params.thermostat_tolerance = t;
     }
     params.validate()?;
 

@@ -1,5 +1,5 @@
-//! Uniform cell grid with doubly linked cell lists, for finding the particles whose
-//! points lie near a given point. Periodic grids wrap; walled grids clamp to their box.
+//! Uniform cell grids for finding the particles whose points lie near a given point:
+//! a linked-list grid (insert only) and a grid of spheres stored contiguously per cell. Periodic grids wrap; walled grids clamp to their box.
 
 use demcon_core::{Aabb, Vec3};
 
@@ -16,8 +16,6 @@ pub struct CellGrid {
     periodic: bool,
     head: Vec<u32>,
     next: Vec<u32>,
-    prev: Vec<u32>,
-    cell_of: Vec<u32>,
 }
 
 impl CellGrid {
@@ -39,8 +37,6 @@ impl CellGrid {
             periodic,
             head: vec![NONE; n[0] * n[1] * n[2]],
             next: vec![NONE; n_particles],
-            prev: vec![NONE; n_particles],
-            cell_of: vec![NONE; n_particles],
         }
     }
 
@@ -64,35 +60,26 @@ impl CellGrid {
     /// Puts particle `i` (not in the grid) into the cell of point `p`.
     pub fn insert(&mut self, i: usize, p: &Vec3) {
         let c = self.cell_index([0, 1, 2].map(|k| self.coord(p, k)));
-        let h = self.head[c];
-        self.next[i] = h;
-        self.prev[i] = NONE;
-        if h != NONE {
-            self.prev[h as usize] = i as u32;
-        }
+        self.next[i] = self.head[c];
         self.head[c] = i as u32;
-        self.cell_of[i] = c as u32;
-    }
-
-    /// Takes particle `i` out of its cell.
-    pub fn remove(&mut self, i: usize) {
-        let c = self.cell_of[i] as usize;
-        let (p, n) = (self.prev[i], self.next[i]);
-        if p == NONE {
-            self.head[c] = n;
-        } else {
-            self.next[p as usize] = n;
-        }
-        if n != NONE {
-            self.prev[n as usize] = p;
-        }
-        self.cell_of[i] = NONE;
     }
 
     /// Calls `f(j)` for every particle in the cell of `p` and in the cells next to it
     /// (each particle once, also on periodic grids with fewer than three cells per axis).
     #[inline]
     pub fn for_each_near(&self, p: &Vec3, mut f: impl FnMut(usize)) {
+        self.for_each_cell_near(p, |c| {
+            let mut j = self.head[c];
+            while j != NONE {
+                f(j as usize);
+                j = self.next[j as usize];
+            }
+        });
+    }
+
+    /// Calls `f(cell)` for the cell of `p` and each distinct cell next to it.
+    #[inline]
+    fn for_each_cell_near(&self, p: &Vec3, mut f: impl FnMut(usize)) {
         let mut axes = [[0usize; 3]; 3];
         let mut counts = [0usize; 3];
         for k in 0..3 {
@@ -115,14 +102,70 @@ impl CellGrid {
         for &z in &axes[2][..counts[2]] {
             for &y in &axes[1][..counts[1]] {
                 for &x in &axes[0][..counts[0]] {
-                    let mut j = self.head[self.cell_index([x, y, z])];
-                    while j != NONE {
-                        f(j as usize);
-                        j = self.next[j as usize];
-                    }
+                    f(self.cell_index([x, y, z]));
                 }
             }
         }
+    }
+}
+
+/// One sphere stored in a [`SphereGrid`] cell: centre (m), radius (m), particle id.
+#[derive(Debug, Clone, Copy)]
+pub struct Entry {
+    /// Centre (m).
+    pub c: Vec3,
+    /// Radius (m).
+    pub rad: f64,
+    /// Particle id.
+    pub id: u32,
+}
+
+/// Cell grid whose cells store their spheres contiguously (centre, radius, id), so that a
+/// neighbour query reads packed memory instead of chasing list pointers across arrays.
+#[derive(Debug, Clone)]
+pub struct SphereGrid {
+    index: CellGrid,
+    cells: Vec<Vec<Entry>>,
+    cell_of: Vec<u32>,
+}
+
+impl SphereGrid {
+    /// See [`CellGrid::new`].
+    pub fn new(bounds: &Aabb, min_cell: f64, periodic: bool, n_particles: usize, max_cells: usize) -> Self {
+        let index = CellGrid::new(bounds, min_cell, periodic, 0, max_cells);
+        let n_cells = index.head.len();
+        Self {
+            index,
+            cells: vec![Vec::new(); n_cells],
+            cell_of: vec![NONE; n_particles],
+        }
+    }
+
+    /// Stores sphere `id` (not in the grid) with centre `c` and radius `rad`.
+    pub fn insert(&mut self, id: usize, c: Vec3, rad: f64) {
+        let k = self.index.cell_index([0, 1, 2].map(|a| self.index.coord(&c, a)));
+        self.cells[k].push(Entry {
+            c,
+            rad,
+            id: id as u32,
+        });
+        self.cell_of[id] = k as u32;
+    }
+
+    /// Removes sphere `id`.
+    pub fn remove(&mut self, id: usize) {
+        let cell = &mut self.cells[self.cell_of[id] as usize];
+        if let Some(q) = cell.iter().position(|e| e.id as usize == id) {
+            cell.swap_remove(q);
+        }
+        self.cell_of[id] = NONE;
+    }
+
+    /// Calls `f` for every sphere stored in the cell of `p` and the cells next to it.
+    #[inline]
+    pub fn for_each_near(&self, p: &Vec3, mut f: impl FnMut(&Entry)) {
+        self.index
+            .for_each_cell_near(p, |k| self.cells[k].iter().for_each(&mut f));
     }
 }
 
@@ -158,11 +201,6 @@ mod tests {
                 .collect();
             let mut g = CellGrid::new(&b, 1.0, periodic, pts.len(), 1 << 20);
             for (i, p) in pts.iter().enumerate() {
-                g.insert(i, p);
-            }
-            // Move a few around.
-            for (i, p) in pts.iter().enumerate().take(50) {
-                g.remove(i);
                 g.insert(i, p);
             }
             for p in pts.iter().take(40) {

@@ -29,7 +29,7 @@ use crate::error::PackingError;
 use crate::params::{PackProgress, PackingParams, StopReason};
 use crate::radius::jamming_estimate;
 use crate::report::{PackingReport, summarize};
-use grid::CellGrid;
+use grid::{CellGrid, SphereGrid};
 use heap::EventHeap;
 use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay, plane_delay};
 
@@ -47,24 +47,33 @@ enum Ev {
     Exit,
 }
 
+/// State of one particle, one cache line: position `x` (m) at its own time `t`, velocity
+/// `v` (m per time unit), radius `a` at s = 1, i.e. at the target (m).
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct P {
+    x: Vec3,
+    t: f64,
+    v: Vec3,
+    a: f64,
+}
+
 struct Engine {
     container: Container,
     period: Option<Vec3>,
-    /// Radius of each particle at s = 1, i.e. at the target (m).
-    a: Vec<f64>,
+    p: Vec<P>,
     a_mean: f64,
-    x: Vec<Vec3>,
-    v: Vec<Vec3>,
-    t: Vec<f64>,
     s0: f64,
     g: f64,
     count: Vec<u32>,
     ev: Vec<Ev>,
     heap: EventHeap,
     nb: Vec<Vec<u32>>,
+    /// Bounding-sphere centre of each particle (m).
     bc: Vec<Vec3>,
+    /// Bounding-sphere radius of each particle (m).
     brad: Vec<f64>,
-    grid: CellGrid,
+    grid: SphereGrid,
     skin: f64,
     ke: f64,
     ke_target: f64,
@@ -120,8 +129,8 @@ pub fn pack(
     for i in 0..n {
         eng.advance(i, now);
     }
-    let radii: Vec<f64> = eng.a.iter().map(|a| a * s_final).collect();
-    let raw = ParticleSet::new(eng.x.clone(), radii)?;
+    let radii: Vec<f64> = eng.p.iter().map(|p| p.a * s_final).collect();
+    let raw = ParticleSet::new(eng.p.iter().map(|p| p.x).collect(), radii)?;
     let order = morton_order(&raw.centres, &params.container.bounds());
     let particles = raw.permuted(&order);
 
@@ -282,15 +291,19 @@ impl Engine {
 
         let skin = params.neighbour_skin;
         let cell = 2.0 * (a_max + skin * a_mean);
-        let grid = CellGrid::new(&c.bounds(), cell, period.is_some(), n, 2 * n + 64);
+        let grid = SphereGrid::new(&c.bounds(), cell, period.is_some(), n, 2 * n + 64);
         let mut eng = Engine {
             container: c,
             period,
-            a,
+            p: (0..n)
+                .map(|i| P {
+                    x: x[i],
+                    t: 0.0,
+                    v: v[i],
+                    a: a[i],
+                })
+                .collect(),
             a_mean,
-            x,
-            v,
-            t: vec![0.0; n],
             s0,
             g: params.growth_rate,
             count: vec![0; n],
@@ -311,10 +324,9 @@ impl Engine {
             virial: 0.0,
         };
         for i in 0..n {
-            eng.bc[i] = eng.x[i];
-            eng.brad[i] = (eng.a[i] + skin * a_mean) * s0;
-            let p = eng.bc[i];
-            eng.grid.insert(i, &p);
+            eng.bc[i] = eng.p[i].x;
+            eng.brad[i] = (eng.p[i].a + skin * a_mean) * s0;
+            eng.grid.insert(i, eng.bc[i], eng.brad[i]);
         }
         for i in 0..n {
             let mut list = std::mem::take(&mut eng.nb[i]);
@@ -334,19 +346,14 @@ impl Engine {
         self.s0 + self.g * t
     }
 
-    #[inline]
-    fn pos(&self, j: usize, now: f64) -> Vec3 {
-        self.x[j] + self.v[j] * (now - self.t[j])
-    }
-
     /// Time of the latest processed event (the clock of the most recently updated particle).
     fn latest_time(&self) -> f64 {
-        self.t.iter().copied().fold(0.0, f64::max)
+        self.p.iter().map(|p| p.t).fold(0.0, f64::max)
     }
 
     #[inline]
     fn advance(&mut self, i: usize, now: f64) {
-        let mut p = self.x[i] + self.v[i] * (now - self.t[i]);
+        let mut p = self.p[i].x + self.p[i].v * (now - self.p[i].t);
         if let Some(l) = self.period {
             for k in 0..3 {
                 if p[k] >= l[k] {
@@ -356,21 +363,19 @@ impl Engine {
                 }
             }
         }
-        self.x[i] = p;
-        self.t[i] = now;
+        self.p[i].x = p;
+        self.p[i].t = now;
     }
 
     /// Particles whose bounding spheres overlap that of `i` (written into `out`).
     fn find_neighbours(&self, i: usize, out: &mut Vec<u32>) {
         out.clear();
         let (ci, ri) = (self.bc[i], self.brad[i]);
-        self.grid.for_each_near(&ci, |j| {
-            if j != i {
-                let d = min_image(self.period, self.bc[j] - ci);
-                let s = ri + self.brad[j];
-                if d.norm_squared() < s * s {
-                    out.push(j as u32);
-                }
+        self.grid.for_each_near(&ci, |e| {
+            let d = min_image(self.period, e.c - ci);
+            let s = ri + e.rad;
+            if d.norm_squared() < s * s && e.id as usize != i {
+                out.push(e.id);
             }
         });
     }
@@ -385,10 +390,9 @@ impl Engine {
             }
         }
         self.grid.remove(i);
-        self.bc[i] = self.x[i];
-        self.brad[i] = (self.a[i] + self.skin * self.a_mean) * self.s(now);
-        let p = self.bc[i];
-        self.grid.insert(i, &p);
+        self.bc[i] = self.p[i].x;
+        self.brad[i] = (self.p[i].a + self.skin * self.a_mean) * self.s(now);
+        self.grid.insert(i, self.bc[i], self.brad[i]);
         self.find_neighbours(i, &mut list);
         for &j in &list {
             self.nb[j as usize].push(i as u32);
@@ -400,10 +404,12 @@ impl Engine {
     /// The earliest event of particle `i` (synchronised at `now`): time and kind.
     #[inline]
     fn next_event(&self, i: usize, now: f64) -> (f64, Ev) {
-        let (xi, vi) = (self.x[i], self.v[i]);
+        let P {
+            x: xi, v: vi, a: ai, ..
+        } = self.p[i];
         let s = self.s(now);
-        let ri = self.a[i] * s;
-        let gi = self.a[i] * self.g;
+        let ri = ai * s;
+        let gi = ai * self.g;
         // Leaving the bounding sphere.
         let p = min_image(self.period, xi - self.bc[i]);
         let room = self.brad[i] - ri;
@@ -439,12 +445,27 @@ impl Engine {
             }
             Container::Periodic { .. } => {}
         }
-        // Neighbours.
+        // Neighbours. A pair whose gap polynomial f(τ) = aτ² + 2bτ + c is still positive at
+        // the current best delay, and decreasing up to it, cannot collide earlier: skip the
+        // square root.
         for &j in &self.nb[i] {
             let j = j as usize;
-            let r = min_image(self.period, self.pos(j, now) - xi);
-            let sa = self.a[i] + self.a[j];
-            let d = pair_delay(&r, &(self.v[j] - vi), sa * s, sa * self.g);
+            let pj = &self.p[j];
+            let r = min_image(self.period, pj.x + pj.v * (now - pj.t) - xi);
+            let v = pj.v - vi;
+            let sa = ai + pj.a;
+            let (sigma, gamma) = (sa * s, sa * self.g);
+            let b = r.dot(&v) - sigma * gamma;
+            let c = r.norm_squared() - sigma * sigma;
+            if c > 0.0 {
+                let a = v.norm_squared() - gamma * gamma;
+                if (b >= 0.0 && a >= 0.0)
+                    || ((a * best + 2.0 * b) * best + c > 0.0 && (a <= 0.0 || -b >= a * best))
+                {
+                    continue;
+                }
+            }
+            let d = pair_delay(&r, &v, sigma, gamma);
             if d < best {
                 best = d;
                 kind = Ev::Pair {
@@ -465,7 +486,7 @@ impl Engine {
 
     /// Recomputes every particle's event (all synchronised at `now`) and rebuilds the heap.
     fn predict_all(&mut self, now: f64) {
-        let n = self.a.len();
+        let n = self.p.len();
         let mut times = Vec::with_capacity(n);
         for i in 0..n {
             let (t, kind) = self.next_event(i, now);
@@ -478,7 +499,7 @@ impl Engine {
     /// Inward unit normal of wall `w` at the position of particle `i`.
     fn wall_normal(&self, i: usize, w: u8) -> Vec3 {
         if w == RADIAL {
-            let mut p = self.x[i];
+            let mut p = self.p[i].x;
             if matches!(self.container, Container::Cylinder { .. }) {
                 p.z = 0.0;
             }
@@ -495,16 +516,16 @@ impl Engine {
     /// Synchronises everyone at `now`, restarts the clock at 0 and rescales the velocities to
     /// the target kinetic energy; recomputes all events.
     fn thermostat(&mut self, now: f64) {
-        let n = self.a.len();
+        let n = self.p.len();
         for i in 0..n {
             self.advance(i, now);
-            self.t[i] = 0.0;
+            self.p[i].t = 0.0;
         }
         self.s0 = self.s(now);
-        let ke = 0.5 * self.v.iter().map(|v| v.norm_squared()).sum::<f64>();
+        let ke = 0.5 * self.p.iter().map(|p| p.v.norm_squared()).sum::<f64>();
         if ke > 0.0 {
             let f = (self.ke_target / ke).sqrt();
-            self.v.iter_mut().for_each(|v| *v *= f);
+            self.p.iter_mut().for_each(|p| p.v *= f);
         }
         self.ke = self.ke_target;
         self.rescales += 1;
@@ -518,16 +539,39 @@ impl Engine {
         start: &Instant,
         progress: Option<&dyn Fn(&PackProgress)>,
     ) -> (StopReason, f64) {
-        let n = self.a.len();
+        let n = self.p.len();
         let ke_limit = |e: &Engine| e.ke_target * (1.0 + params.thermostat_tolerance);
-        // Pressure window: virial and elapsed time since its start (time units).
-        let mut win_elapsed_before = 0.0; // time accumulated before the last clock restart
-        let mut win_start = 0.0;
+        // Pressure window: time accumulated before the last clock restart (time units).
+        let mut win_elapsed_before = 0.0;
         let mut win_collisions = 0u64;
         let mut p_red = 0.0;
         let mut last_progress = 0.0;
         let mut checks = 0u64;
         loop {
+            checks += 1;
+            if checks.is_multiple_of(1024) {
+                let events = self.collisions + self.wall_collisions + self.rebuilds;
+                if events >= params.max_events {
+                    return (StopReason::EventBudget, p_red);
+                }
+                let wall = start.elapsed().as_secs_f64();
+                if wall >= params.max_wall_s {
+                    return (StopReason::TimeBudget, p_red);
+                }
+                if let Some(cb) = progress
+                    && wall - last_progress >= 0.2
+                {
+                    last_progress = wall;
+                    let s = self.s(self.heap.top().1.min((1.0 - self.s0) / self.g));
+                    cb(&PackProgress {
+                        phi: params.target_phi * s * s * s,
+                        target_phi: params.target_phi,
+                        events,
+                        wall_s: wall,
+                        reduced_pressure: p_red,
+                    });
+                }
+            }
             let (i, te) = self.heap.top();
             let t_target = (1.0 - self.s0) / self.g;
             if te >= t_target {
@@ -544,14 +588,14 @@ impl Engine {
                     }
                     self.advance(i, te);
                     self.advance(j, te);
-                    let r = min_image(self.period, self.x[j] - self.x[i]);
+                    let r = min_image(self.period, self.p[j].x - self.p[i].x);
                     let dist = r.norm();
                     let nrm = r / dist;
-                    let gamma = (self.a[i] + self.a[j]) * self.g;
-                    let (mut vi, mut vj) = (self.v[i], self.v[j]);
+                    let gamma = (self.p[i].a + self.p[j].a) * self.g;
+                    let (mut vi, mut vj) = (self.p[i].v, self.p[j].v);
                     let imp = collide_pair(&mut vi, &mut vj, &nrm, gamma);
-                    self.v[i] = vi;
-                    self.v[j] = vj;
+                    self.p[i].v = vi;
+                    self.p[j].v = vj;
                     self.ke += imp * gamma;
                     self.virial += imp * dist;
                     self.count[i] += 1;
@@ -564,10 +608,10 @@ impl Engine {
                 Ev::Wall(w) => {
                     self.advance(i, te);
                     let nrm = self.wall_normal(i, w);
-                    let w0 = self.v[i].dot(&nrm);
-                    let mut vi = self.v[i];
-                    let dw = collide_wall(&mut vi, &nrm, self.a[i] * self.g);
-                    self.v[i] = vi;
+                    let w0 = self.p[i].v.dot(&nrm);
+                    let mut vi = self.p[i].v;
+                    let dw = collide_wall(&mut vi, &nrm, self.p[i].a * self.g);
+                    self.p[i].v = vi;
                     self.ke += dw * w0 + 0.5 * dw * dw;
                     self.count[i] += 1;
                     self.wall_collisions += 1;
@@ -579,48 +623,22 @@ impl Engine {
                     self.predict(i, te);
                 }
             }
-            let mut now = te;
             if self.ke > ke_limit(self) {
-                // Pressure over the window, with the mean temperature of the window.
+                // Pressure over the window (the clock restarts at 0 at every rescale), with
+                // the mean temperature between rescales.
                 let kt = (self.ke + self.ke_target) / (3.0 * n as f64);
-                let dt = win_elapsed_before + now - win_start;
+                let dt = win_elapsed_before + te;
                 if win_collisions >= n as u64 && dt > 0.0 {
                     p_red = 1.0 + self.virial / (3.0 * n as f64 * kt * dt);
                     self.virial = 0.0;
                     win_collisions = 0;
                     win_elapsed_before = 0.0;
                 } else {
-                    win_elapsed_before += now - win_start;
+                    win_elapsed_before = dt;
                 }
-                self.thermostat(now);
-                now = 0.0;
-                win_start = 0.0;
+                self.thermostat(te);
                 if p_red >= params.jam_pressure {
                     return (StopReason::Jammed, p_red);
-                }
-            }
-            checks += 1;
-            if checks.is_multiple_of(1024) {
-                let events = self.collisions + self.wall_collisions + self.rebuilds;
-                if events >= params.max_events {
-                    return (StopReason::EventBudget, p_red);
-                }
-                let wall = start.elapsed().as_secs_f64();
-                if wall >= params.max_wall_s {
-                    return (StopReason::TimeBudget, p_red);
-                }
-                if let Some(cb) = progress
-                    && wall - last_progress >= 0.2
-                {
-                    last_progress = wall;
-                    let s = self.s(now);
-                    cb(&PackProgress {
-                        phi: params.target_phi * s * s * s,
-                        target_phi: params.target_phi,
-                        events,
-                        wall_s: wall,
-                        reduced_pressure: p_red,
-                    });
                 }
             }
         }

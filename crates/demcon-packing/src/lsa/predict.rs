@@ -19,7 +19,13 @@ pub fn pair_delay(r: &Vec3, v: &Vec3, sigma: f64, gamma: f64) -> f64 {
     let b = r.dot(v) - sigma * gamma;
     let c = r.norm_squared() - sigma * sigma;
     if c <= 0.0 {
-        return if b < 0.0 { 0.0 } else { f64::INFINITY };
+        // Same closing test as `collide_pair` (n·v < γ), so a collision at once always
+        // changes the velocities and cannot be rescheduled at the same instant.
+        return if r.dot(v) < r.norm() * gamma {
+            0.0
+        } else {
+            f64::INFINITY
+        };
     }
     let a = v.norm_squared() - gamma * gamma;
     if b >= 0.0 && a >= 0.0 {
@@ -62,7 +68,12 @@ pub fn inside_ball_delay(p: &Vec3, v: &Vec3, room: f64, rdot: f64) -> f64 {
     let b = p.dot(v) + room * rdot;
     let c = p.norm_squared() - room * room;
     if c >= 0.0 || room <= 0.0 {
-        return if b > 0.0 { 0.0 } else { f64::INFINITY };
+        // Same closing test as `collide_wall` (inward speed below ṙ).
+        return if p.dot(v) + p.norm() * rdot > 0.0 {
+            0.0
+        } else {
+            f64::INFINITY
+        };
     }
     let a = v.norm_squared() - rdot * rdot;
     let disc = (b * b - a * c).max(0.0);
@@ -180,6 +191,23 @@ mod tests {
         assert_relative_eq!((vi + vj - p0).norm(), 0.0, epsilon = 1e-15);
         let de = 0.5 * (vi.norm_squared() + vj.norm_squared() - e0);
         assert_relative_eq!(de, imp * gamma, epsilon = 1e-14);
+    }
+
+    #[test]
+    fn overlapping_pair_collides_at_once_only_if_the_rule_acts() {
+        // Overlap by round-off; separating slightly faster than growth along n, but
+        // r·v − σγ < 0: must not be scheduled at delay 0 (the rule would do nothing).
+        let r = Vec3::new(0.999_999, 0.0, 0.0);
+        let gamma = 0.1;
+        let v = Vec3::new(0.100_000_05, 0.0, 0.0);
+        assert!(pair_delay(&r, &v, 1.0, gamma).is_infinite());
+        let (mut vi, mut vj) = (Vec3::zeros(), v);
+        assert_eq!(collide_pair(&mut vi, &mut vj, &Vec3::x(), gamma), 0.0);
+        // Closing: delay 0, and the rule acts.
+        let v = Vec3::new(0.05, 0.0, 0.0);
+        assert_eq!(pair_delay(&r, &v, 1.0, gamma), 0.0);
+        let (mut vi, mut vj) = (Vec3::zeros(), v);
+        assert!(collide_pair(&mut vi, &mut vj, &Vec3::x(), gamma) > 0.0);
     }
 
     #[test]

@@ -1,0 +1,118 @@
+//! `demcon run SCENE.ron`: load a scene, run it, print a summary, write the outputs.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use demcon_scene::{RunOptions, Scene, run as run_scene, summary_json, write_outputs};
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// Arguments of `demcon run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// The scene file (RON).
+    pub scene: PathBuf,
+    /// Output folder (default: `out/<scene name>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: all cores). Results depend on it only within round-off.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Runs the subcommand.
+pub fn run(args: RunArgs) -> Result<ExitCode> {
+    crate::set_threads(args.threads)?;
+    let scene = Scene::load(&args.scene).with_context(|| format!("loading scene {}", args.scene.display()))?;
+    let stem = args.scene.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_string();
+    let name = if scene.config.name.is_empty() { stem.clone() } else { scene.config.name.clone() };
+    let out = args.out.unwrap_or_else(|| PathBuf::from("out").join(&stem));
+    let bar = (!args.quiet).then(|| {
+        let b = ProgressBar::new(1000);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} packing {bar:30} φ {msg} [{elapsed}]")
+                .expect("static template")
+                .progress_chars("=> "),
+        );
+        b.enable_steady_tick(Duration::from_millis(200));
+        b
+    });
+    let progress = |p: &demcon_packing::PackProgress| {
+        if let Some(b) = &bar {
+            b.set_position((1000.0 * p.phi / p.target_phi).round() as u64);
+            b.set_message(format!("{:.4}", p.phi));
+        }
+    };
+    let opts = RunOptions { progress: Some(&progress) };
+    let result = run_scene(&scene, &opts).with_context(|| format!("running scene {}", args.scene.display()));
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let result = result?;
+    let files = write_outputs(&name, &scene.config.outputs, &result, &out)
+        .with_context(|| format!("writing outputs to {}", out.display()))?;
+    print_summary(&name, &result);
+    println!("outputs in {}: {}", out.display(), files.join(", "));
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_summary(name: &str, r: &demcon_scene::RunResult) {
+    let m = &r.model;
+    println!("scene {name}: {} particles, φ = {:.4}, {} contacts (Z = {:.3}, ε = {:.4})",
+        m.particles.len(), m.phi, m.graph.pairs.len(), m.graph.coordination(), m.graph.report.epsilon);
+    if let Some(p) = &m.report.packing {
+        println!("  packing: {:.2} s, {} events ({:.2e}/s), stop {:?}", p.wall_s, p.events, p.events_per_s, p.stop);
+    }
+    println!("  contacts {:.2} s, network {:.2} s", m.report.contacts_s, m.report.network_s);
+    if let Some(s) = &r.thermal_setup {
+        if let Some(c) = &s.calibration {
+            println!("  C_t = {:.4} (calibrated on this packing, {}, {} CG iterations)", c.c_t, c.method, c.iterations);
+        }
+    }
+    if let Some(t) = &r.thermal {
+        let rep = &t.report;
+        println!(
+            "  thermal {}: {:.2} s, {} steps, {} CG iterations, dt = {:.3e} s (bound {:.3e} s{}), energy balance {:.1e}",
+            rep.scheme,
+            rep.wall_s,
+            rep.steps,
+            rep.iterations,
+            rep.dt,
+            rep.dt_bound,
+            rep.dt_paper.map(|d| format!(", paper eq. 16: {d:.3e} s")).unwrap_or_default(),
+            rep.energy_balance_error
+        );
+    }
+    if let Some(e) = &r.electric {
+        let rep = &e.report;
+        println!(
+            "  electric: R = {} Ω, I = {:.4e} A (in/out mismatch {:.1e}), Joule {:.4e} W, {} {} iterations, {:.3} s",
+            rep.resistance_ohm.map(|v| format!("{v:.6e}")).unwrap_or_else(|| "-".into()),
+            rep.current_in,
+            rep.current_mismatch,
+            rep.joule_w,
+            rep.method,
+            rep.iterations,
+            rep.wall_s
+        );
+    }
+    if let Some(etc) = &r.etc {
+        println!("  effective conductivity along {}: {:.5} W/(m·K)", etc.axis, etc.lambda_e);
+    }
+    if let Some((_, _, h)) = &r.halo {
+        println!("  Halo k = {}: {:.1} members on average, {} truncated by the boundary, {:.2} s", h.ratio, h.mean_members, h.n_truncated, h.wall_s);
+    }
+    for p in &r.probes {
+        println!("  probe {} {} at t = {} s: {:.6}", p.name, p.field, p.t, p.value);
+    }
+    for d in &r.diagnostics {
+        println!("  note: {d}");
+    }
+    let _ = summary_json;
+    println!("  total {:.2} s", r.wall_s);
+}
