@@ -14,9 +14,13 @@
 //! Method: the dipoles and volumes are summed once per particle, then a neighbourhood sum is
 //! done over a grid of columns along z (a uniform grid in x and y, particles sorted by z
 //! within each column): each Halo visits only the columns its ball crosses, and in each the
-//! contiguous range of particles within its chord, found by binary search. The per-particle sums run in parallel (rayon) but each
-//! is sequential in a fixed order, so the result does not depend on the thread count (it is
-//! bitwise identical).
+//! contiguous range of particles within its chord, found by binary search. The per-particle
+//! sums run in parallel (rayon) but each is sequential in a fixed order, so the result does
+//! not depend on the thread count (it is bitwise identical).
+//!
+//! Why not rstar: on 10⁵ particles at k = 11 (one thread, loaded machine) rstar's
+//! `locate_within_distance` took 6.8–7.1 s against 1.7 s for these columns (same sums to
+//! 4e-14). rstar serves the probes, where few queries are made.
 
 use std::time::Instant;
 
