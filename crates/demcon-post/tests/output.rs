@@ -173,6 +173,7 @@ fn vtu_is_well_formed_and_reads_back() {
         .filter(|e| e.file_name().to_string_lossy().contains(".tmp"))
         .collect();
     assert!(left.is_empty());
+    std::fs::remove_file(&path).unwrap();
 }
 
 #[test]
@@ -209,6 +210,7 @@ fn csv_round_trip_is_exact() {
     assert_eq!(cols[1], b);
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(text.lines().nth(1).unwrap().starts_with("0,1"), "{text}");
+    std::fs::remove_file(&path).unwrap();
 }
 
 #[test]
@@ -224,4 +226,5 @@ fn csv_errors() {
     std::fs::write(&path, "a,b\n1,2\n3\n").unwrap();
     let e = read_csv(&path).unwrap_err();
     assert!(matches!(e, PostError::Format { line: 3, .. }), "{e}");
+    std::fs::remove_file(&path).unwrap();
 }
