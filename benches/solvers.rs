@@ -7,7 +7,9 @@
 //! depend on the packing crate. Run one group with e.g.
 //! `cargo bench -p demcon-benches --bench solvers -- explicit_step`.
 //! Before the groups, a one-off measurement prints the explicit step's effective bandwidth
-//! as a fraction of the triad's.
+//! as a fraction of the triad's, and each solve case prints its iterations, setup and solve
+//! times once. With `DEMCON_BENCH_SUMMARY_ONLY=1` only these one-off lines are produced
+//! (no criterion sampling), which is how the 10⁶-particle figures are taken quickly.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -16,7 +18,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use demcon_core::{Vec3, morton_order};
 use demcon_electric::{ElectricParams, solve_potential};
 use demcon_network::{
-    Constraints, FloatingPolicy, Method, Network, SolveParams, resolve_fixed, solve_steady,
+    Constraints, FloatingPolicy, LinearSystem, Method, Network, SolveParams, resolve_fixed, solve_steady,
 };
 use demcon_thermal::{ExplicitStepper, stable_dt_bound};
 use rand::seq::SliceRandom;
@@ -34,6 +36,11 @@ fn wanted(id: &str) -> bool {
         .skip(1)
         .find(|a| !a.starts_with('-') && a != "--bench");
     filter.is_none_or(|f| f.split('|').any(|part| id.contains(part)))
+}
+
+/// Whether only the one-off summaries are wanted (`DEMCON_BENCH_SUMMARY_ONLY=1`).
+fn summary_only() -> bool {
+    std::env::var("DEMCON_BENCH_SUMMARY_ONLY").is_ok_and(|v| v == "1")
 }
 
 /// A packing-like network of `n` nodes: node ids in Morton order, or randomly permuted.
@@ -242,49 +249,65 @@ fn bench_explicit(c: &mut Criterion) {
     group.finish();
 }
 
-fn cg(rel_tol: f64) -> Method {
-    Method::Cg {
-        rel_tol,
-        max_iter: 100_000,
-    }
-}
+const JACOBI: Method = Method::Cg {
+    rel_tol: 1e-8,
+    max_iter: 100_000,
+};
+const AMG: Method = Method::AmgCg {
+    rel_tol: 1e-8,
+    max_iter: 10_000,
+};
+const FAER: Method = Method::FaerCg {
+    rel_tol: 1e-8,
+    max_iter: 100_000,
+};
 
 fn bench_steady(c: &mut Criterion) {
     let mut group = c.benchmark_group("steady_solve");
     group.sample_size(10);
-    let n = 100_000;
-    if !["jacobi-pcg", "faer-cg"]
-        .iter()
-        .any(|m| wanted(&format!("steady_solve/{m}/{n}")))
-    {
-        return;
-    }
-    let case = build(n, false, 2);
-    let bcs = constraints(&case);
-    let q = vec![0.0; n];
-    for method in [
-        cg(1e-8),
-        Method::FaerCg {
-            rel_tol: 1e-8,
-            max_iter: 100_000,
-        },
-    ] {
-        if !wanted(&format!("steady_solve/{}/{n}", method.name())) {
+    for n in [10_000usize, 100_000] {
+        if !["jacobi-pcg", "amg-pcg", "faer-cg"]
+            .iter()
+            .any(|m| wanted(&format!("steady_solve/{m}/{n}")))
+        {
             continue;
         }
-        let p = SolveParams { method };
-        let r = solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges");
-        println!(
-            "steady n = {n}, {} contacts, {}: {} iterations, residual {:.1e}, {:.3} s",
-            case.net.n_edges(),
-            method.name(),
-            r.report.iterations,
-            r.report.relative_residual,
-            r.report.wall_s + r.report.setup_s
-        );
-        group.bench_with_input(BenchmarkId::new(method.name(), n), &n, |bch, _| {
-            bch.iter(|| solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges"))
-        });
+        let case = build(n, false, 2);
+        let bcs = constraints(&case);
+        let q = vec![0.0; n];
+        for method in [JACOBI, AMG, FAER] {
+            if !wanted(&format!("steady_solve/{}/{n}", method.name())) {
+                continue;
+            }
+            let p = SolveParams { method };
+            let r = solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges");
+            println!(
+                "steady n = {n}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s",
+                case.net.n_edges(),
+                method.name(),
+                r.report.iterations,
+                r.report.relative_residual,
+                r.report.setup_s,
+                r.report.wall_s
+            );
+            if let Some(info) = LinearSystem::new(&case.net, &case.g, None, &bcs, &p)
+                .expect("valid system")
+                .amg_info()
+            {
+                println!(
+                    "  hierarchy (rows, nnz): {:?}, operator complexity {:.2}, grid complexity {:.2}",
+                    info.levels.iter().map(|l| (l.rows, l.nnz)).collect::<Vec<_>>(),
+                    info.operator_complexity,
+                    info.grid_complexity
+                );
+            }
+            if summary_only() {
+                continue;
+            }
+            group.bench_with_input(BenchmarkId::new(method.name(), n), &n, |bch, _| {
+                bch.iter(|| solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges"))
+            });
+        }
     }
     group.finish();
 }
@@ -293,37 +316,9 @@ fn bench_electric(c: &mut Criterion) {
     let mut group = c.benchmark_group("electric_solve");
     group.sample_size(10);
     let ladder: [(usize, &[Method]); 3] = [
-        (
-            5_000,
-            &[
-                Method::Cg {
-                    rel_tol: 1e-8,
-                    max_iter: 100_000,
-                },
-                Method::FaerCg {
-                    rel_tol: 1e-8,
-                    max_iter: 100_000,
-                },
-                Method::Cholesky,
-            ],
-        ),
-        (
-            100_000,
-            &[
-                Method::Cg {
-                    rel_tol: 1e-8,
-                    max_iter: 100_000,
-                },
-                Method::Cholesky,
-            ],
-        ),
-        (
-            1_000_000,
-            &[Method::Cg {
-                rel_tol: 1e-8,
-                max_iter: 100_000,
-            }],
-        ),
+        (5_000, &[JACOBI, AMG, FAER, Method::Cholesky]),
+        (100_000, &[JACOBI, AMG, Method::Cholesky]),
+        (1_000_000, &[JACOBI, AMG]),
     ];
     for (n, methods) in ladder {
         if !methods
@@ -354,6 +349,9 @@ fn bench_electric(c: &mut Criterion) {
                 r.resistance_ohm.unwrap_or(f64::NAN),
                 r.current_mismatch
             );
+            if summary_only() {
+                continue;
+            }
             group.bench_with_input(BenchmarkId::new(method.name(), n), &n, |bch, _| {
                 bch.iter(|| solve_potential(&case.net, &case.g, &electrodes, &p).expect("solves"))
             });

@@ -9,6 +9,12 @@
 //! residual ([`SolveReport`]) and fail with a clear [`SolveError`] rather than return
 //! garbage. Results do not depend on the rayon thread count (fixed reduction order).
 //!
+//! The default method ([`Method::AmgCg`]) is conjugate gradient preconditioned by
+//! smoothed-aggregation algebraic multigrid: its hierarchy is built once per
+//! [`LinearSystem`] (cost reported as [`SolveReport::setup_s`], shape by
+//! [`LinearSystem::amg_info`]) and needs ~20–25 iterations to 1e-8 on packing networks of
+//! 10⁴–10⁶ nodes, where Jacobi-PCG ([`Method::Cg`], still available) needs 200–800.
+//!
 //! ```
 //! use demcon_network::{FloatingPolicy, Network, SolveParams, resolve_fixed, solve_steady};
 //!
@@ -23,8 +29,10 @@
 //! ```
 #![warn(missing_docs)]
 
+mod amg;
 mod cholesky;
 mod constraints;
+mod csr;
 mod error;
 mod faer_cg;
 mod flows;
@@ -32,6 +40,7 @@ mod network;
 mod par;
 mod solve;
 
+pub use amg::{AmgInfo, AmgLevel};
 pub use constraints::{Constraints, Diagnostic, FloatingPolicy, NodeKind, resolve_fixed};
 pub use error::SolveError;
 pub use flows::{boundary_flow, edge_flows};

@@ -5,7 +5,9 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use crate::amg::{self, Amg, AmgInfo};
 use crate::constraints::{Constraints, NodeKind};
+use crate::csr::Csr;
 use crate::error::{SolveError, check_finite, check_len};
 use crate::network::Network;
 use crate::par::{CHUNK, MIN_TASK_CHUNKS, dot, ordered_sum};
@@ -31,16 +33,30 @@ pub enum Method {
         /// Maximum number of iterations, ≥ 1.
         max_iter: usize,
     },
+    /// Conjugate gradient preconditioned by one V-cycle of smoothed-aggregation algebraic
+    /// multigrid (SA-AMG) on the free-node block, deterministic for any thread count. The
+    /// hierarchy is built once per [`LinearSystem`] (cost in [`SolveReport::setup_s`]) and
+    /// reused by every solve; a few tens of iterations at any size where Jacobi-PCG needs
+    /// hundreds. Stops on the true residual like [`Method::Cg`].
+    AmgCg {
+        /// Relative residual tolerance, in (0, 1).
+        rel_tol: f64,
+        /// Maximum number of iterations, ≥ 1.
+        max_iter: usize,
+    },
     /// Direct sparse Cholesky (faer, AMD ordering). The factorisation is reused by every
     /// solve of one [`LinearSystem`]; practical to ~10⁵ unknowns.
     Cholesky,
 }
 
+/// Multigrid-preconditioned CG to a relative residual of 1e-8: the fastest method from
+/// 10⁴ unknowns up (see `docs/performance.md`); below a few hundred unknowns it is one
+/// dense factorisation.
 impl Default for Method {
     fn default() -> Self {
-        Self::Cg {
+        Self::AmgCg {
             rel_tol: 1e-8,
-            max_iter: 20_000,
+            max_iter: 1_000,
         }
     }
 }
@@ -51,13 +67,16 @@ impl Method {
         match self {
             Self::Cg { .. } => "jacobi-pcg",
             Self::FaerCg { .. } => "faer-cg",
+            Self::AmgCg { .. } => "amg-pcg",
             Self::Cholesky => "cholesky",
         }
     }
 
     fn validate(&self) -> Result<(), SolveError> {
         match *self {
-            Self::Cg { rel_tol, max_iter } | Self::FaerCg { rel_tol, max_iter } => {
+            Self::Cg { rel_tol, max_iter }
+            | Self::FaerCg { rel_tol, max_iter }
+            | Self::AmgCg { rel_tol, max_iter } => {
                 if !(rel_tol.is_finite() && rel_tol > 0.0 && rel_tol < 1.0) {
                     return Err(SolveError::invalid(
                         "method.rel_tol",
@@ -134,6 +153,9 @@ pub struct LinearSystem<'a> {
     pub(crate) free: Vec<bool>,
     method: Method,
     factor: Option<cholesky::Factor>,
+    /// Multigrid hierarchy of the free block and the free nodes in unknown order
+    /// ([`Method::AmgCg`]).
+    amg: Option<(Amg, Vec<u32>)>,
     setup_s: f64,
 }
 
@@ -217,10 +239,16 @@ impl<'a> LinearSystem<'a> {
             free,
             method: params.method,
             factor: None,
+            amg: None,
             setup_s: 0.0,
         };
-        if params.method == Method::Cholesky {
-            sys.factor = Some(cholesky::Factor::new(&sys)?);
+        match params.method {
+            Method::Cholesky => sys.factor = Some(cholesky::Factor::new(&sys)?),
+            Method::AmgCg { .. } => {
+                let (a0, nodes) = sys.free_block();
+                sys.amg = Some((Amg::new(a0)?, nodes));
+            }
+            Method::Cg { .. } | Method::FaerCg { .. } => {}
         }
         sys.setup_s = start.elapsed().as_secs_f64();
         Ok(sys)
@@ -229,6 +257,60 @@ impl<'a> LinearSystem<'a> {
     /// Number of unknowns.
     pub fn n_unknowns(&self) -> usize {
         self.constraints.n_free()
+    }
+
+    /// Shape of the multigrid hierarchy ([`Method::AmgCg`] only): levels, operator and grid
+    /// complexity.
+    pub fn amg_info(&self) -> Option<AmgInfo> {
+        self.amg.as_ref().map(|(a, _)| a.info())
+    }
+
+    /// The free-node block of D + K in compressed rows (unknowns numbered in node order,
+    /// parallel edges merged, diagonal stored) and the node of each unknown.
+    fn free_block(&self) -> (Csr, Vec<u32>) {
+        let n = self.net.n_nodes();
+        let mut index = vec![u32::MAX; n];
+        let mut nodes = Vec::with_capacity(self.constraints.n_free());
+        for (p, &f) in self.free.iter().enumerate() {
+            if f {
+                index[p] = nodes.len() as u32;
+                nodes.push(p as u32);
+            }
+        }
+        let (row_ptr, cols) = (self.net.row_ptr(), self.net.cols());
+        let a = Csr::from_rows(
+            nodes.len(),
+            nodes.len(),
+            || (),
+            |_, k, c, v| {
+                let p = nodes[k] as usize;
+                let mut diag_done = false;
+                for e in row_ptr[p]..row_ptr[p + 1] {
+                    let j = index[cols[e] as usize];
+                    if j == u32::MAX {
+                        continue;
+                    }
+                    if !diag_done && j as usize > k {
+                        c.push(k as u32);
+                        v.push(self.diag[p]);
+                        diag_done = true;
+                    }
+                    if c.last() == Some(&j) {
+                        if let Some(last) = v.last_mut() {
+                            *last -= self.vals[e];
+                        }
+                    } else {
+                        c.push(j);
+                        v.push(-self.vals[e]);
+                    }
+                }
+                if !diag_done {
+                    c.push(k as u32);
+                    v.push(self.diag[p]);
+                }
+            },
+        );
+        (a, nodes)
     }
 
     /// Wall time spent preparing (and factorising) the system (s).
@@ -282,6 +364,9 @@ impl<'a> LinearSystem<'a> {
                 }
                 Method::FaerCg { rel_tol, max_iter } => {
                     faer_cg::solve(self, rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
+                }
+                Method::AmgCg { rel_tol, max_iter } => {
+                    self.amg_pcg(rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
                 }
                 Method::Cholesky => {
                     let factor = self.factor.as_ref().ok_or_else(|| {
@@ -422,6 +507,49 @@ impl<'a> LinearSystem<'a> {
         if true_rel > rel_tol {
             return Err(SolveError::NotConverged {
                 method: name,
+                iterations,
+                relative_residual: true_rel,
+                tolerance: rel_tol,
+            });
+        }
+        Ok((iterations, true_rel))
+    }
+
+    /// Multigrid-preconditioned CG on the compact free block for the correction, restarted
+    /// from the true residual until it meets the tolerance; `r` holds b − A x on entry.
+    fn amg_pcg(
+        &self,
+        b: &[f64],
+        x: &mut [f64],
+        r: &mut [f64],
+        b_norm: f64,
+        rel_tol: f64,
+        max_iter: usize,
+    ) -> Result<(usize, f64), SolveError> {
+        let Some((hierarchy, nodes)) = &self.amg else {
+            return Err(SolveError::Factorization(
+                "system prepared without a multigrid hierarchy".into(),
+            ));
+        };
+        let mut iterations = 0usize;
+        let mut true_rel = dot(r, r).sqrt() / b_norm;
+        while true_rel > rel_tol && iterations < max_iter {
+            let rc: Vec<f64> = nodes
+                .par_iter()
+                .with_min_len(CHUNK)
+                .map(|&p| r[p as usize])
+                .collect();
+            let (delta, its) = amg::pcg(hierarchy, &rc, rel_tol * b_norm, max_iter - iterations)?;
+            iterations += its.max(1);
+            for (&p, d) in nodes.iter().zip(&delta) {
+                x[p as usize] += d;
+            }
+            self.residual(b, x, r);
+            true_rel = dot(r, r).sqrt() / b_norm;
+        }
+        if true_rel > rel_tol {
+            return Err(SolveError::NotConverged {
+                method: self.method.name(),
                 iterations,
                 relative_residual: true_rel,
                 tolerance: rel_tol,

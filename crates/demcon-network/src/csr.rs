@@ -1,0 +1,317 @@
+//! Compact compressed-row matrices of the multigrid hierarchy, with parallel products whose
+//! results do not depend on the thread count (rows in fixed chunks, each row summed in a
+//! fixed order, partial dot products combined in chunk order).
+
+use rayon::prelude::*;
+
+use crate::par::{CHUNK, MIN_TASK_CHUNKS, ordered_sum};
+
+/// A sparse matrix in compressed rows: the entries of row i are
+/// `cols[ptr[i]..ptr[i + 1]]` (sorted, unique) with values `vals[..]`.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Csr {
+    pub nrows: usize,
+    pub ncols: usize,
+    pub ptr: Vec<usize>,
+    pub cols: Vec<u32>,
+    pub vals: Vec<f64>,
+}
+
+/// Rows of one chunk built by [`Csr::from_rows`]: columns, values, row lengths.
+type ChunkRows = (Vec<u32>, Vec<f64>, Vec<usize>);
+
+impl Csr {
+    /// Number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// Row i as (columns, values).
+    #[inline(always)]
+    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let (lo, hi) = (self.ptr[i], self.ptr[i + 1]);
+        (&self.cols[lo..hi], &self.vals[lo..hi])
+    }
+
+    /// Builds a matrix row by row, rows in parallel chunks of [`CHUNK`]. `row(scratch, i,
+    /// cols, vals)` appends the entries of row i (sorted unique columns); `init` makes a
+    /// scratch state per parallel task (it must not influence the values).
+    pub fn from_rows<S, I, F>(nrows: usize, ncols: usize, init: I, row: F) -> Self
+    where
+        I: Fn() -> S + Sync + Send,
+        F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) + Sync + Send,
+    {
+        let n_chunks = nrows.div_ceil(CHUNK);
+        let chunks: Vec<ChunkRows> = (0..n_chunks)
+            .into_par_iter()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .map_init(&init, |s, c| {
+                let (lo, hi) = (c * CHUNK, ((c + 1) * CHUNK).min(nrows));
+                let mut cols = Vec::new();
+                let mut vals = Vec::new();
+                let mut lens = Vec::with_capacity(hi - lo);
+                for i in lo..hi {
+                    let before = cols.len();
+                    row(s, i, &mut cols, &mut vals);
+                    lens.push(cols.len() - before);
+                }
+                (cols, vals, lens)
+            })
+            .collect();
+        let nnz: usize = chunks.iter().map(|c| c.0.len()).sum();
+        let mut ptr = Vec::with_capacity(nrows + 1);
+        let mut cols = Vec::with_capacity(nnz);
+        let mut vals = Vec::with_capacity(nnz);
+        ptr.push(0);
+        for (c, v, lens) in chunks {
+            for l in lens {
+                let last = ptr[ptr.len() - 1];
+                ptr.push(last + l);
+            }
+            cols.extend_from_slice(&c);
+            vals.extend_from_slice(&v);
+        }
+        Self {
+            nrows,
+            ncols,
+            ptr,
+            cols,
+            vals,
+        }
+    }
+
+    /// The transpose (rows of the result list their columns in increasing order).
+    pub fn transpose(&self) -> Self {
+        let mut count = vec![0usize; self.ncols + 1];
+        for &c in &self.cols {
+            count[c as usize + 1] += 1;
+        }
+        for j in 0..self.ncols {
+            count[j + 1] += count[j];
+        }
+        let ptr = count.clone();
+        let mut fill = count;
+        let mut cols = vec![0u32; self.nnz()];
+        let mut vals = vec![0.0; self.nnz()];
+        for i in 0..self.nrows {
+            let (rc, rv) = self.row(i);
+            for (&c, &v) in rc.iter().zip(rv) {
+                let k = fill[c as usize];
+                cols[k] = i as u32;
+                vals[k] = v;
+                fill[c as usize] += 1;
+            }
+        }
+        Self {
+            nrows: self.ncols,
+            ncols: self.nrows,
+            ptr,
+            cols,
+            vals,
+        }
+    }
+
+    /// The product self · b. Each entry is summed in the order of the row's entries, then of
+    /// b's rows (deterministic).
+    pub fn matmul(&self, b: &Csr) -> Self {
+        debug_assert_eq!(self.ncols, b.nrows);
+        let m = b.ncols;
+        Self::from_rows(
+            self.nrows,
+            m,
+            || Accumulator::new(m),
+            |acc, i, cols, vals| {
+                let (ac, av) = self.row(i);
+                for (&k, &a) in ac.iter().zip(av) {
+                    let (bc, bv) = b.row(k as usize);
+                    for (&j, &v) in bc.iter().zip(bv) {
+                        acc.add(i, j, a * v);
+                    }
+                }
+                acc.drain_sorted(cols, vals);
+            },
+        )
+    }
+
+    /// y = self · x.
+    pub fn spmv(&self, x: &[f64], y: &mut [f64]) {
+        y.par_chunks_mut(CHUNK)
+            .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .for_each(|(c, yc)| {
+                let base = c * CHUNK;
+                for (k, yi) in yc.iter_mut().enumerate() {
+                    *yi = self.row_dot(base + k, x);
+                }
+            });
+    }
+
+    /// y += self · x.
+    pub fn spmv_add(&self, x: &[f64], y: &mut [f64]) {
+        y.par_chunks_mut(CHUNK)
+            .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .for_each(|(c, yc)| {
+                let base = c * CHUNK;
+                for (k, yi) in yc.iter_mut().enumerate() {
+                    *yi += self.row_dot(base + k, x);
+                }
+            });
+    }
+
+    /// q = self · p; returns p·q.
+    pub fn spmv_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
+        let partials: Vec<f64> = q
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .map(|(c, qc)| {
+                let base = c * CHUNK;
+                let mut acc = 0.0;
+                for (k, qi) in qc.iter_mut().enumerate() {
+                    let v = self.row_dot(base + k, p);
+                    acc += v * p[base + k];
+                    *qi = v;
+                }
+                acc
+            })
+            .collect();
+        ordered_sum(&partials)
+    }
+
+    /// r = b − self · x.
+    pub fn residual(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
+        r.par_chunks_mut(CHUNK)
+            .zip(b.par_chunks(CHUNK))
+            .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .for_each(|(c, (rc, bc))| {
+                let base = c * CHUNK;
+                for (k, (ri, bi)) in rc.iter_mut().zip(bc).enumerate() {
+                    *ri = bi - self.row_dot(base + k, x);
+                }
+            });
+    }
+
+    /// Σ_j a_ij x_j for row i.
+    #[inline(always)]
+    pub fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
+        let (rc, rv) = self.row(i);
+        rc.iter().zip(rv).map(|(&j, &v)| v * x[j as usize]).sum()
+    }
+}
+
+/// Dense scatter accumulator for one sparse row.
+pub(crate) struct Accumulator {
+    values: Vec<f64>,
+    mark: Vec<usize>,
+    touched: Vec<u32>,
+}
+
+impl Accumulator {
+    /// For rows of `ncols` columns.
+    pub fn new(ncols: usize) -> Self {
+        Self {
+            values: vec![0.0; ncols],
+            mark: vec![usize::MAX; ncols],
+            touched: Vec::new(),
+        }
+    }
+
+    /// Adds v at column j of row `row` (rows must be distinct between drains).
+    #[inline]
+    pub fn add(&mut self, row: usize, j: u32, v: f64) {
+        let ju = j as usize;
+        if self.mark[ju] == row {
+            self.values[ju] += v;
+        } else {
+            self.mark[ju] = row;
+            self.values[ju] = v;
+            self.touched.push(j);
+        }
+    }
+
+    /// Appends the row's entries (sorted columns) and resets.
+    pub fn drain_sorted(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+        self.touched.sort_unstable();
+        for &j in &self.touched {
+            cols.push(j);
+            vals.push(self.values[j as usize]);
+            self.mark[j as usize] = usize::MAX;
+        }
+        self.touched.clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dense(a: &Csr) -> Vec<Vec<f64>> {
+        let mut d = vec![vec![0.0; a.ncols]; a.nrows];
+        for (i, row) in d.iter_mut().enumerate() {
+            let (c, v) = a.row(i);
+            for (&j, &x) in c.iter().zip(v) {
+                row[j as usize] += x;
+            }
+        }
+        d
+    }
+
+    fn small(nrows: usize, ncols: usize, seed: u64) -> Csr {
+        let mut s = seed;
+        let mut next = move || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 33) as usize
+        };
+        let rows: Vec<Vec<(u32, f64)>> = (0..nrows)
+            .map(|_| {
+                let mut r: Vec<(u32, f64)> = (0..3)
+                    .map(|_| ((next() % ncols) as u32, (next() % 7) as f64 - 3.0))
+                    .collect();
+                r.sort_by_key(|e| e.0);
+                r.dedup_by_key(|e| e.0);
+                r
+            })
+            .collect();
+        Csr::from_rows(
+            nrows,
+            ncols,
+            || (),
+            |_, i, c, v| {
+                for &(j, x) in &rows[i] {
+                    c.push(j);
+                    v.push(x);
+                }
+            },
+        )
+    }
+
+    #[test]
+    fn products_and_transpose_match_dense_arithmetic() {
+        let a = small(9, 7, 1);
+        let b = small(7, 5, 2);
+        let (da, db) = (dense(&a), dense(&b));
+        let c = dense(&a.matmul(&b));
+        for i in 0..9 {
+            for j in 0..5 {
+                let want: f64 = (0..7).map(|k| da[i][k] * db[k][j]).sum();
+                assert_eq!(c[i][j], want);
+            }
+        }
+        let t = dense(&a.transpose());
+        for i in 0..9 {
+            for j in 0..7 {
+                assert_eq!(t[j][i], da[i][j]);
+            }
+        }
+        let x: Vec<f64> = (0..7).map(|k| k as f64 - 2.5).collect();
+        let mut y = vec![0.0; 9];
+        a.spmv(&x, &mut y);
+        for i in 0..9 {
+            assert_eq!(y[i], (0..7).map(|k| da[i][k] * x[k]).sum::<f64>());
+        }
+    }
+}
