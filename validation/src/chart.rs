@@ -121,7 +121,7 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
         chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
         chart.y_scale,
     );
-    let tmp = path.with_extension("png.tmp");
+    let tmp = path.with_extension("tmp.png"); // the image encoder picks the format from the last extension
     {
         let root = BitMapBackend::new(&tmp, (900, 600)).into_drawing_area();
         root.fill(&WHITE)?;
@@ -213,7 +213,7 @@ pub fn draw_raster(
     let (lo, hi) = vals.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
         (a.min(v), b.max(v))
     });
-    let tmp = path.with_extension("png.tmp");
+    let tmp = path.with_extension("tmp.png"); // the image encoder picks the format from the last extension
     {
         let px = 4u32;
         let w = nx as u32 * px + 40;
