@@ -162,13 +162,6 @@ fn triad(a: &mut [f64], b: &[f64], c: &[f64], s: f64) {
         });
 }
 
-/// Bytes one explicit step must move at least: 12 per row entry (u32 column + f64 weight),
-/// 40 per row (row pointer, centre and source coefficients, read T_p, write T'_p); the
-/// neighbour gathers are assumed to hit the cache.
-fn step_bytes(net: &Network) -> f64 {
-    12.0 * net.cols().len() as f64 + 40.0 * net.n_nodes() as f64
-}
-
 fn stepper<'a>(case: &'a Case, bcs: &Constraints) -> ExplicitStepper<'a> {
     let dt = stable_dt_bound(&case.net, &case.g, &case.caps, bcs)
         .expect("valid inputs")
@@ -181,26 +174,27 @@ fn stepper<'a>(case: &'a Case, bcs: &Constraints) -> ExplicitStepper<'a> {
 fn bandwidth_summary() {
     let gbs = triad_gbs(1 << 24, 10);
     println!("triad bandwidth: {gbs:.2} GB/s (3 x 128 MiB arrays, best of 10)");
-    for (n, random) in [(1_000_000, false), (1_000_000, true)] {
+    for (n, random) in [(100_000, false), (1_000_000, false), (1_000_000, true)] {
         let case = build(n, random, 1);
         let bcs = constraints(&case);
         let st = stepper(&case, &bcs);
         let mut a = vec![0.5; n];
         let mut b = vec![0.0; n];
         let mut best = f64::INFINITY;
-        for _ in 0..10 {
+        for _ in 0..30 {
             let t = Instant::now();
             black_box(st.step(&a, &mut b));
             best = best.min(t.elapsed().as_secs_f64());
             std::mem::swap(&mut a, &mut b);
         }
-        let eff = step_bytes(&case.net) / best / 1e9;
+        let eff = st.bytes_per_step() / best / 1e9;
         println!(
-            "explicit step n = {n} ({}), {} contacts: {:.3} ms, {:.0} M contacts/s, {:.2} GB/s = {:.0} % of triad",
+            "explicit step n = {n} ({}), {} contacts: {:.3} ms (best of 30), {:.0} M contacts/s, {:.1} B/contact, {:.2} GB/s = {:.0} % of triad",
             if random { "random order" } else { "Morton order" },
             case.net.n_edges(),
             best * 1e3,
             case.net.n_edges() as f64 / best / 1e6,
+            st.bytes_per_step() / case.net.n_edges() as f64,
             eff,
             100.0 * eff / gbs
         );
