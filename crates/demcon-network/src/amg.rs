@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use crate::csr::{Accumulator, Csr};
 use crate::error::SolveError;
-use crate::par::{CHUNK, MIN_TASK_CHUNKS, dot, ordered_sum};
+use crate::par::{CHUNK, MIN_TASK_CHUNKS, chunks_map, chunks_map2, dot, ordered_sum};
 
 /// Largest level solved directly by dense Cholesky (unknowns).
 pub(crate) const MAX_COARSE: usize = 400;
@@ -172,15 +172,12 @@ impl Amg {
         };
 
         // Pre-smoothing from x = 0: x = ω D⁻¹ b.
-        x.par_chunks_mut(CHUNK)
-            .zip(b.par_chunks(CHUNK))
-            .zip(lev.wdinv.par_chunks(CHUNK))
-            .with_min_len(MIN_TASK_CHUNKS)
-            .for_each(|((xc, bc), dc)| {
-                for ((xi, bi), di) in xc.iter_mut().zip(bc).zip(dc) {
-                    *xi = di * bi;
-                }
-            });
+        chunks_map(x, |c, xc| {
+            let range = c * CHUNK..c * CHUNK + xc.len();
+            for ((xi, bi), di) in xc.iter_mut().zip(&b[range.clone()]).zip(&lev.wdinv[range]) {
+                *xi = di * bi;
+            }
+        });
         lev.a.residual(b, x, &mut w.r);
         lev.r.spmv(&w.r, &mut w.bc);
         self.cycle(l + 1, &w.bc, &mut w.xc, rest);
@@ -193,16 +190,13 @@ impl Amg {
 
 /// One damped-Jacobi sweep: out = x + ω D⁻¹ (b − A x).
 fn jacobi(a: &Csr, wdinv: &[f64], b: &[f64], x: &[f64], out: &mut [f64]) {
-    out.par_chunks_mut(CHUNK)
-        .enumerate()
-        .with_min_len(MIN_TASK_CHUNKS)
-        .for_each(|(c, tc)| {
-            let base = c * CHUNK;
-            for (k, ti) in tc.iter_mut().enumerate() {
-                let i = base + k;
-                *ti = x[i] + wdinv[i] * (b[i] - a.row_dot(i, x));
-            }
-        });
+    chunks_map(out, |c, tc| {
+        let base = c * CHUNK;
+        for (k, ti) in tc.iter_mut().enumerate() {
+            let i = base + k;
+            *ti = x[i] + wdinv[i] * (b[i] - a.row_dot(i, x));
+        }
+    });
 }
 
 /// The diagonal of `a`; every entry must be positive.
@@ -515,24 +509,21 @@ pub(crate) fn pcg(
             });
         }
         let alpha = rz / pq;
-        let partials: Vec<f64> = (
-            x.par_chunks_mut(CHUNK),
-            r.par_chunks_mut(CHUNK),
-            p.par_chunks(CHUNK),
-            q.par_chunks(CHUNK),
-        )
-            .into_par_iter()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .map(|(xc, rc, pc, qc)| {
-                let mut rr = 0.0;
-                for (((xi, ri), pi), qi) in xc.iter_mut().zip(rc.iter_mut()).zip(pc).zip(qc) {
-                    *xi += alpha * pi;
-                    *ri -= alpha * qi;
-                    rr += *ri * *ri;
-                }
-                rr
-            })
-            .collect();
+        let partials = chunks_map2(&mut x, &mut r, |c, xc, rc| {
+            let range = c * CHUNK..c * CHUNK + xc.len();
+            let mut rr = 0.0;
+            for (((xi, ri), pi), qi) in xc
+                .iter_mut()
+                .zip(rc.iter_mut())
+                .zip(&p[range.clone()])
+                .zip(&q[range])
+            {
+                *xi += alpha * pi;
+                *ri -= alpha * qi;
+                rr += *ri * *ri;
+            }
+            rr
+        });
         if ordered_sum(&partials).sqrt() <= abs_tol || iterations >= max_iter {
             break;
         }
@@ -540,14 +531,12 @@ pub(crate) fn pcg(
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;
-        p.par_chunks_mut(CHUNK)
-            .zip(z.par_chunks(CHUNK))
-            .with_min_len(MIN_TASK_CHUNKS)
-            .for_each(|(pc, zc)| {
-                for (pi, zi) in pc.iter_mut().zip(zc) {
-                    *pi = zi + beta * *pi;
-                }
-            });
+        chunks_map(&mut p, |c, pc| {
+            let range = c * CHUNK..c * CHUNK + pc.len();
+            for (pi, zi) in pc.iter_mut().zip(&z[range]) {
+                *pi = zi + beta * *pi;
+            }
+        });
     }
     Ok((x, iterations))
 }

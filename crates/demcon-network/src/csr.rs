@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 
-use crate::par::{CHUNK, MIN_TASK_CHUNKS, ordered_sum};
+use crate::par::{CHUNK, MIN_TASK_CHUNKS, chunks_map, ordered_sum, sequential};
 
 /// A sparse matrix in compressed rows: the entries of row i are
 /// `cols[ptr[i]..ptr[i + 1]]` (sorted, unique) with values `vals[..]`.
@@ -42,22 +42,28 @@ impl Csr {
         F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) + Sync + Send,
     {
         let n_chunks = nrows.div_ceil(CHUNK);
-        let chunks: Vec<ChunkRows> = (0..n_chunks)
-            .into_par_iter()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .map_init(&init, |s, c| {
-                let (lo, hi) = (c * CHUNK, ((c + 1) * CHUNK).min(nrows));
-                let mut cols = Vec::new();
-                let mut vals = Vec::new();
-                let mut lens = Vec::with_capacity(hi - lo);
-                for i in lo..hi {
-                    let before = cols.len();
-                    row(s, i, &mut cols, &mut vals);
-                    lens.push(cols.len() - before);
-                }
-                (cols, vals, lens)
-            })
-            .collect();
+        let build = |s: &mut S, c: usize| -> ChunkRows {
+            let (lo, hi) = (c * CHUNK, ((c + 1) * CHUNK).min(nrows));
+            let mut cols = Vec::new();
+            let mut vals = Vec::new();
+            let mut lens = Vec::with_capacity(hi - lo);
+            for i in lo..hi {
+                let before = cols.len();
+                row(s, i, &mut cols, &mut vals);
+                lens.push(cols.len() - before);
+            }
+            (cols, vals, lens)
+        };
+        let chunks: Vec<ChunkRows> = if sequential(nrows) {
+            let mut s = init();
+            (0..n_chunks).map(|c| build(&mut s, c)).collect()
+        } else {
+            (0..n_chunks)
+                .into_par_iter()
+                .with_min_len(MIN_TASK_CHUNKS)
+                .map_init(&init, build)
+                .collect()
+        };
         let nnz: usize = chunks.iter().map(|c| c.0.len()).sum();
         let mut ptr = Vec::with_capacity(nrows + 1);
         let mut cols = Vec::with_capacity(nnz);
@@ -135,62 +141,47 @@ impl Csr {
 
     /// y = self · x.
     pub fn spmv(&self, x: &[f64], y: &mut [f64]) {
-        y.par_chunks_mut(CHUNK)
-            .enumerate()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .for_each(|(c, yc)| {
-                let base = c * CHUNK;
-                for (k, yi) in yc.iter_mut().enumerate() {
-                    *yi = self.row_dot(base + k, x);
-                }
-            });
+        chunks_map(y, |c, yc| {
+            let base = c * CHUNK;
+            for (k, yi) in yc.iter_mut().enumerate() {
+                *yi = self.row_dot(base + k, x);
+            }
+        });
     }
 
     /// y += self · x.
     pub fn spmv_add(&self, x: &[f64], y: &mut [f64]) {
-        y.par_chunks_mut(CHUNK)
-            .enumerate()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .for_each(|(c, yc)| {
-                let base = c * CHUNK;
-                for (k, yi) in yc.iter_mut().enumerate() {
-                    *yi += self.row_dot(base + k, x);
-                }
-            });
+        chunks_map(y, |c, yc| {
+            let base = c * CHUNK;
+            for (k, yi) in yc.iter_mut().enumerate() {
+                *yi += self.row_dot(base + k, x);
+            }
+        });
     }
 
     /// q = self · p; returns p·q.
     pub fn spmv_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
-        let partials: Vec<f64> = q
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .map(|(c, qc)| {
-                let base = c * CHUNK;
-                let mut acc = 0.0;
-                for (k, qi) in qc.iter_mut().enumerate() {
-                    let v = self.row_dot(base + k, p);
-                    acc += v * p[base + k];
-                    *qi = v;
-                }
-                acc
-            })
-            .collect();
+        let partials = chunks_map(q, |c, qc| {
+            let base = c * CHUNK;
+            let mut acc = 0.0;
+            for (k, qi) in qc.iter_mut().enumerate() {
+                let v = self.row_dot(base + k, p);
+                acc += v * p[base + k];
+                *qi = v;
+            }
+            acc
+        });
         ordered_sum(&partials)
     }
 
     /// r = b − self · x.
     pub fn residual(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
-        r.par_chunks_mut(CHUNK)
-            .zip(b.par_chunks(CHUNK))
-            .enumerate()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .for_each(|(c, (rc, bc))| {
-                let base = c * CHUNK;
-                for (k, (ri, bi)) in rc.iter_mut().zip(bc).enumerate() {
-                    *ri = bi - self.row_dot(base + k, x);
-                }
-            });
+        chunks_map(r, |c, rc| {
+            let base = c * CHUNK;
+            for (k, ri) in rc.iter_mut().enumerate() {
+                *ri = b[base + k] - self.row_dot(base + k, x);
+            }
+        });
     }
 
     /// Σ_j a_ij x_j for row i.

@@ -10,7 +10,7 @@ use crate::constraints::{Constraints, NodeKind};
 use crate::csr::Csr;
 use crate::error::{SolveError, check_finite, check_len};
 use crate::network::Network;
-use crate::par::{CHUNK, MIN_TASK_CHUNKS, dot, ordered_sum};
+use crate::par::{CHUNK, MIN_TASK_CHUNKS, chunks_map, dot, ordered_sum};
 use crate::{cholesky, faer_cg};
 
 /// How the linear system is solved.
@@ -402,20 +402,17 @@ impl<'a> LinearSystem<'a> {
 
     /// r = b − A x on free rows (x holds fixed values at fixed nodes), 0 elsewhere.
     pub(crate) fn residual(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
-        r.par_chunks_mut(CHUNK)
-            .enumerate()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .for_each(|(c, rc)| {
-                let base = c * CHUNK;
-                for (k, ri) in rc.iter_mut().enumerate() {
-                    let i = base + k;
-                    *ri = if self.free[i] {
-                        b[i] - self.row_apply(i, x)
-                    } else {
-                        0.0
-                    };
-                }
-            });
+        chunks_map(r, |c, rc| {
+            let base = c * CHUNK;
+            for (k, ri) in rc.iter_mut().enumerate() {
+                let i = base + k;
+                *ri = if self.free[i] {
+                    b[i] - self.row_apply(i, x)
+                } else {
+                    0.0
+                };
+            }
+        });
     }
 
     /// (A x)_i for one row.
@@ -534,11 +531,7 @@ impl<'a> LinearSystem<'a> {
         let mut iterations = 0usize;
         let mut true_rel = dot(r, r).sqrt() / b_norm;
         while true_rel > rel_tol && iterations < max_iter {
-            let rc: Vec<f64> = nodes
-                .par_iter()
-                .with_min_len(CHUNK)
-                .map(|&p| r[p as usize])
-                .collect();
+            let rc: Vec<f64> = nodes.iter().map(|&p| r[p as usize]).collect();
             let (delta, its) = amg::pcg(hierarchy, &rc, rel_tol * b_norm, max_iter - iterations)?;
             iterations += its.max(1);
             for (&p, d) in nodes.iter().zip(&delta) {

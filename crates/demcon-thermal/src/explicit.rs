@@ -268,10 +268,9 @@ impl<'a> ExplicitStepper<'a> {
                         .chunks_exact(LANES)
                         .zip(self.weights[a..b].chunks_exact(LANES))
                     {
-                        acc[0] += wj[0] * t_old[cj[0] as usize];
-                        acc[1] += wj[1] * t_old[cj[1] as usize];
-                        acc[2] += wj[2] * t_old[cj[2] as usize];
-                        acc[3] += wj[3] * t_old[cj[3] as usize];
+                        for ((v, &w), &q) in acc.iter_mut().zip(wj).zip(cj) {
+                            *v += w * t_old[q as usize];
+                        }
                     }
                     for (l, &v) in acc.iter().enumerate().take(lanes) {
                         out[self.perm[i0 + l] as usize - base] = v;
