@@ -5,6 +5,10 @@ pub mod haddad2021_ct_calibration;
 pub mod haddad2021_slab_transient;
 pub mod haddad2021_sphere_transient;
 pub mod haddad2021_stability;
+pub mod hubert2017_cylinder_resistance;
+pub mod hubert2017_notch_joule;
+pub mod hubert2017_scenes;
+pub mod hubert2017_solver_timing;
 
 use crate::Case;
 
@@ -30,6 +34,21 @@ pub fn registry() -> Vec<Case> {
             id: "stability",
             about: "Haddad 2021 eq. 16 vs the exact explicit bound; implicit/steady do not fail",
             run: haddad2021_stability::run,
+        },
+        Case {
+            id: "cylinder-resistance",
+            about: "Hubert 2017 §3.1: cylinder R vs ρ_e l/A, N = 1e3…2e4, 3 packings, Terreros and C_t",
+            run: hubert2017_cylinder_resistance::run,
+        },
+        Case {
+            id: "notch-joule",
+            about: "Hubert 2017 §3.2: grooved cylinder, R vs FEM and steady Joule ΔT_max vs Kohlrausch",
+            run: hubert2017_notch_joule::run,
+        },
+        Case {
+            id: "electric-solver-timing",
+            about: "Hubert 2017 Table 1: one potential solve at 5000 particles, CG vs Cholesky",
+            run: hubert2017_solver_timing::run,
         },
     ]
 }
