@@ -332,6 +332,17 @@ pub enum ThermalBcConfig {
         /// Temperature (°C).
         value: f64,
     },
+    /// Temperature (°C) held on a container face itself (not on particles): each particle
+    /// touching the face is linked to it by a half-contact λ S / h, h its centre-to-face
+    /// distance and S its own transmission surface (C_t π R_p², or α(n_p) R_p²) — the bond to
+    /// its mirror image across the face, cut in half. The boundary is then exactly at the
+    /// face, where the papers put it, instead of a particle radius inside.
+    WallTemperature {
+        /// The face.
+        face: FaceConfig,
+        /// Temperature (°C).
+        value: f64,
+    },
     /// Heat flux density (W/m², positive into the body) through a face, shared among the
     /// face's particles in proportion to their projected area.
     HeatFlux {

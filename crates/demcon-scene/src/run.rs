@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use demcon_core::Vec3;
 use demcon_post::{
-    Domain, HaloParams, HaloReport, Line, ProbeIndex, ProbeMethod, halo_flux, particle_dipoles, particle_flux,
+    Domain, HaloParams, HaloReport, Line, ProbeIndex, ProbeMethod, halo_flux, particle_dipoles,
 };
 use serde::Serialize;
 
@@ -71,6 +71,36 @@ impl Scene {
         crate::model::contact_params(&c.contacts)?;
         if let Some(r) = &c.carve {
             convert::region(r, "carve")?;
+        }
+        // Phases name their material and region: check them before any packing.
+        for (i, ph) in c.phases.iter().enumerate() {
+            let (PhaseConfig::Region { material, .. } | PhaseConfig::Inclusions { material, .. }) = ph;
+            materials
+                .phase_of(material)
+                .map_err(|e| SceneError::at(&format!("phases[{i}].material"), e))?;
+            if let PhaseConfig::Region { region, .. } = ph {
+                convert::region(region, &format!("phases[{i}].region"))?;
+            }
+        }
+        // Probes must lie in the domain; with a generated packing it is known before packing.
+        let domain = match (&c.carve, &c.packing) {
+            (Some(r), _) => Some(convert::region(r, "carve")?),
+            (None, PackingConfig::Generate { container, .. }) => {
+                Some(convert::container(container, "packing.container")?.region())
+            }
+            _ => None,
+        };
+        if let Some(d) = domain {
+            for (i, p) in c.outputs.probes.iter().enumerate() {
+                let x = demcon_core::Vec3::new(p.point.0, p.point.1, p.point.2);
+                if !d.contains_point(&x) {
+                    return Err(SceneError::invalid(
+                        &format!("outputs.probes[{i}].point ({})", p.name),
+                        format!("{:?}", p.point),
+                        "the probe point must lie inside the domain (container or carved region) (m)",
+                    ));
+                }
+            }
         }
         if c.thermal.is_none() && c.electric.is_none() {
             return Err(SceneError::invalid(
@@ -272,7 +302,12 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
     // with the Joule sources; with ρ_e(T), iterate until temperatures settle.
     let thermal_setup = match &cfg.thermal {
         Some(_) => {
-            let s = thermal_setup(&model, &cfg.surface, cfg.interface)?;
+            let s = thermal_setup(
+                &model,
+                &cfg.surface,
+                cfg.interface,
+                cfg.thermal.as_ref().expect("thermal"),
+            )?;
             if s.clamped > 0 {
                 diagnostics.push(format!(
                     "{} particles outside the Terreros table's 4–20 neighbours (α clamped)",
@@ -284,7 +319,12 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
         None => None,
     };
     let bcs = match &cfg.thermal {
-        Some(t) => Some(thermal_bcs(&model, t, cfg.floating)?),
+        Some(t) => Some(thermal_bcs(
+            &model,
+            thermal_setup.as_ref().expect("setup"),
+            t,
+            cfg.floating,
+        )?),
         None => None,
     };
     if let Some(b) = &bcs {
@@ -379,15 +419,21 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
     let want_flux = cfg.outputs.flux || cfg.outputs.halo.is_some();
     let (mut flux, mut halo) = (None, None);
     if let (true, Some(th), Some(s)) = (want_flux, &thermal, &thermal_setup) {
-        flux = Some(particle_flux(
+        let m = model.graph.pairs.len();
+        let mut d = particle_dipoles(
             &model.graph.pairs,
             &branches,
-            &s.conductances,
-            &s.rep_volumes,
+            &s.conductances[..m],
             &th.temperatures,
-        )?);
+        )?;
+        add_wall_dipoles(&model, s, &th.node_temperatures, &mut d);
+        flux = Some(
+            d.iter()
+                .zip(&s.rep_volumes)
+                .map(|(d, v)| -d / (2.0 * v))
+                .collect::<Vec<Vec3>>(),
+        );
         if let Some(k) = cfg.outputs.halo {
-            let d = particle_dipoles(&model.graph.pairs, &branches, &s.conductances, &th.temperatures)?;
             let h = halo_flux(
                 &model.particles,
                 &d,
@@ -558,9 +604,9 @@ fn effective_conductivity(
         (1, 0)
     };
     let q = demcon_network::boundary_flow(
-        &model.network,
+        s.network(model),
         &s.conductances,
-        &th.temperatures,
+        &th.node_temperatures,
         &b.fixed_sets[hot].1,
     )?;
     let delta_t = b.fixed_sets[hot].2 - b.fixed_sets[cold].2;
@@ -573,4 +619,44 @@ fn effective_conductivity(
         delta_t,
         lambda_e,
     })
+}
+
+/// Adds the wall links' share to the particle dipoles D_p = Σ g (T_q − T_p) ℓ_pq: a link of
+/// conductance g_w over the half-length h is the bond to the mirror image at 2h, of
+/// conductance g_w/2 and temperature difference 2 (T_w − T_p), so it adds
+/// 2 g_w (T_w − T_p) h n (n the outward normal of the face).
+fn add_wall_dipoles(model: &Model, s: &ThermalSetup, node_t: &[f64], d: &mut [Vec3]) {
+    for w in &s.walls {
+        let tw = node_t[w.node as usize];
+        for (&p, &g) in w.particles.iter().zip(&w.conductances) {
+            let pu = p as usize;
+            let c = model.particles.centres[pu];
+            let Some(h) = model.container.face_distance(w.face, &c) else {
+                continue;
+            };
+            let n = outward_normal(&model.container, w.face, &c);
+            d[pu] += 2.0 * g * (tw - node_t[pu]) * h.max(0.5 * model.particles.radii[pu]) * n;
+        }
+    }
+}
+
+/// Outward unit normal of a container face at (the projection of) point `c`.
+fn outward_normal(container: &demcon_core::Container, face: demcon_core::Face, c: &Vec3) -> Vec3 {
+    use demcon_core::Face;
+    match face {
+        Face::XMin => -Vec3::x(),
+        Face::XMax => Vec3::x(),
+        Face::YMin => -Vec3::y(),
+        Face::YMax => Vec3::y(),
+        Face::ZMin => -Vec3::z(),
+        Face::ZMax => Vec3::z(),
+        Face::Outer => {
+            let r = match container {
+                demcon_core::Container::Cylinder { .. } => Vec3::new(c.x, c.y, 0.0),
+                _ => *c,
+            };
+            let l = r.norm();
+            if l > 0.0 { r / l } else { Vec3::x() }
+        }
+    }
 }

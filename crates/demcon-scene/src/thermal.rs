@@ -6,6 +6,7 @@ use std::time::Instant;
 use demcon_core::{Axis, Container, Face, Selector};
 use demcon_graph::{
     InterfaceRule, SurfaceModel, conductances, contact_property, contact_surfaces, representative_volumes,
+    surface_calibrated, terreros_alpha,
 };
 use demcon_network::{Constraints, FloatingPolicy, Method, SolveParams, SolveReport, resolve_fixed};
 use demcon_thermal::{
@@ -103,13 +104,33 @@ pub fn section_and_length(container: &Container, axis: Axis) -> Option<(f64, f64
 /// Turns steady temperatures into (λ_e with the sample length, λ_e with the centre-to-centre length).
 type Measure = Box<dyn Fn(&[f64]) -> (f64, f64)>;
 
-/// Calibrates C_t on the model's own packing (never copied from the paper): with C_t,arb = 1,
-/// impose a flux on the top face and a fixed temperature on the bottom (box: along y;
-/// cylinder: along its axis z), solve the steady state, measure λ_e = φ L / ΔT with ΔT the
-/// mean top-layer temperature rise, and return C_t = λ / λ_e. For a sphere container, a
-/// uniform volumetric source q with the surface held fixed gives the mean temperature rise
-/// q R² / (15 λ_e).
+/// [`calibrate_ct_with`] the paper's way ([`CalibrationBc::Particles`]).
 pub fn calibrate_ct(model: &Model) -> Result<CtCalibration, SceneError> {
+    calibrate_ct_with(model, CalibrationBc::Particles)
+}
+
+/// How the boundary temperatures of a calibration are applied.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum CalibrationBc {
+    /// On the particles touching the faces (Haddad 2021 §2.1).
+    Particles,
+    /// On the faces themselves, through wall half-contacts (`WallTemperature`).
+    Walls,
+}
+
+/// Calibrates C_t on the model's own packing (never copied from the paper) with C_t,arb = 1
+/// (the whole network, wall links included, scales linearly with C_t).
+///
+/// [`CalibrationBc::Particles`], the paper's protocol: a flux on the top face and a fixed
+/// temperature on the bottom particles (box: along y; cylinder: along its axis z), steady
+/// state, λ_e = φ L / ΔT with ΔT the mean top-layer rise. [`CalibrationBc::Walls`]: the two
+/// faces held at 0 and 1 through wall links, λ_e = Q L / (A ΔT) from the heat flow Q. For a
+/// sphere container (both variants) a uniform volumetric source q with the surface held at 0
+/// gives the mean temperature rise q R² / (15 λ_e). C_t = λ / λ_e.
+pub fn calibrate_ct_with(model: &Model, bc: CalibrationBc) -> Result<CtCalibration, SceneError> {
+    if bc == CalibrationBc::Walls {
+        return calibrate_ct_walls(model);
+    }
     let t0 = Instant::now();
     let lambda = 1.0;
     let graph = &model.graph;
@@ -228,6 +249,157 @@ pub fn calibrate_ct(model: &Model) -> Result<CtCalibration, SceneError> {
     })
 }
 
+fn calibrate_ct_walls(model: &Model) -> Result<CtCalibration, SceneError> {
+    let sm = SurfaceModel::Calibrated { c_t: 1.0 };
+    let s = contact_surfaces(&model.graph, &model.particles, &sm)?;
+    let lam = vec![1.0; model.graph.pairs.len()];
+    let g = conductances(&model.graph, &s.area, &lam)?;
+    let ones = vec![1.0; model.particles.len()];
+    let n = model.particles.len();
+    let (method, walls, sources): (&str, Vec<(Face, f64)>, Vec<f64>) = match model.container {
+        Container::Sphere { .. } => {
+            let src = (0..n).map(|p| model.particles.volume(p) / model.phi).collect();
+            ("source-wall", vec![(Face::Outer, 0.0)], src)
+        }
+        Container::Box { .. } => (
+            "walls-y",
+            vec![(Face::YMin, 0.0), (Face::YMax, 1.0)],
+            vec![0.0; n],
+        ),
+        Container::Cylinder { .. } => (
+            "walls-z",
+            vec![(Face::ZMin, 0.0), (Face::ZMax, 1.0)],
+            vec![0.0; n],
+        ),
+        Container::Periodic { .. } => {
+            return Err(SceneError::invalid(
+                "surface.c_t",
+                "Auto",
+                "C_t calibration needs a box, cylinder or sphere container; give `c_t: Value(..)` for periodic packings",
+            ));
+        }
+    };
+    let (net, g_ext, links) = extended_network(model, &sm, &g, &ones, &walls)?;
+    let net = net.as_ref().unwrap_or(&model.network);
+    let mut src = sources;
+    src.resize(net.n_nodes(), 0.0);
+    let sets: Vec<(Vec<u32>, f64)> = links.iter().map(|w| (vec![w.node], w.value)).collect();
+    let constraints = resolve_fixed(net, &sets, FloatingPolicy::Exclude)?;
+    let steady = solve_steady_temperature(net, &g_ext, &constraints, &src, &default_solve_params())?;
+    let t = &steady.solution.values;
+    let lam_e = match model.container {
+        Container::Sphere { radius } => {
+            let excluded: std::collections::BTreeSet<u32> = constraints.excluded().iter().copied().collect();
+            let (mut sum, mut w) = (0.0, 0.0);
+            for (p, &tp) in t.iter().enumerate().take(n) {
+                let v = model.particles.volume(p);
+                if !excluded.contains(&(p as u32)) {
+                    sum += v * tp;
+                }
+                w += v;
+            }
+            radius * radius / (15.0 * sum / w)
+        }
+        _ => {
+            let axis = if matches!(model.container, Container::Box { .. }) {
+                Axis::Y
+            } else {
+                Axis::Z
+            };
+            let (area, length) = section_and_length(&model.container, axis).expect("box or cylinder");
+            let q = demcon_network::boundary_flow(net, &g_ext, t, &[links[1].node])?;
+            q * length / area
+        }
+    };
+    let report = steady.solution.report.clone();
+    Ok(CtCalibration {
+        c_t: 1.0 / lam_e,
+        c_t_centres: 1.0 / lam_e,
+        method: method.to_string(),
+        lambda_e_arb: lam_e,
+        lambda: 1.0,
+        delta_t: t.iter().copied().fold(0.0, f64::max),
+        solve_s: report.wall_s + report.setup_s,
+        iterations: report.iterations,
+        solve: Some(report),
+    })
+}
+
+/// A container face held at a temperature, linked to the particles touching it.
+#[derive(Debug, Clone)]
+pub struct WallLinks {
+    /// The face.
+    pub face: Face,
+    /// Its temperature (°C).
+    pub value: f64,
+    /// Its node in the thermal network (after the particles).
+    pub node: u32,
+    /// Particles linked to it.
+    pub particles: Vec<u32>,
+    /// Link conductances λ_p S_p / h_p (W/K).
+    pub conductances: Vec<f64>,
+}
+
+/// The network with wall nodes (or `None`: the model's), all conductances (W/K), the walls.
+pub type ExtendedNetwork = (Option<demcon_network::Network>, Vec<f64>, Vec<WallLinks>);
+
+/// The thermal network with one extra node per wall: the particles' contacts followed by the
+/// wall links. Returns `None` for the network when there is no wall (the model's is used).
+/// `particle_lambda` is each particle's conductivity (W/(m·K)).
+pub fn extended_network(
+    model: &Model,
+    sm: &SurfaceModel,
+    contact_g: &[f64],
+    particle_lambda: &[f64],
+    walls: &[(Face, f64)],
+) -> Result<ExtendedNetwork, SceneError> {
+    if walls.is_empty() {
+        return Ok((None, contact_g.to_vec(), Vec::new()));
+    }
+    let n = model.particles.len();
+    let degrees = model.graph.degrees();
+    let mut edges = model.graph.pairs.clone();
+    let mut g = contact_g.to_vec();
+    let mut links = Vec::new();
+    for (k, &(face, value)) in walls.iter().enumerate() {
+        let node = (n + k) as u32;
+        let ids = Selector::Face(face)
+            .select_nonempty(
+                &model.particles,
+                &model.container,
+                &format!("wall {} (WallTemperature)", face.name()),
+            )
+            .map_err(|e| SceneError::at("thermal.bcs", e))?;
+        let mut gs = Vec::with_capacity(ids.len());
+        for &p in &ids {
+            let pu = p as usize;
+            let r = model.particles.radii[pu];
+            let h = model
+                .container
+                .face_distance(face, &model.particles.centres[pu])
+                .unwrap_or(r)
+                .max(0.5 * r);
+            let area = match *sm {
+                SurfaceModel::Calibrated { c_t } => surface_calibrated(c_t, r),
+                SurfaceModel::TerrerosAlpha => terreros_alpha(degrees[pu] + 1).alpha * r * r,
+            };
+            let gp = particle_lambda[pu] * area / h;
+            edges.push([p, node]);
+            g.push(gp);
+            gs.push(gp);
+        }
+        links.push(WallLinks {
+            face,
+            value,
+            node,
+            particles: ids,
+            conductances: gs,
+        });
+    }
+    let net = demcon_network::Network::new(n + walls.len(), &edges)?;
+    Ok((Some(net), g, links))
+}
+
 /// Conductances, capacities and volumes of the thermal network.
 #[derive(Debug, Clone)]
 pub struct ThermalSetup {
@@ -239,11 +411,15 @@ pub struct ThermalSetup {
     pub areas: Vec<f64>,
     /// Contact conductivity λ per contact (W/(m·K)), interface rule applied.
     pub contact_lambda: Vec<f64>,
-    /// Contact conductance H = λ S / d per contact (W/K).
+    /// Conductances (W/K): H = λ S / d per contact, then the wall links.
     pub conductances: Vec<f64>,
+    /// The network with the wall nodes, when there are walls (else the model's is used).
+    pub network: Option<demcon_network::Network>,
+    /// Walls held at a temperature.
+    pub walls: Vec<WallLinks>,
     /// Representative volume per particle (m³).
     pub rep_volumes: Vec<f64>,
-    /// Heat capacity per particle (J/K).
+    /// Heat capacity per node (J/K): particles, then 1 J/K for each (fixed) wall node.
     pub capacities: Vec<f64>,
     /// Particles whose neighbour count lay outside the Terreros table (clamped).
     pub clamped: usize,
@@ -256,10 +432,24 @@ pub fn thermal_setup(
     model: &Model,
     surface: &SurfaceConfig,
     interface: InterfaceConfig,
+    thermal: &ThermalConfig,
 ) -> Result<ThermalSetup, SceneError> {
+    let walls: Vec<(Face, f64)> = thermal
+        .bcs
+        .iter()
+        .filter_map(|bc| match bc {
+            ThermalBcConfig::WallTemperature { face, value } => Some((convert::face(*face), *value)),
+            _ => None,
+        })
+        .collect();
     let (c_t, calibration) = match surface {
         SurfaceConfig::Calibrated { c_t: CtConfig::Auto } => {
-            let cal = calibrate_ct(model)?;
+            let bc = if walls.is_empty() {
+                CalibrationBc::Particles
+            } else {
+                CalibrationBc::Walls
+            };
+            let cal = calibrate_ct_with(model, bc)?;
             (Some(cal.c_t), Some(cal))
         }
         SurfaceConfig::Calibrated {
@@ -293,7 +483,10 @@ pub fn thermal_setup(
     let fv: Vec<f64> = vols.iter().zip(&rep).map(|(v, r)| (v / r).min(1.0)).collect();
     let c = per_particle(model, |m| m.specific_heat);
     let rho = per_particle(model, |m| m.density);
-    let caps = capacities(&vols, &c, &rho, RepresentativeVolume::VolumeFraction(&fv))?;
+    let mut caps = capacities(&vols, &c, &rho, RepresentativeVolume::VolumeFraction(&fv))?;
+    let lam_p = per_particle(model, |m| m.conductivity);
+    let (network, g, walls) = extended_network(model, &sm, &g, &lam_p, &walls)?;
+    caps.resize(caps.len() + walls.len(), 1.0);
     let paper_dt = c_t.and_then(|ct| {
         let d_min = model
             .graph
@@ -318,11 +511,20 @@ pub fn thermal_setup(
         areas: s.area,
         contact_lambda,
         conductances: g,
+        network,
+        walls,
         rep_volumes: rep,
         capacities: caps,
         clamped: s.clamped,
         paper_dt,
     })
+}
+
+impl ThermalSetup {
+    /// The thermal network: the model's, or the one extended with wall nodes.
+    pub fn network<'a>(&'a self, model: &'a Model) -> &'a demcon_network::Network {
+        self.network.as_ref().unwrap_or(&model.network)
+    }
 }
 
 /// Resolved thermal boundary conditions and sources.
@@ -347,11 +549,13 @@ pub fn floating_policy(f: FloatingConfig) -> FloatingPolicy {
 /// Resolves the thermal boundary conditions of `cfg` on the model.
 pub fn thermal_bcs(
     model: &Model,
+    setup: &ThermalSetup,
     cfg: &ThermalConfig,
     floating: FloatingConfig,
 ) -> Result<ThermalBcs, SceneError> {
-    let n = model.particles.len();
-    let mut sources = vec![0.0; n];
+    let net = setup.network(model);
+    let mut sources = vec![0.0; net.n_nodes()];
+    let mut walls = setup.walls.iter();
     let mut sets = Vec::new();
     let mut fixed_sets = Vec::new();
     for (i, bc) in cfg.bcs.iter().enumerate() {
@@ -398,6 +602,21 @@ pub fn thermal_bcs(
                 let s = face_flux_sources(&model.particles, &ids, flux * area)?;
                 sources.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
             }
+            ThermalBcConfig::WallTemperature { face, value } => {
+                if !value.is_finite() {
+                    return Err(SceneError::invalid(
+                        &format!("{field}.value"),
+                        value,
+                        "must be a finite temperature",
+                    ));
+                }
+                let w = walls
+                    .next()
+                    .expect("one wall link per WallTemperature, built by thermal_setup");
+                debug_assert_eq!(w.face, convert::face(*face));
+                fixed_sets.push((format!("Wall({:?})", face), vec![w.node], *value));
+                sets.push((vec![w.node], *value));
+            }
         }
     }
     for (i, src) in cfg.sources.iter().enumerate() {
@@ -425,7 +644,7 @@ pub fn thermal_bcs(
     {
         return Err(SceneError::invalid(
             "thermal.bcs",
-            "no FixedTemperature",
+            "no FixedTemperature or WallTemperature",
             "a steady thermal solve needs at least one fixed temperature",
         ));
     }
@@ -436,7 +655,7 @@ pub fn thermal_bcs(
         }
         _ => floating_policy(floating),
     };
-    let constraints = resolve_fixed(&model.network, &sets, policy)?;
+    let constraints = resolve_fixed(net, &sets, policy)?;
     Ok(ThermalBcs {
         constraints,
         sources,
@@ -493,8 +712,10 @@ pub struct ThermalSolveReport {
 /// Temperatures of a thermal solve.
 #[derive(Debug, Clone)]
 pub struct ThermalRun {
-    /// Final temperatures (°C). Excluded particles keep their initial temperature.
+    /// Final temperatures of the particles (°C). Excluded particles keep their initial temperature.
     pub temperatures: Vec<f64>,
+    /// Final temperatures of every network node: the particles, then the wall nodes (°C).
+    pub node_temperatures: Vec<f64>,
     /// Snapshots at the requested output times (t, temperatures).
     pub snapshots: Vec<(f64, Vec<f64>)>,
     /// Cost and step data.
@@ -524,11 +745,11 @@ pub fn solve_thermal(
             "must be finite",
         ));
     }
-    let mut t_init = vec![initial; n];
+    let net = setup.network(model);
+    let mut t_init = vec![initial; net.n_nodes()];
     bcs.constraints.impose(&mut t_init);
     let mut snapshots = Vec::new();
     let excluded = bcs.constraints.excluded().len();
-    let net = &model.network;
     let g = &setup.conductances;
     let caps = &setup.capacities;
     let report_of = |r: &demcon_thermal::TransientReport| ThermalSolveReport {
@@ -575,11 +796,12 @@ pub fn solve_thermal(
                 &sources,
                 &t_init,
                 &params,
-                |t, v| snapshots.push((t, v.to_vec())),
+                |t, v| snapshots.push((t, v[..n].to_vec())),
             )?;
             Ok(ThermalRun {
                 report: report_of(&tr.report),
-                temperatures: tr.temperatures,
+                temperatures: tr.temperatures[..n].to_vec(),
+                node_temperatures: tr.temperatures,
                 snapshots,
             })
         }
@@ -607,11 +829,12 @@ pub fn solve_thermal(
                 &sources,
                 &t_init,
                 &params,
-                |t, v| snapshots.push((t, v.to_vec())),
+                |t, v| snapshots.push((t, v[..n].to_vec())),
             )?;
             Ok(ThermalRun {
                 report: report_of(&tr.report),
-                temperatures: tr.temperatures,
+                temperatures: tr.temperatures[..n].to_vec(),
+                node_temperatures: tr.temperatures,
                 snapshots,
             })
         }
@@ -637,7 +860,8 @@ pub fn solve_thermal(
                     energy_balance_error: st.balance_error,
                     excluded,
                 },
-                temperatures: temps,
+                temperatures: temps[..n].to_vec(),
+                node_temperatures: temps,
                 snapshots,
             })
         }

@@ -35,7 +35,11 @@ pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
     let (mut scene, realisations) = match (&args.scene, &args.packing) {
         (Some(path), None) => {
             let s = Scene::load(path).with_context(|| format!("loading scene {}", path.display()))?;
-            let k = if matches!(s.config.packing, PackingConfig::File { .. }) { 1 } else { args.realisations.max(1) };
+            let k = if matches!(s.config.packing, PackingConfig::File { .. }) {
+                1
+            } else {
+                args.realisations.max(1)
+            };
             (s, k)
         }
         (None, Some(file)) => {
@@ -51,17 +55,24 @@ pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
     };
     if let PackingConfig::File { .. } = scene.config.packing {
         scene.config.contacts = if args.packing.is_some() {
-            ContactsConfig { coordination: Some(args.coordination), tolerance: None }
+            ContactsConfig {
+                coordination: Some(args.coordination),
+                tolerance: None,
+            }
         } else {
             scene.config.contacts
         };
     }
     let base_seed = scene.config.seed;
     let mut values = Vec::new();
-    println!("{:>5} {:>9} {:>10} {:>9} {:>8} {:>8} {:>10}", "seed", "N", "C_t", "C_t(ctr)", "Z", "ε", "solve (s)");
+    println!(
+        "{:>5} {:>9} {:>10} {:>9} {:>8} {:>8} {:>10}",
+        "seed", "N", "C_t", "C_t(ctr)", "Z", "ε", "solve (s)"
+    );
     for k in 0..realisations {
         scene.config.seed = base_seed + k;
-        let model = build_model(&scene.config, &scene.base_dir, None).context("building the packing and contacts")?;
+        let model =
+            build_model(&scene.config, &scene.base_dir, None).context("building the packing and contacts")?;
         let cal = calibrate_ct(&model).context("calibrating C_t")?;
         println!(
             "{:>5} {:>9} {:>10.5} {:>9.5} {:>8.3} {:>8.4} {:>10.3}",
@@ -78,6 +89,10 @@ pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
     let n = values.len() as f64;
     let mean = values.iter().sum::<f64>() / n;
     let std = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
-    println!("C_t = {mean:.5} (CoV {:.3} % over {} realisation(s)); the paper's 0.806 (1e5) / 0.834 (1e6) are for comparison only", 100.0 * std / mean, values.len());
+    println!(
+        "C_t = {mean:.5} (CoV {:.3} % over {} realisation(s)); the paper's 0.806 (1e5) / 0.834 (1e6) are for comparison only",
+        100.0 * std / mean,
+        values.len()
+    );
     Ok(ExitCode::SUCCESS)
 }

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use demcon_scene::{RunOptions, Scene, run as run_scene, summary_json, write_outputs};
+use demcon_scene::{RunOptions, Scene, run as run_scene, write_outputs};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Arguments of `demcon run`.
@@ -28,9 +28,19 @@ pub struct RunArgs {
 /// Runs the subcommand.
 pub fn run(args: RunArgs) -> Result<ExitCode> {
     crate::set_threads(args.threads)?;
-    let scene = Scene::load(&args.scene).with_context(|| format!("loading scene {}", args.scene.display()))?;
-    let stem = args.scene.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_string();
-    let name = if scene.config.name.is_empty() { stem.clone() } else { scene.config.name.clone() };
+    let scene =
+        Scene::load(&args.scene).with_context(|| format!("loading scene {}", args.scene.display()))?;
+    let stem = args
+        .scene
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("scene")
+        .to_string();
+    let name = if scene.config.name.is_empty() {
+        stem.clone()
+    } else {
+        scene.config.name.clone()
+    };
     let out = args.out.unwrap_or_else(|| PathBuf::from("out").join(&stem));
     let bar = (!args.quiet).then(|| {
         let b = ProgressBar::new(1000);
@@ -48,7 +58,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             b.set_message(format!("{:.4}", p.phi));
         }
     };
-    let opts = RunOptions { progress: Some(&progress) };
+    let opts = RunOptions {
+        progress: Some(&progress),
+    };
     let result = run_scene(&scene, &opts).with_context(|| format!("running scene {}", args.scene.display()));
     if let Some(b) = &bar {
         b.finish_and_clear();
@@ -63,16 +75,29 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
 
 fn print_summary(name: &str, r: &demcon_scene::RunResult) {
     let m = &r.model;
-    println!("scene {name}: {} particles, φ = {:.4}, {} contacts (Z = {:.3}, ε = {:.4})",
-        m.particles.len(), m.phi, m.graph.pairs.len(), m.graph.coordination(), m.graph.report.epsilon);
+    println!(
+        "scene {name}: {} particles, φ = {:.4}, {} contacts (Z = {:.3}, ε = {:.4})",
+        m.particles.len(),
+        m.phi,
+        m.graph.pairs.len(),
+        m.graph.coordination(),
+        m.graph.report.epsilon
+    );
     if let Some(p) = &m.report.packing {
-        println!("  packing: {:.2} s, {} events ({:.2e}/s), stop {:?}", p.wall_s, p.events, p.events_per_s, p.stop);
+        println!(
+            "  packing: {:.2} s, {} events ({:.2e}/s), stop {:?}",
+            p.wall_s, p.events, p.events_per_s, p.stop
+        );
     }
-    println!("  contacts {:.2} s, network {:.2} s", m.report.contacts_s, m.report.network_s);
-    if let Some(s) = &r.thermal_setup {
-        if let Some(c) = &s.calibration {
-            println!("  C_t = {:.4} (calibrated on this packing, {}, {} CG iterations)", c.c_t, c.method, c.iterations);
-        }
+    println!(
+        "  contacts {:.2} s, network {:.2} s",
+        m.report.contacts_s, m.report.network_s
+    );
+    if let Some(c) = r.thermal_setup.as_ref().and_then(|s| s.calibration.as_ref()) {
+        println!(
+            "  C_t = {:.4} (calibrated on this packing, {}, {} CG iterations)",
+            c.c_t, c.method, c.iterations
+        );
     }
     if let Some(t) = &r.thermal {
         let rep = &t.report;
@@ -84,7 +109,9 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
             rep.iterations,
             rep.dt,
             rep.dt_bound,
-            rep.dt_paper.map(|d| format!(", paper eq. 16: {d:.3e} s")).unwrap_or_default(),
+            rep.dt_paper
+                .map(|d| format!(", paper eq. 16: {d:.3e} s"))
+                .unwrap_or_default(),
             rep.energy_balance_error
         );
     }
@@ -92,7 +119,9 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
         let rep = &e.report;
         println!(
             "  electric: R = {} Ω, I = {:.4e} A (in/out mismatch {:.1e}), Joule {:.4e} W, {} {} iterations, {:.3} s",
-            rep.resistance_ohm.map(|v| format!("{v:.6e}")).unwrap_or_else(|| "-".into()),
+            rep.resistance_ohm
+                .map(|v| format!("{v:.6e}"))
+                .unwrap_or_else(|| "-".into()),
             rep.current_in,
             rep.current_mismatch,
             rep.joule_w,
@@ -102,10 +131,16 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
         );
     }
     if let Some(etc) = &r.etc {
-        println!("  effective conductivity along {}: {:.5} W/(m·K)", etc.axis, etc.lambda_e);
+        println!(
+            "  effective conductivity along {}: {:.5} W/(m·K)",
+            etc.axis, etc.lambda_e
+        );
     }
     if let Some((_, _, h)) = &r.halo {
-        println!("  Halo k = {}: {:.1} members on average, {} truncated by the boundary, {:.2} s", h.ratio, h.mean_members, h.n_truncated, h.wall_s);
+        println!(
+            "  Halo k = {}: {:.1} members on average, {} truncated by the boundary, {:.2} s",
+            h.ratio, h.mean_members, h.n_truncated, h.wall_s
+        );
     }
     for p in &r.probes {
         println!("  probe {} {} at t = {} s: {:.6}", p.name, p.field, p.t, p.value);
@@ -113,6 +148,5 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
     for d in &r.diagnostics {
         println!("  note: {d}");
     }
-    let _ = summary_json;
     println!("  total {:.2} s", r.wall_s);
 }

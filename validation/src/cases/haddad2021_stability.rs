@@ -34,7 +34,7 @@ fn attempt(model: &Model, n: usize, seed: u64, solver: ThermalSolverConfig) -> a
     match run_with(&cfg, model) {
         Ok(r) => {
             let th = r.thermal.as_ref().expect("thermal");
-            let skip = fixed_mask(model, &r.thermal_bcs.as_ref().expect("bcs").fixed_sets);
+            let skip = unsolved_mask(model, r.thermal_bcs.as_ref().expect("bcs"));
             let a = 33.0 / (7800.0 * 0.9);
             let prof = layer_profile(model, &th.temperatures, 1, 0.0, 0.1, 20, &skip);
             let e = prof
