@@ -29,13 +29,19 @@ use rand_chacha::ChaCha8Rng;
 const LINK: f64 = 1.2143;
 
 /// Whether criterion's name filter (the first positional argument, a regex; matched here
-/// as a plain substring) selects `id`, so unselected cases are neither built nor
-/// summarised.
+/// as `|`-separated plain substrings, a trailing `$` anchoring one at the end, e.g.
+/// `electric_solve/amg-pcg/100000$`) selects `id`, so unselected cases are neither built
+/// nor summarised.
 fn wanted(id: &str) -> bool {
     let filter = std::env::args()
         .skip(1)
         .find(|a| !a.starts_with('-') && a != "--bench");
-    filter.is_none_or(|f| f.split('|').any(|part| id.contains(part)))
+    filter.is_none_or(|f| {
+        f.split('|').any(|part| {
+            part.strip_suffix('$')
+                .map_or(id.contains(part), |p| id.ends_with(p))
+        })
+    })
 }
 
 /// Whether only the one-off summaries are wanted (`DEMCON_BENCH_SUMMARY_ONLY=1`).

@@ -9,11 +9,12 @@
 //! residual ([`SolveReport`]) and fail with a clear [`SolveError`] rather than return
 //! garbage. Results do not depend on the rayon thread count (fixed reduction order).
 //!
-//! The default method ([`Method::AmgCg`]) is conjugate gradient preconditioned by
-//! smoothed-aggregation algebraic multigrid: its hierarchy is built once per
-//! [`LinearSystem`] (cost reported as [`SolveReport::setup_s`], shape by
-//! [`LinearSystem::amg_info`]) and needs ~20–25 iterations to 1e-8 on packing networks of
-//! 10⁴–10⁶ nodes, where Jacobi-PCG ([`Method::Cg`], still available) needs 200–800.
+//! [`Method::AmgCg`] is conjugate gradient preconditioned by smoothed-aggregation algebraic
+//! multigrid: its hierarchy is built once per [`LinearSystem`] (cost reported as
+//! [`SolveReport::setup_s`], shape by [`LinearSystem::amg_info`]) and needs ~20–25
+//! iterations to 1e-8 on packing networks of 10⁴–10⁶ nodes, where Jacobi-PCG
+//! ([`Method::Cg`]) needs 200–800. The default, [`Method::Auto`], runs Jacobi-PCG below
+//! [`AUTO_AMG_MIN_UNKNOWNS`] unknowns and multigrid from there on.
 //!
 //! ```
 //! use demcon_network::{FloatingPolicy, Network, SolveParams, resolve_fixed, solve_steady};
@@ -46,4 +47,7 @@ pub use error::SolveError;
 pub use flows::{boundary_flow, edge_flows};
 pub use network::{Components, Network};
 pub use par::{CHUNK, MIN_TASK_CHUNKS};
-pub use solve::{LinearSystem, Method, Solution, SolveParams, SolveReport, solve_shifted, solve_steady};
+pub use solve::{
+    AUTO_AMG_MIN_UNKNOWNS, LinearSystem, Method, Solution, SolveParams, SolveReport, solve_shifted,
+    solve_steady,
+};

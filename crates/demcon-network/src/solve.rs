@@ -10,7 +10,7 @@ use crate::constraints::{Constraints, NodeKind};
 use crate::csr::Csr;
 use crate::error::{SolveError, check_finite, check_len};
 use crate::network::Network;
-use crate::par::{CHUNK, MIN_TASK_CHUNKS, chunks_map, dot, ordered_sum};
+use crate::par::{CHUNK, chunks_map, chunks_map3, dot, ordered_sum};
 use crate::{cholesky, faer_cg};
 
 /// How the linear system is solved.
@@ -44,19 +44,31 @@ pub enum Method {
         /// Maximum number of iterations, ≥ 1.
         max_iter: usize,
     },
+    /// Chooses by the number of unknowns: Jacobi-PCG ([`Method::Cg`]) below
+    /// [`AUTO_AMG_MIN_UNKNOWNS`], where its cheap iterations win (5·10³ nodes: ~6.8 ms
+    /// against ~17 ms), multigrid ([`Method::AmgCg`]) from there on (10⁵ nodes: 2.6× faster;
+    /// 10⁶: ~10×). [`SolveReport::method`] names the method that ran.
+    Auto {
+        /// Relative residual tolerance, in (0, 1).
+        rel_tol: f64,
+        /// Maximum number of iterations, ≥ 1.
+        max_iter: usize,
+    },
     /// Direct sparse Cholesky (faer, AMD ordering). The factorisation is reused by every
     /// solve of one [`LinearSystem`]; practical to ~10⁵ unknowns.
     Cholesky,
 }
 
-/// Multigrid-preconditioned CG to a relative residual of 1e-8: the fastest method from
-/// 10⁴ unknowns up (see `docs/performance.md`); below a few hundred unknowns it is one
-/// dense factorisation.
+/// Unknowns from which [`Method::Auto`] uses multigrid (measured crossover on packing
+/// networks: at 10⁴ nodes both take ~21 ms, see `docs/performance.md`).
+pub const AUTO_AMG_MIN_UNKNOWNS: usize = 10_000;
+
+/// [`Method::Auto`] to a relative residual of 1e-8 (at most 20 000 iterations).
 impl Default for Method {
     fn default() -> Self {
-        Self::AmgCg {
+        Self::Auto {
             rel_tol: 1e-8,
-            max_iter: 1_000,
+            max_iter: 20_000,
         }
     }
 }
@@ -68,7 +80,20 @@ impl Method {
             Self::Cg { .. } => "jacobi-pcg",
             Self::FaerCg { .. } => "faer-cg",
             Self::AmgCg { .. } => "amg-pcg",
+            Self::Auto { .. } => "auto",
             Self::Cholesky => "cholesky",
+        }
+    }
+
+    /// The concrete method [`Method::Auto`] picks for `n_unknowns` (other methods are
+    /// returned unchanged).
+    pub fn resolve(&self, n_unknowns: usize) -> Method {
+        match *self {
+            Self::Auto { rel_tol, max_iter } if n_unknowns >= AUTO_AMG_MIN_UNKNOWNS => {
+                Self::AmgCg { rel_tol, max_iter }
+            }
+            Self::Auto { rel_tol, max_iter } => Self::Cg { rel_tol, max_iter },
+            m => m,
         }
     }
 
@@ -76,7 +101,8 @@ impl Method {
         match *self {
             Self::Cg { rel_tol, max_iter }
             | Self::FaerCg { rel_tol, max_iter }
-            | Self::AmgCg { rel_tol, max_iter } => {
+            | Self::AmgCg { rel_tol, max_iter }
+            | Self::Auto { rel_tol, max_iter } => {
                 if !(rel_tol.is_finite() && rel_tol > 0.0 && rel_tol < 1.0) {
                     return Err(SolveError::invalid(
                         "method.rel_tol",
@@ -230,6 +256,7 @@ impl<'a> LinearSystem<'a> {
             .zip(&free)
             .map(|(&d, &f)| if f && d > 0.0 { 1.0 / d } else { 0.0 })
             .collect();
+        let method = params.method.resolve(constraints.n_free());
         let mut sys = Self {
             net,
             constraints,
@@ -237,18 +264,18 @@ impl<'a> LinearSystem<'a> {
             diag,
             inv_diag,
             free,
-            method: params.method,
+            method,
             factor: None,
             amg: None,
             setup_s: 0.0,
         };
-        match params.method {
+        match method {
             Method::Cholesky => sys.factor = Some(cholesky::Factor::new(&sys)?),
             Method::AmgCg { .. } => {
                 let (a0, nodes) = sys.free_block();
                 sys.amg = Some((Amg::new(a0)?, nodes));
             }
-            Method::Cg { .. } | Method::FaerCg { .. } => {}
+            Method::Cg { .. } | Method::FaerCg { .. } | Method::Auto { .. } => {}
         }
         sys.setup_s = start.elapsed().as_secs_f64();
         Ok(sys)
@@ -257,6 +284,11 @@ impl<'a> LinearSystem<'a> {
     /// Number of unknowns.
     pub fn n_unknowns(&self) -> usize {
         self.constraints.n_free()
+    }
+
+    /// The method this system runs ([`Method::Auto`] resolved).
+    pub fn method(&self) -> Method {
+        self.method
     }
 
     /// Shape of the multigrid hierarchy ([`Method::AmgCg`] only): levels, operator and grid
@@ -359,7 +391,8 @@ impl<'a> LinearSystem<'a> {
             (0, 0.0)
         } else {
             match self.method {
-                Method::Cg { rel_tol, max_iter } => {
+                // `Auto` was resolved in `new`; were it not, Jacobi-PCG is always valid.
+                Method::Cg { rel_tol, max_iter } | Method::Auto { rel_tol, max_iter } => {
                     self.pcg(rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
                 }
                 Method::FaerCg { rel_tol, max_iter } => {
@@ -428,26 +461,21 @@ impl<'a> LinearSystem<'a> {
 
     /// q = A p on free rows (0 elsewhere); returns p·q. `p` must be 0 off the free nodes.
     pub(crate) fn apply_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
-        let partials: Vec<f64> = q
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .map(|(c, qc)| {
-                let base = c * CHUNK;
-                let mut acc = 0.0;
-                for (k, qi) in qc.iter_mut().enumerate() {
-                    let i = base + k;
-                    *qi = if self.free[i] {
-                        let v = self.row_apply(i, p);
-                        acc += v * p[i];
-                        v
-                    } else {
-                        0.0
-                    };
-                }
-                acc
-            })
-            .collect();
+        let partials = chunks_map(q, |c, qc| {
+            let base = c * CHUNK;
+            let mut acc = 0.0;
+            for (k, qi) in qc.iter_mut().enumerate() {
+                let i = base + k;
+                *qi = if self.free[i] {
+                    let v = self.row_apply(i, p);
+                    acc += v * p[i];
+                    v
+                } else {
+                    0.0
+                };
+            }
+            acc
+        });
         ordered_sum(&partials)
     }
 
@@ -489,14 +517,12 @@ impl<'a> LinearSystem<'a> {
                 }
                 let beta = rz_new / rz;
                 rz = rz_new;
-                p.par_chunks_mut(CHUNK)
-                    .zip(z.par_chunks(CHUNK))
-                    .with_min_len(MIN_TASK_CHUNKS)
-                    .for_each(|(pc, zc)| {
-                        for (pi, zi) in pc.iter_mut().zip(zc) {
-                            *pi = zi + beta * *pi;
-                        }
-                    });
+                chunks_map(&mut p, |c, pc| {
+                    let range = c * CHUNK..c * CHUNK + pc.len();
+                    for (pi, zi) in pc.iter_mut().zip(&z[range]) {
+                        *pi = zi + beta * *pi;
+                    }
+                });
             }
             self.residual(b, x, r);
             true_rel = dot(r, r).sqrt() / b_norm;
@@ -553,21 +579,16 @@ impl<'a> LinearSystem<'a> {
 
     /// z = D⁻¹ r on free nodes; returns (r·z, r·r).
     fn precondition(&self, r: &[f64], z: &mut [f64]) -> (f64, f64) {
-        let partials: Vec<(f64, f64)> = z
-            .par_chunks_mut(CHUNK)
-            .zip(r.par_chunks(CHUNK))
-            .zip(self.inv_diag.par_chunks(CHUNK))
-            .with_min_len(MIN_TASK_CHUNKS)
-            .map(|((zc, rc), dc)| {
-                let (mut rz, mut rr) = (0.0, 0.0);
-                for ((zi, ri), di) in zc.iter_mut().zip(rc).zip(dc) {
-                    *zi = ri * di;
-                    rz += ri * *zi;
-                    rr += ri * ri;
-                }
-                (rz, rr)
-            })
-            .collect();
+        let partials = chunks_map(z, |c, zc| {
+            let range = c * CHUNK..c * CHUNK + zc.len();
+            let (mut rz, mut rr) = (0.0, 0.0);
+            for ((zi, ri), di) in zc.iter_mut().zip(&r[range.clone()]).zip(&self.inv_diag[range]) {
+                *zi = ri * di;
+                rz += ri * *zi;
+                rr += ri * ri;
+            }
+            (rz, rr)
+        });
         partials.iter().fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d))
     }
 
@@ -581,28 +602,19 @@ impl<'a> LinearSystem<'a> {
         r: &mut [f64],
         z: &mut [f64],
     ) -> (f64, f64) {
-        let partials: Vec<(f64, f64)> = (
-            x.par_chunks_mut(CHUNK),
-            r.par_chunks_mut(CHUNK),
-            z.par_chunks_mut(CHUNK),
-            p.par_chunks(CHUNK),
-            q.par_chunks(CHUNK),
-            self.inv_diag.par_chunks(CHUNK),
-        )
-            .into_par_iter()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .map(|(xc, rc, zc, pc, qc, dc)| {
-                let (mut rz, mut rr) = (0.0, 0.0);
-                for k in 0..xc.len() {
-                    xc[k] += alpha * pc[k];
-                    rc[k] -= alpha * qc[k];
-                    zc[k] = rc[k] * dc[k];
-                    rz += rc[k] * zc[k];
-                    rr += rc[k] * rc[k];
-                }
-                (rz, rr)
-            })
-            .collect();
+        let partials = chunks_map3(x, r, z, |c, xc, rc, zc| {
+            let range = c * CHUNK..c * CHUNK + xc.len();
+            let (pc, qc, dc) = (&p[range.clone()], &q[range.clone()], &self.inv_diag[range]);
+            let (mut rz, mut rr) = (0.0, 0.0);
+            for k in 0..xc.len() {
+                xc[k] += alpha * pc[k];
+                rc[k] -= alpha * qc[k];
+                zc[k] = rc[k] * dc[k];
+                rz += rc[k] * zc[k];
+                rr += rc[k] * rc[k];
+            }
+            (rz, rr)
+        });
         partials.iter().fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d))
     }
 }

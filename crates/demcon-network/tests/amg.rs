@@ -281,3 +281,42 @@ fn parameters_and_non_convergence_are_reported() {
         other => panic!("expected NotConverged, got {other:?}"),
     }
 }
+
+#[test]
+fn auto_picks_jacobi_for_small_and_multigrid_for_large_systems() {
+    let auto = SolveParams::default();
+    assert!(matches!(auto.method, Method::Auto { .. }));
+    let (net, g, x) = geometric(2000, 8);
+    let bcs = resolve_fixed(&net, &faces(&x, 0.0, 1.0), FloatingPolicy::Exclude).unwrap();
+    let small = solve_steady(&net, &g, &bcs, &vec![0.0; net.n_nodes()], &auto).unwrap();
+    assert_eq!(small.report.method, "jacobi-pcg");
+    assert!(small.report.relative_residual <= 1e-8);
+    assert_eq!(
+        auto.method.resolve(demcon_network::AUTO_AMG_MIN_UNKNOWNS),
+        Method::AmgCg {
+            rel_tol: 1e-8,
+            max_iter: 20_000
+        }
+    );
+    // A chain of 12 000 free nodes between two fixed ends: multigrid, and the linear profile.
+    let n = 12_002;
+    let edges: Vec<[u32; 2]> = (0..n as u32 - 1).map(|i| [i, i + 1]).collect();
+    let chain = Network::new(n, &edges).unwrap();
+    let ends = resolve_fixed(
+        &chain,
+        &[(vec![0], 0.0), (vec![n as u32 - 1], 1.0)],
+        FloatingPolicy::Fail,
+    )
+    .unwrap();
+    let sys = LinearSystem::new(&chain, &vec![1.0; n - 1], None, &ends, &auto).unwrap();
+    assert!(matches!(sys.method(), Method::AmgCg { .. }));
+    let sol = sys.solve(&vec![0.0; n], None).unwrap();
+    assert_eq!(sol.report.method, "amg-pcg");
+    let worst = sol
+        .values
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (v - i as f64 / (n - 1) as f64).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-6, "{worst}");
+}
