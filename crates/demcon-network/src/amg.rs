@@ -21,6 +21,9 @@ use crate::par::{CHUNK, MIN_TASK_CHUNKS, chunks_map, chunks_map2, dot, ordered_s
 
 /// Largest level solved directly by dense Cholesky (unknowns).
 pub(crate) const MAX_COARSE: usize = 400;
+/// Largest coarsest level factorised densely (unknowns); used only when coarsening stalls
+/// between [`MAX_COARSE`] and this size.
+const MAX_DENSE: usize = 1_000;
 /// Most levels in the hierarchy (including the coarsest).
 const MAX_LEVELS: usize = 12;
 /// Strength-of-connection threshold θ.
@@ -75,7 +78,7 @@ struct Level {
 #[derive(Debug)]
 pub(crate) struct Amg {
     levels: Vec<Level>,
-    coarse: DenseCholesky,
+    coarse: Coarse,
     /// The coarsest operator (the only one when the matrix is small).
     coarse_a: Csr,
 }
@@ -114,7 +117,15 @@ impl Amg {
             a = ac;
             b = b_c;
         }
-        let coarse = DenseCholesky::new(&a)?;
+        // Coarsening can stall above the dense size (e.g. free nodes joined only to fixed
+        // ones): the last level is then smoothed, never factorised densely.
+        let coarse = if a.nrows <= MAX_DENSE {
+            Coarse::Dense(DenseCholesky::new(&a)?)
+        } else {
+            let diag = diagonal(&a)?;
+            let rho = spectral_radius(&a, &diag.iter().map(|d| 1.0 / d).collect::<Vec<_>>());
+            Coarse::Jacobi(diag.iter().map(|d| 4.0 / (3.0 * rho * d)).collect())
+        };
         Ok(Self {
             levels,
             coarse,
@@ -169,7 +180,21 @@ impl Amg {
 
     fn cycle(&self, l: usize, b: &[f64], x: &mut Vec<f64>, work: &mut [Work]) {
         let Some(lev) = self.levels.get(l) else {
-            self.coarse.solve(b, x);
+            match &self.coarse {
+                Coarse::Dense(f) => f.solve(b, x),
+                Coarse::Jacobi(wdinv) => {
+                    // Two damped-Jacobi sweeps from zero (symmetric: a polynomial in D⁻¹A).
+                    chunks_map(x, |c, xc| {
+                        let range = c * CHUNK..c * CHUNK + xc.len();
+                        for ((xi, bi), di) in xc.iter_mut().zip(&b[range.clone()]).zip(&wdinv[range]) {
+                            *xi = di * bi;
+                        }
+                    });
+                    let mut tmp = vec![0.0; x.len()];
+                    jacobi(&self.coarse_a, wdinv, b, x, &mut tmp);
+                    std::mem::swap(x, &mut tmp);
+                }
+            }
             return;
         };
         let Some((w, rest)) = work.split_first_mut() else {
@@ -395,6 +420,16 @@ fn spectral_radius(a: &Csr, dinv: &[f64]) -> f64 {
     }
 }
 
+/// Solver of the coarsest level.
+#[derive(Debug)]
+enum Coarse {
+    /// Exact: dense LDLᵀ (at most [`MAX_DENSE`] unknowns).
+    Dense(DenseCholesky),
+    /// Coarsening stalled above [`MAX_DENSE`] unknowns: two damped-Jacobi sweeps
+    /// (ω/a_ii stored).
+    Jacobi(Vec<f64>),
+}
+
 /// Dense LDLᵀ factor of the coarsest operator (row-major unit lower triangle L, pivots D;
 /// no square roots, so exactly representable solutions such as uniform fields come out
 /// exact).
@@ -482,10 +517,10 @@ pub(crate) fn pcg(
     let a = amg.fine();
     let n = rhs.len();
     let mut work = amg.work();
-    if amg.levels.is_empty() {
+    if let (true, Coarse::Dense(f)) = (amg.levels.is_empty(), &amg.coarse) {
         // The hierarchy is one exact factor: solve directly.
         let mut x = vec![0.0; n];
-        amg.coarse.solve(rhs, &mut x);
+        f.solve(rhs, &mut x);
         return Ok((x, 1));
     }
     let mut x = vec![0.0; n];
@@ -569,6 +604,29 @@ mod tests {
                 }
             },
         )
+    }
+
+    #[test]
+    fn stalled_coarsening_falls_back_to_smoothing_not_a_dense_factor() {
+        // 5000 unknowns without off-diagonal entries: nothing to aggregate.
+        let n = 5000;
+        let a = Csr::from_rows(
+            n,
+            n,
+            || (),
+            |_, i, c, v| {
+                c.push(i as u32);
+                v.push(1.0 + (i % 3) as f64);
+            },
+        );
+        let amg = Amg::new(a.clone()).unwrap();
+        assert!(matches!(amg.coarse, Coarse::Jacobi(_)));
+        assert_eq!(amg.info().levels.len(), 1);
+        let rhs: Vec<f64> = (0..n).map(|i| (i % 7) as f64).collect();
+        let (x, its) = pcg(&amg, &rhs, 1e-12, 50).unwrap();
+        let mut r = vec![0.0; n];
+        a.residual(&rhs, &x, &mut r);
+        assert!(dot(&r, &r).sqrt() <= 1e-10, "{its} iterations");
     }
 
     #[test]
