@@ -90,7 +90,8 @@ fn fails(dir: &Path, text: &str, field: &str) -> String {
     };
     let msg = err.to_string();
     assert!(msg.contains(field), "message does not name `{field}`: {msg}");
-    assert!(!msg.contains("NaN"), "{msg}");
+    // A NaN in the message only when the input itself was NaN.
+    assert!(!msg.contains("NaN") || text.contains("NaN"), "{msg}");
     msg
 }
 

