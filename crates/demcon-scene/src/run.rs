@@ -141,6 +141,22 @@ impl Scene {
             if !(0.0..=1.0).contains(&e.eta) {
                 return Err(SceneError::invalid("electric.eta", e.eta, "must be in [0, 1]"));
             }
+            if let Some(tol) = e.recouple_tolerance {
+                if !(tol.is_finite() && tol > 0.0) {
+                    return Err(SceneError::invalid(
+                        "electric.recouple_tolerance",
+                        tol,
+                        "must be a finite temperature change > 0 (K)",
+                    ));
+                }
+                if c.thermal.is_none() {
+                    return Err(SceneError::invalid(
+                        "electric.recouple_tolerance",
+                        tol,
+                        "re-solving with ρ_e(T) needs `thermal` physics to give the temperatures",
+                    ));
+                }
+            }
             if e.electrodes.len() < 2 {
                 return Err(SceneError::invalid(
                     "electric.electrodes",
@@ -358,6 +374,26 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
             let mut temps: Option<Vec<f64>> = None;
             let tol = e.recouple_tolerance;
             let max_rounds = if tol.is_some() { 50 } else { 1 };
+            if tol.is_none()
+                && model
+                    .materials
+                    .materials
+                    .iter()
+                    .any(|m| m.resistivity_temp_coeff != 0.0)
+            {
+                diagnostics.push(
+                    "electric: resistivity_temp_coeff is set but electric.recouple_tolerance is not: ρ_e was \
+                     evaluated at resistivity_ref_temp (one-way coupling)"
+                        .into(),
+                );
+            }
+            if tol.is_some() && !matches!(t.solver, ThermalSolverConfig::Steady) {
+                diagnostics.push(
+                    "electric: each coupling round re-runs the whole transient with the potential of the previous \
+                     round's final temperatures (exact for the final state, not time-accurate during the transient)"
+                        .into(),
+                );
+            }
             for round in 0..max_rounds {
                 let el = solve_electric(&model, e, cfg.interface, cfg.floating, temps.as_deref())?;
                 let th = solve_thermal(

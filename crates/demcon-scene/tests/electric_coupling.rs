@@ -242,3 +242,29 @@ fn the_coupled_run_is_deterministic() {
     );
     assert_eq!(resistance(&a).to_bits(), resistance(&b).to_bits());
 }
+
+#[test]
+fn bad_recouple_tolerances_are_refused_and_a_one_way_beta_is_reported() {
+    for tol in ["0.0", "-1.0", "NaN", "inf"] {
+        let text = scene(0.0, "").config;
+        let mut cfg = text.clone();
+        cfg.electric.as_mut().unwrap().recouple_tolerance = Some(tol.parse().unwrap());
+        let err = Scene::from_config(cfg, lattice_dir()).unwrap_err().to_string();
+        assert!(err.contains("electric.recouple_tolerance"), "{err}");
+    }
+    // Without thermal physics there are no temperatures to recouple with.
+    let mut cfg = scene(0.0, "").config;
+    cfg.thermal = None;
+    cfg.electric.as_mut().unwrap().recouple_tolerance = Some(1e-3);
+    let err = Scene::from_config(cfg, lattice_dir()).unwrap_err().to_string();
+    assert!(err.contains("needs `thermal`"), "{err}");
+    // β without recoupling: ρ_e at T_ref (same R as β = 0), and the run says so.
+    let cold = resistance(&run(&scene(0.0, ""), &RunOptions::default()).unwrap());
+    let r = run(&scene(4e-3, ""), &RunOptions::default()).unwrap();
+    assert_eq!(resistance(&r), cold);
+    assert!(
+        r.diagnostics.iter().any(|d| d.contains("one-way coupling")),
+        "{:?}",
+        r.diagnostics
+    );
+}
