@@ -20,10 +20,11 @@ use crate::convert;
 use crate::error::SceneError;
 use crate::model::Model;
 
-/// Default steady/implicit solver: Jacobi-PCG to a relative residual of 1e-10.
+/// Default steady/implicit solver: Jacobi-PCG below 10⁴ unknowns, smoothed-aggregation
+/// AMG-PCG above (`Method::Auto`), to a relative residual of 1e-10.
 pub fn default_solve_params() -> SolveParams {
     SolveParams {
-        method: Method::Cg {
+        method: Method::Auto {
             rel_tol: 1e-10,
             max_iter: 200_000,
         },
@@ -814,12 +815,7 @@ pub fn solve_thermal(
                     ImplicitSchemeConfig::CrankNicolson => Scheme::CrankNicolson,
                 },
                 output_times: output_times.to_vec(),
-                solve: SolveParams {
-                    method: Method::Cg {
-                        rel_tol: 1e-10,
-                        max_iter: 100_000,
-                    },
-                },
+                solve: default_solve_params(),
             };
             let tr = run_implicit(
                 net,

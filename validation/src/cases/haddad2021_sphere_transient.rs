@@ -43,7 +43,11 @@ pub fn scene_calibrated(n: usize, seed: u64, solver: ThermalSolverConfig) -> Sce
             solver,
         },
     );
-    s.outputs.times = TIMES.to_vec();
+    let t_end = match solver {
+        ThermalSolverConfig::Explicit { t_end, .. } | ThermalSolverConfig::Implicit { t_end, .. } => t_end,
+        ThermalSolverConfig::Steady => 0.0,
+    };
+    s.outputs.times = TIMES.iter().copied().filter(|&t| t <= t_end).collect();
     s.outputs.probes = vec![ProbeConfig {
         name: "centre".into(),
         point: (0.0, 0.0, 0.0),

@@ -1,7 +1,13 @@
 //! The registry: the one list of validation cases, in report order. One file per paper case.
 
 pub mod common;
+pub mod haddad2021_cost_accuracy;
 pub mod haddad2021_ct_calibration;
+pub mod haddad2021_halo_cov;
+pub mod haddad2021_inclusion_etc;
+pub mod haddad2021_inclusion_fields;
+pub mod haddad2021_multi_inclusion_etc;
+pub mod haddad2021_multi_inclusion_fields;
 pub mod haddad2021_slab_transient;
 pub mod haddad2021_sphere_transient;
 pub mod haddad2021_stability;
@@ -36,9 +42,39 @@ pub fn registry() -> Vec<Case> {
             run: haddad2021_stability::run,
         },
         Case {
+            id: "cost-accuracy-thermal",
+            about: "Haddad 2021 §2.2: slab and sphere error against N and wall time, explicit vs implicit",
+            run: haddad2021_cost_accuracy::run,
+        },
+        Case {
             id: "cylinder-resistance",
             about: "Hubert 2017 §3.1: cylinder R vs ρ_e l/A, N = 1e3…2e4, 3 packings, Terreros and C_t",
             run: hubert2017_cylinder_resistance::run,
+        },
+        Case {
+            id: "halo-cov",
+            about: "Haddad 2021 §3: CoV of the flux in a homogeneous slab against the Halo ratio k",
+            run: haddad2021_halo_cov::run,
+        },
+        Case {
+            id: "inclusion-etc",
+            about: "Haddad 2021 §4.1: single inclusion, λ_e/λ_m against the contrast vs FEM and Maxwell",
+            run: haddad2021_inclusion_etc::run,
+        },
+        Case {
+            id: "inclusion-fields",
+            about: "Haddad 2021 §4.2: single inclusion, T and Halo |q| at A, B, C vs FEM; slices",
+            run: haddad2021_inclusion_fields::run,
+        },
+        Case {
+            id: "multi-inclusion-etc",
+            about: "Haddad 2021 §5.1: epoxy/silica ETC against f vs FFT, Maxwell, third order; N ladder",
+            run: haddad2021_multi_inclusion_etc::run,
+        },
+        Case {
+            id: "multi-inclusion-fields",
+            about: "Haddad 2021 §5.2: f = 0.2, T and Halo |q| at A–D beside Table 3; flux slice",
+            run: haddad2021_multi_inclusion_fields::run,
         },
         Case {
             id: "notch-joule",
