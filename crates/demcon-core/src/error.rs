@@ -23,11 +23,7 @@ pub enum CoreError {
 
 impl CoreError {
     /// Shorthand for [`CoreError::InvalidParameter`].
-    pub fn invalid(
-        field: impl Into<String>,
-        value: impl ToString,
-        allowed: impl Into<String>,
-    ) -> Self {
+    pub fn invalid(field: impl Into<String>, value: impl ToString, allowed: impl Into<String>) -> Self {
         Self::InvalidParameter {
             field: field.into(),
             value: value.to_string(),
@@ -41,10 +37,6 @@ pub(crate) fn positive(field: &str, value: f64) -> Result<f64, CoreError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
-        Err(CoreError::invalid(
-            field,
-            value,
-            "must be a finite number > 0",
-        ))
+        Err(CoreError::invalid(field, value, "must be a finite number > 0"))
     }
 }

@@ -24,10 +24,7 @@ impl ParticleSet {
                 format!("one radius per centre ({} centres)", centres.len()),
             ));
         }
-        if let Some(i) = centres
-            .iter()
-            .position(|c| !c.iter().all(|v| v.is_finite()))
-        {
+        if let Some(i) = centres.iter().position(|c| !c.iter().all(|v| v.is_finite())) {
             return Err(CoreError::invalid(
                 format!("centres[{i}]"),
                 format!("{:?}", centres[i].as_slice()),
@@ -108,10 +105,7 @@ impl ParticleSet {
 
     /// The particles for which `keep` is true, and their old ids (in the same order).
     pub fn retain(&self, mut keep: impl FnMut(usize) -> bool) -> (ParticleSet, Vec<u32>) {
-        let ids: Vec<u32> = (0..self.len())
-            .filter(|&i| keep(i))
-            .map(|i| i as u32)
-            .collect();
+        let ids: Vec<u32> = (0..self.len()).filter(|&i| keep(i)).map(|i| i as u32).collect();
         (self.permuted(&ids), ids)
     }
 }

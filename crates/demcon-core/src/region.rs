@@ -96,10 +96,7 @@ impl Region {
     /// A box that contains the region (m). For a difference, the first region's box.
     pub fn bounds(&self) -> Aabb {
         match self {
-            Region::Box { min, max } => Aabb {
-                min: *min,
-                max: *max,
-            },
+            Region::Box { min, max } => Aabb { min: *min, max: *max },
             Region::Cylinder {
                 base,
                 axis,
@@ -148,11 +145,7 @@ impl Region {
     pub fn volume(&self, cells_per_axis: usize) -> f64 {
         use std::f64::consts::PI;
         match self {
-            Region::Box { min, max } => Aabb {
-                min: *min,
-                max: *max,
-            }
-            .volume(),
+            Region::Box { min, max } => Aabb { min: *min, max: *max }.volume(),
             Region::Cylinder { radius, length, .. } => PI * radius * radius * length,
             Region::Sphere { radius, .. } => 4.0 / 3.0 * PI * radius.powi(3),
             _ => {

@@ -67,17 +67,11 @@ impl Selector {
     /// The ids (sorted, unique) of the selected particles. Fails when a face does not exist
     /// on this container or an explicit id is out of range; an empty result is not an error
     /// here (see [`Selector::select_nonempty`]).
-    pub fn select(
-        &self,
-        particles: &ParticleSet,
-        container: &Container,
-    ) -> Result<Vec<u32>, CoreError> {
+    pub fn select(&self, particles: &ParticleSet, container: &Container) -> Result<Vec<u32>, CoreError> {
         let n = particles.len();
         let ids: Vec<u32> = match self {
             Selector::All => (0..n as u32).collect(),
-            Selector::Face(face) => {
-                self.face_ids(particles, container, *face, |r| DEFAULT_FACE_GAP * r)?
-            }
+            Selector::Face(face) => self.face_ids(particles, container, *face, |r| DEFAULT_FACE_GAP * r)?,
             Selector::FaceWithin { face, gap } => {
                 if !(gap.is_finite() && *gap >= 0.0) {
                     return Err(CoreError::invalid(

@@ -123,9 +123,7 @@ impl Container {
     pub fn volume(&self) -> f64 {
         match *self {
             Container::Box { size } | Container::Periodic { size } => size[0] * size[1] * size[2],
-            Container::Cylinder { radius, length } => {
-                std::f64::consts::PI * radius * radius * length
-            }
+            Container::Cylinder { radius, length } => std::f64::consts::PI * radius * radius * length,
             Container::Sphere { radius } => 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3),
         }
     }
