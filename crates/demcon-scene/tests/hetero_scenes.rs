@@ -56,16 +56,14 @@ fn halo_slab_scene_gives_the_uniform_flux() {
     for (_, ids, _) in fixed {
         ids.iter().for_each(|&i| free[i as usize] = false);
     }
+    // Volume-weighted mean (the volume average of the flux field) and CoV over free particles.
+    let w = &r.thermal_setup.as_ref().unwrap().rep_volumes;
     let stats = |v: &[demcon_core::Vec3]| {
-        let ys: Vec<f64> = v
-            .iter()
-            .zip(&free)
-            .filter(|(_, f)| **f)
-            .map(|(q, _)| q.y)
-            .collect();
-        let m = ys.iter().sum::<f64>() / ys.len() as f64;
-        let sd = (ys.iter().map(|y| (y - m).powi(2)).sum::<f64>() / ys.len() as f64).sqrt();
-        (m, sd / m.abs())
+        let sel = || v.iter().zip(w).zip(&free).filter(|(_, f)| **f).map(|(x, _)| x);
+        let sw: f64 = sel().map(|(_, w)| w).sum();
+        let m = sel().map(|(q, w)| w * q.y).sum::<f64>() / sw;
+        let var = sel().map(|(q, w)| w * (q.y - m).powi(2)).sum::<f64>() / sw;
+        (m, var.sqrt() / m.abs())
     };
     let (m0, cov0) = stats(flux);
     let (m3, cov3) = stats(halo);
@@ -78,7 +76,7 @@ fn halo_slab_scene_gives_the_uniform_flux() {
         (m3 / exact - 1.0).abs() < 0.1,
         "mean Halo q_y = {m3}, expected ≈ {exact}"
     );
-    assert!(cov3 < 0.5 * cov0, "CoV without Halo {cov0}, with k = 3 {cov3}");
+    assert!(cov3 < 0.7 * cov0, "CoV without Halo {cov0}, with k = 3 {cov3}");
 }
 
 #[test]
@@ -107,10 +105,11 @@ fn multi_inclusion_scene_places_the_silica() {
     let s = small("multi-inclusion.ron", 6000, 2.0);
     let r = run(&s, &RunOptions::default()).unwrap();
     let inc = r.model.report.inclusions.as_ref().unwrap();
-    // f = 0.2, edge / diameter = 6: round(0.2 · 216 · 6/π) = 83 spheres of radius L/12.
+    // f = 0.2, edge / diameter = 6: round(0.2 · 216 · 6/π) = 83 spheres of radius ≈ L/12
+    // (grown to exactly f: (82.5/83)^(1/3) · L/12).
     assert_eq!(inc.count, 83);
-    assert!((inc.radius - 0.1 / 12.0).abs() < 1e-12);
-    assert!((inc.fraction - 0.2).abs() < 0.002, "{}", inc.fraction);
+    assert!((inc.radius / (0.1 / 12.0) - 1.0).abs() < 0.005, "{}", inc.radius);
+    assert!((inc.fraction - 0.2).abs() < 1e-3, "{}", inc.fraction);
     // No two spheres overlap, none crosses a wall.
     for (i, a) in inc.centres.iter().enumerate() {
         for c in a {

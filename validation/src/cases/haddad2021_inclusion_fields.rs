@@ -1,0 +1,370 @@
+//! `inclusion-fields` — Haddad et al. 2021 §4.2, Table 2, Figs. 15–16: the single-inclusion
+//! cube (inclusion radius L/3) with λ_m = 33 and λ_i = 165 W/(m·K), T = 25 °C on y = 0 and
+//! 35 °C on y = L, steady state. Temperature and Halo-smoothed flux magnitude |q| (k = 11, the
+//! paper's choice) at the paper's points A(0.5, 0.5, 0.5)L, B(0.08, 0.5, 0.5)L,
+//! C(0.5, 0.92, 0.5)L against the FEM reference (`shared/refs/single-inclusion-fem.json`), and
+//! slice pictures of T and |q| on Z = 0.5L.
+//!
+//! Compared quantity: the largest relative error over A, B, C of T (°C, the paper's measure)
+//! and of |q|, reading the particle whose centre is nearest to the point (a ball average of
+//! radius 0.02L is reported beside it). The paper's Table 2 at 1.5·10⁵ particles: 7796, 2370,
+//! 6183 W/m² against its FE 7767, 2318, 6424, i.e. up to 4.0 % from our FEM reference (C is
+//! 0.08L from a fixed-temperature face, B 0.08L from an adiabatic one: both inside the reach
+//! of an 11-radius Halo, whose average is then one-sided and centred inward — for B, towards
+//! the inclusion, which starts at 0.17L and carries three times B's flux).
+//! Tolerances: T within the paper's 1 %; |q| within 5 % at A, B and C at 1.5·10⁵ (`--full`,
+//! the paper's worst point plus 1 %). In `--quick` (2·10⁴ particles) the Halo radius 11·R_p
+//! reaches 0.2–0.35L, far past B into the inclusion, so B is off by tens of % and is reported,
+//! not gated: the quick gate is |q| at A (Halo inside the inclusion) within 10 %.
+
+use std::path::Path;
+
+use demcon_core::{Axis, Vec3};
+use demcon_post::{Plane, ProbeIndex, ProbeMethod, SliceParams, slice_grid};
+use demcon_scene::config::*;
+use serde_json::{Map, Value};
+
+use super::common::*;
+use super::haddad2021_inclusion_etc::{L, centred_inclusion, slab_scene};
+use crate::chart::draw_raster;
+use crate::{CaseOutcome, Comparison, Ctx, Table};
+
+/// The Halo ratio of the paper's field pictures.
+pub const HALO_K: f64 = 11.0;
+
+/// The scene: matrix 33, inclusion 165 W/(m·K), Halo k = 11, probes at `points` (name, point
+/// in units of L) read at the nearest particle and as a ball average (named `<name>-ball`).
+pub fn scene(n: usize, seed: u64, points: &[(String, [f64; 3])]) -> SceneConfig {
+    let mut s = slab_scene(
+        "inclusion-fields",
+        seed,
+        n,
+        vec![
+            material("matrix", 33.0, 7800.0, 0.9),
+            material("inclusion", 165.0, 7800.0, 0.9),
+        ],
+        vec![centred_inclusion("inclusion")],
+    );
+    s.outputs.halo = Some(HALO_K);
+    s.outputs.probes = probes(points, n);
+    s
+}
+
+/// Radius (m) of the ball probes for a packing of `n` particles in the cube: the FEM
+/// reference's 0.02L, or 2.5 mean radii when the packing is too coarse for that ball to hold
+/// several centres (R̄ estimated from φ = 0.64 and Gaussian-0.3 radii).
+pub fn ball_radius(n: usize) -> f64 {
+    let mean_r = L * (3.0 * 0.64 / (4.0 * std::f64::consts::PI * n as f64 * (1.0 + 3.0 * 0.09))).cbrt();
+    (0.02 * L).max(2.5 * mean_r)
+}
+
+/// Nearest and ball probes (radius [`ball_radius`]) at points given in units of L.
+pub fn probes(points: &[(String, [f64; 3])], n: usize) -> Vec<ProbeConfig> {
+    let mut v = Vec::new();
+    for (name, p) in points {
+        let point = (p[0] * L, p[1] * L, p[2] * L);
+        v.push(ProbeConfig {
+            name: name.clone(),
+            point,
+            method: ProbeMethodConfig::Nearest,
+        });
+        v.push(ProbeConfig {
+            name: format!("{name}-ball"),
+            point,
+            method: ProbeMethodConfig::Ball(ball_radius(n)),
+        });
+    }
+    v
+}
+
+/// The value of probe `name` for `field` in a run.
+pub fn probe_value(r: &RunResult, name: &str, field: &str) -> anyhow::Result<f64> {
+    r.probes
+        .iter()
+        .find(|p| p.name == name && p.field == field)
+        .map(|p| p.value)
+        .ok_or_else(|| anyhow::anyhow!("no probe {name} for {field}"))
+}
+
+/// Whether the Halo of the particle nearest to `point` (m) is cut by the boundary.
+pub fn nearest_truncated(r: &RunResult, point: Vec3) -> bool {
+    let Some((_, trunc, _)) = &r.halo else {
+        return false;
+    };
+    let p = &r.model.particles;
+    let best = (0..p.len())
+        .min_by(|&a, &b| {
+            (p.centres[a] - point)
+                .norm_squared()
+                .total_cmp(&(p.centres[b] - point).norm_squared())
+        })
+        .unwrap_or(0);
+    trunc.get(best).copied().unwrap_or(false)
+}
+
+/// Draws a slice of a particle field on the plane `axis = position` (m): each cell shows the
+/// particle whose section covers it (`slice_grid`); cells in the gaps between sections
+/// take the value of the particle with the nearest centre. Returns the covered fraction.
+pub fn slice_picture(
+    r: &RunResult,
+    values: &[f64],
+    axis: Axis,
+    position: f64,
+    title: &str,
+    unit: &str,
+    path: &Path,
+) -> anyhow::Result<f64> {
+    let p = &r.model.particles;
+    let g = slice_grid(
+        p,
+        values,
+        &r.domain,
+        &SliceParams {
+            plane: Plane { axis, position },
+            resolution: 160,
+        },
+    )?;
+    let rep: Vec<f64> = r
+        .thermal_setup
+        .as_ref()
+        .map(|s| s.rep_volumes.clone())
+        .unwrap_or_else(|| (0..p.len()).map(|i| p.volume(i) / r.model.phi).collect());
+    let index = ProbeIndex::new(p, &rep, &r.domain)?;
+    let mut cells = Vec::with_capacity(g.values.len());
+    for iv in 0..g.shape[1] {
+        for iu in 0..g.shape[0] {
+            let i = iv * g.shape[0] + iu;
+            cells.push(Some(if g.covered[i] {
+                g.values[i]
+            } else {
+                index.probe(values, &g.centre(iu, iv), &ProbeMethod::Nearest)?
+            }));
+        }
+    }
+    draw_raster(title, g.shape[0], g.shape[1], &cells, unit, path)?;
+    Ok(g.coverage())
+}
+
+/// One run's readings at the points: (name, T nearest, T ball, |q| nearest, |q| ball, Halo cut).
+type Readings = Vec<(String, f64, f64, f64, f64, bool)>;
+
+fn readings(r: &RunResult, points: &[(String, [f64; 3])]) -> anyhow::Result<Readings> {
+    points
+        .iter()
+        .map(|(name, p)| {
+            Ok((
+                name.clone(),
+                probe_value(r, name, "temperature")?,
+                probe_value(r, &format!("{name}-ball"), "temperature")?,
+                probe_value(r, name, "halo_flux_magnitude")?,
+                probe_value(r, &format!("{name}-ball"), "halo_flux_magnitude")?,
+                nearest_truncated(r, Vec3::new(p[0] * L, p[1] * L, p[2] * L)),
+            ))
+        })
+        .collect()
+}
+
+/// Runs the case.
+pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
+    let sizes = ctx.pick(vec![20_000], vec![150_000, 500_000]);
+    let mut out = CaseOutcome::new("inclusion-fields", ctx.mode);
+    let fem = crate::refs::single_inclusion_fem();
+    let f5 = &fem["fields_contrast_5"];
+    let names = ["A", "B", "C"];
+    let mut points = Vec::new();
+    let mut refs = Vec::new();
+    for name in names {
+        let p = f5["points_in_units_of_L"][name]
+            .as_array()
+            .ok_or_else(|| anyhow::anyhow!("FEM reference: no point {name}"))?;
+        let p: Vec<f64> = p.iter().filter_map(Value::as_f64).collect();
+        anyhow::ensure!(p.len() == 3, "FEM reference: point {name} needs 3 coordinates");
+        points.push((name.to_string(), [p[0], p[1], p[2]]));
+        let get = |k: &str| {
+            f5["fem"][name][k]
+                .as_f64()
+                .ok_or_else(|| anyhow::anyhow!("FEM reference: no {k} at {name}"))
+        };
+        refs.push((
+            get("T_C")?,
+            get("q_mag_W_m2")?,
+            get("q_mag_ball_avg_r0.02L_W_m2")?,
+        ));
+    }
+
+    let mut all = Vec::new();
+    for (i, &n) in sizes.iter().enumerate() {
+        let cfg = scene(n, ctx.seed, &points);
+        let model = model_of(&cfg)?;
+        let r = run_with(&cfg, &model)?;
+        let rd = readings(&r, &points)?;
+        if i == 0 {
+            let th = r.thermal.as_ref().expect("thermal");
+            let temps = &th.temperatures;
+            let (halo, _, hrep) = r.halo.as_ref().expect("halo requested");
+            let qmag: Vec<f64> = halo.iter().map(|v| v.norm()).collect();
+            let cov_t = slice_picture(
+                &r,
+                temps,
+                Axis::Z,
+                0.5 * L,
+                &format!(
+                    "T on Z = 0.5L, N = {} (Haddad 2021 Fig. 15a)",
+                    r.model.particles.len()
+                ),
+                "°C",
+                &ctx.out.join("inclusion-fields-T.png"),
+            )?;
+            slice_picture(
+                &r,
+                &qmag,
+                Axis::Z,
+                0.5 * L,
+                &format!(
+                    "|q| (Halo k = 11) on Z = 0.5L, N = {} (Haddad 2021 Fig. 16a)",
+                    r.model.particles.len()
+                ),
+                "W/m²",
+                &ctx.out.join("inclusion-fields-q.png"),
+            )?;
+            out.charts.push("inclusion-fields-T.png".into());
+            out.charts.push("inclusion-fields-q.png".into());
+            out.n_particles = r.model.particles.len();
+            out.metric(
+                "c_t",
+                r.thermal_setup
+                    .as_ref()
+                    .and_then(|s| s.calibration.as_ref())
+                    .map(|c| c.c_t)
+                    .unwrap_or(f64::NAN),
+            );
+            out.metric("steady_solve_s", th.report.wall_s);
+            out.metric("cg_iterations", th.report.iterations);
+            out.metric("halo_wall_s", hrep.wall_s);
+            out.metric("halo_mean_members", hrep.mean_members);
+            out.note(format!(
+                "Slices: each pixel shows the particle whose section by the plane covers it ({:.0} % of the pixels); the gaps \
+                 between sections show the particle with the nearest centre. Halo k = 11 cost {:.2} s ({:.0} members on \
+                 average), the steady solve {:.2} s ({} CG iterations).",
+                100.0 * cov_t,
+                hrep.wall_s,
+                hrep.mean_members,
+                th.report.wall_s,
+                th.report.iterations
+            ));
+        }
+        all.push((r.model.particles.len(), rd));
+    }
+
+    let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
+    let (_, main) = &all[0];
+    let err_t = main
+        .iter()
+        .zip(&refs)
+        .map(|(m, f)| rel(m.1, f.0))
+        .fold(0.0f64, f64::max);
+    let err_q = main
+        .iter()
+        .zip(&refs)
+        .map(|(m, f)| rel(m.3, f.1))
+        .fold(0.0f64, f64::max);
+    let err_q_ball = main
+        .iter()
+        .zip(&refs)
+        .map(|(m, f)| rel(m.4, f.2))
+        .fold(0.0f64, f64::max);
+    out.metric("max_rel_error_T", err_t);
+    out.metric("max_rel_error_q", err_q);
+    out.metric("max_rel_error_q_ball", err_q_ball);
+    for (n, rd) in &all {
+        let mut m = Map::new();
+        for x in rd {
+            m.insert(
+                x.0.clone(),
+                serde_json::json!({ "T": x.1, "q": x.3, "T_ball": x.2, "q_ball": x.4, "halo_cut": x.5 }),
+            );
+        }
+        out.metric(&format!("points_{n}"), Value::Object(m));
+    }
+    out.reference("max_rel_error_T", 0.01);
+    out.reference("max_rel_error_q", 0.040);
+    out.reference(
+        "source",
+        "Haddad 2021 §4.2 Table 2 (1.5·10⁵ DE: |q| 7796, 2370, 6183 W/m²); FEM: shared/refs/single-inclusion-fem.json",
+    );
+    out.compare(Comparison::at_most(
+        "max relative error of T at A, B, C",
+        err_t,
+        0.01,
+        "paper < 1 %",
+    ));
+    let err_q_a = rel(main[0].3, refs[0].1);
+    out.metric("rel_error_q_A", err_q_a);
+    match ctx.mode {
+        crate::Mode::Full => out.compare(Comparison::at_most(
+            "max relative error of |q| (Halo 11) at A, B, C",
+            err_q,
+            0.05,
+            "paper up to 4.0 % from our FEM",
+        )),
+        crate::Mode::Quick => out.compare(Comparison::at_most(
+            "relative error of |q| (Halo 11) at A (B and C: see the notes)",
+            err_q_a,
+            0.10,
+            "paper 0.4 % at A",
+        )),
+    }
+    let mut t = Table {
+        title: "T and |q| at the paper's points (nearest particle; ball = volume average over r = 0.02L)"
+            .into(),
+        header: vec![
+            "N".into(),
+            "point".into(),
+            "T (°C)".into(),
+            "T FEM".into(),
+            "|q| (W/m²)".into(),
+            "|q| ball".into(),
+            "|q| FEM".into(),
+            "err |q|".into(),
+            "Halo cut".into(),
+        ],
+        rows: Vec::new(),
+    };
+    for (n, rd) in &all {
+        for (x, f) in rd.iter().zip(&refs) {
+            t.rows.push(vec![
+                n.to_string(),
+                x.0.clone(),
+                format!("{:.3}", x.1),
+                format!("{:.3}", f.0),
+                format!("{:.0}", x.3),
+                format!("{:.0}", x.4),
+                format!("{:.1}", f.1),
+                format!("{:.2} %", 100.0 * (x.3 - f.1) / f.1),
+                if x.5 { "yes" } else { "no" }.into(),
+            ]);
+        }
+    }
+    let paper = &f5["paper_table2"];
+    for name in names {
+        t.rows.push(vec![
+            "paper 150 000".into(),
+            name.into(),
+            format!("{}", paper[name]["T_C"]),
+            String::new(),
+            format!("{}", paper[name]["q_mag_W_m2"]["DE_150k"]),
+            String::new(),
+            format!("{} (its FE)", paper[name]["q_mag_W_m2"]["FE"]),
+            String::new(),
+            String::new(),
+        ]);
+    }
+    out.tables.push(t);
+    out.note(format!(
+        "{} mode: N = {:?}; T and Halo flux from the scene pipeline (steady solver, C_t from our own calibration, \
+         harmonic-mean interface, Halo k = 11 on the particle's own radius). The metrics use the first N.",
+        ctx.mode.name(),
+        sizes
+    ));
+    Ok(out)
+}
