@@ -129,6 +129,8 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
             ($ctx:expr) => {{
                 let mut ctx = $ctx;
                 ctx.configure_mesh()
+                    .x_label_formatter(&|v: &f64| crate::outcome::fmt_sig(*v))
+                    .y_label_formatter(&|v: &f64| crate::outcome::fmt_sig(*v))
                     .x_desc(chart.x_label.as_str())
                     .y_desc(chart.y_label.as_str())
                     .label_style(("sans-serif", 14))
