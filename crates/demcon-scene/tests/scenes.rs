@@ -30,18 +30,34 @@ fn first_scene_runs_end_to_end() {
     // the discretisation error (C_t calibrated on this packing), the centre near 30 °C.
     let etc = r.etc.as_ref().unwrap().lambda_e;
     assert!((etc / 33.0 - 1.0).abs() < 0.05, "λ_e = {etc}");
-    let centre = r.probes.iter().find(|p| p.name == "centre" && p.field == "temperature").unwrap().value;
+    let centre = r
+        .probes
+        .iter()
+        .find(|p| p.name == "centre" && p.field == "temperature")
+        .unwrap()
+        .value;
     assert!((centre - 30.0).abs() < 0.5, "T_centre = {centre}");
     let th = r.thermal.as_ref().unwrap();
     assert!(th.report.residual < 1e-8);
-    assert!(th.temperatures.iter().all(|t| t.is_finite() && (25.0 - 1e-9..=35.0 + 1e-9).contains(t)));
+    assert!(
+        th.temperatures
+            .iter()
+            .all(|t| t.is_finite() && (25.0 - 1e-9..=35.0 + 1e-9).contains(t))
+    );
     let dir = std::env::temp_dir().join(format!("demcon-scene-test-{}", std::process::id()));
     let files = write_outputs("slab-steady", &scene.config.outputs, &r, &dir).unwrap();
-    for f in ["particles.vtu", "particles.csv", "probes.csv", "profiles.csv", "summary.json"] {
+    for f in [
+        "particles.vtu",
+        "particles.csv",
+        "probes.csv",
+        "profiles.csv",
+        "summary.json",
+    ] {
         assert!(files.iter().any(|x| x == f), "{f} not written");
         assert!(dir.join(f).metadata().unwrap().len() > 0);
     }
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     assert!(summary["etc"]["lambda_e"].as_f64().unwrap() > 0.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -70,9 +86,24 @@ fn bad_values_name_the_field() {
     let good_m = "(name: \"a\", conductivity: 1.0, density: 1.0, specific_heat: 1.0)";
     let fixed = "FixedTemperature(select: Face(YMin), value: 0.0)";
     for (text, needle) in [
-        (base("(name: \"a\", conductivity: -1.0, density: 1.0, specific_heat: 1.0)", fixed), "materials[a].conductivity"),
-        (base("(name: \"a\", conductivity: 1.0, density: 0.0, specific_heat: 1.0)", fixed), "materials[a].density"),
-        (base(good_m, "FixedTemperature(select: Material(\"b\"), value: 0.0)"), "thermal.bcs[0].select"),
+        (
+            base(
+                "(name: \"a\", conductivity: -1.0, density: 1.0, specific_heat: 1.0)",
+                fixed,
+            ),
+            "materials[a].conductivity",
+        ),
+        (
+            base(
+                "(name: \"a\", conductivity: 1.0, density: 0.0, specific_heat: 1.0)",
+                fixed,
+            ),
+            "materials[a].density",
+        ),
+        (
+            base(good_m, "FixedTemperature(select: Material(\"b\"), value: 0.0)"),
+            "thermal.bcs[0].select",
+        ),
         (base(good_m, ""), "thermal.bcs"),
     ] {
         let e = Scene::parse(&text, Path::new("x.ron"), PathBuf::new())
@@ -85,7 +116,9 @@ fn bad_values_name_the_field() {
     let halo = "(packing: Generate(container: Box(size: (1.0, 1.0, 1.0)), count: 50, phi: 0.4), \
                 materials: [(name: \"a\", conductivity: 1.0, density: 1.0, specific_heat: 1.0)], \
                 thermal: (bcs: [FixedTemperature(select: Face(YMin), value: 0.0)], solver: Steady), outputs: (halo: Some(0.0)))";
-    let e = Scene::parse(halo, Path::new("h.ron"), PathBuf::new()).unwrap_err().to_string();
+    let e = Scene::parse(halo, Path::new("h.ron"), PathBuf::new())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("outputs.halo"), "{e}");
 }
 

@@ -8,7 +8,6 @@
 //! No pass/fail threshold of its own beyond sanity (every run finishes with finite errors):
 //! this case is the chart that tells a user which N and which solver buy which accuracy.
 
-use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
