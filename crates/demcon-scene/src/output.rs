@@ -73,6 +73,9 @@ pub fn write_outputs(
     if let Some(e) = &r.electric {
         excluded.extend(&e.excluded);
     }
+    if let Some(b) = &r.thermal_bcs {
+        excluded.extend(b.constraints.excluded().iter().filter(|&&p| (p as usize) < n));
+    }
     for &p in &excluded {
         solved[p as usize] = 0;
     }
