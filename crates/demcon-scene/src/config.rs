@@ -21,6 +21,9 @@ pub struct SceneConfig {
     /// Keep only the particles whose sphere lies inside this region (e.g. a grooved cylinder).
     #[serde(default)]
     pub carve: Option<RegionConfig>,
+    /// Which particles `carve` keeps.
+    #[serde(default)]
+    pub carve_rule: CarveRuleConfig,
     /// How contacts are found.
     #[serde(default)]
     pub contacts: ContactsConfig,
@@ -86,6 +89,18 @@ pub enum PackingConfig {
 
 fn default_cov() -> f64 {
     0.3
+}
+
+/// Which particles a carving keeps.
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
+pub enum CarveRuleConfig {
+    /// Spheres lying wholly inside the region: the kept solid stops a fraction of a radius
+    /// inside every cut surface (a thin section comes out too thin).
+    #[default]
+    WholeSphere,
+    /// Particles whose centre lies inside: their representative cells tile the region on
+    /// average (the unbiased cut of a homogeneous packing; spheres may protrude).
+    Centre,
 }
 
 /// A container (m). A box spans `[0, size]`; a cylinder is along z from z = 0 with its axis at

@@ -305,7 +305,10 @@ pub fn build_model(
     let mut carved_away = 0;
     if let Some(rc) = &cfg.carve {
         let region = convert::region(rc, "carve")?;
-        let (kept, _) = carve(&particles, &region);
+        let (kept, _) = match cfg.carve_rule {
+            CarveRuleConfig::WholeSphere => carve(&particles, &region),
+            CarveRuleConfig::Centre => particles.retain(|i| region.contains_point(&particles.centres[i])),
+        };
         carved_away = particles.len() - kept.len();
         if kept.is_empty() {
             return Err(SceneError::invalid(

@@ -72,6 +72,7 @@ pub fn thermal_scene(
         seed,
         packing,
         carve: None,
+        carve_rule: CarveRuleConfig::WholeSphere,
         contacts: ContactsConfig {
             coordination: Some(7.5),
             tolerance: None,

@@ -137,6 +137,7 @@ pub fn electric_scene(
         seed,
         packing: cylinder_packing(count),
         carve,
+        carve_rule: CarveRuleConfig::WholeSphere,
         contacts: ContactsConfig {
             coordination: Some(7.5),
             tolerance: None,
