@@ -723,6 +723,23 @@ pub struct ThermalRun {
     pub report: ThermalSolveReport,
 }
 
+impl ThermalRun {
+    /// A run from the final temperatures of every node (particles first, then wall nodes).
+    fn from_nodes(
+        n: usize,
+        nodes: Vec<f64>,
+        snapshots: Vec<(f64, Vec<f64>)>,
+        report: ThermalSolveReport,
+    ) -> Self {
+        Self {
+            temperatures: nodes[..n].to_vec(),
+            node_temperatures: nodes,
+            snapshots,
+            report,
+        }
+    }
+}
+
 /// Runs the thermal solver of `solver` with `extra_sources` (W per particle, e.g. Joule heat)
 /// added to the boundary sources.
 pub fn solve_thermal(
@@ -799,12 +816,12 @@ pub fn solve_thermal(
                 &params,
                 |t, v| snapshots.push((t, v[..n].to_vec())),
             )?;
-            Ok(ThermalRun {
-                report: report_of(&tr.report),
-                temperatures: tr.temperatures[..n].to_vec(),
-                node_temperatures: tr.temperatures,
+            Ok(ThermalRun::from_nodes(
+                n,
+                tr.temperatures,
                 snapshots,
-            })
+                report_of(&tr.report),
+            ))
         }
         ThermalSolverConfig::Implicit { t_end, dt, scheme } => {
             let params = ImplicitParams {
@@ -827,12 +844,12 @@ pub fn solve_thermal(
                 &params,
                 |t, v| snapshots.push((t, v[..n].to_vec())),
             )?;
-            Ok(ThermalRun {
-                report: report_of(&tr.report),
-                temperatures: tr.temperatures[..n].to_vec(),
-                node_temperatures: tr.temperatures,
+            Ok(ThermalRun::from_nodes(
+                n,
+                tr.temperatures,
                 snapshots,
-            })
+                report_of(&tr.report),
+            ))
         }
         ThermalSolverConfig::Steady => {
             let st = solve_steady_temperature(net, g, &bcs.constraints, &sources, &default_solve_params())?;
@@ -842,24 +859,20 @@ pub fn solve_thermal(
             }
             let r = &st.solution.report;
             let bound = demcon_thermal::stable_dt_bound(net, g, caps, &bcs.constraints)?;
-            Ok(ThermalRun {
-                report: ThermalSolveReport {
-                    scheme: "steady".into(),
-                    steps: 0,
-                    dt: 0.0,
-                    dt_bound: bound.dt_max,
-                    dt_paper: setup.paper_dt,
-                    iterations: r.iterations as u64,
-                    residual: r.relative_residual,
-                    wall_s: r.wall_s + r.setup_s,
-                    contacts_per_s: 0.0,
-                    energy_balance_error: st.balance_error,
-                    excluded,
-                },
-                temperatures: temps[..n].to_vec(),
-                node_temperatures: temps,
-                snapshots,
-            })
+            let report = ThermalSolveReport {
+                scheme: "steady".into(),
+                steps: 0,
+                dt: 0.0,
+                dt_bound: bound.dt_max,
+                dt_paper: setup.paper_dt,
+                iterations: r.iterations as u64,
+                residual: r.relative_residual,
+                wall_s: r.wall_s + r.setup_s,
+                contacts_per_s: 0.0,
+                energy_balance_error: st.balance_error,
+                excluded,
+            };
+            Ok(ThermalRun::from_nodes(n, temps, snapshots, report))
         }
     }
 }
