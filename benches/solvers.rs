@@ -253,6 +253,10 @@ const JACOBI: Method = Method::Cg {
     rel_tol: 1e-8,
     max_iter: 100_000,
 };
+const MIC: Method = Method::IcCg {
+    rel_tol: 1e-8,
+    max_iter: 20_000,
+};
 const AMG: Method = Method::AmgCg {
     rel_tol: 1e-8,
     max_iter: 10_000,
@@ -316,8 +320,8 @@ fn bench_electric(c: &mut Criterion) {
     let mut group = c.benchmark_group("electric_solve");
     group.sample_size(10);
     let ladder: [(usize, &[Method]); 3] = [
-        (5_000, &[JACOBI, AMG, FAER, Method::Cholesky]),
-        (100_000, &[JACOBI, AMG, Method::Cholesky]),
+        (5_000, &[JACOBI, MIC, AMG, FAER, Method::Cholesky]),
+        (100_000, &[JACOBI, MIC, AMG, Method::Cholesky]),
         (1_000_000, &[JACOBI, AMG]),
     ];
     for (n, methods) in ladder {

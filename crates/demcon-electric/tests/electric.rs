@@ -160,7 +160,11 @@ fn bad_electrodes_and_eta_are_clear_errors() {
     ));
     // One electrode: uniform potential, no current, no resistance.
     let one = solve_potential(&net, &g, &[(vec![0], 3.0)], &p).unwrap();
-    assert_eq!(one.potentials, vec![3.0; 3]);
+    assert!(
+        one.potentials.iter().all(|v| (v - 3.0).abs() < 1e-12),
+        "{:?}",
+        one.potentials
+    );
     assert_eq!(one.resistance_ohm, None);
     for eta in [-0.1, 1.5, f64::NAN] {
         assert!(matches!(

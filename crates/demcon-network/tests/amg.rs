@@ -283,13 +283,13 @@ fn parameters_and_non_convergence_are_reported() {
 }
 
 #[test]
-fn auto_picks_jacobi_for_small_and_multigrid_for_large_systems() {
+fn auto_picks_mic_for_small_and_multigrid_for_large_systems() {
     let auto = SolveParams::default();
     assert!(matches!(auto.method, Method::Auto { .. }));
     let (net, g, x) = geometric(2000, 8);
     let bcs = resolve_fixed(&net, &faces(&x, 0.0, 1.0), FloatingPolicy::Exclude).unwrap();
     let small = solve_steady(&net, &g, &bcs, &vec![0.0; net.n_nodes()], &auto).unwrap();
-    assert_eq!(small.report.method, "jacobi-pcg");
+    assert_eq!(small.report.method, "mic-pcg");
     assert!(small.report.relative_residual <= 1e-8);
     assert_eq!(
         auto.method.resolve(demcon_network::AUTO_AMG_MIN_UNKNOWNS),
