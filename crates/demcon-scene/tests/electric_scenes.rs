@@ -51,10 +51,10 @@ fn check_parameters(s: &Scene) {
     let e = c.electric.as_ref().unwrap();
     assert_eq!(e.electrodes.len(), 2);
     assert!(
-        matches!(e.electrodes[0].select, SelectorConfig::Face(f) if f == demcon_scene::config::FaceConfig::ZMin)
+        matches!(e.electrodes[0].select, Some(SelectorConfig::Face(f)) if f == demcon_scene::config::FaceConfig::ZMin)
     );
     assert!(
-        matches!(e.electrodes[1].select, SelectorConfig::Face(f) if f == demcon_scene::config::FaceConfig::ZMax)
+        matches!(e.electrodes[1].select, Some(SelectorConfig::Face(f)) if f == demcon_scene::config::FaceConfig::ZMax)
     );
     assert_eq!(e.eta, 1.0);
     assert!(c.outputs.vtk);
