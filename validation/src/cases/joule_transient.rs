@@ -110,7 +110,7 @@ fn lattice_scene(
             coordination: None,
             tolerance: Some(0.01),
         },
-        surface: surface.clone(),
+        surface,
         materials: vec![steel_beta()],
         phases: Vec::new(),
         interface: InterfaceConfig::Harmonic,
