@@ -383,6 +383,8 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
         }
         (Some(e), Some(t)) => {
             let (s, b) = (thermal_setup.as_ref().unwrap(), bcs.as_ref().unwrap());
+            // Calibrate an `Auto` C_t of the electric surfaces once, not at every re-solve.
+            let e = &resolved_surface(&model, e)?;
             let mut temps: Option<Vec<f64>> = None;
             let tol = e.recouple_tolerance;
             let transient = !matches!(t.solver, ThermalSolverConfig::Steady);
@@ -612,6 +614,20 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
         post_s,
         wall_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// `e` with an `Auto` C_t of its surfaces replaced by the value calibrated on `model`.
+fn resolved_surface(model: &Model, e: &ElectricConfig) -> Result<ElectricConfig, SceneError> {
+    let mut e = e.clone();
+    if let SurfaceConfig::Calibrated { c_t: CtConfig::Auto } = e.surface
+        && let demcon_graph::SurfaceModel::Calibrated { c_t } =
+            crate::electric::electric_surface_model(model, &e.surface)?
+    {
+        e.surface = SurfaceConfig::Calibrated {
+            c_t: CtConfig::Value(c_t),
+        };
+    }
+    Ok(e)
 }
 
 /// The time-accurate ρ_e(T) coupling of a transient: the potential is solved at the initial
