@@ -461,12 +461,19 @@ fn default_electric_surface() -> SurfaceConfig {
     SurfaceConfig::TerrerosAlpha
 }
 
-/// A fixed potential.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A fixed potential: either on particles (`select`: the selected particles are held at the
+/// potential) or on a container face (`face`: the face itself is held at it and linked to
+/// each particle touching it by a half-contact σ_p S_p / h_p, h_p the centre-to-face
+/// distance). Give exactly one of the two.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ElectrodeConfig {
-    /// Which particles.
-    pub select: SelectorConfig,
+    /// Which particles are held at the potential.
+    #[serde(default)]
+    pub select: Option<SelectorConfig>,
+    /// Which container face is held at the potential.
+    #[serde(default)]
+    pub face: Option<FaceConfig>,
     /// Potential (V).
     pub potential: f64,
 }

@@ -9,7 +9,7 @@ use crate::config::*;
 use crate::convert;
 use crate::error::SceneError;
 use crate::model::Model;
-use crate::thermal::{default_solve_params, floating_policy};
+use crate::thermal::{default_solve_params, extended_network, floating_policy};
 
 /// What the electric solve gave.
 #[derive(Debug, Clone)]
@@ -18,9 +18,10 @@ pub struct ElectricRun {
     pub potentials: Vec<f64>,
     /// Excluded particles.
     pub excluded: Vec<u32>,
-    /// Current per contact (A), positive from p to q.
+    /// Current per contact (A), positive from p to q, then per face-electrode link (particle
+    /// to face).
     pub branch_currents: Vec<f64>,
-    /// Contact conductances 1/R (S).
+    /// Conductances 1/R (S): the contacts, then the face-electrode links.
     pub conductances: Vec<f64>,
     /// Joule power per particle (W), η applied.
     pub joule: Vec<f64>,
@@ -51,18 +52,16 @@ pub struct ElectricReport {
     pub residual: f64,
     /// Wall time of the solve (s).
     pub wall_s: f64,
+    /// Potential solves in the run: 1 without ρ_e(T) coupling; with it, one per fixed-point
+    /// round (steady) or the first plus every re-solve during the transient.
+    pub solves: usize,
+    /// Wall time of all those solves, conductances with ρ_e(T) and Joule power included (s).
+    pub solves_wall_s: f64,
 }
 
-/// Contact conductances 1/R_pq = S_pq / (ρ_e,pq d_pq) (S). `temperatures` (°C), when given,
-/// evaluate ρ_e(T) per particle; the contact value combines the two particles' conductivities
-/// by the interface rule (two half-bonds in series for the harmonic mean).
-pub fn electric_conductances(
-    model: &Model,
-    surface: &SurfaceConfig,
-    interface: InterfaceConfig,
-    temperatures: Option<&[f64]>,
-) -> Result<Vec<f64>, SceneError> {
-    let sm = match surface {
+/// The surface model of the electric network (C_t calibrated on the model when `Auto`).
+pub fn electric_surface_model(model: &Model, surface: &SurfaceConfig) -> Result<SurfaceModel, SceneError> {
+    Ok(match surface {
         SurfaceConfig::TerrerosAlpha => SurfaceModel::TerrerosAlpha,
         SurfaceConfig::Calibrated {
             c_t: CtConfig::Value(c),
@@ -71,12 +70,12 @@ pub fn electric_conductances(
             let cal = crate::thermal::calibrate_ct(model)?;
             SurfaceModel::Calibrated { c_t: cal.c_t }
         }
-    };
-    let s = contact_surfaces(&model.graph, &model.particles, &sm)?;
-    let rule = match interface {
-        InterfaceConfig::Harmonic => InterfaceRule::HarmonicMean,
-        InterfaceConfig::Arithmetic => InterfaceRule::ArithmeticMean,
-    };
+    })
+}
+
+/// Electric conductivity σ_p = 1/ρ_e(T_p) of every particle (S/m); `temperatures` (°C), when
+/// given, evaluate ρ_e(T), else each material's ρ_e at its reference temperature.
+pub fn particle_conductivities(model: &Model, temperatures: Option<&[f64]>) -> Result<Vec<f64>, SceneError> {
     let n = model.particles.len();
     let mut sigma = Vec::with_capacity(n);
     for p in 0..n {
@@ -98,6 +97,34 @@ pub fn electric_conductances(
         }
         sigma.push(1.0 / rho);
     }
+    Ok(sigma)
+}
+
+/// Contact conductances 1/R_pq = S_pq / (ρ_e,pq d_pq) (S). `temperatures` (°C), when given,
+/// evaluate ρ_e(T) per particle; the contact value combines the two particles' conductivities
+/// by the interface rule (two half-bonds in series for the harmonic mean).
+pub fn electric_conductances(
+    model: &Model,
+    surface: &SurfaceConfig,
+    interface: InterfaceConfig,
+    temperatures: Option<&[f64]>,
+) -> Result<Vec<f64>, SceneError> {
+    let sm = electric_surface_model(model, surface)?;
+    let sigma = particle_conductivities(model, temperatures)?;
+    contact_conductances(model, &sm, interface, &sigma)
+}
+
+fn contact_conductances(
+    model: &Model,
+    sm: &SurfaceModel,
+    interface: InterfaceConfig,
+    sigma: &[f64],
+) -> Result<Vec<f64>, SceneError> {
+    let s = contact_surfaces(&model.graph, &model.particles, sm)?;
+    let rule = match interface {
+        InterfaceConfig::Harmonic => InterfaceRule::HarmonicMean,
+        InterfaceConfig::Arithmetic => InterfaceRule::ArithmeticMean,
+    };
     Ok(model
         .graph
         .pairs
@@ -111,6 +138,11 @@ pub fn electric_conductances(
 }
 
 /// Solves the potential with the scene's electrodes; `temperatures` feed ρ_e(T).
+///
+/// Face electrodes add one node per face to the network (after the particles), held at the
+/// potential and linked to the particles touching the face by half-contacts σ_p S_p / h_p
+/// (the construction of the thermal `WallTemperature`, [`extended_network`]). The Joule
+/// power of such a link goes wholly to its particle (the face is not a particle).
 pub fn solve_electric(
     model: &Model,
     cfg: &ElectricConfig,
@@ -118,22 +150,60 @@ pub fn solve_electric(
     floating: FloatingConfig,
     temperatures: Option<&[f64]>,
 ) -> Result<ElectricRun, SceneError> {
-    let g = electric_conductances(model, &cfg.surface, interface, temperatures)?;
+    let start = std::time::Instant::now();
+    let n = model.particles.len();
+    let sm = electric_surface_model(model, &cfg.surface)?;
+    let sigma = particle_conductivities(model, temperatures)?;
+    let g = contact_conductances(model, &sm, interface, &sigma)?;
+    let faces: Vec<(demcon_core::Face, f64)> = cfg
+        .electrodes
+        .iter()
+        .filter_map(|e| e.face.map(|f| (convert::face(f), e.potential)))
+        .collect();
+    let (ext, g, walls) = extended_network(model, &sm, &g, &sigma, &faces, "electric.electrodes")?;
+    let net = ext.as_ref().unwrap_or(&model.network);
+    let mut walls_iter = walls.iter();
     let mut electrodes = Vec::new();
     for (i, e) in cfg.electrodes.iter().enumerate() {
-        let field = format!("electric.electrodes[{i}].select");
-        let sel = convert::selector(&e.select, &model.materials, &field)?;
-        let ids = sel
-            .select_nonempty(&model.particles, &model.container, &format!("electrode {i}"))
-            .map_err(|err| SceneError::at(&field, err))?;
-        electrodes.push((ids, e.potential));
+        match (&e.select, &e.face) {
+            (Some(select), None) => {
+                let field = format!("electric.electrodes[{i}].select");
+                let sel = convert::selector(select, &model.materials, &field)?;
+                let ids = sel
+                    .select_nonempty(&model.particles, &model.container, &format!("electrode {i}"))
+                    .map_err(|err| SceneError::at(&field, err))?;
+                electrodes.push((ids, e.potential));
+            }
+            (None, Some(_)) => {
+                let w = walls_iter.next().expect("one wall per face electrode");
+                electrodes.push((vec![w.node], e.potential));
+            }
+            _ => {
+                return Err(SceneError::invalid(
+                    &format!("electric.electrodes[{i}]"),
+                    "select and face",
+                    "give exactly one of `select` or `face`",
+                ));
+            }
+        }
     }
     let params = ElectricParams {
         floating: floating_policy(floating),
         solve: default_solve_params(),
     };
-    let sol = solve_potential(&model.network, &g, &electrodes, &params)?;
-    let joule = joule_power(&model.network, &g, &sol.potentials, cfg.eta)?;
+    let sol = solve_potential(net, &g, &electrodes, &params)?;
+    let mut joule = joule_power(net, &g, &sol.potentials, cfg.eta)?;
+    // A wall link's power: the half booked to the wall node goes to the particle too.
+    for w in &walls {
+        let u_w = sol.potentials[w.node as usize];
+        for (&p, &gw) in w.particles.iter().zip(&w.conductances) {
+            let du = sol.potentials[p as usize] - u_w;
+            joule[p as usize] += 0.5 * cfg.eta * gw * du * du;
+        }
+    }
+    joule.truncate(n);
+    let mut potentials = sol.potentials;
+    potentials.truncate(n);
     let r = &sol.report;
     Ok(ElectricRun {
         report: ElectricReport {
@@ -146,9 +216,11 @@ pub fn solve_electric(
             iterations: r.iterations,
             residual: r.relative_residual,
             wall_s: r.wall_s + r.setup_s,
+            solves: 1,
+            solves_wall_s: start.elapsed().as_secs_f64(),
         },
         diagnostics: sol.diagnostics.iter().map(|d| format!("electric: {d}")).collect(),
-        potentials: sol.potentials,
+        potentials,
         excluded: sol.excluded,
         branch_currents: sol.branch_currents,
         conductances: g,

@@ -177,11 +177,23 @@ impl Scene {
                 }
             }
             for (i, el) in e.electrodes.iter().enumerate() {
-                convert::selector(
-                    &el.select,
-                    &materials,
-                    &format!("electric.electrodes[{i}].select"),
-                )?;
+                match (&el.select, &el.face) {
+                    (Some(sel), None) => {
+                        convert::selector(sel, &materials, &format!("electric.electrodes[{i}].select"))?;
+                    }
+                    (None, Some(_)) => {}
+                    (sel, _) => {
+                        return Err(SceneError::invalid(
+                            &format!("electric.electrodes[{i}]"),
+                            if sel.is_some() {
+                                "both select and face"
+                            } else {
+                                "neither select nor face"
+                            },
+                            "give exactly one of `select` (particles held at the potential) or `face` (the container face held at it)",
+                        ));
+                    }
+                }
                 if !el.potential.is_finite() {
                     return Err(SceneError::invalid(
                         &format!("electric.electrodes[{i}].potential"),
@@ -371,9 +383,18 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
         }
         (Some(e), Some(t)) => {
             let (s, b) = (thermal_setup.as_ref().unwrap(), bcs.as_ref().unwrap());
+            // Calibrate an `Auto` C_t of the electric surfaces once, not at every re-solve.
+            let e = &resolved_surface(&model, e)?;
             let mut temps: Option<Vec<f64>> = None;
             let tol = e.recouple_tolerance;
-            let max_rounds = if tol.is_some() { 50 } else { 1 };
+            let transient = !matches!(t.solver, ThermalSolverConfig::Steady);
+            // Steady with ρ_e(T): fixed-point rounds; transient with ρ_e(T): one coupled run
+            // below (no rounds); without ρ_e(T): one round.
+            let max_rounds = match (tol, transient) {
+                (Some(_), true) => 0,
+                (Some(_), false) => 50,
+                (None, _) => 1,
+            };
             if tol.is_none()
                 && model
                     .materials
@@ -387,12 +408,16 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
                         .into(),
                 );
             }
-            if tol.is_some() && !matches!(t.solver, ThermalSolverConfig::Steady) {
-                diagnostics.push(
-                    "electric: each coupling round re-runs the whole transient with the potential of the previous \
-                     round's final temperatures (exact for the final state, not time-accurate during the transient)"
-                        .into(),
-                );
+            if let (Some(tol), true) = (tol, transient) {
+                let (el, th) = coupled_transient(&model, e, cfg, t, s, b, tol, output_times)?;
+                let r = &el.report;
+                diagnostics.push(format!(
+                    "electro-thermal coupling: {} potential solves during the transient (re-solved whenever a \
+                     temperature moved by more than {tol} K since the last one), {:.3} s",
+                    r.solves, r.solves_wall_s
+                ));
+                electric = Some(el);
+                thermal = Some(th);
             }
             for round in 0..max_rounds {
                 let el = solve_electric(&model, e, cfg.interface, cfg.floating, temps.as_deref())?;
@@ -415,6 +440,12 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
                     })
                     .unwrap_or(f64::INFINITY);
                 temps = Some(th.temperatures.clone());
+                let (solves, solves_s) = electric
+                    .as_ref()
+                    .map_or((0, 0.0), |p| (p.report.solves, p.report.solves_wall_s));
+                let mut el = el;
+                el.report.solves += solves;
+                el.report.solves_wall_s += solves_s;
                 electric = Some(el);
                 thermal = Some(th);
                 if let Some(tol) = tol {
@@ -583,6 +614,71 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
         post_s,
         wall_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// `e` with an `Auto` C_t of its surfaces replaced by the value calibrated on `model`.
+fn resolved_surface(model: &Model, e: &ElectricConfig) -> Result<ElectricConfig, SceneError> {
+    let mut e = e.clone();
+    if let SurfaceConfig::Calibrated { c_t: CtConfig::Auto } = e.surface
+        && let demcon_graph::SurfaceModel::Calibrated { c_t } =
+            crate::electric::electric_surface_model(model, &e.surface)?
+    {
+        e.surface = SurfaceConfig::Calibrated {
+            c_t: CtConfig::Value(c_t),
+        };
+    }
+    Ok(e)
+}
+
+/// The time-accurate ρ_e(T) coupling of a transient: the potential is solved at the initial
+/// temperatures, then re-solved (and the Joule sources replaced) after any step that leaves a
+/// particle more than `tol` (K) away from its temperature at the last solve. The check is
+/// O(n) per step, beside the O(n Z) step. Returns the last electric solve (the one in force at
+/// the end, its report counting every solve) and the thermal run.
+#[allow(clippy::too_many_arguments)]
+fn coupled_transient(
+    model: &Model,
+    e: &ElectricConfig,
+    cfg: &SceneConfig,
+    t: &ThermalConfig,
+    setup: &ThermalSetup,
+    bcs: &crate::thermal::ThermalBcs,
+    tol: f64,
+    output_times: &[f64],
+) -> Result<(ElectricRun, ThermalRun), SceneError> {
+    let n = model.particles.len();
+    let t_init = crate::thermal::initial_node_temperatures(model, setup, bcs, t.initial_temperature);
+    let mut last_t = t_init[..n].to_vec();
+    let mut el = solve_electric(model, e, cfg.interface, cfg.floating, Some(&last_t))?;
+    let first_joule = el.joule.clone();
+    let (mut solves, mut solves_s) = (1usize, el.report.solves_wall_s);
+    let mut update = |_time: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, SceneError> {
+        let moved = temps[..n]
+            .iter()
+            .zip(&last_t)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        if moved <= tol {
+            return Ok(None);
+        }
+        last_t.copy_from_slice(&temps[..n]);
+        el = solve_electric(model, e, cfg.interface, cfg.floating, Some(&last_t))?;
+        solves += 1;
+        solves_s += el.report.solves_wall_s;
+        Ok(Some(el.joule.clone()))
+    };
+    let th = crate::thermal::solve_thermal_with(
+        model,
+        setup,
+        bcs,
+        &t.solver,
+        t.initial_temperature,
+        output_times,
+        Some(&first_joule),
+        &mut update,
+    )?;
+    el.report.solves = solves;
+    el.report.solves_wall_s = solves_s;
+    Ok((el, th))
 }
 
 fn final_time(cfg: &SceneConfig) -> f64 {

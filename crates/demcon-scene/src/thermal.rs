@@ -11,7 +11,7 @@ use demcon_graph::{
 use demcon_network::{Constraints, FloatingPolicy, Method, SolveParams, SolveReport, resolve_fixed};
 use demcon_thermal::{
     ExplicitParams, ImplicitParams, RepresentativeVolume, Scheme, TimeStep, capacities, face_flux_sources,
-    paper_dt_estimate, run_explicit, run_implicit, solve_steady_temperature,
+    paper_dt_estimate, run_explicit_with, run_implicit_with, solve_steady_temperature,
 };
 use serde::Serialize;
 
@@ -280,7 +280,7 @@ fn calibrate_ct_walls(model: &Model) -> Result<CtCalibration, SceneError> {
             ));
         }
     };
-    let (net, g_ext, links) = extended_network(model, &sm, &g, &ones, &walls)?;
+    let (net, g_ext, links) = extended_network(model, &sm, &g, &ones, &walls, "thermal.bcs")?;
     let net = net.as_ref().unwrap_or(&model.network);
     let mut src = sources;
     src.resize(net.n_nodes(), 0.0);
@@ -331,28 +331,33 @@ fn calibrate_ct_walls(model: &Model) -> Result<CtCalibration, SceneError> {
 pub struct WallLinks {
     /// The face.
     pub face: Face,
-    /// Its temperature (°C).
+    /// Its value: temperature (°C) or potential (V).
     pub value: f64,
     /// Its node in the thermal network (after the particles).
     pub node: u32,
     /// Particles linked to it.
     pub particles: Vec<u32>,
-    /// Link conductances λ_p S_p / h_p (W/K).
+    /// Link conductances λ_p S_p / h_p (W/K; S for an electrode).
     pub conductances: Vec<f64>,
 }
 
 /// The network with wall nodes (or `None`: the model's), all conductances (W/K), the walls.
 pub type ExtendedNetwork = (Option<demcon_network::Network>, Vec<f64>, Vec<WallLinks>);
 
-/// The thermal network with one extra node per wall: the particles' contacts followed by the
-/// wall links. Returns `None` for the network when there is no wall (the model's is used).
-/// `particle_lambda` is each particle's conductivity (W/(m·K)).
+/// The network with one extra node per wall: the particles' contacts followed by the wall
+/// links, each a half-contact λ_p S_p / h_p from a particle touching the face (h_p its
+/// centre-to-face distance, at least half its radius; S_p its own transmission surface of
+/// model `sm`). Returns `None` for the network when there is no wall (the model's is used).
+/// `particle_lambda` is each particle's conductivity (W/(m·K) for heat, S/m = 1/ρ_e for
+/// current); `walls` the faces and their values (°C or V); `field` names the scene entry in
+/// errors (`thermal.bcs`, `electric.electrodes`).
 pub fn extended_network(
     model: &Model,
     sm: &SurfaceModel,
     contact_g: &[f64],
     particle_lambda: &[f64],
     walls: &[(Face, f64)],
+    field: &str,
 ) -> Result<ExtendedNetwork, SceneError> {
     if walls.is_empty() {
         return Ok((None, contact_g.to_vec(), Vec::new()));
@@ -368,9 +373,9 @@ pub fn extended_network(
             .select_nonempty(
                 &model.particles,
                 &model.container,
-                &format!("wall {} (WallTemperature)", face.name()),
+                &format!("wall {} ({field})", face.name()),
             )
-            .map_err(|e| SceneError::at("thermal.bcs", e))?;
+            .map_err(|e| SceneError::at(field, e))?;
         let mut gs = Vec::with_capacity(ids.len());
         for &p in &ids {
             let pu = p as usize;
@@ -486,7 +491,7 @@ pub fn thermal_setup(
     let rho = per_particle(model, |m| m.density);
     let mut caps = capacities(&vols, &c, &rho, RepresentativeVolume::VolumeFraction(&fv))?;
     let lam_p = per_particle(model, |m| m.conductivity);
-    let (network, g, walls) = extended_network(model, &sm, &g, &lam_p, &walls)?;
+    let (network, g, walls) = extended_network(model, &sm, &g, &lam_p, &walls, "thermal.bcs")?;
     caps.resize(caps.len() + walls.len(), 1.0);
     let paper_dt = c_t.and_then(|ct| {
         let d_min = model
@@ -751,11 +756,75 @@ pub fn solve_thermal(
     output_times: &[f64],
     extra_sources: Option<&[f64]>,
 ) -> Result<ThermalRun, SceneError> {
+    solve_thermal_with(
+        model,
+        setup,
+        bcs,
+        solver,
+        initial,
+        output_times,
+        extra_sources,
+        &mut |_, _| Ok(None),
+    )
+}
+
+/// Extra sources that change during a transient: called after every time step with the time
+/// (s) and the temperatures of every node (particles first, °C); returns new extra sources
+/// (W per particle) for the following steps, or `None` to keep the current ones. An error
+/// stops the run and is returned by [`solve_thermal_with`].
+pub type ExtraSourceUpdate<'a> = dyn FnMut(f64, &[f64]) -> Result<Option<Vec<f64>>, SceneError> + 'a;
+
+/// The initial temperature of every node of the thermal network (°C): `initial`, with the
+/// fixed values imposed.
+pub fn initial_node_temperatures(
+    model: &Model,
+    setup: &ThermalSetup,
+    bcs: &ThermalBcs,
+    initial: f64,
+) -> Vec<f64> {
+    let mut t = vec![initial; setup.network(model).n_nodes()];
+    bcs.constraints.impose(&mut t);
+    t
+}
+
+/// [`solve_thermal`] whose extra sources are re-evaluated during a transient by `update`
+/// (not called by the steady solve).
+#[allow(clippy::too_many_arguments)]
+pub fn solve_thermal_with(
+    model: &Model,
+    setup: &ThermalSetup,
+    bcs: &ThermalBcs,
+    solver: &ThermalSolverConfig,
+    initial: f64,
+    output_times: &[f64],
+    extra_sources: Option<&[f64]>,
+    update: &mut ExtraSourceUpdate<'_>,
+) -> Result<ThermalRun, SceneError> {
     let n = model.particles.len();
     let mut sources = bcs.sources.clone();
     if let Some(x) = extra_sources {
         sources.iter_mut().zip(x).for_each(|(a, b)| *a += b);
     }
+    // The scene's error that stopped a run, returned instead of the solver's.
+    let mut stopped: Option<SceneError> = None;
+    let mut hook = |t: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, demcon_thermal::ThermalError> {
+        match update(t, temps) {
+            Ok(None) => Ok(None),
+            Ok(Some(extra)) => {
+                let mut s = bcs.sources.clone();
+                s.iter_mut().zip(&extra).for_each(|(a, b)| *a += b);
+                Ok(Some(s))
+            }
+            Err(e) => {
+                stopped = Some(e);
+                Err(demcon_thermal::ThermalError::invalid(
+                    "source update",
+                    t,
+                    "the run was stopped by the coupled solve",
+                ))
+            }
+        }
+    };
     if !initial.is_finite() {
         return Err(SceneError::invalid(
             "thermal.initial_temperature",
@@ -764,8 +833,7 @@ pub fn solve_thermal(
         ));
     }
     let net = setup.network(model);
-    let mut t_init = vec![initial; net.n_nodes()];
-    bcs.constraints.impose(&mut t_init);
+    let t_init = initial_node_temperatures(model, setup, bcs, initial);
     let mut snapshots = Vec::new();
     let excluded = bcs.constraints.excluded().len();
     let g = &setup.conductances;
@@ -806,7 +874,7 @@ pub fn solve_thermal(
                 paper_dt: setup.paper_dt,
                 ..ExplicitParams::default()
             };
-            let tr = run_explicit(
+            let tr = run_explicit_with(
                 net,
                 g,
                 caps,
@@ -815,7 +883,12 @@ pub fn solve_thermal(
                 &t_init,
                 &params,
                 |t, v| snapshots.push((t, v[..n].to_vec())),
-            )?;
+                &mut hook,
+            );
+            let tr = match (tr, stopped) {
+                (_, Some(e)) => return Err(e),
+                (r, None) => r?,
+            };
             Ok(ThermalRun::from_nodes(
                 n,
                 tr.temperatures,
@@ -834,7 +907,7 @@ pub fn solve_thermal(
                 output_times: output_times.to_vec(),
                 solve: default_solve_params(),
             };
-            let tr = run_implicit(
+            let tr = run_implicit_with(
                 net,
                 g,
                 caps,
@@ -843,7 +916,12 @@ pub fn solve_thermal(
                 &t_init,
                 &params,
                 |t, v| snapshots.push((t, v[..n].to_vec())),
-            )?;
+                &mut hook,
+            );
+            let tr = match (tr, stopped) {
+                (_, Some(e)) => return Err(e),
+                (r, None) => r?,
+            };
             Ok(ThermalRun::from_nodes(
                 n,
                 tr.temperatures,

@@ -51,10 +51,10 @@ fn check_parameters(s: &Scene) {
     let e = c.electric.as_ref().unwrap();
     assert_eq!(e.electrodes.len(), 2);
     assert!(
-        matches!(e.electrodes[0].select, SelectorConfig::Face(f) if f == demcon_scene::config::FaceConfig::ZMin)
+        matches!(e.electrodes[0].select, Some(SelectorConfig::Face(f)) if f == demcon_scene::config::FaceConfig::ZMin)
     );
     assert!(
-        matches!(e.electrodes[1].select, SelectorConfig::Face(f) if f == demcon_scene::config::FaceConfig::ZMax)
+        matches!(e.electrodes[1].select, Some(SelectorConfig::Face(f)) if f == demcon_scene::config::FaceConfig::ZMax)
     );
     assert_eq!(e.eta, 1.0);
     assert!(c.outputs.vtk);
@@ -151,4 +151,53 @@ fn cylinder_and_notch_scenes_run_small_and_write_vtk() {
     vtu_has_fields(&dir);
     let _ = std::fs::remove_dir_all(out_dir("cylinder"));
     let _ = std::fs::remove_dir_all(out_dir("notch"));
+}
+
+/// `scenes/joule-transient.ron`, shrunk (500 particles, a tenth of the time): the coupled
+/// transient re-solves the potential, the resistance in force at the end has risen as
+/// R0 (1 + β θ̄) within the lag (β tol = 1e-3) and the non-uniformity of the packing, and the
+/// heat stored is the Joule energy.
+#[test]
+fn joule_transient_scene_recouples_during_the_run() {
+    let mut s = small("joule-transient.ron", 500);
+    let Some(demcon_scene::config::ThermalConfig {
+        solver: demcon_scene::config::ThermalSolverConfig::Implicit { t_end, dt, .. },
+        ..
+    }) = s.config.thermal.as_mut()
+    else {
+        panic!("joule-transient.ron: expected an implicit thermal solver");
+    };
+    *t_end = 26.0;
+    *dt = 0.65;
+    s.config.outputs.times = vec![13.0, 26.0];
+    s.config.outputs.probes.clear();
+    let r = run(&s, &RunOptions::default()).unwrap();
+    let el = r.electric.as_ref().unwrap();
+    let th = r.thermal.as_ref().unwrap();
+    assert!(el.report.solves > 10, "{} solves", el.report.solves);
+    assert!(th.report.energy_balance_error < 1e-9);
+    // Mean rise over the particles that carry current (rattlers stay at 20 °C).
+    let deg = r.model.graph.degrees();
+    let hot: Vec<f64> = th
+        .temperatures
+        .iter()
+        .zip(&deg)
+        .filter(|(_, d)| **d > 0)
+        .map(|(t, _)| t - 20.0)
+        .collect();
+    let theta = hot.iter().sum::<f64>() / hot.len() as f64;
+    assert!(theta > 10.0, "θ̄ = {theta}");
+    let mut one_way = s.clone();
+    one_way.config.electric.as_mut().unwrap().recouple_tolerance = None;
+    let r0 = run(&one_way, &RunOptions::default()).unwrap();
+    let (re, r00) = (
+        el.report.resistance_ohm.unwrap(),
+        r0.electric.as_ref().unwrap().report.resistance_ohm.unwrap(),
+    );
+    let expected = 1.0 + 4e-3 * theta;
+    assert!(
+        (re / r00 / expected - 1.0).abs() < 0.01,
+        "R/R0 = {}, 1 + βθ̄ = {expected}",
+        re / r00
+    );
 }

@@ -8,7 +8,7 @@ use demcon_network::{CHUNK, Constraints, MIN_TASK_CHUNKS, Network, NodeKind};
 use rayon::prelude::*;
 
 use crate::capacity::{DtBound, stable_dt_bound};
-use crate::error::ThermalError;
+use crate::error::{ThermalError, check_finite, check_len};
 use crate::transient::{
     Transient, TransientReport, boundary_edges, boundary_power, check_inputs, close_ledger, source_power,
     stops,
@@ -102,6 +102,9 @@ pub struct ExplicitStepper<'a> {
     centre: Vec<f64>,
     /// s_p in sorted order, absent when every source is zero.
     source: Option<Vec<f64>>,
+    /// Δt/C_p in sorted order on free rows, 0 on the others (s/(J/K)): turns a new source
+    /// vector into s_p ([`Self::set_sources`]).
+    scale: Vec<f64>,
     dt: f64,
 }
 
@@ -160,6 +163,7 @@ impl<'a> ExplicitStepper<'a> {
         let mut weights = vec![0.0f64; total];
         let mut centre = vec![1.0; n];
         let mut source = vec![0.0; n];
+        let mut scale = vec![0.0; n];
         // Fill slice by slice (in parallel over slices: each owns its entry range).
         let mut slices_c: Vec<&mut [u32]> = Vec::with_capacity(n_slices);
         let mut slices_w: Vec<&mut [f64]> = Vec::with_capacity(n_slices);
@@ -178,10 +182,11 @@ impl<'a> ExplicitStepper<'a> {
             .zip(slices_w.into_par_iter())
             .zip(centre.par_chunks_mut(LANES))
             .zip(source.par_chunks_mut(LANES))
+            .zip(scale.par_chunks_mut(LANES))
             .enumerate()
             .with_min_len(CHUNK / LANES)
-            .for_each(|(s, (((sc, sw), cc), ss))| {
-                for (l, (c, src)) in cc.iter_mut().zip(ss.iter_mut()).enumerate() {
+            .for_each(|(s, ((((sc, sw), cc), ss), sa))| {
+                for (l, ((c, src), sca)) in cc.iter_mut().zip(ss.iter_mut()).zip(sa.iter_mut()).enumerate() {
                     let p = perm[s * LANES + l] as usize;
                     // Padding points at the row itself with weight 0.
                     for j in (l..sc.len()).step_by(LANES) {
@@ -201,6 +206,7 @@ impl<'a> ExplicitStepper<'a> {
                     }
                     *c = 1.0 - sum;
                     *src = a * sources[p];
+                    *sca = a;
                 }
             });
         let source = source.iter().any(|&v| v != 0.0).then_some(source);
@@ -213,8 +219,28 @@ impl<'a> ExplicitStepper<'a> {
             weights,
             centre,
             source,
+            scale,
             dt,
         })
+    }
+
+    /// Replaces the source term by `sources` (Q_p, W per node; values on fixed and excluded
+    /// nodes are ignored), e.g. Joule heat re-evaluated during a run. O(n).
+    ///
+    /// # Errors
+    /// A length other than one value per node, or a non-finite value.
+    pub fn set_sources(&mut self, sources: &[f64]) -> Result<(), ThermalError> {
+        check_len("sources", sources.len(), self.n)?;
+        check_finite("sources", sources)?;
+        let s: Vec<f64> = self
+            .perm
+            .par_iter()
+            .zip(self.scale.par_iter())
+            .with_min_len(CHUNK)
+            .map(|(&p, &a)| a * sources[p as usize])
+            .collect();
+        self.source = s.iter().any(|&v| v != 0.0).then_some(s);
+        Ok(())
     }
 
     /// The step (s).
@@ -314,7 +340,41 @@ pub fn run_explicit(
     sources: &[f64],
     t_init: &[f64],
     params: &ExplicitParams,
+    observer: impl FnMut(f64, &[f64]),
+) -> Result<Transient, ThermalError> {
+    run_explicit_with(
+        net,
+        conductances,
+        capacities,
+        constraints,
+        sources,
+        t_init,
+        params,
+        observer,
+        |_, _| Ok(None),
+    )
+}
+
+/// [`run_explicit`] with sources that may change during the run: `update(t, T)` is called
+/// once after every step (t in s, T in K, one value per node) and returns new sources
+/// (W per node) to use from the next step on, or `None` to keep the current ones;
+/// an `Err` stops the run and is returned. The energy ledger integrates the sources in force over each
+/// step, and the maximum-principle envelope grows with each new heating rate.
+///
+/// # Errors
+/// As [`run_explicit`]; an invalid source vector from `update`; an error returned by
+/// `update` stops the run and is passed on.
+#[allow(clippy::too_many_arguments)]
+pub fn run_explicit_with(
+    net: &Network,
+    conductances: &[f64],
+    capacities: &[f64],
+    constraints: &Constraints,
+    sources: &[f64],
+    t_init: &[f64],
+    params: &ExplicitParams,
     mut observer: impl FnMut(f64, &[f64]),
+    mut update: impl FnMut(f64, &[f64]) -> Result<Option<Vec<f64>>, ThermalError>,
 ) -> Result<Transient, ThermalError> {
     let start = Instant::now();
     check_inputs(net, conductances, capacities, constraints, sources, t_init)?;
@@ -352,7 +412,7 @@ pub fn run_explicit(
             ),
         ));
     }
-    let stepper = ExplicitStepper::new(net, conductances, capacities, constraints, sources, dt)?;
+    let mut stepper = ExplicitStepper::new(net, conductances, capacities, constraints, sources, dt)?;
     let kinds = constraints.kinds();
     let mut cur = t_init.to_vec();
     constraints.impose(&mut cur);
@@ -363,18 +423,24 @@ pub fn run_explicit(
     let (lo0, hi0) = cur.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
         (a.min(v), b.max(v))
     });
-    let (mut heat_rate, mut cool_rate) = (0.0f64, 0.0f64);
-    for p in 0..net.n_nodes() {
-        if kinds[p] == NodeKind::Free {
-            heat_rate = heat_rate.max(sources[p].max(0.0) / capacities[p]);
-            cool_rate = cool_rate.max((-sources[p]).max(0.0) / capacities[p]);
+    let rates = |sources: &[f64]| {
+        let (mut heat_rate, mut cool_rate) = (0.0f64, 0.0f64);
+        for p in 0..net.n_nodes() {
+            if kinds[p] == NodeKind::Free {
+                heat_rate = heat_rate.max(sources[p].max(0.0) / capacities[p]);
+                cool_rate = cool_rate.max((-sources[p]).max(0.0) / capacities[p]);
+            }
         }
-    }
+        (heat_rate, cool_rate)
+    };
+    let (mut heat_rate, mut cool_rate) = rates(sources);
+    // The envelope's growth up to the last source change (K) and that change's time (s).
+    let (mut heat_base, mut cool_base, mut t_change) = (0.0f64, 0.0f64, 0.0f64);
     let rounding = 1e-9 * (lo0.abs() + hi0.abs() + (hi0 - lo0)) + f64::MIN_POSITIVE;
     let unstable = dt > bound.dt_max;
 
     let edges_b = boundary_edges(net, conductances, constraints);
-    let p_src = source_power(constraints, sources);
+    let mut p_src = source_power(constraints, sources);
     let mut report = TransientReport::new("forward-euler", dt, bound, params.paper_dt);
     if params.output_times.first() == Some(&0.0) {
         observer(0.0, &cur);
@@ -415,9 +481,11 @@ pub fn run_explicit(
             }
             steps += 1;
             let t_now = t_start + if k < n_full { (k + 1) as f64 * dt } else { span };
-            let width = (hi0 - lo0) + t_now * (heat_rate + cool_rate);
+            let heat = heat_base + (t_now - t_change) * heat_rate;
+            let cool = cool_base + (t_now - t_change) * cool_rate;
+            let width = (hi0 - lo0) + heat + cool;
             let margin = rounding + if unstable { width } else { 0.0 };
-            let (env_lo, env_hi) = (lo0 - t_now * cool_rate - margin, hi0 + t_now * heat_rate + margin);
+            let (env_lo, env_hi) = (lo0 - cool - margin, hi0 + heat + margin);
             if bad || lo < env_lo || hi > env_hi {
                 let node = next
                     .iter()
@@ -435,6 +503,12 @@ pub fn run_explicit(
                 });
             }
             std::mem::swap(&mut cur, &mut next);
+            if let Some(new) = update(t_now, &cur)? {
+                stepper.set_sources(&new)?;
+                p_src = source_power(constraints, &new);
+                (heat_base, cool_base, t_change) = (heat, cool, t_now);
+                (heat_rate, cool_rate) = rates(&new);
+            }
         }
         t_start = stop;
         if stop < params.t_end || params.output_times.last() == Some(&stop) {

@@ -76,7 +76,40 @@ pub fn run_implicit(
     sources: &[f64],
     t_init: &[f64],
     params: &ImplicitParams,
+    observer: impl FnMut(f64, &[f64]),
+) -> Result<Transient, ThermalError> {
+    run_implicit_with(
+        net,
+        conductances,
+        capacities,
+        constraints,
+        sources,
+        t_init,
+        params,
+        observer,
+        |_, _| Ok(None),
+    )
+}
+
+/// [`run_implicit`] with sources that may change during the run: `update(t, T)` is called
+/// once after every step and returns new sources (W per node) for the following steps, or
+/// `None`; an `Err` stops the run and is returned. Each step uses the sources in force at its start (for
+/// Crank–Nicolson, at both ends of the step); the energy ledger integrates them.
+///
+/// # Errors
+/// As [`run_implicit`]; an invalid source vector from `update`; an error returned by
+/// `update` stops the run and is passed on.
+#[allow(clippy::too_many_arguments)]
+pub fn run_implicit_with(
+    net: &Network,
+    conductances: &[f64],
+    capacities: &[f64],
+    constraints: &Constraints,
+    sources: &[f64],
+    t_init: &[f64],
+    params: &ImplicitParams,
     mut observer: impl FnMut(f64, &[f64]),
+    mut update: impl FnMut(f64, &[f64]) -> Result<Option<Vec<f64>>, ThermalError>,
 ) -> Result<Transient, ThermalError> {
     let start = Instant::now();
     check_inputs(net, conductances, capacities, constraints, sources, t_init)?;
@@ -94,7 +127,8 @@ pub fn run_implicit(
     let factor = if cn { 2.0 } else { 1.0 };
     let mut report = TransientReport::new(params.scheme.name(), params.dt, bound, None);
     let edges_b = boundary_edges(net, conductances, constraints);
-    let p_src = source_power(constraints, sources);
+    let mut p_src = source_power(constraints, sources);
+    let mut sources = sources.to_vec();
     let kinds = constraints.kinds();
 
     let mut cur = t_init.to_vec();
@@ -125,7 +159,7 @@ pub fn run_implicit(
             Some((_, s)) => s,
             None => unreachable!("system built above"),
         };
-        for _ in 0..n_steps {
+        for k in 0..n_steps {
             let p_b_old = boundary_power(&edges_b, &cur);
             if cn {
                 let k_t = net.apply_laplacian(conductances, &cur)?;
@@ -156,6 +190,18 @@ pub fn run_implicit(
             report.max_relative_residual = report.max_relative_residual.max(r.relative_residual);
             report.steps += 1;
             cur = next;
+            let t_now = t_start
+                + if k + 1 == n_steps {
+                    span
+                } else {
+                    (k + 1) as f64 * h
+                };
+            if let Some(new) = update(t_now, &cur)? {
+                check_len("sources", new.len(), n)?;
+                check_finite("sources", &new)?;
+                p_src = source_power(constraints, &new);
+                sources = new;
+            }
         }
         t_start = stop;
         if stop < params.t_end || params.output_times.last() == Some(&stop) {

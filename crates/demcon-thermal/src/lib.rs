@@ -40,7 +40,9 @@ mod transient;
 
 pub use capacity::{DtBound, RepresentativeVolume, capacities, paper_dt_estimate, stable_dt_bound};
 pub use error::ThermalError;
-pub use explicit::{ExplicitParams, ExplicitStepper, TimeStep, run_explicit};
-pub use implicit::{ImplicitParams, Scheme, SteadyTemperature, run_implicit, solve_steady_temperature};
+pub use explicit::{ExplicitParams, ExplicitStepper, TimeStep, run_explicit, run_explicit_with};
+pub use implicit::{
+    ImplicitParams, Scheme, SteadyTemperature, run_implicit, run_implicit_with, solve_steady_temperature,
+};
 pub use sources::{add_sources, face_flux_sources};
 pub use transient::{Transient, TransientReport};

@@ -361,3 +361,146 @@ fn bad_input_is_named() {
     assert!(matches!(go(&[0.0; 2], &[1.0; 2], &p),
         Err(ThermalError::InvalidParameter { ref field, .. }) if field == "dt"));
 }
+
+/// Sources updated during a run (the hook of `run_explicit_with` / `run_implicit_with`):
+/// a lattice heated by Q_p = q_p / (1 + T_p) (a resistance rising with temperature), the
+/// hook re-evaluating Q every step. The explicit run equals a hand-written loop over the
+/// stepper with `set_sources`; both ledgers close; a hook error stops the run.
+#[test]
+fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
+    use demcon_thermal::{ExplicitStepper, run_explicit_with, run_implicit_with};
+    let n = 5;
+    let (net, g, c) = lattice(n, 11);
+    let m = n * n * n;
+    let bcs = resolve_fixed(&net, &[(face(n, 0), 0.0)], FloatingPolicy::Fail).unwrap();
+    let q0: Vec<f64> = (0..m).map(|p| 0.5 + (p % 7) as f64 * 0.1).collect();
+    let src = |t: &[f64]| -> Vec<f64> { q0.iter().zip(t).map(|(q, t)| q / (1.0 + t.abs())).collect() };
+    let t0 = vec![0.0; m];
+    let dt = 0.5 * stable_dt_bound(&net, &g, &c, &bcs).unwrap().dt_max;
+    let steps = 40;
+    let params = ExplicitParams {
+        t_end: steps as f64 * dt,
+        dt: TimeStep::Fixed {
+            dt,
+            allow_unstable: false,
+        },
+        ..Default::default()
+    };
+    let mut calls = 0;
+    let run = run_explicit_with(
+        &net,
+        &g,
+        &c,
+        &bcs,
+        &src(&t0),
+        &t0,
+        &params,
+        |_, _| {},
+        |_, t| {
+            calls += 1;
+            Ok(Some(src(t)))
+        },
+    )
+    .unwrap();
+    assert_eq!(calls, steps);
+    // The same by hand.
+    let mut st = ExplicitStepper::new(&net, &g, &c, &bcs, &src(&t0), dt).unwrap();
+    let (mut cur, mut next) = (t0.clone(), t0.clone());
+    for _ in 0..steps {
+        st.step(&cur, &mut next);
+        std::mem::swap(&mut cur, &mut next);
+        st.set_sources(&src(&cur)).unwrap();
+    }
+    for (a, b) in run.temperatures.iter().zip(&cur) {
+        assert!((a - b).abs() <= 1e-12 * (1.0 + b.abs()), "{a} vs {b}");
+    }
+    // The sources did change (otherwise the test proves nothing) and the ledger closes.
+    let first: f64 = src(&t0).iter().sum();
+    let last: f64 = src(&cur).iter().sum();
+    assert!(last < 0.99 * first, "{last} vs {first}");
+    assert!(
+        run.report.energy_balance_error < 1e-10,
+        "{}",
+        run.report.energy_balance_error
+    );
+    // Implicit: the ledger closes too, for both schemes.
+    for scheme in [Scheme::BackwardEuler, Scheme::CrankNicolson] {
+        let p = ImplicitParams {
+            t_end: 40.0 * dt,
+            dt: 4.0 * dt,
+            scheme,
+            solve: SolveParams {
+                method: Method::Cg {
+                    rel_tol: 1e-13,
+                    max_iter: 10_000,
+                },
+            },
+            ..Default::default()
+        };
+        let mut calls = 0;
+        let im = run_implicit_with(
+            &net,
+            &g,
+            &c,
+            &bcs,
+            &src(&t0),
+            &t0,
+            &p,
+            |_, _| {},
+            |_, t| {
+                calls += 1;
+                Ok(Some(src(t)))
+            },
+        )
+        .unwrap();
+        assert_eq!(calls, 10);
+        assert!(
+            im.report.energy_balance_error < 1e-9,
+            "{scheme:?}: {}",
+            im.report.energy_balance_error
+        );
+    }
+    // Bad sources from the hook and a hook error are reported, not panics.
+    let bad = run_explicit_with(
+        &net,
+        &g,
+        &c,
+        &bcs,
+        &q0,
+        &t0,
+        &params,
+        |_, _| {},
+        |_, _| Ok(Some(vec![f64::NAN; m])),
+    );
+    assert!(
+        matches!(bad, Err(ThermalError::InvalidParameter { .. })),
+        "{bad:?}"
+    );
+    let short = run_explicit_with(
+        &net,
+        &g,
+        &c,
+        &bcs,
+        &q0,
+        &t0,
+        &params,
+        |_, _| {},
+        |_, _| Ok(Some(vec![0.0; 3])),
+    );
+    assert!(
+        matches!(short, Err(ThermalError::InvalidParameter { .. })),
+        "{short:?}"
+    );
+    let stop = run_explicit_with(
+        &net,
+        &g,
+        &c,
+        &bcs,
+        &q0,
+        &t0,
+        &params,
+        |_, _| {},
+        |t, _| Err(ThermalError::invalid("hook", t, "stopped")),
+    );
+    assert!(matches!(stop, Err(ThermalError::InvalidParameter { ref field, .. }) if field == "hook"));
+}

@@ -112,12 +112,31 @@ pub fn cylinder_packing(count: usize) -> PackingConfig {
 pub fn end_electrodes(v0: f64) -> Vec<ElectrodeConfig> {
     vec![
         ElectrodeConfig {
-            select: SelectorConfig::Face(FaceConfig::ZMin),
+            select: Some(SelectorConfig::Face(FaceConfig::ZMin)),
             potential: 0.0,
+            ..Default::default()
         },
         ElectrodeConfig {
-            select: SelectorConfig::Face(FaceConfig::ZMax),
+            select: Some(SelectorConfig::Face(FaceConfig::ZMax)),
             potential: v0,
+            ..Default::default()
+        },
+    ]
+}
+
+/// Electrodes on the end faces themselves: 0 V on ZMin, `v0` (V) on ZMax, each linked to
+/// the particles touching it by half-contacts σ S / h.
+pub fn face_electrodes(v0: f64) -> Vec<ElectrodeConfig> {
+    vec![
+        ElectrodeConfig {
+            face: Some(FaceConfig::ZMin),
+            potential: 0.0,
+            ..Default::default()
+        },
+        ElectrodeConfig {
+            face: Some(FaceConfig::ZMax),
+            potential: v0,
+            ..Default::default()
         },
     ]
 }

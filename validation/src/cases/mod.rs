@@ -15,6 +15,7 @@ pub mod hubert2017_cylinder_resistance;
 pub mod hubert2017_notch_joule;
 pub mod hubert2017_scenes;
 pub mod hubert2017_solver_timing;
+pub mod joule_transient;
 
 use crate::Case;
 
@@ -80,6 +81,11 @@ pub fn registry() -> Vec<Case> {
             id: "notch-joule",
             about: "Hubert 2017 §3.2: grooved cylinder, R vs FEM and steady Joule ΔT_max vs Kohlrausch",
             run: hubert2017_notch_joule::run,
+        },
+        Case {
+            id: "joule-transient",
+            about: "ρ_e(T) two-way coupling in transients: uniform Joule heating vs the exact θ(t), explicit and implicit",
+            run: joule_transient::run,
         },
         Case {
             id: "electric-solver-timing",
