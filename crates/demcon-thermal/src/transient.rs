@@ -109,6 +109,12 @@ pub(crate) fn stops(t_end: f64, output_times: &[f64]) -> Result<Vec<f64>, Therma
     let mut out = Vec::with_capacity(output_times.len() + 1);
     let mut last = 0.0;
     for (k, &t) in output_times.iter().enumerate() {
+        // A time past t_end by rounding only (e.g. t_end·k/n at k = n) is t_end.
+        let t = if t > t_end && t <= t_end * (1.0 + 1e-12) {
+            t_end
+        } else {
+            t
+        };
         if !(t.is_finite() && t >= last && t <= t_end) {
             return Err(ThermalError::invalid(
                 format!("output_times[{k}]"),
@@ -193,4 +199,21 @@ pub(crate) fn close_ledger(
         (a.min(v), b.max(v))
     });
     report.t_range = [lo, hi];
+}
+
+#[cfg(test)]
+mod tests {
+    use super::stops;
+
+    #[test]
+    fn output_times_past_t_end_by_rounding_are_t_end() {
+        let t_end = 254.49193782192313;
+        let times: Vec<f64> = (1..=20).map(|k| t_end * k as f64 / 20.0).collect();
+        let s = stops(t_end, &times).unwrap();
+        assert_eq!(s.len(), 20);
+        assert_eq!(*s.last().unwrap(), t_end);
+        // Beyond rounding it is still an error naming the entry.
+        assert!(stops(1.0, &[0.5, 1.001]).is_err());
+        assert!(stops(1.0, &[0.5, 0.4]).is_err());
+    }
 }
