@@ -78,9 +78,9 @@ pub fn electric_conductances(
         InterfaceConfig::Arithmetic => InterfaceRule::ArithmeticMean,
     };
     let n = model.particles.len();
-    let mut sigma = Vec::with_capacity(n);
-    for p in 0..n {
-        let m = &model.materials.materials[model.particles.phases[p] as usize];
+    // σ = 1/ρ_e(T_p) of each phase at a particle's temperature.
+    let sigma_of = |phase: u16, p: usize| -> Result<f64, SceneError> {
+        let m = &model.materials.materials[phase as usize];
         let t = temperatures.map(|t| t[p]).unwrap_or(m.resistivity_ref_temp);
         let rho = m.resistivity_at(t).ok_or_else(|| {
             SceneError::invalid(
@@ -96,8 +96,24 @@ pub fn electric_conductances(
                 format!("ρ_e(T = {t:.3}) must stay > 0: check resistivity_temp_coeff"),
             ));
         }
-        sigma.push(1.0 / rho);
+        Ok(1.0 / rho)
+    };
+    let lam = model.laminates();
+    let mut sigma = Vec::with_capacity(n);
+    // (mix, σ of the other phase) of the laminate particles.
+    let mut other = Vec::with_capacity(n);
+    for p in 0..n {
+        sigma.push(sigma_of(model.particles.phases[p], p)?);
+        other.push(match lam.get(p) {
+            Some(m) => Some((*m, sigma_of(m.other_phase, p)?)),
+            None => None,
+        });
     }
+    // A laminate particle's half-bond uses its conductivity along the branch.
+    let along = |p: usize, e: &demcon_core::Vec3| match &other[p] {
+        Some((m, s)) => m.along(sigma[p], *s, e),
+        None => sigma[p],
+    };
     Ok(model
         .graph
         .pairs
@@ -105,7 +121,8 @@ pub fn electric_conductances(
         .zip(&model.graph.geometry)
         .zip(&s.area)
         .map(|((&[p, q], geo), &a)| {
-            interface_value(sigma[p as usize], sigma[q as usize], rule) * a / geo.distance
+            let (p, q) = (p as usize, q as usize);
+            interface_value(along(p, &geo.normal), along(q, &geo.normal), rule) * a / geo.distance
         })
         .collect())
 }

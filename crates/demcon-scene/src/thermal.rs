@@ -5,8 +5,8 @@ use std::time::Instant;
 
 use demcon_core::{Axis, Container, Face, Selector};
 use demcon_graph::{
-    InterfaceRule, SurfaceModel, conductances, contact_property, contact_surfaces, representative_volumes,
-    surface_calibrated, terreros_alpha,
+    InterfaceRule, SurfaceModel, conductances, contact_property_laminate, contact_surfaces,
+    representative_volumes, surface_calibrated, terreros_alpha,
 };
 use demcon_network::{Constraints, FloatingPolicy, Method, SolveParams, SolveReport, resolve_fixed};
 use demcon_thermal::{
@@ -62,15 +62,6 @@ fn model_for(cfg: &SurfaceConfig, c_t: Option<f64>) -> SurfaceModel {
             c_t: c_t.unwrap_or(1.0),
         },
     }
-}
-
-fn per_particle<T: Copy>(model: &Model, f: impl Fn(&demcon_core::Material) -> T) -> Vec<T> {
-    model
-        .particles
-        .phases
-        .iter()
-        .map(|&p| f(&model.materials.materials[p as usize]))
-        .collect()
 }
 
 fn interface_rule(i: InterfaceConfig) -> InterfaceRule {
@@ -255,7 +246,7 @@ fn calibrate_ct_walls(model: &Model) -> Result<CtCalibration, SceneError> {
     let s = contact_surfaces(&model.graph, &model.particles, &sm)?;
     let lam = vec![1.0; model.graph.pairs.len()];
     let g = conductances(&model.graph, &s.area, &lam)?;
-    let ones = vec![1.0; model.particles.len()];
+    let ones = vec![1.0; model.materials.materials.len()];
     let n = model.particles.len();
     let (method, walls, sources): (&str, Vec<(Face, f64)>, Vec<f64>) = match model.container {
         Container::Sphere { .. } => {
@@ -346,12 +337,13 @@ pub type ExtendedNetwork = (Option<demcon_network::Network>, Vec<f64>, Vec<WallL
 
 /// The thermal network with one extra node per wall: the particles' contacts followed by the
 /// wall links. Returns `None` for the network when there is no wall (the model's is used).
-/// `particle_lambda` is each particle's conductivity (W/(m·K)).
+/// `phase_lambda` is each phase's conductivity (W/(m·K)); a laminate particle's link uses its
+/// conductivity along the face normal.
 pub fn extended_network(
     model: &Model,
     sm: &SurfaceModel,
     contact_g: &[f64],
-    particle_lambda: &[f64],
+    phase_lambda: &[f64],
     walls: &[(Face, f64)],
 ) -> Result<ExtendedNetwork, SceneError> {
     if walls.is_empty() {
@@ -359,6 +351,7 @@ pub fn extended_network(
     }
     let n = model.particles.len();
     let degrees = model.graph.degrees();
+    let lam = model.laminates();
     let mut edges = model.graph.pairs.clone();
     let mut g = contact_g.to_vec();
     let mut links = Vec::new();
@@ -384,7 +377,8 @@ pub fn extended_network(
                 SurfaceModel::Calibrated { c_t } => surface_calibrated(c_t, r),
                 SurfaceModel::TerrerosAlpha => terreros_alpha(degrees[pu] + 1).alpha * r * r,
             };
-            let gp = particle_lambda[pu] * area / h;
+            let e = face_normal(&model.container, face, &model.particles.centres[pu]);
+            let gp = lam.along(pu, &model.particles.phases, phase_lambda, &e) * area / h;
             edges.push([p, node]);
             g.push(gp);
             gs.push(gp);
@@ -399,6 +393,23 @@ pub fn extended_network(
     }
     let net = demcon_network::Network::new(n + walls.len(), &edges)?;
     Ok((Some(net), g, links))
+}
+
+/// Unit normal of a container face at (the particle centred at) `c`.
+fn face_normal(container: &Container, face: Face, c: &demcon_core::Vec3) -> demcon_core::Vec3 {
+    use demcon_core::Vec3;
+    match face {
+        Face::XMin | Face::XMax => Vec3::x(),
+        Face::YMin | Face::YMax => Vec3::y(),
+        Face::ZMin | Face::ZMax => Vec3::z(),
+        Face::Outer => {
+            let r = match container {
+                Container::Cylinder { .. } => Vec3::new(c.x, c.y, 0.0),
+                _ => *c,
+            };
+            if r.norm() > 0.0 { r.normalize() } else { Vec3::x() }
+        }
+    }
 }
 
 /// Conductances, capacities and volumes of the thermal network.
@@ -470,10 +481,11 @@ pub fn thermal_setup(
     let sm = model_for(surface, c_t);
     let s = contact_surfaces(&model.graph, &model.particles, &sm)?;
     let lam_phase: Vec<f64> = model.materials.materials.iter().map(|m| m.conductivity).collect();
-    let contact_lambda = contact_property(
+    let contact_lambda = contact_property_laminate(
         &model.graph,
         &model.particles.phases,
         &lam_phase,
+        &model.mixes,
         interface_rule(interface),
     )?;
     let g = conductances(&model.graph, &s.area, &contact_lambda)?;
@@ -482,11 +494,24 @@ pub fn thermal_setup(
         .map(|p| model.particles.volume(p))
         .collect();
     let fv: Vec<f64> = vols.iter().zip(&rep).map(|(v, r)| (v / r).min(1.0)).collect();
-    let c = per_particle(model, |m| m.specific_heat);
-    let rho = per_particle(model, |m| m.density);
+    // Laminate particles: ρ and ρc mix arithmetically (c = ρc/ρ).
+    let lam = model.laminates();
+    let phases = &model.particles.phases;
+    let rho_phase: Vec<f64> = model.materials.materials.iter().map(|m| m.density).collect();
+    let rc_phase: Vec<f64> = model
+        .materials
+        .materials
+        .iter()
+        .map(|m| m.density * m.specific_heat)
+        .collect();
+    let rho: Vec<f64> = (0..vols.len())
+        .map(|p| lam.arithmetic(p, phases, &rho_phase))
+        .collect();
+    let c: Vec<f64> = (0..vols.len())
+        .map(|p| lam.arithmetic(p, phases, &rc_phase) / rho[p])
+        .collect();
     let mut caps = capacities(&vols, &c, &rho, RepresentativeVolume::VolumeFraction(&fv))?;
-    let lam_p = per_particle(model, |m| m.conductivity);
-    let (network, g, walls) = extended_network(model, &sm, &g, &lam_p, &walls)?;
+    let (network, g, walls) = extended_network(model, &sm, &g, &lam_phase, &walls)?;
     caps.resize(caps.len() + walls.len(), 1.0);
     let paper_dt = c_t.and_then(|ct| {
         let d_min = model

@@ -135,3 +135,66 @@ fn multi_inclusion_scene_places_the_silica() {
         assert!((25.0..=35.0).contains(&t), "T({name}) = {t}");
     }
 }
+
+#[test]
+fn laminate_rule_resolves_the_inclusion_below_a_particle() {
+    use demcon_scene::build_model;
+    use demcon_scene::config::PhaseRuleConfig;
+    let centre = small("single-inclusion.ron", 3000, 2.0);
+    let mut lam = centre.clone();
+    lam.config.phase_rule = PhaseRuleConfig::Laminate;
+    let mc = build_model(&centre.config, &centre.base_dir, None).unwrap();
+    let ml = build_model(&lam.config, &lam.base_dir, None).unwrap();
+    // Same packing, same phases by centre; only the laminate model carries mixes.
+    assert_eq!(mc.particles.phases, ml.particles.phases);
+    assert!(mc.mixes.is_empty());
+    assert_eq!(ml.report.mixed_particles, ml.mixes.len());
+    assert!(ml.mixes.len() > 50, "{} cut particles", ml.mixes.len());
+    // Every cut particle straddles the sphere of radius L/3 and its normal is radial.
+    let (c0, a) = (demcon_core::Vec3::new(0.05, 0.05, 0.05), 0.1 / 3.0);
+    for m in &ml.mixes {
+        let p = m.particle as usize;
+        let d = ml.particles.centres[p] - c0;
+        assert!((d.norm() - a).abs() < ml.particles.radii[p]);
+        assert!(m.other_fraction > 0.0 && m.other_fraction < 1.0);
+        assert!((d.normalize().dot(&m.normal).abs() - 1.0).abs() < 1e-6);
+    }
+    // Each cut particle's fraction in the other phase matches a count of grid points of its
+    // ball (13³ grid over its box) on the other side of the sphere.
+    for m in ml.mixes.iter().step_by(7) {
+        let p = m.particle as usize;
+        let (c, r) = (ml.particles.centres[p], ml.particles.radii[p]);
+        let (mut inside_ball, mut other_side) = (0usize, 0usize);
+        for i in 0..13 {
+            for j in 0..13 {
+                for k in 0..13 {
+                    let u = demcon_core::Vec3::new(i as f64, j as f64, k as f64) / 6.0
+                        - demcon_core::Vec3::new(1.0, 1.0, 1.0);
+                    if u.norm() > 1.0 {
+                        continue;
+                    }
+                    inside_ball += 1;
+                    let x = c + r * u;
+                    let in_sphere = (x - c0).norm() <= a;
+                    let own_inclusion = ml.particles.phases[p] == 1;
+                    if in_sphere != own_inclusion {
+                        other_side += 1;
+                    }
+                }
+            }
+        }
+        let sampled = other_side as f64 / inside_ball as f64;
+        assert!(
+            (sampled - m.other_fraction).abs() < 0.03,
+            "particle {p}: {sampled} vs {}",
+            m.other_fraction
+        );
+    }
+    // The carried fractions of the two phases sum to 1.
+    assert!((mc.report.phase_fractions[0] + mc.report.phase_fractions[1] - 1.0).abs() < 1e-12);
+    assert!((ml.report.phase_fractions[0] + ml.report.phase_fractions[1] - 1.0).abs() < 1e-12);
+    // The steady run goes through, with an ETC between the phases' conductivities.
+    let r = run(&lam, &RunOptions::default()).unwrap();
+    let etc = r.etc.as_ref().unwrap().lambda_e;
+    assert!(etc > 0.9 * 33.0 && etc < 165.0, "λ_e = {etc}");
+}
