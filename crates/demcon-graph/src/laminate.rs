@@ -10,9 +10,16 @@
 //!
 //! with λ_a the particle's own phase (the phase of its centre, as the centre rule gives),
 //! λ_b the other phase and w the other phase's volume fraction. The half-bond of a contact
-//! along the unit branch e uses λ_p(e) = eᵀ Λ e; the two half-bonds then combine by the
-//! [`InterfaceRule`] as for unmixed particles. Capacities (ρc) and any scalar property mix
-//! arithmetically.
+//! along the unit branch e uses λ_p(e) = eᵀ Λ e ([`HalfBond::Laminate`]); the two half-bonds
+//! then combine by the [`InterfaceRule`] as for unmixed particles. Capacities (ρc) and any
+//! scalar property mix arithmetically.
+//!
+//! [`HalfBond::Segment`] is the network's own reading of the same geometry: a half-bond is
+//! the segment from the centre along e over half the branch length ℓ, and its conductivity
+//! is the series mix over the part u of that segment beyond the (plane) interface:
+//! 1/λ_p(e) = (1−u)/λ_a + u/λ_b, u = clamp(1 − δ/(ℓ e·n), 0, 1) when the segment heads
+//! towards the interface (e·n > 0, n pointing to the other phase, δ the centre's distance to
+//! the interface), else u = 0: branches along the interface see the centre's phase.
 
 use demcon_core::{CoreError, ParticleSet, Region, Vec3};
 
@@ -29,8 +36,24 @@ pub struct Mix {
     pub other_phase: u16,
     /// Fraction of the particle's volume in `other_phase`, in (0, 1).
     pub other_fraction: f64,
-    /// Unit normal of the interface at the particle (sign irrelevant).
+    /// Unit normal of the interface at the particle, pointing from its own phase into
+    /// `other_phase`.
     pub normal: Vec3,
+    /// Distance (m) from the particle's centre to the interface along `normal` (≥ 0).
+    pub offset: f64,
+    /// How its half-bonds see the two phases.
+    pub half_bond: HalfBond,
+}
+
+/// How the half-bond of a particle cut by an interface sees the two phases.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum HalfBond {
+    /// eᵀ Λ e of the laminate tensor (volume fractions; arithmetic along the interface,
+    /// harmonic across).
+    #[default]
+    Laminate,
+    /// Series mix along the half-bond segment (the part of the branch beyond the interface).
+    Segment,
 }
 
 impl Mix {
@@ -38,6 +61,32 @@ impl Mix {
     /// `other` (same unit, both > 0) along the unit vector `e`.
     pub fn along(&self, own: f64, other: f64, e: &Vec3) -> f64 {
         laminate_value(own, other, self.other_fraction, e.dot(&self.normal).powi(2))
+    }
+
+    /// Fraction of the segment from the centre along the unit vector `e` over `length` (m)
+    /// that lies beyond the (plane) interface.
+    pub fn segment_fraction(&self, e: &Vec3, length: f64) -> f64 {
+        let k = e.dot(&self.normal);
+        if k <= 0.0 || length <= 0.0 {
+            return 0.0;
+        }
+        (1.0 - self.offset / (k * length)).clamp(0.0, 1.0)
+    }
+
+    /// The half-bond value of a property (`own`, `other` > 0) along the unit vector `e` over
+    /// a half-bond of `length` (m), by this mix's [`HalfBond`] rule.
+    pub fn half_bond_value(&self, own: f64, other: f64, e: &Vec3, length: f64) -> f64 {
+        match self.half_bond {
+            HalfBond::Laminate => self.along(own, other, e),
+            HalfBond::Segment => {
+                let u = self.segment_fraction(e, length);
+                if u <= 0.0 {
+                    own
+                } else {
+                    1.0 / ((1.0 - u) / own + u / other)
+                }
+            }
+        }
     }
 
     /// The arithmetic mix (1−w)·own + w·other (heat capacity per volume, density).
@@ -121,13 +170,15 @@ pub fn interface_normal(region: &Region, c: &Vec3, h: f64) -> Vec3 {
 /// of its centre (`phase` if the centre is inside, its previous phase otherwise) and gets a
 /// [`Mix`] with the other phase, the volume fraction in it and the interface normal.
 /// A particle cut again by a later region loses its earlier mix (one interface per
-/// particle). `mixes` stays sorted by particle. Returns the particles whose centre lies in
-/// the region (the centre rule's count).
+/// particle). `mixes` stays sorted by particle; `half_bond` says how the new mixes'
+/// half-bonds see the phases. Returns the particles whose centre lies in the region (the
+/// centre rule's count).
 pub fn assign_phase_laminate(
     particles: &mut ParticleSet,
     region: &Region,
     phase: u16,
     mixes: &mut Vec<Mix>,
+    half_bond: HalfBond,
 ) -> usize {
     let mut count = 0;
     let mut new = Vec::new();
@@ -156,11 +207,16 @@ pub fn assign_phase_laminate(
             if !inside {
                 touched.push(p as u32);
             }
+            // The signed distance grows outwards: the other phase lies outside when the
+            // centre is inside.
+            let grad = interface_normal(region, &c, 1e-3 * r);
             new.push(Mix {
                 particle: p as u32,
                 other_phase: other,
                 other_fraction: w,
-                normal: interface_normal(region, &c, 1e-3 * r),
+                normal: if inside { grad } else { -grad },
+                offset: s.abs(),
+                half_bond,
             });
         }
     }
@@ -199,11 +255,12 @@ impl<'a> Laminates<'a> {
         }
     }
 
-    /// Particle `p`'s value of a property (one value per phase) along the unit vector `e`.
-    pub fn along(&self, p: usize, phases: &[u16], per_phase: &[f64], e: &Vec3) -> f64 {
+    /// Particle `p`'s half-bond value of a property (one value per phase) along the unit
+    /// vector `e` over a half-bond of `length` (m).
+    pub fn half_bond(&self, p: usize, phases: &[u16], per_phase: &[f64], e: &Vec3, length: f64) -> f64 {
         let own = per_phase[phases[p] as usize];
         match self.get(p) {
-            Some(m) => m.along(own, per_phase[m.other_phase as usize], e),
+            Some(m) => m.half_bond_value(own, per_phase[m.other_phase as usize], e, length),
             None => own,
         }
     }
@@ -242,8 +299,8 @@ impl<'a> Laminates<'a> {
     }
 }
 
-/// Like [`crate::contact_property`], with laminate particles: each contact combines the
-/// half-bond values λ_p(e) and λ_q(e) along its branch by `rule`.
+/// Like [`crate::contact_property`], with particles cut by interfaces: each contact combines
+/// the half-bond values λ_p(e) and λ_q(−e) over half its branch by `rule`.
 ///
 /// Errors: as [`crate::contact_property`], and a mix whose other phase has no value.
 pub fn contact_property_laminate(
@@ -284,8 +341,9 @@ pub fn contact_property_laminate(
             if lam.get(p).is_none() && lam.get(q).is_none() {
                 return b;
             }
-            let a = lam.along(p, phases, per_phase, &g.normal);
-            let c = lam.along(q, phases, per_phase, &g.normal);
+            let half = 0.5 * g.distance;
+            let a = lam.half_bond(p, phases, per_phase, &g.normal, half);
+            let c = lam.half_bond(q, phases, per_phase, &(-g.normal), half);
             interface_value(a, c, rule)
         })
         .collect())
@@ -344,7 +402,19 @@ mod tests {
             other_phase: 1,
             other_fraction: w,
             normal: Vec3::z(),
+            offset: 0.1,
+            half_bond: HalfBond::Laminate,
         };
+        // Segment: along the normal, beyond the offset; nothing across or away from it.
+        assert!((m.segment_fraction(&Vec3::z(), 0.4) - 0.75).abs() < 1e-15);
+        assert_eq!(m.segment_fraction(&(-Vec3::z()), 0.4), 0.0);
+        assert_eq!(m.segment_fraction(&Vec3::x(), 0.4), 0.0);
+        let seg = Mix {
+            half_bond: HalfBond::Segment,
+            ..m
+        };
+        assert!((seg.half_bond_value(a, b, &Vec3::z(), 0.4) - 1.0 / (0.25 / a + 0.75 / b)).abs() < 1e-15);
+        assert_eq!(seg.half_bond_value(a, b, &Vec3::x(), 0.4), a);
         let e = Vec3::new(1.0, 0.0, 1.0).normalize();
         let mid = m.along(a, b, &e);
         assert!((mid - 0.5 * (laminate_value(a, b, w, 0.0) + laminate_value(a, b, w, 1.0))).abs() < 1e-14);
@@ -367,14 +437,20 @@ mod tests {
             radius: 1.0,
         };
         let mut mixes = Vec::new();
-        assert_eq!(assign_phase_laminate(&mut p, &ball, 1, &mut mixes), 2);
+        assert_eq!(
+            assign_phase_laminate(&mut p, &ball, 1, &mut mixes, HalfBond::Laminate),
+            2
+        );
         assert_eq!(p.phases, vec![1, 1, 0, 0]);
         assert_eq!(mixes.len(), 2);
         assert_eq!((mixes[0].particle, mixes[0].other_phase), (1, 0));
         assert_eq!((mixes[1].particle, mixes[1].other_phase), (2, 1));
         assert!((mixes[0].other_fraction - (1.0 - sphere_cut_fraction(0.8, 0.5, 1.0))).abs() < 1e-15);
         assert!((mixes[1].other_fraction - sphere_cut_fraction(1.2, 0.5, 1.0)).abs() < 1e-15);
+        // Normals point into the other phase; offsets are the distances to the sphere.
         assert!((mixes[0].normal - Vec3::x()).norm() < 1e-6);
+        assert!((mixes[1].normal + Vec3::x()).norm() < 1e-6);
+        assert!((mixes[0].offset - 0.2).abs() < 1e-12 && (mixes[1].offset - 0.2).abs() < 1e-12);
         // Carried inclusion volume: particle 0 whole, 1 and 2 in part.
         let lam = Laminates::new(4, &mixes);
         let f = lam.phase_fractions(&p, 2);
@@ -386,7 +462,7 @@ mod tests {
             centre: Vec3::zeros(),
             radius: 2.0,
         };
-        assign_phase_laminate(&mut p, &big, 1, &mut mixes);
+        assign_phase_laminate(&mut p, &big, 1, &mut mixes, HalfBond::Laminate);
         assert!(mixes.iter().all(|m| m.particle != 1 && m.particle != 2));
     }
 
@@ -435,6 +511,14 @@ mod tests {
 
     #[test]
     fn lattice_series_and_parallel() {
+        lattice_series_and_parallel_with(HalfBond::Laminate, true);
+        lattice_series_and_parallel_with(HalfBond::Segment, false);
+    }
+
+    /// The series result for both half-bond rules (the cut layer's centres on the plane);
+    /// the parallel result for the laminate (`parallel`), the centre's phase for the
+    /// segment rule (its branches run along the plane).
+    fn lattice_series_and_parallel_with(hb: HalfBond, parallel_expected: bool) {
         let (nx, ny, nz) = (6, 4, 3);
         let (la, lb) = (1.0, 7.0);
         let per_phase = [la, lb];
@@ -450,7 +534,7 @@ mod tests {
             max: Vec3::new(10.0, 10.0, 10.0),
         };
         let mut mixes = Vec::new();
-        assign_phase_laminate(&mut p, &beyond, 1, &mut mixes);
+        assign_phase_laminate(&mut p, &beyond, 1, &mut mixes, hb);
         assert_eq!(mixes.len(), ny * nz);
         assert!(mixes.iter().all(|m| (m.other_fraction - 0.5).abs() < 1e-12));
         let lam = contact_property_laminate(&g, &p.phases, &per_phase, &mixes, rule).unwrap();
@@ -471,14 +555,46 @@ mod tests {
             max: Vec3::new(10.0, 10.0, 10.0),
         };
         let mut mixes = Vec::new();
-        assign_phase_laminate(&mut p, &above, 1, &mut mixes);
+        assign_phase_laminate(&mut p, &above, 1, &mut mixes, hb);
         assert_eq!(mixes.len(), nx * nz);
         let lam = contact_property_laminate(&g, &p.phases, &per_phase, &mixes, rule).unwrap();
-        let parallel = (1.5 * la + 2.5 * lb) / 4.0;
+        let parallel = if parallel_expected {
+            (1.5 * la + 2.5 * lb) / 4.0
+        } else {
+            (la + 3.0 * lb) / 4.0
+        };
         let got = lattice_conductivity_x(&p, &g, &lam, ny, nz, nx);
         assert!(
             (got - parallel).abs() < 1e-12 * parallel,
             "{got} vs parallel {parallel}"
         );
+    }
+
+    #[test]
+    fn segment_rule_gives_the_series_result_at_any_plane_position() {
+        // A chain of touching unit spheres along x, the plane x = x0 anywhere inside: the
+        // segment rule puts the interface exactly where it is along the chain.
+        let (nx, ny, nz) = (6, 1, 1);
+        let (la, lb) = (1.0, 7.0);
+        for x0 in [2.1, 2.3, 2.5, 2.75, 2.95, 3.2] {
+            let (mut p, container) = lattice(nx, ny, nz);
+            let g = crate::detect_contacts(&p, &container, &crate::ContactParams::relative(0.01)).unwrap();
+            let beyond = Region::Box {
+                min: Vec3::new(x0, -1.0, -1.0),
+                max: Vec3::new(10.0, 10.0, 10.0),
+            };
+            let mut mixes = Vec::new();
+            assign_phase_laminate(&mut p, &beyond, 1, &mut mixes, HalfBond::Segment);
+            let lam =
+                contact_property_laminate(&g, &p.phases, &[la, lb], &mixes, InterfaceRule::HarmonicMean)
+                    .unwrap();
+            let got = lattice_conductivity_x(&p, &g, &lam, ny, nz, nx);
+            // Between the first (0.5) and last (5.5) centres.
+            let series = 5.0 / ((x0 - 0.5) / la + (5.5 - x0) / lb);
+            assert!(
+                (got - series).abs() < 1e-12 * series,
+                "x0 = {x0}: {got} vs {series}"
+            );
+        }
     }
 }

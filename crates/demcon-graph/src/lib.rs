@@ -74,8 +74,8 @@ pub use contact::{
 pub use error::GraphError;
 pub use interface::{InterfaceRule, conductances, contact_property, interface_value};
 pub use laminate::{
-    Laminates, Mix, assign_phase_laminate, contact_property_laminate, inside_fraction, interface_normal,
-    laminate_value, plane_cut_fraction, sphere_cut_fraction,
+    HalfBond, Laminates, Mix, assign_phase_laminate, contact_property_laminate, inside_fraction,
+    interface_normal, laminate_value, plane_cut_fraction, sphere_cut_fraction,
 };
 pub use phase::assign_phase;
 pub use search::{NeighbourSearch, relative_gap};

@@ -119,6 +119,10 @@ pub enum PhaseRuleConfig {
     /// conductivity tensor λ_∥ (I − n nᵀ) + λ_⊥ n nᵀ (arithmetic along the interface,
     /// harmonic across it); heat capacity ρc mixes arithmetically.
     Laminate,
+    /// As `Laminate` for volumes and capacities, but each half-bond (centre to mid-branch)
+    /// is the series mix of the part of its segment on either side of the interface (a
+    /// plane at the particle): branches along the interface see the centre's phase.
+    Segment,
 }
 
 /// A container (m). A box spans `[0, size]`; a cylinder is along z from z = 0 with its axis at

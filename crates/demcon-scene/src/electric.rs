@@ -110,8 +110,8 @@ pub fn electric_conductances(
         });
     }
     // A laminate particle's half-bond uses its conductivity along the branch.
-    let along = |p: usize, e: &demcon_core::Vec3| match &other[p] {
-        Some((m, s)) => m.along(sigma[p], *s, e),
+    let along = |p: usize, e: &demcon_core::Vec3, half: f64| match &other[p] {
+        Some((m, s)) => m.half_bond_value(sigma[p], *s, e, half),
         None => sigma[p],
     };
     Ok(model
@@ -122,7 +122,9 @@ pub fn electric_conductances(
         .zip(&s.area)
         .map(|((&[p, q], geo), &a)| {
             let (p, q) = (p as usize, q as usize);
-            interface_value(along(p, &geo.normal), along(q, &geo.normal), rule) * a / geo.distance
+            let half = 0.5 * geo.distance;
+            interface_value(along(p, &geo.normal, half), along(q, &(-geo.normal), half), rule) * a
+                / geo.distance
         })
         .collect())
 }

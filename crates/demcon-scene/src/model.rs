@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use demcon_core::{Container, MaterialTable, ParticleSet, Region};
 use demcon_graph::{
-    ContactGraph, ContactParams, ContactReport, Laminates, Mix, assign_phase, assign_phase_laminate,
-    detect_contacts,
+    ContactGraph, ContactParams, ContactReport, HalfBond, Laminates, Mix, assign_phase,
+    assign_phase_laminate, detect_contacts,
 };
 use demcon_network::Network;
 use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReason, carve, pack, read_xyzr};
@@ -253,7 +253,10 @@ fn apply_phases(
             assign_phase(particles, region, phase);
         }
         PhaseRuleConfig::Laminate => {
-            assign_phase_laminate(particles, region, phase, mixes);
+            assign_phase_laminate(particles, region, phase, mixes, HalfBond::Laminate);
+        }
+        PhaseRuleConfig::Segment => {
+            assign_phase_laminate(particles, region, phase, mixes, HalfBond::Segment);
         }
     };
     for (i, ph) in cfg.phases.iter().enumerate() {
@@ -311,6 +314,50 @@ fn apply_phases(
         inc.particle_fraction = f.get(phase as usize).copied().unwrap_or(0.0);
     }
     Ok(inclusions)
+}
+
+/// Re-assigns the phases of a built model (same packing and contacts): every particle back
+/// to phase 0 with no mix, then each `(region, phase)` in order under `rule`; updates the
+/// report's phase counts, carried fractions and cut-particle count. For studies that compare
+/// phase layouts or rules on one packing.
+pub fn set_region_phases(model: &mut Model, regions: &[(Region, u16)], rule: PhaseRuleConfig) {
+    model.particles.phases.iter_mut().for_each(|p| *p = 0);
+    model.mixes.clear();
+    for (region, phase) in regions {
+        match rule {
+            PhaseRuleConfig::Centre => {
+                assign_phase(&mut model.particles, region, *phase);
+            }
+            PhaseRuleConfig::Laminate => {
+                assign_phase_laminate(
+                    &mut model.particles,
+                    region,
+                    *phase,
+                    &mut model.mixes,
+                    HalfBond::Laminate,
+                );
+            }
+            PhaseRuleConfig::Segment => {
+                assign_phase_laminate(
+                    &mut model.particles,
+                    region,
+                    *phase,
+                    &mut model.mixes,
+                    HalfBond::Segment,
+                );
+            }
+        }
+    }
+    let n_phases = model.materials.materials.len();
+    let mut counts = vec![0; n_phases];
+    for &p in &model.particles.phases {
+        if (p as usize) < n_phases {
+            counts[p as usize] += 1;
+        }
+    }
+    model.report.phase_counts = counts;
+    model.report.phase_fractions = model.laminates().phase_fractions(&model.particles, n_phases);
+    model.report.mixed_particles = model.mixes.len();
 }
 
 /// Contact parameters from the scene.

@@ -378,7 +378,7 @@ pub fn extended_network(
                 SurfaceModel::TerrerosAlpha => terreros_alpha(degrees[pu] + 1).alpha * r * r,
             };
             let e = face_normal(&model.container, face, &model.particles.centres[pu]);
-            let gp = lam.along(pu, &model.particles.phases, phase_lambda, &e) * area / h;
+            let gp = lam.half_bond(pu, &model.particles.phases, phase_lambda, &e, h) * area / h;
             edges.push([p, node]);
             g.push(gp);
             gs.push(gp);
@@ -395,13 +395,16 @@ pub fn extended_network(
     Ok((Some(net), g, links))
 }
 
-/// Unit normal of a container face at (the particle centred at) `c`.
+/// Outward unit normal of a container face at (the particle centred at) `c`.
 fn face_normal(container: &Container, face: Face, c: &demcon_core::Vec3) -> demcon_core::Vec3 {
     use demcon_core::Vec3;
     match face {
-        Face::XMin | Face::XMax => Vec3::x(),
-        Face::YMin | Face::YMax => Vec3::y(),
-        Face::ZMin | Face::ZMax => Vec3::z(),
+        Face::XMin => -Vec3::x(),
+        Face::XMax => Vec3::x(),
+        Face::YMin => -Vec3::y(),
+        Face::YMax => Vec3::y(),
+        Face::ZMin => -Vec3::z(),
+        Face::ZMax => Vec3::z(),
         Face::Outer => {
             let r = match container {
                 Container::Cylinder { .. } => Vec3::new(c.x, c.y, 0.0),

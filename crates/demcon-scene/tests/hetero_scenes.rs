@@ -197,4 +197,24 @@ fn laminate_rule_resolves_the_inclusion_below_a_particle() {
     let r = run(&lam, &RunOptions::default()).unwrap();
     let etc = r.etc.as_ref().unwrap().lambda_e;
     assert!(etc > 0.9 * 33.0 && etc < 165.0, "λ_e = {etc}");
+    // The segment rule cuts the same particles with the same fractions; its normals point
+    // into the other phase and its offsets are the centres' distances to the sphere.
+    let mut seg = centre.clone();
+    seg.config.phase_rule = PhaseRuleConfig::Segment;
+    let ms = build_model(&seg.config, &seg.base_dir, None).unwrap();
+    assert_eq!(ms.mixes.len(), ml.mixes.len());
+    for (m, b) in ms.mixes.iter().zip(&ml.mixes) {
+        assert_eq!((m.particle, m.other_fraction), (b.particle, b.other_fraction));
+        let d = ms.particles.centres[m.particle as usize] - c0;
+        assert!((m.offset - (d.norm() - a).abs()).abs() < 1e-12);
+        let outwards = d.normalize().dot(&m.normal);
+        assert!(if ms.particles.phases[m.particle as usize] == 1 {
+            outwards > 0.999
+        } else {
+            outwards < -0.999
+        });
+    }
+    let r = run(&seg, &RunOptions::default()).unwrap();
+    let etc_s = r.etc.as_ref().unwrap().lambda_e;
+    assert!(etc_s > 0.9 * 33.0 && etc_s < 165.0, "λ_e = {etc_s}");
 }
