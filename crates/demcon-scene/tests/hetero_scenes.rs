@@ -218,3 +218,60 @@ fn laminate_rule_resolves_the_inclusion_below_a_particle() {
     let etc_s = r.etc.as_ref().unwrap().lambda_e;
     assert!(etc_s > 0.9 * 33.0 && etc_s < 165.0, "λ_e = {etc_s}");
 }
+
+#[test]
+fn cut_particles_conduct_heat_and_current_alike_and_store_heat_by_volume() {
+    use demcon_scene::build_model;
+    use demcon_scene::config::{PhaseRuleConfig, SurfaceConfig};
+    use demcon_scene::electric::electric_conductances;
+    use demcon_scene::thermal::thermal_setup;
+    for rule in [PhaseRuleConfig::Laminate, PhaseRuleConfig::Segment] {
+        let mut s = small("single-inclusion.ron", 2000, 2.0);
+        s.config.phase_rule = rule;
+        s.config.surface = SurfaceConfig::TerrerosAlpha;
+        // ρ_e = 1/λ in each phase: the electric network must be the thermal one.
+        for m in &mut s.config.materials {
+            m.resistivity = Some(1.0 / m.conductivity);
+        }
+        s.config.materials[1].density = 2.0 * s.config.materials[0].density;
+        let model = build_model(&s.config, &s.base_dir, None).unwrap();
+        assert!(!model.mixes.is_empty());
+        let th = s.config.thermal.as_ref().unwrap();
+        let setup = thermal_setup(&model, &s.config.surface, s.config.interface, th).unwrap();
+        let ge = electric_conductances(&model, &s.config.surface, s.config.interface, None).unwrap();
+        let nc = model.graph.pairs.len();
+        for k in 0..nc {
+            let gt = setup.conductances[k];
+            assert!(
+                (ge[k] - gt).abs() <= 1e-9 * gt,
+                "{rule:?}, contact {k}: {} vs {gt}",
+                ge[k]
+            );
+        }
+        // Capacities: ρc mixes by the volume fractions (c equal, ρ_inclusion = 2 ρ_matrix).
+        let lam = model.laminates();
+        let (c0, c1) = (
+            s.config.materials[0].density * s.config.materials[0].specific_heat,
+            s.config.materials[1].density * s.config.materials[1].specific_heat,
+        );
+        let frac: Vec<f64> = setup
+            .rep_volumes
+            .iter()
+            .enumerate()
+            .map(|(p, r)| (model.particles.volume(p) / r).min(1.0))
+            .collect();
+        for m in &model.mixes {
+            let p = m.particle as usize;
+            let own = if model.particles.phases[p] == 1 { c1 } else { c0 };
+            let other = if m.other_phase == 1 { c1 } else { c0 };
+            let rc = (1.0 - m.other_fraction) * own + m.other_fraction * other;
+            let expected = rc * model.particles.volume(p) / frac[p];
+            let got = setup.capacities[p];
+            assert!(
+                (got - expected).abs() <= 1e-9 * expected,
+                "{rule:?}, particle {p}: {got} vs {expected}"
+            );
+            assert!(lam.get(p).is_some());
+        }
+    }
+}
