@@ -239,14 +239,9 @@ fn cut_particles_conduct_heat_and_current_alike_and_store_heat_by_volume() {
         let th = s.config.thermal.as_ref().unwrap();
         let setup = thermal_setup(&model, &s.config.surface, s.config.interface, th).unwrap();
         let ge = electric_conductances(&model, &s.config.surface, s.config.interface, None).unwrap();
-        let nc = model.graph.pairs.len();
-        for k in 0..nc {
-            let gt = setup.conductances[k];
-            assert!(
-                (ge[k] - gt).abs() <= 1e-9 * gt,
-                "{rule:?}, contact {k}: {} vs {gt}",
-                ge[k]
-            );
+        assert_eq!(ge.len(), model.graph.pairs.len());
+        for (k, (e, t)) in ge.iter().zip(&setup.conductances).enumerate() {
+            assert!((e - t).abs() <= 1e-9 * t, "{rule:?}, contact {k}: {e} vs {t}");
         }
         // Capacities: ρc mixes by the volume fractions (c equal, ρ_inclusion = 2 ρ_matrix).
         let lam = model.laminates();
