@@ -9,7 +9,9 @@
 //! [`contact_surfaces`] under a [`SurfaceModel`] (calibrated C_t·π·R_m², or Terreros α) →
 //! [`contact_property`] per contact with an [`InterfaceRule`] → [`conductances`]
 //! property·S/d. [`representative_volumes`] gives each particle's volume (V_p/φ or
-//! V_p/f_v), [`assign_phase`] sets phases from a region.
+//! V_p/f_v), [`assign_phase`] sets phases from a region by the particles' centres, and
+//! [`assign_phase_laminate`] also resolves the interface inside the particles it cuts
+//! ([`Mix`]: a laminate of the two phases, [`contact_property_laminate`]).
 //!
 //! Neighbour search: a uniform cell grid visited in cell order, in parallel (default), or
 //! an rstar R-tree self-join ([`NeighbourSearch`]); both give identical graphs. The grid is
@@ -57,6 +59,7 @@ mod components;
 mod contact;
 mod error;
 mod interface;
+mod laminate;
 mod phase;
 mod search;
 mod surface;
@@ -70,6 +73,10 @@ pub use contact::{
 };
 pub use error::GraphError;
 pub use interface::{InterfaceRule, conductances, contact_property, interface_value};
+pub use laminate::{
+    HalfBond, Laminates, Mix, assign_phase_laminate, contact_property_laminate, inside_fraction,
+    interface_normal, laminate_value, plane_cut_fraction, sphere_cut_fraction,
+};
 pub use phase::assign_phase;
 pub use search::{NeighbourSearch, relative_gap};
 pub use surface::{SurfaceModel, Surfaces, contact_surfaces, representative_volumes};

@@ -35,6 +35,9 @@ pub struct SceneConfig {
     /// Phase assignments applied in order on top of phase 0.
     #[serde(default)]
     pub phases: Vec<PhaseConfig>,
+    /// How `phases` treat the particles their interfaces cut.
+    #[serde(default)]
+    pub phase_rule: PhaseRuleConfig,
     /// Conductivity of contacts between two phases.
     #[serde(default)]
     pub interface: InterfaceConfig,
@@ -101,6 +104,25 @@ pub enum CarveRuleConfig {
     /// Particles whose centre lies inside: their representative cells tile the region on
     /// average (the unbiased cut of a homogeneous packing; spheres may protrude).
     Centre,
+}
+
+/// How a phase assignment treats the particles cut by its region's boundary.
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
+pub enum PhaseRuleConfig {
+    /// A particle takes the phase of its centre: the interface is resolved to a particle
+    /// size.
+    #[default]
+    Centre,
+    /// A particle cut by the interface (|signed distance of its centre| < R_p) keeps the
+    /// phase of its centre and becomes a laminate of the two phases: its volume fraction in
+    /// each (exact for spheres, a plane cut otherwise), the interface normal, and the
+    /// conductivity tensor λ_∥ (I − n nᵀ) + λ_⊥ n nᵀ (arithmetic along the interface,
+    /// harmonic across it); heat capacity ρc mixes arithmetically.
+    Laminate,
+    /// As `Laminate` for volumes and capacities, but each half-bond (centre to mid-branch)
+    /// is the series mix of the part of its segment on either side of the interface (a
+    /// plane at the particle): branches along the interface see the centre's phase.
+    Segment,
 }
 
 /// A container (m). A box spans `[0, size]`; a cylinder is along z from z = 0 with its axis at

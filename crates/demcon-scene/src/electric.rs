@@ -73,13 +73,37 @@ pub fn electric_surface_model(model: &Model, surface: &SurfaceConfig) -> Result<
     })
 }
 
-/// Electric conductivity σ_p = 1/ρ_e(T_p) of every particle (S/m); `temperatures` (°C), when
-/// given, evaluate ρ_e(T), else each material's ρ_e at its reference temperature.
-pub fn particle_conductivities(model: &Model, temperatures: Option<&[f64]>) -> Result<Vec<f64>, SceneError> {
+/// Electric conductivities σ = 1/ρ_e(T_p) of every particle (S/m): its own phase's and, for a
+/// particle cut by a phase interface (`phase_rule` other than Centre), the other phase's with
+/// the mix that combines them along a half-bond.
+pub struct ParticleConductivities {
+    /// σ of the particle's own phase (S/m).
+    pub own: Vec<f64>,
+    /// The interface mix and σ of the other phase (S/m), for cut particles.
+    pub other: Vec<Option<(demcon_graph::Mix, f64)>>,
+}
+
+impl ParticleConductivities {
+    /// Particle p's conductivity along the unit vector `e` over a half-bond of length `half`
+    /// (m) (S/m).
+    pub fn half_bond(&self, p: usize, e: &demcon_core::Vec3, half: f64) -> f64 {
+        match &self.other[p] {
+            Some((m, s)) => m.half_bond_value(self.own[p], *s, e, half),
+            None => self.own[p],
+        }
+    }
+}
+
+/// Electric conductivities of every particle; `temperatures` (°C), when given, evaluate
+/// ρ_e(T), else each material's ρ_e at its reference temperature.
+pub fn particle_conductivities(
+    model: &Model,
+    temperatures: Option<&[f64]>,
+) -> Result<ParticleConductivities, SceneError> {
     let n = model.particles.len();
-    let mut sigma = Vec::with_capacity(n);
-    for p in 0..n {
-        let m = &model.materials.materials[model.particles.phases[p] as usize];
+    // σ = 1/ρ_e(T_p) of a phase at a particle's temperature.
+    let sigma_of = |phase: u16, p: usize| -> Result<f64, SceneError> {
+        let m = &model.materials.materials[phase as usize];
         let t = temperatures.map(|t| t[p]).unwrap_or(m.resistivity_ref_temp);
         let rho = m.resistivity_at(t).ok_or_else(|| {
             SceneError::invalid(
@@ -95,9 +119,19 @@ pub fn particle_conductivities(model: &Model, temperatures: Option<&[f64]>) -> R
                 format!("ρ_e(T = {t:.3}) must stay > 0: check resistivity_temp_coeff"),
             ));
         }
-        sigma.push(1.0 / rho);
+        Ok(1.0 / rho)
+    };
+    let lam = model.laminates();
+    let mut own = Vec::with_capacity(n);
+    let mut other = Vec::with_capacity(n);
+    for p in 0..n {
+        own.push(sigma_of(model.particles.phases[p], p)?);
+        other.push(match lam.get(p) {
+            Some(m) => Some((*m, sigma_of(m.other_phase, p)?)),
+            None => None,
+        });
     }
-    Ok(sigma)
+    Ok(ParticleConductivities { own, other })
 }
 
 /// Contact conductances 1/R_pq = S_pq / (ρ_e,pq d_pq) (S). `temperatures` (°C), when given,
@@ -118,7 +152,7 @@ fn contact_conductances(
     model: &Model,
     sm: &SurfaceModel,
     interface: InterfaceConfig,
-    sigma: &[f64],
+    sigma: &ParticleConductivities,
 ) -> Result<Vec<f64>, SceneError> {
     let s = contact_surfaces(&model.graph, &model.particles, sm)?;
     let rule = match interface {
@@ -132,7 +166,13 @@ fn contact_conductances(
         .zip(&model.graph.geometry)
         .zip(&s.area)
         .map(|((&[p, q], geo), &a)| {
-            interface_value(sigma[p as usize], sigma[q as usize], rule) * a / geo.distance
+            let (p, q) = (p as usize, q as usize);
+            let half = 0.5 * geo.distance;
+            let (sp, sq) = (
+                sigma.half_bond(p, &geo.normal, half),
+                sigma.half_bond(q, &(-geo.normal), half),
+            );
+            interface_value(sp, sq, rule) * a / geo.distance
         })
         .collect())
 }
@@ -160,7 +200,8 @@ pub fn solve_electric(
         .iter()
         .filter_map(|e| e.face.map(|f| (convert::face(f), e.potential)))
         .collect();
-    let (ext, g, walls) = extended_network(model, &sm, &g, &sigma, &faces, "electric.electrodes")?;
+    let half_bond = |p: usize, e: &demcon_core::Vec3, h: f64| sigma.half_bond(p, e, h);
+    let (ext, g, walls) = extended_network(model, &sm, &g, &half_bond, &faces, "electric.electrodes")?;
     let net = ext.as_ref().unwrap_or(&model.network);
     let mut walls_iter = walls.iter();
     let mut electrodes = Vec::new();

@@ -5,7 +5,10 @@ use std::path::Path;
 use std::time::Instant;
 
 use demcon_core::{Container, MaterialTable, ParticleSet, Region};
-use demcon_graph::{ContactGraph, ContactParams, ContactReport, assign_phase, detect_contacts};
+use demcon_graph::{
+    ContactGraph, ContactParams, ContactReport, HalfBond, Laminates, Mix, assign_phase,
+    assign_phase_laminate, detect_contacts,
+};
 use demcon_network::Network;
 use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReason, carve, pack, read_xyzr};
 use serde::Serialize;
@@ -27,12 +30,22 @@ pub struct Model {
     pub phi: f64,
     /// The materials, indexed by phase.
     pub materials: MaterialTable,
+    /// Particles cut by a phase interface under the laminate rule, sorted by particle
+    /// (empty under the centre rule).
+    pub mixes: Vec<Mix>,
     /// Contacts with their geometry.
     pub graph: ContactGraph,
     /// Laplacian structure over the contacts.
     pub network: Network,
     /// What the build did.
     pub report: ModelReport,
+}
+
+impl Model {
+    /// The laminate mixes indexed by particle.
+    pub fn laminates(&self) -> Laminates<'_> {
+        Laminates::new(self.particles.len(), &self.mixes)
+    }
 }
 
 /// What building the model did and cost.
@@ -44,8 +57,13 @@ pub struct ModelReport {
     pub imported_from: Option<String>,
     /// Particles removed by carving.
     pub carved_away: usize,
-    /// Particles per phase.
+    /// Particles per phase (by centre).
     pub phase_counts: Vec<usize>,
+    /// Volume fraction of the solid carried by each phase: Σ v_p V_p / Σ V_p (the
+    /// particles' own phases, and the laminate fractions of the cut ones).
+    pub phase_fractions: Vec<f64>,
+    /// Particles cut by an interface (laminate rule).
+    pub mixed_particles: usize,
     /// Inclusions placed (centres and radius), when the scene asks for them.
     pub inclusions: Option<InclusionReport>,
     /// Contact detection summary.
@@ -67,7 +85,8 @@ pub struct InclusionReport {
     pub radius: f64,
     /// Volume fraction of the inclusion spheres in the box.
     pub fraction: f64,
-    /// Fraction of the particles (by volume) given the inclusion phase.
+    /// Fraction of the solid (by volume) the model carries in the inclusion phase (by
+    /// centre, or with the laminate fractions under the laminate rule).
     pub particle_fraction: f64,
     /// Centres (m).
     pub centres: Vec<[f64; 3]>,
@@ -226,8 +245,20 @@ fn apply_phases(
     particles: &mut ParticleSet,
     container: &Container,
     materials: &MaterialTable,
+    mixes: &mut Vec<Mix>,
 ) -> Result<Option<InclusionReport>, SceneError> {
     let mut inclusions = None;
+    let mut assign = |particles: &mut ParticleSet, region: &Region, phase: u16| match cfg.phase_rule {
+        PhaseRuleConfig::Centre => {
+            assign_phase(particles, region, phase);
+        }
+        PhaseRuleConfig::Laminate => {
+            assign_phase_laminate(particles, region, phase, mixes, HalfBond::Laminate);
+        }
+        PhaseRuleConfig::Segment => {
+            assign_phase_laminate(particles, region, phase, mixes, HalfBond::Segment);
+        }
+    };
     for (i, ph) in cfg.phases.iter().enumerate() {
         match ph {
             PhaseConfig::Region { material, region } => {
@@ -236,7 +267,7 @@ fn apply_phases(
                     .phase_of(material)
                     .map_err(|e| SceneError::at(&format!("{field}.material"), e))?;
                 let region = convert::region(region, &format!("{field}.region"))?;
-                assign_phase(particles, &region, phase);
+                assign(particles, &region, phase);
             }
             PhaseConfig::Inclusions {
                 material,
@@ -253,18 +284,14 @@ fn apply_phases(
                         .map(|c| Region::Sphere { centre: *c, radius })
                         .collect(),
                 );
-                assign_phase(particles, &union, phase);
-                let v_in: f64 = (0..particles.len())
-                    .filter(|&p| particles.phases[p] == phase)
-                    .map(|p| particles.volume(p))
-                    .sum();
+                assign(particles, &union, phase);
                 let b = container.bounds();
                 inclusions = Some(InclusionReport {
                     count: centres.len(),
                     radius,
                     fraction: centres.len() as f64 * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
                         / b.volume(),
-                    particle_fraction: v_in / particles.solid_volume(),
+                    particle_fraction: 0.0, // set once all phases are applied
                     centres: centres.iter().map(|c| [c.x, c.y, c.z]).collect(),
                 });
             }
@@ -273,7 +300,64 @@ fn apply_phases(
     materials
         .check_phases(&particles.phases)
         .map_err(|e| SceneError::at("phases", e))?;
+    if let Some(inc) = inclusions.as_mut() {
+        let phase = cfg
+            .phases
+            .iter()
+            .rev()
+            .find_map(|p| match p {
+                PhaseConfig::Inclusions { material, .. } => materials.phase_of(material).ok(),
+                _ => None,
+            })
+            .unwrap_or(0);
+        let f = Laminates::new(particles.len(), mixes).phase_fractions(particles, materials.materials.len());
+        inc.particle_fraction = f.get(phase as usize).copied().unwrap_or(0.0);
+    }
     Ok(inclusions)
+}
+
+/// Re-assigns the phases of a built model (same packing and contacts): every particle back
+/// to phase 0 with no mix, then each `(region, phase)` in order under `rule`; updates the
+/// report's phase counts, carried fractions and cut-particle count. For studies that compare
+/// phase layouts or rules on one packing.
+pub fn set_region_phases(model: &mut Model, regions: &[(Region, u16)], rule: PhaseRuleConfig) {
+    model.particles.phases.iter_mut().for_each(|p| *p = 0);
+    model.mixes.clear();
+    for (region, phase) in regions {
+        match rule {
+            PhaseRuleConfig::Centre => {
+                assign_phase(&mut model.particles, region, *phase);
+            }
+            PhaseRuleConfig::Laminate => {
+                assign_phase_laminate(
+                    &mut model.particles,
+                    region,
+                    *phase,
+                    &mut model.mixes,
+                    HalfBond::Laminate,
+                );
+            }
+            PhaseRuleConfig::Segment => {
+                assign_phase_laminate(
+                    &mut model.particles,
+                    region,
+                    *phase,
+                    &mut model.mixes,
+                    HalfBond::Segment,
+                );
+            }
+        }
+    }
+    let n_phases = model.materials.materials.len();
+    let mut counts = vec![0; n_phases];
+    for &p in &model.particles.phases {
+        if (p as usize) < n_phases {
+            counts[p as usize] += 1;
+        }
+    }
+    model.report.phase_counts = counts;
+    model.report.phase_fractions = model.laminates().phase_fractions(&model.particles, n_phases);
+    model.report.mixed_particles = model.mixes.len();
 }
 
 /// Contact parameters from the scene.
@@ -320,7 +404,10 @@ pub fn build_model(
         particles = kept;
         domain_volume = region.volume(256);
     }
-    let inclusions = apply_phases(cfg, &mut particles, &container, &materials)?;
+    let mut mixes = Vec::new();
+    let inclusions = apply_phases(cfg, &mut particles, &container, &materials, &mut mixes)?;
+    let phase_fractions =
+        Laminates::new(particles.len(), &mixes).phase_fractions(&particles, materials.materials.len());
     let t1 = Instant::now();
     let graph = detect_contacts(&particles, &container, &contact_params)?;
     let contacts_s = t1.elapsed().as_secs_f64();
@@ -338,6 +425,8 @@ pub fn build_model(
             imported_from,
             carved_away,
             phase_counts,
+            phase_fractions,
+            mixed_particles: mixes.len(),
             inclusions,
             contacts: ContactSummary::from(&graph.report),
             pack_s,
@@ -349,6 +438,7 @@ pub fn build_model(
         domain_volume,
         phi,
         materials,
+        mixes,
         graph,
         network,
     })

@@ -84,6 +84,21 @@ pub fn write_outputs(
     let phase: Vec<f64> = m.particles.phases.iter().map(|&p| p as f64).collect();
     let degree: Vec<i32> = m.graph.degrees().iter().map(|&d| d as i32).collect();
     let mut scalars: Vec<(&str, Vec<f64>)> = Vec::new();
+    // Laminate rule: the fraction of each particle's volume in its own phase (1 unless an
+    // interface cuts it) and the phase on the other side (its own phase if none).
+    let lam = m.laminates();
+    scalars.push((
+        "phase_fraction",
+        (0..n)
+            .map(|p| lam.get(p).map_or(1.0, |x| 1.0 - x.other_fraction))
+            .collect(),
+    ));
+    scalars.push((
+        "other_phase",
+        (0..n)
+            .map(|p| lam.get(p).map_or(m.particles.phases[p], |x| x.other_phase) as f64)
+            .collect(),
+    ));
     if let Some(t) = &r.thermal {
         scalars.push(("temperature", t.temperatures.clone()));
     }

@@ -5,8 +5,8 @@ use std::time::Instant;
 
 use demcon_core::{Axis, Container, Face, Selector};
 use demcon_graph::{
-    InterfaceRule, SurfaceModel, conductances, contact_property, contact_surfaces, representative_volumes,
-    surface_calibrated, terreros_alpha,
+    InterfaceRule, SurfaceModel, conductances, contact_property_laminate, contact_surfaces,
+    representative_volumes, surface_calibrated, terreros_alpha,
 };
 use demcon_network::{Constraints, FloatingPolicy, Method, SolveParams, SolveReport, resolve_fixed};
 use demcon_thermal::{
@@ -62,15 +62,6 @@ fn model_for(cfg: &SurfaceConfig, c_t: Option<f64>) -> SurfaceModel {
             c_t: c_t.unwrap_or(1.0),
         },
     }
-}
-
-fn per_particle<T: Copy>(model: &Model, f: impl Fn(&demcon_core::Material) -> T) -> Vec<T> {
-    model
-        .particles
-        .phases
-        .iter()
-        .map(|&p| f(&model.materials.materials[p as usize]))
-        .collect()
 }
 
 fn interface_rule(i: InterfaceConfig) -> InterfaceRule {
@@ -255,7 +246,6 @@ fn calibrate_ct_walls(model: &Model) -> Result<CtCalibration, SceneError> {
     let s = contact_surfaces(&model.graph, &model.particles, &sm)?;
     let lam = vec![1.0; model.graph.pairs.len()];
     let g = conductances(&model.graph, &s.area, &lam)?;
-    let ones = vec![1.0; model.particles.len()];
     let n = model.particles.len();
     let (method, walls, sources): (&str, Vec<(Face, f64)>, Vec<f64>) = match model.container {
         Container::Sphere { .. } => {
@@ -280,7 +270,7 @@ fn calibrate_ct_walls(model: &Model) -> Result<CtCalibration, SceneError> {
             ));
         }
     };
-    let (net, g_ext, links) = extended_network(model, &sm, &g, &ones, &walls, "thermal.bcs")?;
+    let (net, g_ext, links) = extended_network(model, &sm, &g, &|_, _, _| 1.0, &walls, "thermal.bcs")?;
     let net = net.as_ref().unwrap_or(&model.network);
     let mut src = sources;
     src.resize(net.n_nodes(), 0.0);
@@ -345,17 +335,18 @@ pub struct WallLinks {
 pub type ExtendedNetwork = (Option<demcon_network::Network>, Vec<f64>, Vec<WallLinks>);
 
 /// The network with one extra node per wall: the particles' contacts followed by the wall
-/// links, each a half-contact λ_p S_p / h_p from a particle touching the face (h_p its
+/// links, each a half-contact λ_p(n) S_p / h_p from a particle touching the face (h_p its
 /// centre-to-face distance, at least half its radius; S_p its own transmission surface of
-/// model `sm`). Returns `None` for the network when there is no wall (the model's is used).
-/// `particle_lambda` is each particle's conductivity (W/(m·K) for heat, S/m = 1/ρ_e for
-/// current); `walls` the faces and their values (°C or V); `field` names the scene entry in
-/// errors (`thermal.bcs`, `electric.electrodes`).
+/// model `sm`; λ_p(n) its conductivity along the face normal n). Returns `None` for the
+/// network when there is no wall (the model's is used). `half_bond(p, e, h)` is particle p's
+/// conductivity along the unit vector e over a half-bond of length h (W/(m·K) for heat, S/m
+/// for current; a laminate particle's depends on e); `walls` the faces and their values (°C
+/// or V); `field` names the scene entry in errors (`thermal.bcs`, `electric.electrodes`).
 pub fn extended_network(
     model: &Model,
     sm: &SurfaceModel,
     contact_g: &[f64],
-    particle_lambda: &[f64],
+    half_bond: &dyn Fn(usize, &demcon_core::Vec3, f64) -> f64,
     walls: &[(Face, f64)],
     field: &str,
 ) -> Result<ExtendedNetwork, SceneError> {
@@ -389,7 +380,8 @@ pub fn extended_network(
                 SurfaceModel::Calibrated { c_t } => surface_calibrated(c_t, r),
                 SurfaceModel::TerrerosAlpha => terreros_alpha(degrees[pu] + 1).alpha * r * r,
             };
-            let gp = particle_lambda[pu] * area / h;
+            let e = face_normal(&model.container, face, &model.particles.centres[pu]);
+            let gp = half_bond(pu, &e, h) * area / h;
             edges.push([p, node]);
             g.push(gp);
             gs.push(gp);
@@ -404,6 +396,26 @@ pub fn extended_network(
     }
     let net = demcon_network::Network::new(n + walls.len(), &edges)?;
     Ok((Some(net), g, links))
+}
+
+/// Outward unit normal of a container face at (the particle centred at) `c`.
+fn face_normal(container: &Container, face: Face, c: &demcon_core::Vec3) -> demcon_core::Vec3 {
+    use demcon_core::Vec3;
+    match face {
+        Face::XMin => -Vec3::x(),
+        Face::XMax => Vec3::x(),
+        Face::YMin => -Vec3::y(),
+        Face::YMax => Vec3::y(),
+        Face::ZMin => -Vec3::z(),
+        Face::ZMax => Vec3::z(),
+        Face::Outer => {
+            let r = match container {
+                Container::Cylinder { .. } => Vec3::new(c.x, c.y, 0.0),
+                _ => *c,
+            };
+            if r.norm() > 0.0 { r.normalize() } else { Vec3::x() }
+        }
+    }
 }
 
 /// Conductances, capacities and volumes of the thermal network.
@@ -475,10 +487,11 @@ pub fn thermal_setup(
     let sm = model_for(surface, c_t);
     let s = contact_surfaces(&model.graph, &model.particles, &sm)?;
     let lam_phase: Vec<f64> = model.materials.materials.iter().map(|m| m.conductivity).collect();
-    let contact_lambda = contact_property(
+    let contact_lambda = contact_property_laminate(
         &model.graph,
         &model.particles.phases,
         &lam_phase,
+        &model.mixes,
         interface_rule(interface),
     )?;
     let g = conductances(&model.graph, &s.area, &contact_lambda)?;
@@ -487,11 +500,25 @@ pub fn thermal_setup(
         .map(|p| model.particles.volume(p))
         .collect();
     let fv: Vec<f64> = vols.iter().zip(&rep).map(|(v, r)| (v / r).min(1.0)).collect();
-    let c = per_particle(model, |m| m.specific_heat);
-    let rho = per_particle(model, |m| m.density);
+    // Laminate particles: ρ and ρc mix arithmetically (c = ρc/ρ).
+    let lam = model.laminates();
+    let phases = &model.particles.phases;
+    let rho_phase: Vec<f64> = model.materials.materials.iter().map(|m| m.density).collect();
+    let rc_phase: Vec<f64> = model
+        .materials
+        .materials
+        .iter()
+        .map(|m| m.density * m.specific_heat)
+        .collect();
+    let rho: Vec<f64> = (0..vols.len())
+        .map(|p| lam.arithmetic(p, phases, &rho_phase))
+        .collect();
+    let c: Vec<f64> = (0..vols.len())
+        .map(|p| lam.arithmetic(p, phases, &rc_phase) / rho[p])
+        .collect();
     let mut caps = capacities(&vols, &c, &rho, RepresentativeVolume::VolumeFraction(&fv))?;
-    let lam_p = per_particle(model, |m| m.conductivity);
-    let (network, g, walls) = extended_network(model, &sm, &g, &lam_p, &walls, "thermal.bcs")?;
+    let half_bond = |p: usize, e: &demcon_core::Vec3, h: f64| lam.half_bond(p, phases, &lam_phase, e, h);
+    let (network, g, walls) = extended_network(model, &sm, &g, &half_bond, &walls, "thermal.bcs")?;
     caps.resize(caps.len() + walls.len(), 1.0);
     let paper_dt = c_t.and_then(|ct| {
         let d_min = model

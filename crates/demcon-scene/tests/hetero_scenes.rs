@@ -135,3 +135,138 @@ fn multi_inclusion_scene_places_the_silica() {
         assert!((25.0..=35.0).contains(&t), "T({name}) = {t}");
     }
 }
+
+#[test]
+fn laminate_rule_resolves_the_inclusion_below_a_particle() {
+    use demcon_scene::build_model;
+    use demcon_scene::config::PhaseRuleConfig;
+    let centre = small("single-inclusion.ron", 3000, 2.0);
+    let mut lam = centre.clone();
+    lam.config.phase_rule = PhaseRuleConfig::Laminate;
+    let mc = build_model(&centre.config, &centre.base_dir, None).unwrap();
+    let ml = build_model(&lam.config, &lam.base_dir, None).unwrap();
+    // Same packing, same phases by centre; only the laminate model carries mixes.
+    assert_eq!(mc.particles.phases, ml.particles.phases);
+    assert!(mc.mixes.is_empty());
+    assert_eq!(ml.report.mixed_particles, ml.mixes.len());
+    assert!(ml.mixes.len() > 50, "{} cut particles", ml.mixes.len());
+    // Every cut particle straddles the sphere of radius L/3 and its normal is radial.
+    let (c0, a) = (demcon_core::Vec3::new(0.05, 0.05, 0.05), 0.1 / 3.0);
+    for m in &ml.mixes {
+        let p = m.particle as usize;
+        let d = ml.particles.centres[p] - c0;
+        assert!((d.norm() - a).abs() < ml.particles.radii[p]);
+        assert!(m.other_fraction > 0.0 && m.other_fraction < 1.0);
+        assert!((d.normalize().dot(&m.normal).abs() - 1.0).abs() < 1e-6);
+    }
+    // Each cut particle's fraction in the other phase matches a count of grid points of its
+    // ball (13³ grid over its box) on the other side of the sphere.
+    for m in ml.mixes.iter().step_by(7) {
+        let p = m.particle as usize;
+        let (c, r) = (ml.particles.centres[p], ml.particles.radii[p]);
+        let (mut inside_ball, mut other_side) = (0usize, 0usize);
+        for i in 0..13 {
+            for j in 0..13 {
+                for k in 0..13 {
+                    let u = demcon_core::Vec3::new(i as f64, j as f64, k as f64) / 6.0
+                        - demcon_core::Vec3::new(1.0, 1.0, 1.0);
+                    if u.norm() > 1.0 {
+                        continue;
+                    }
+                    inside_ball += 1;
+                    let x = c + r * u;
+                    let in_sphere = (x - c0).norm() <= a;
+                    let own_inclusion = ml.particles.phases[p] == 1;
+                    if in_sphere != own_inclusion {
+                        other_side += 1;
+                    }
+                }
+            }
+        }
+        let sampled = other_side as f64 / inside_ball as f64;
+        assert!(
+            (sampled - m.other_fraction).abs() < 0.03,
+            "particle {p}: {sampled} vs {}",
+            m.other_fraction
+        );
+    }
+    // The carried fractions of the two phases sum to 1.
+    assert!((mc.report.phase_fractions[0] + mc.report.phase_fractions[1] - 1.0).abs() < 1e-12);
+    assert!((ml.report.phase_fractions[0] + ml.report.phase_fractions[1] - 1.0).abs() < 1e-12);
+    // The steady run goes through, with an ETC between the phases' conductivities.
+    let r = run(&lam, &RunOptions::default()).unwrap();
+    let etc = r.etc.as_ref().unwrap().lambda_e;
+    assert!(etc > 0.9 * 33.0 && etc < 165.0, "λ_e = {etc}");
+    // The segment rule cuts the same particles with the same fractions; its normals point
+    // into the other phase and its offsets are the centres' distances to the sphere.
+    let mut seg = centre.clone();
+    seg.config.phase_rule = PhaseRuleConfig::Segment;
+    let ms = build_model(&seg.config, &seg.base_dir, None).unwrap();
+    assert_eq!(ms.mixes.len(), ml.mixes.len());
+    for (m, b) in ms.mixes.iter().zip(&ml.mixes) {
+        assert_eq!((m.particle, m.other_fraction), (b.particle, b.other_fraction));
+        let d = ms.particles.centres[m.particle as usize] - c0;
+        assert!((m.offset - (d.norm() - a).abs()).abs() < 1e-12);
+        let outwards = d.normalize().dot(&m.normal);
+        assert!(if ms.particles.phases[m.particle as usize] == 1 {
+            outwards > 0.999
+        } else {
+            outwards < -0.999
+        });
+    }
+    let r = run(&seg, &RunOptions::default()).unwrap();
+    let etc_s = r.etc.as_ref().unwrap().lambda_e;
+    assert!(etc_s > 0.9 * 33.0 && etc_s < 165.0, "λ_e = {etc_s}");
+}
+
+#[test]
+fn cut_particles_conduct_heat_and_current_alike_and_store_heat_by_volume() {
+    use demcon_scene::build_model;
+    use demcon_scene::config::{PhaseRuleConfig, SurfaceConfig};
+    use demcon_scene::electric::electric_conductances;
+    use demcon_scene::thermal::thermal_setup;
+    for rule in [PhaseRuleConfig::Laminate, PhaseRuleConfig::Segment] {
+        let mut s = small("single-inclusion.ron", 2000, 2.0);
+        s.config.phase_rule = rule;
+        s.config.surface = SurfaceConfig::TerrerosAlpha;
+        // ρ_e = 1/λ in each phase: the electric network must be the thermal one.
+        for m in &mut s.config.materials {
+            m.resistivity = Some(1.0 / m.conductivity);
+        }
+        s.config.materials[1].density = 2.0 * s.config.materials[0].density;
+        let model = build_model(&s.config, &s.base_dir, None).unwrap();
+        assert!(!model.mixes.is_empty());
+        let th = s.config.thermal.as_ref().unwrap();
+        let setup = thermal_setup(&model, &s.config.surface, s.config.interface, th).unwrap();
+        let ge = electric_conductances(&model, &s.config.surface, s.config.interface, None).unwrap();
+        assert_eq!(ge.len(), model.graph.pairs.len());
+        for (k, (e, t)) in ge.iter().zip(&setup.conductances).enumerate() {
+            assert!((e - t).abs() <= 1e-9 * t, "{rule:?}, contact {k}: {e} vs {t}");
+        }
+        // Capacities: ρc mixes by the volume fractions (c equal, ρ_inclusion = 2 ρ_matrix).
+        let lam = model.laminates();
+        let (c0, c1) = (
+            s.config.materials[0].density * s.config.materials[0].specific_heat,
+            s.config.materials[1].density * s.config.materials[1].specific_heat,
+        );
+        let frac: Vec<f64> = setup
+            .rep_volumes
+            .iter()
+            .enumerate()
+            .map(|(p, r)| (model.particles.volume(p) / r).min(1.0))
+            .collect();
+        for m in &model.mixes {
+            let p = m.particle as usize;
+            let own = if model.particles.phases[p] == 1 { c1 } else { c0 };
+            let other = if m.other_phase == 1 { c1 } else { c0 };
+            let rc = (1.0 - m.other_fraction) * own + m.other_fraction * other;
+            let expected = rc * model.particles.volume(p) / frac[p];
+            let got = setup.capacities[p];
+            assert!(
+                (got - expected).abs() <= 1e-9 * expected,
+                "{rule:?}, particle {p}: {got} vs {expected}"
+            );
+            assert!(lam.get(p).is_some());
+        }
+    }
+}

@@ -80,6 +80,7 @@ pub fn thermal_scene(
         surface: SurfaceConfig::Calibrated { c_t: CtConfig::Auto },
         materials,
         phases: Vec::new(),
+        phase_rule: PhaseRuleConfig::Centre,
         interface: InterfaceConfig::Harmonic,
         floating: FloatingConfig::Exclude,
         thermal: Some(thermal),

@@ -164,6 +164,7 @@ pub fn electric_scene(
         surface: SurfaceConfig::TerrerosAlpha,
         materials: vec![steel_304l()],
         phases: Vec::new(),
+        phase_rule: PhaseRuleConfig::Centre,
         interface: InterfaceConfig::Harmonic,
         floating: FloatingConfig::Exclude,
         thermal: None,
