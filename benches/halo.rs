@@ -14,7 +14,7 @@ use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use demcon_core::{Container, ParticleSet, Vec3};
-use demcon_post::{Domain, Field, HaloParams, halo_flux, write_vtu};
+use demcon_post::{Domain, Field, HaloParams, HaloPhases, halo_flux, write_vtu};
 
 /// SplitMix64: a small seeded generator.
 struct SplitMix(u64);
@@ -78,6 +78,17 @@ fn halo(c: &mut Criterion) {
             eprintln!("halo k={k} N={}: {:?}", p.len(), r.report);
             g.bench_function(BenchmarkId::new(format!("k{k}"), p.len()), |b| {
                 b.iter(|| black_box(halo_flux(&p, &d, &v, &domain, &params).expect("halo")))
+            });
+        }
+        if m == 46 {
+            // The default Halo tests each member's phase (one phase here, same result); the
+            // all-phases Halo skips the test: their ratio is the cost of the phase test.
+            let all = HaloParams {
+                phases: HaloPhases::All,
+                ..HaloParams::ratio(11.0)
+            };
+            g.bench_function(BenchmarkId::new("k11-all-phases", p.len()), |b| {
+                b.iter(|| black_box(halo_flux(&p, &d, &v, &domain, &all).expect("halo")))
             });
         }
     }

@@ -11,6 +11,15 @@
 //! the contacts of a member count, even when the partner lies outside (they are already in
 //! `D_r`). `k = 0` means no halo: the result is the per-particle flux.
 //!
+//! Phases ([`HaloPhases`]): by default ([`HaloPhases::Same`]) the sums run only over the
+//! members of p's own phase (`ParticleSet::phases`, the phase of the particle's centre), i.e.
+//! eqs. 22–23 restricted to `r ∈ Ω_p` with `phase(r) = phase(p)`. Across an interface the
+//! normal flux is continuous but the tangential flux `−λ ∂T/∂t` jumps with λ, so a Halo that
+//! mixes phases smears that jump into both sides (a matrix particle near a 5× more conductive
+//! inclusion reads a flux biased towards the inclusion's); averaging each phase over itself is
+//! the per-phase averaging of RVE post-processing. [`HaloPhases::All`] is the paper's Halo as
+//! printed. In a one-phase set both give the same result.
+//!
 //! Method: the dipoles and volumes are summed once per particle, then a neighbourhood sum is
 //! done over a grid of columns along z (a uniform grid in x and y, particles sorted by z
 //! within each column): each Halo visits only the columns its ball crosses, and in each the
@@ -43,6 +52,19 @@ pub enum HaloScale {
     MeanRadius,
 }
 
+/// Which particles of the ball a Halo averages over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum HaloPhases {
+    /// Only the members of the particle's own phase (`ParticleSet::phases`). The default: the
+    /// tangential flux jumps across an interface (λ jumps), so averaging across it biases the
+    /// Halo flux of every particle within `k·R` of the interface; averaging each phase over
+    /// itself keeps the jump sharp.
+    #[default]
+    Same,
+    /// Every particle in the ball, whatever its phase (Haddad 2021 eqs. 22–23 as printed).
+    All,
+}
+
 /// Inputs of the Halo smoothing.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HaloParams {
@@ -51,6 +73,9 @@ pub struct HaloParams {
     pub ratio: f64,
     /// The radius `R` that `ratio` multiplies.
     pub scale: HaloScale,
+    /// Which members of the ball count: the particle's own phase (default) or all.
+    #[serde(default)]
+    pub phases: HaloPhases,
 }
 
 impl Default for HaloParams {
@@ -58,6 +83,7 @@ impl Default for HaloParams {
         Self {
             ratio: 11.0,
             scale: HaloScale::ParticleRadius,
+            phases: HaloPhases::Same,
         }
     }
 }
@@ -90,9 +116,12 @@ pub struct HaloField {
 pub struct HaloReport {
     /// The ratio `k` used.
     pub ratio: f64,
+    /// Which members counted (own phase or all).
+    pub phases: HaloPhases,
     /// Number of truncated halos.
     pub n_truncated: usize,
-    /// Mean number of particles in a halo (the particle itself included).
+    /// Mean number of particles in a halo (the particle itself included; with
+    /// [`HaloPhases::Same`], only those of its phase).
     pub mean_members: f64,
     /// Smallest number of particles in a halo.
     pub min_members: usize,
@@ -106,17 +135,18 @@ pub struct HaloReport {
 
 /// Halo-smoothed flux of every particle (see the module documentation for the formula).
 ///
-/// - `particles`: centres and radii (m);
+/// - `particles`: centres and radii (m), and phases (used with [`HaloPhases::Same`]);
 /// - `dipoles`: `D_p` per particle (W·m), from [`particle_dipoles`](crate::particle_dipoles);
 /// - `rep_volumes`: representative volumes `V_rep,p` (m³), e.g. `V_p/φ`;
 /// - `domain`: the domain, for the truncation flags and, if periodic, for wrapping: in a
 ///   periodic box the halo is a ball of the periodically repeated medium (every image whose
 ///   centre lies in the ball counts — one image per particle as long as `k·R_p` is below half
 ///   the period);
-/// - `params`: the ratio `k ≥ 0` and whether it multiplies `R_p` (the paper) or the mean
-///   radius.
+/// - `params`: the ratio `k ≥ 0`, whether it multiplies `R_p` (the paper) or the mean
+///   radius, and whether only the particle's own phase counts.
 ///
-/// Cost: O(N × halo size), about 700 particles per halo at k = 11 and φ = 0.64.
+/// Cost: O(N × halo size), about 700 particles per halo at k = 11 and φ = 0.64; the phase test
+/// is part of the same distance loop (one pass).
 pub fn halo_flux(
     particles: &ParticleSet,
     dipoles: &[Vec3],
@@ -146,6 +176,7 @@ pub fn halo_flux(
             truncated: vec![],
             report: HaloReport {
                 ratio: k,
+                phases: params.phases,
                 wall_s: start.elapsed().as_secs_f64(),
                 threads: rayon::current_num_threads(),
                 ..HaloReport::default()
@@ -188,11 +219,20 @@ pub fn halo_flux(
         })
         .collect();
 
+    let phase: Vec<u16> = grid.order.iter().map(|&i| particles.phases[i as usize]).collect();
     let sums: Vec<([f64; 4], u32)> = grid
         .order
         .par_iter()
         .with_min_len(256)
-        .map(|&i| grid.ball_sum(&grid.centres[i as usize], halo_radius(i as usize), &pos, &dv))
+        .map(|&i| {
+            let (c, r) = (&grid.centres[i as usize], halo_radius(i as usize));
+            match params.phases {
+                HaloPhases::All => grid.ball_sum::<false>(c, r, &pos, &dv, &phase, 0),
+                HaloPhases::Same => {
+                    grid.ball_sum::<true>(c, r, &pos, &dv, &phase, particles.phases[i as usize])
+                }
+            }
+        })
         .collect();
 
     let mut flux = vec![Vec3::zeros(); n];
@@ -211,6 +251,7 @@ pub fn halo_flux(
     let total: u64 = members.iter().map(|&m| u64::from(m)).sum();
     let report = HaloReport {
         ratio: k,
+        phases: params.phases,
         n_truncated: truncated.iter().filter(|&&t| t).count(),
         mean_members: total as f64 / n as f64,
         min_members: members.iter().copied().min().unwrap_or(0) as usize,
@@ -367,8 +408,17 @@ impl ColumnGrid {
     }
 
     /// Sum of `dv` over the particles (and periodic images) whose centre lies within `r` of
-    /// `c`, and their number. Sequential in a fixed order.
-    fn ball_sum(&self, c: &Vec3, r: f64, pos: &[Vec3], dv: &[[f64; 4]]) -> ([f64; 4], u32) {
+    /// `c` and, if `SAME`, whose phase (`phase`, grid order) is `want`; and their number.
+    /// Sequential in a fixed order.
+    fn ball_sum<const SAME: bool>(
+        &self,
+        c: &Vec3,
+        r: f64,
+        pos: &[Vec3],
+        dv: &[[f64; 4]],
+        phase: &[u16],
+        want: u16,
+    ) -> ([f64; 4], u32) {
         let r2 = r * r;
         let mut acc_a = [0.0f64; 4];
         let mut acc_b = [0.0f64; 4];
@@ -391,6 +441,7 @@ impl ColumnGrid {
                 let col = wx * self.dims[1] + wy;
                 let column = &pos[self.start[col] as usize..self.start[col + 1] as usize];
                 let weights = &dv[self.start[col] as usize..self.start[col + 1] as usize];
+                let phases = &phase[self.start[col] as usize..self.start[col + 1] as usize];
                 let half = rem.sqrt() + slack_z;
                 let (zlo, zhi) = (c.z - half, c.z + half);
                 // Periodic: one window per image of the column along z.
@@ -406,14 +457,17 @@ impl ColumnGrid {
                     // Two interleaved accumulators, so that consecutive additions do not
                     // wait for each other (measured at 10⁵ particles, k = 11, one thread:
                     // 0.57 s against 0.68 s with one).
-                    let (cs, ws) = (&column[a..b], &weights[a..b]);
+                    let (cs, ws, ps) = (&column[a..b], &weights[a..b], &phases[a..b]);
+                    let keep = |j: usize| !SAME || ps[j] == want;
                     let pairs = cs.len() / 2;
                     for j in 0..pairs {
-                        count += add_if_inside(&cs[2 * j], &ws[2 * j], &q, r2, &mut acc_a);
-                        count += add_if_inside(&cs[2 * j + 1], &ws[2 * j + 1], &q, r2, &mut acc_b);
+                        let (j0, j1) = (2 * j, 2 * j + 1);
+                        count += add_if_inside(&cs[j0], &ws[j0], keep(j0), &q, r2, &mut acc_a);
+                        count += add_if_inside(&cs[j1], &ws[j1], keep(j1), &q, r2, &mut acc_b);
                     }
                     if cs.len() % 2 == 1 {
-                        count += add_if_inside(&cs[2 * pairs], &ws[2 * pairs], &q, r2, &mut acc_a);
+                        let j = 2 * pairs;
+                        count += add_if_inside(&cs[j], &ws[j], keep(j), &q, r2, &mut acc_a);
                     }
                 }
             }
@@ -423,13 +477,13 @@ impl ColumnGrid {
     }
 }
 
-/// Adds `w` to `acc` if `p` lies within `r2` (m²) of `q`; returns 1 if it does, else 0.
-/// Branch-free: many tested centres are outside the ball, a branch would often be
-/// mispredicted.
+/// Adds `w` to `acc` if `keep` and `p` lies within `r2` (m²) of `q`; returns 1 if it does,
+/// else 0. Branch-free: many tested centres are outside the ball (or of another phase), a
+/// branch would often be mispredicted.
 #[inline(always)]
-fn add_if_inside(p: &Vec3, w: &[f64; 4], q: &Vec3, r2: f64, acc: &mut [f64; 4]) -> u32 {
+fn add_if_inside(p: &Vec3, w: &[f64; 4], keep: bool, q: &Vec3, r2: f64, acc: &mut [f64; 4]) -> u32 {
     let e = p - q;
-    let inside = e.x * e.x + e.y * e.y + e.z * e.z <= r2;
+    let inside = (e.x * e.x + e.y * e.y + e.z * e.z <= r2) & keep;
     let m = f64::from(u8::from(inside));
     acc[0] += m * w[0];
     acc[1] += m * w[1];
@@ -476,13 +530,26 @@ mod tests {
         (ParticleSet::new(c, r).unwrap(), d, v)
     }
 
-    /// Direct O(N²) evaluation of the Halo formula, with minimum images if periodic.
+    /// Direct O(N²) evaluation of the Halo formula over every phase, with minimum images if
+    /// periodic.
     fn brute(
         p: &ParticleSet,
         d: &[Vec3],
         v: &[f64],
         radius: impl Fn(usize) -> f64,
         period: Option<f64>,
+    ) -> Vec<(Vec3, u32)> {
+        brute_phases(p, d, v, radius, period, HaloPhases::All)
+    }
+
+    /// Direct O(N²) evaluation of the Halo formula, with minimum images if periodic.
+    fn brute_phases(
+        p: &ParticleSet,
+        d: &[Vec3],
+        v: &[f64],
+        radius: impl Fn(usize) -> f64,
+        period: Option<f64>,
+        phases: HaloPhases,
     ) -> Vec<(Vec3, u32)> {
         (0..p.len())
             .map(|i| {
@@ -495,7 +562,8 @@ mod tests {
                     if let Some(l) = period {
                         e = e.map(|x| x - l * (x / l).round());
                     }
-                    if e.norm_squared() <= r * r {
+                    let same = phases == HaloPhases::All || p.phases[j] == p.phases[i];
+                    if same && e.norm_squared() <= r * r {
                         sd += d[j];
                         sv += v[j];
                         m += 1;
@@ -508,7 +576,11 @@ mod tests {
 
     #[test]
     fn matches_the_direct_sum_walled_and_periodic() {
-        let (p, d, v) = cloud(9, 7);
+        let (mut p, d, v) = cloud(9, 7);
+        // Three phases at random: the default (own phase) Halo is checked against the direct
+        // sum too.
+        let mut rng = Mix(99);
+        p.phases = (0..p.len()).map(|_| (3.0 * rng.next()) as u16).collect();
         for (domain, period) in [
             (
                 Domain::of_container(&Container::Box { size: [9.0; 3] }).unwrap(),
@@ -519,14 +591,22 @@ mod tests {
                 Some(9.0),
             ),
         ] {
-            for k in [0.0, 2.5, 6.0] {
-                let h = halo_flux(&p, &d, &v, &domain, &HaloParams::ratio(k)).unwrap();
-                let b = brute(&p, &d, &v, |i| k * p.radii[i], period);
+            for (k, phases) in [0.0, 2.5, 6.0]
+                .into_iter()
+                .flat_map(|k| [(k, HaloPhases::All), (k, HaloPhases::Same)])
+            {
+                let params = HaloParams {
+                    phases,
+                    ..HaloParams::ratio(k)
+                };
+                let h = halo_flux(&p, &d, &v, &domain, &params).unwrap();
+                assert_eq!(h.report.phases, phases);
+                let b = brute_phases(&p, &d, &v, |i| k * p.radii[i], period, phases);
                 for (i, (got, want)) in h.flux.iter().zip(&b).enumerate() {
                     let err = (got - want.0).norm();
                     assert!(
                         err <= 1e-12 * (1.0 + want.0.norm()),
-                        "k={k} i={i}: {got:?} vs {:?}",
+                        "k={k} {phases:?} i={i}: {got:?} vs {:?}",
                         want.0
                     );
                 }
@@ -539,6 +619,53 @@ mod tests {
         }
     }
 
+    /// Two half-spaces x < 4.5 (phase 0, flux q) and x > 4.5 (phase 1, flux 5q), q tangential
+    /// to the interface: the own-phase Halo of every particle is its half-space's flux (to
+    /// round-off), the all-phase Halo of a particle next to the interface is a mix.
+    #[test]
+    fn own_phase_halo_keeps_a_flux_jump_sharp() {
+        let (mut p, _, v) = cloud(9, 5);
+        let q = Vec3::new(0.0, 1000.0, 0.0);
+        let flux_of = |x: f64| if x < 4.5 { q } else { q * 5.0 };
+        p.phases = p.centres.iter().map(|c| u16::from(c.x >= 4.5)).collect();
+        // D_r = −2 V_r q_r, so that the per-particle flux is q_r.
+        let d: Vec<Vec3> = (0..p.len())
+            .map(|i| flux_of(p.centres[i].x) * (-2.0 * v[i]))
+            .collect();
+        let domain = Domain::of_container(&Container::Box { size: [9.0; 3] }).unwrap();
+        let k = 6.0;
+        let same = halo_flux(&p, &d, &v, &domain, &HaloParams::ratio(k)).unwrap();
+        let all = halo_flux(
+            &p,
+            &d,
+            &v,
+            &domain,
+            &HaloParams {
+                phases: HaloPhases::All,
+                ..HaloParams::ratio(k)
+            },
+        )
+        .unwrap();
+        let mut mixed = 0;
+        for i in 0..p.len() {
+            let want = flux_of(p.centres[i].x);
+            assert!(
+                (same.flux[i] - want).norm() <= 1e-12 * want.norm(),
+                "i={i}: {:?} vs {want:?}",
+                same.flux[i]
+            );
+            // Next to the interface (centres within one spacing): the all-phase Halo mixes q
+            // and 5q, strictly between them.
+            if (p.centres[i].x - 4.5).abs() < 1.0 {
+                let y = all.flux[i].y;
+                assert!(y > 1.05 * q.y && y < 0.95 * 5.0 * q.y, "i={i}: all-phase {y}");
+                mixed += 1;
+            }
+        }
+        assert!(mixed > 0);
+        assert!(same.report.mean_members < all.report.mean_members);
+    }
+
     #[test]
     fn mean_radius_scale_gives_equal_halos() {
         let (p, d, v) = cloud(8, 11);
@@ -546,6 +673,7 @@ mod tests {
         let params = HaloParams {
             ratio: 4.0,
             scale: HaloScale::MeanRadius,
+            ..HaloParams::default()
         };
         let h = halo_flux(&p, &d, &v, &domain, &params).unwrap();
         let rm = p.radii.iter().sum::<f64>() / p.len() as f64;

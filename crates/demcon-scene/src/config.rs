@@ -510,6 +510,17 @@ pub enum ProbeMethodConfig {
     Ball(f64),
 }
 
+/// Which particles a Halo averages over (`outputs.halo_phases`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+pub enum HaloPhasesConfig {
+    /// Only the particles of the particle's own phase (the default: the tangential flux jumps
+    /// across an interface, a Halo that mixes phases smears the jump).
+    #[default]
+    Same,
+    /// Every particle in the ball (Haddad 2021 eqs. 22–23 as printed).
+    All,
+}
+
 /// A probe point.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -565,6 +576,10 @@ pub struct OutputsConfig {
     /// Halo smoothing ratio k of the flux (implies `flux`).
     #[serde(default)]
     pub halo: Option<f64>,
+    /// Which particles each Halo averages over: `Same` (its own phase, the default) or `All`.
+    /// Only with `halo`.
+    #[serde(default)]
+    pub halo_phases: Option<HaloPhasesConfig>,
     /// Effective conductivity along this axis from a steady run (fixed temperatures on its two faces).
     #[serde(default)]
     pub etc_axis: Option<AxisConfig>,
@@ -584,6 +599,7 @@ impl Default for OutputsConfig {
             vtk: true,
             flux: false,
             halo: None,
+            halo_phases: None,
             etc_axis: None,
         }
     }

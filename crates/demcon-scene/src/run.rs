@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use demcon_core::Vec3;
 use demcon_post::{
-    Domain, HaloParams, HaloReport, Line, ProbeIndex, ProbeMethod, halo_flux, particle_dipoles,
+    Domain, HaloParams, HaloPhases, HaloReport, Line, ProbeIndex, ProbeMethod, halo_flux, particle_dipoles,
 };
 use serde::Serialize;
 
@@ -210,6 +210,13 @@ impl Scene {
                 "outputs.halo",
                 k,
                 "the Halo/particle radius ratio must be > 0",
+            ));
+        }
+        if let (Some(ph), None) = (c.outputs.halo_phases, c.outputs.halo) {
+            return Err(SceneError::invalid(
+                "outputs.halo_phases",
+                format!("{ph:?}"),
+                "only meaningful with a Halo: give `halo: Some(k)` too, or remove halo_phases",
             ));
         }
         Ok(())
@@ -508,6 +515,10 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
                 &domain,
                 &HaloParams {
                     ratio: k,
+                    phases: match cfg.outputs.halo_phases.unwrap_or_default() {
+                        HaloPhasesConfig::Same => HaloPhases::Same,
+                        HaloPhasesConfig::All => HaloPhases::All,
+                    },
                     ..HaloParams::default()
                 },
             )?;

@@ -59,6 +59,21 @@ fn the_valid_two_phase_scene_runs() {
     let r = run(&s, &RunOptions::default()).unwrap();
     assert!(r.model.report.phase_counts[1] > 0);
     assert!(r.halo.is_some() && r.etc.is_some());
+    // The default Halo averages each particle over its own phase.
+    assert_eq!(r.halo.as_ref().unwrap().2.phases, demcon_post::HaloPhases::Same);
+}
+
+#[test]
+fn halo_phases_is_read_and_needs_a_halo() {
+    let s = parse(&text(TWO, SPHERE, "vtk: false, halo: 2.0, halo_phases: All")).unwrap();
+    assert_eq!(
+        s.config.outputs.halo_phases,
+        Some(demcon_scene::config::HaloPhasesConfig::All)
+    );
+    let e = parse(&text(TWO, SPHERE, "vtk: false, halo_phases: Same"))
+        .unwrap_err()
+        .to_string();
+    assert_mentions(&e, &["outputs.halo_phases", "Same", "halo: Some(k)"]);
 }
 
 #[test]

@@ -138,8 +138,8 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
     }
     if let Some((_, _, h)) = &r.halo {
         println!(
-            "  Halo k = {}: {:.1} members on average, {} truncated by the boundary, {:.2} s",
-            h.ratio, h.mean_members, h.n_truncated, h.wall_s
+            "  Halo k = {} ({:?} phases): {:.1} members on average, {} truncated by the boundary, {:.2} s",
+            h.ratio, h.phases, h.mean_members, h.n_truncated, h.wall_s
         );
     }
     for p in &r.probes {

@@ -191,6 +191,7 @@ pub fn sweep(n: usize, seed: u64) -> anyhow::Result<HaloSweep> {
             &HaloParams {
                 ratio: k,
                 scale: HaloScale::MeanRadius,
+                ..HaloParams::default()
             },
         )?;
         let qm = components(&hm.flux, Axis::Y);
