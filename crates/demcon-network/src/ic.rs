@@ -139,41 +139,23 @@ impl Mic {
         }
     }
 
-    /// One fused CG step on Â. The backward sweep first completes the previous step —
-    /// x += α_prev p, p = r + β p (skipped when `first`) — row by row as it goes (row i reads
-    /// only p_i), then solves t = P⁻ᵀ S p; the forward sweep solves w = P⁻¹ (S p − K t) and
-    /// forms q = Â p = S (t + w). Returns p·q. Three passes over the vectors per iteration
-    /// instead of six.
-    #[allow(clippy::too_many_arguments)]
-    fn step(
-        &self,
-        first: bool,
-        alpha_prev: f64,
-        beta: f64,
-        x: &mut [f64],
-        r: &[f64],
-        p: &mut [f64],
-        t: &mut [f64],
-        w: &mut [f64],
-        q: &mut [f64],
-    ) -> f64 {
-        let n = p.len();
-        for i in (0..n).rev() {
-            if !first {
-                x[i] += alpha_prev * p[i];
-                p[i] = r[i] + beta * p[i];
-            }
-            let (cols, vals) = self.upper.row(i);
-            t[i] = (self.s[i] * p[i] - sum4(cols, vals, t)) * self.inv_d[i];
+    /// q = Â v = S (t + w), t = P⁻ᵀ S v, w = P⁻¹ (S v − K t); returns v·q. `y`, `t`, `w`
+    /// are work vectors.
+    fn apply(&self, v: &[f64], q: &mut [f64], y: &mut [f64], t: &mut [f64], w: &mut [f64]) -> f64 {
+        for ((yi, vi), si) in y.iter_mut().zip(v).zip(&self.s) {
+            *yi = si * vi;
         }
-        let mut pq = 0.0;
-        for i in 0..n {
-            let (cols, vals) = self.lower.row(i);
-            w[i] = (self.s[i] * p[i] - self.k[i] * t[i] - sum4(cols, vals, w)) * self.inv_d[i];
+        self.backward(y, t);
+        for ((yi, ti), ki) in y.iter_mut().zip(t.iter()).zip(&self.k) {
+            *yi -= ki * ti;
+        }
+        self.forward(y, w);
+        let mut vq = 0.0;
+        for i in 0..q.len() {
             q[i] = self.s[i] * (t[i] + w[i]);
-            pq += p[i] * q[i];
+            vq += v[i] * q[i];
         }
-        pq
+        vq
     }
 }
 
@@ -249,7 +231,7 @@ pub(crate) fn pcg(
 ) -> Result<(Vec<f64>, usize), SolveError> {
     const NAME: &str = "mic-pcg";
     let n = rhs.len();
-    let (mut t, mut w, mut q) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let (mut y, mut t, mut w) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     // r̂ = S P⁻¹ b.
     let mut r = vec![0.0; n];
     m.forward(rhs, &mut r);
@@ -258,20 +240,10 @@ pub(crate) fn pcg(
     let mut rr: f64 = r.iter().map(|v| v * v).sum();
     let stop = reduction * reduction * rr;
     let mut p = r.clone();
-    let (mut alpha, mut beta) = (0.0, 0.0);
+    let mut q = vec![0.0; n];
     let mut iterations = 0;
     while iterations < max_iter && rr > stop {
-        let pq = m.step(
-            iterations == 0,
-            alpha,
-            beta,
-            &mut x,
-            &r,
-            &mut p,
-            &mut t,
-            &mut w,
-            &mut q,
-        );
+        let pq = m.apply(&p, &mut q, &mut y, &mut t, &mut w);
         iterations += 1;
         if !(pq > 0.0 && pq.is_finite()) {
             return Err(SolveError::Breakdown {
@@ -280,19 +252,20 @@ pub(crate) fn pcg(
                 detail: format!("p·Âp = {pq:e}"),
             });
         }
-        alpha = rr / pq;
+        let alpha = rr / pq;
         let mut rr_new = 0.0;
-        for (ri, qi) in r.iter_mut().zip(&q) {
-            *ri -= alpha * qi;
-            rr_new += *ri * *ri;
+        for i in 0..n {
+            x[i] += alpha * p[i];
+            r[i] -= alpha * q[i];
+            rr_new += r[i] * r[i];
         }
-        beta = rr_new / rr;
+        let beta = rr_new / rr;
         rr = rr_new;
+        for (pi, ri) in p.iter_mut().zip(&r) {
+            *pi = ri + beta * *pi;
+        }
     }
-    // The last step's x += α p, then δ = P⁻ᵀ S x̂.
-    if iterations > 0 {
-        x.iter_mut().zip(&p).for_each(|(xi, pi)| *xi += alpha * pi);
-    }
+    // δ = P⁻ᵀ S x̂.
     x.iter_mut().zip(&m.s).for_each(|(xi, si)| *xi *= si);
     m.backward(&x, &mut t);
     Ok((t, iterations))
