@@ -10,13 +10,19 @@
 //! as a fraction of the triad's, and each solve case prints its iterations, setup and solve
 //! times once. With `DEMCON_BENCH_SUMMARY_ONLY=1` only these one-off lines are produced
 //! (no criterion sampling), which is how the 10⁶-particle figures are taken quickly.
+//!
+//! The electric paper's own case is benchmarked too (`electric_cylinder`): an LS packing of
+//! 5000 particles in the cylinder r = 1 mm, l = 5 mm (Gaussian radii, CoV 0.3), contacts for
+//! Z = 7.5, Terreros α surfaces, AISI 304L, the particles touching the end faces held at
+//! 1 V and 0 V — the network the `electric-solver-timing` validation case times.
 
 use std::hint::black_box;
 use std::time::Instant;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use demcon_core::{Vec3, morton_order};
+use demcon_core::{Container, Face, Selector, Vec3, morton_order};
 use demcon_electric::{ElectricParams, solve_potential};
+use demcon_graph::{ContactParams, SurfaceModel, conductances, contact_surfaces, detect_contacts};
 use demcon_network::{
     Constraints, FloatingPolicy, LinearSystem, Method, Network, SolveParams, resolve_fixed, solve_steady,
 };
@@ -364,5 +370,83 @@ fn bench_electric(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_triad, bench_explicit, bench_steady, bench_electric);
+/// The electric paper's 5000-particle cylinder (see the module documentation): network,
+/// branch conductances (S) and the two electrode sets.
+fn cylinder_case() -> (Network, Vec<f64>, [Vec<u32>; 2]) {
+    let container = Container::Cylinder {
+        radius: 1e-3,
+        length: 5e-3,
+    };
+    let params = demcon_packing::PackingParams::new(
+        container.clone(),
+        5000,
+        0.64,
+        demcon_packing::RadiusDistribution::gaussian(0.3),
+    );
+    // A cylinder ~13 mean radii wide jams below 0.64 (wall layers): the jammed state is used.
+    // `pack` returns the particles in Morton order.
+    let (set, _) = demcon_packing::pack(&params, 1, None).expect("packs");
+    let graph = detect_contacts(&set, &container, &ContactParams::target(7.5)).expect("contacts");
+    let s = contact_surfaces(&graph, &set, &SurfaceModel::TerrerosAlpha).expect("surfaces");
+    let sigma = vec![1.0 / 0.73e-6; graph.pairs.len()];
+    let g = conductances(&graph, &s.area, &sigma).expect("conductances");
+    let net = Network::new(set.len(), &graph.pairs).expect("network");
+    let face = |f: Face| {
+        Selector::Face(f)
+            .select_nonempty(&set, &container, f.name())
+            .expect("electrode")
+    };
+    (net, g, [face(Face::ZMin), face(Face::ZMax)])
+}
+
+fn bench_electric_cylinder(c: &mut Criterion) {
+    let methods = [JACOBI, MIC, Method::Cholesky];
+    if !methods
+        .iter()
+        .any(|m| wanted(&format!("electric_cylinder/{}/5000", m.name())))
+    {
+        return;
+    }
+    let (net, g, [lo, hi]) = cylinder_case();
+    let electrodes = [(hi, 1.0), (lo, 0.0)];
+    let mut group = c.benchmark_group("electric_cylinder");
+    group.sample_size(20);
+    for method in methods {
+        if !wanted(&format!("electric_cylinder/{}/5000", method.name())) {
+            continue;
+        }
+        let p = ElectricParams {
+            floating: FloatingPolicy::Exclude,
+            solve: SolveParams { method },
+        };
+        let r = solve_potential(&net, &g, &electrodes, &p).expect("solves");
+        println!(
+            "electric cylinder n = {}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s, R = {:.6e} ohm",
+            net.n_nodes(),
+            net.n_edges(),
+            method.name(),
+            r.report.iterations,
+            r.report.relative_residual,
+            r.report.setup_s,
+            r.report.wall_s,
+            r.resistance_ohm.unwrap_or(f64::NAN),
+        );
+        if summary_only() {
+            continue;
+        }
+        group.bench_with_input(BenchmarkId::new(method.name(), 5000), &5000, |bch, _| {
+            bch.iter(|| solve_potential(&net, &g, &electrodes, &p).expect("solves"))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    bench_triad,
+    bench_explicit,
+    bench_steady,
+    bench_electric,
+    bench_electric_cylinder
+);
 criterion_main!(benches);
