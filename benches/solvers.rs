@@ -378,7 +378,7 @@ fn cylinder_case() -> (Network, Vec<f64>, [Vec<u32>; 2]) {
         length: 5e-3,
     };
     let params = demcon_packing::PackingParams::new(
-        container.clone(),
+        container,
         5000,
         0.64,
         demcon_packing::RadiusDistribution::gaussian(0.3),
