@@ -10,44 +10,13 @@ use demcon_network::{
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-/// Random geometric graph: `n` uniform points in a cube of unit density, links closer than
-/// 1.2143 (mean coordination ≈ 7.5, like a packing), conductance = 1/distance × a random
-/// factor in [0.5, 2]. Returns the network, the conductances and the x coordinates.
-fn geometric(n: usize, seed: u64) -> (Network, Vec<f64>, Vec<f64>) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let l = (n as f64).cbrt();
-    let pts: Vec<[f64; 3]> = (0..n)
-        .map(|_| [0, 1, 2].map(|_| rng.random::<f64>() * l))
-        .collect();
-    let mut edges = Vec::new();
-    let mut g = Vec::new();
-    for i in 0..n {
-        for j in i + 1..n {
-            let d = (0..3)
-                .map(|a| (pts[i][a] - pts[j][a]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            if d < 1.2143 {
-                edges.push([i as u32, j as u32]);
-                g.push(rng.random_range(0.5..2.0) / d.max(0.1));
-            }
-        }
-    }
-    let x = pts.iter().map(|p| p[0]).collect();
-    (Network::new(n, &edges).unwrap(), g, x)
-}
+mod common;
+use common::{faces, geometric_with};
 
-/// Nodes with x < 1 at `lo`, x > L − 1 at `hi`.
-fn faces(x: &[f64], lo: f64, hi: f64) -> Vec<(Vec<u32>, f64)> {
-    let l = x.iter().cloned().fold(0.0, f64::max);
-    let sel = |f: &dyn Fn(f64) -> bool| -> Vec<u32> {
-        x.iter()
-            .enumerate()
-            .filter(|(_, v)| f(**v))
-            .map(|(i, _)| i as u32)
-            .collect()
-    };
-    vec![(sel(&|v| v < 1.0), lo), (sel(&|v| v > l - 1.0), hi)]
+/// The shared random geometric graph with conductance 1/distance × a random factor in
+/// [0.5, 2].
+fn geometric(n: usize, seed: u64) -> (Network, Vec<f64>, Vec<f64>) {
+    geometric_with(n, seed, |rng, d| rng.random_range(0.5..2.0) / d.max(0.1))
 }
 
 fn amg(rel_tol: f64) -> SolveParams {

@@ -8,39 +8,12 @@ use demcon_network::{
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-/// Random points in a cube of side n^(1/3) linked within distance 1.2 (mean degree ≈ 7),
-/// conductances log-uniform over a decade; also returns the x coordinates.
-fn geometric(n: usize, seed: u64) -> (Network, Vec<f64>, Vec<f64>) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let l = (n as f64).cbrt();
-    let pts: Vec<[f64; 3]> = (0..n)
-        .map(|_| [0, 1, 2].map(|_| rng.random::<f64>() * l))
-        .collect();
-    let mut edges = Vec::new();
-    let mut g = Vec::new();
-    for i in 0..n {
-        for j in i + 1..n {
-            let d2: f64 = (0..3).map(|k| (pts[i][k] - pts[j][k]).powi(2)).sum();
-            if d2 < 1.44 {
-                edges.push([i as u32, j as u32]);
-                g.push(10f64.powf(rng.random::<f64>()));
-            }
-        }
-    }
-    let x = pts.iter().map(|p| p[0]).collect();
-    (Network::new(n, &edges).unwrap(), g, x)
-}
+mod common;
+use common::{faces, geometric_with};
 
-fn faces(x: &[f64], lo: f64, hi: f64) -> Vec<(Vec<u32>, f64)> {
-    let l = x.iter().cloned().fold(0.0, f64::max);
-    let sel = |f: &dyn Fn(f64) -> bool| -> Vec<u32> {
-        x.iter()
-            .enumerate()
-            .filter(|(_, v)| f(**v))
-            .map(|(i, _)| i as u32)
-            .collect()
-    };
-    vec![(sel(&|v| v < 1.0), lo), (sel(&|v| v > l - 1.0), hi)]
+/// The shared random geometric graph with conductances log-uniform over a decade.
+fn geometric(n: usize, seed: u64) -> (Network, Vec<f64>, Vec<f64>) {
+    geometric_with(n, seed, |rng, _| 10f64.powf(rng.random::<f64>()))
 }
 
 fn params(method: Method) -> SolveParams {

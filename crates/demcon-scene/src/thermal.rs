@@ -878,7 +878,7 @@ pub fn solve_thermal_with(
         energy_balance_error: r.energy_balance_error,
         excluded,
     };
-    match *solver {
+    let tr = match *solver {
         ThermalSolverConfig::Explicit { t_end, dt } => {
             let step = match dt {
                 TimeStepConfig::Auto { safety } => TimeStep::Auto { safety },
@@ -901,7 +901,7 @@ pub fn solve_thermal_with(
                 paper_dt: setup.paper_dt,
                 ..ExplicitParams::default()
             };
-            let tr = run_explicit_with(
+            run_explicit_with(
                 net,
                 g,
                 caps,
@@ -911,17 +911,7 @@ pub fn solve_thermal_with(
                 &params,
                 |t, v| snapshots.push((t, v[..n].to_vec())),
                 &mut hook,
-            );
-            let tr = match (tr, stopped) {
-                (_, Some(e)) => return Err(e),
-                (r, None) => r?,
-            };
-            Ok(ThermalRun::from_nodes(
-                n,
-                tr.temperatures,
-                snapshots,
-                report_of(&tr.report),
-            ))
+            )
         }
         ThermalSolverConfig::Implicit { t_end, dt, scheme } => {
             let params = ImplicitParams {
@@ -934,7 +924,7 @@ pub fn solve_thermal_with(
                 output_times: output_times.to_vec(),
                 solve: default_solve_params(),
             };
-            let tr = run_implicit_with(
+            run_implicit_with(
                 net,
                 g,
                 caps,
@@ -944,17 +934,7 @@ pub fn solve_thermal_with(
                 &params,
                 |t, v| snapshots.push((t, v[..n].to_vec())),
                 &mut hook,
-            );
-            let tr = match (tr, stopped) {
-                (_, Some(e)) => return Err(e),
-                (r, None) => r?,
-            };
-            Ok(ThermalRun::from_nodes(
-                n,
-                tr.temperatures,
-                snapshots,
-                report_of(&tr.report),
-            ))
+            )
         }
         ThermalSolverConfig::Steady => {
             let st = solve_steady_temperature(net, g, &bcs.constraints, &sources, &default_solve_params())?;
@@ -977,7 +957,18 @@ pub fn solve_thermal_with(
                 energy_balance_error: st.balance_error,
                 excluded,
             };
-            Ok(ThermalRun::from_nodes(n, temps, snapshots, report))
+            return Ok(ThermalRun::from_nodes(n, temps, snapshots, report));
         }
-    }
+    };
+    // A scene error raised in the hook is returned in place of the solver's "stopped".
+    let tr = match (tr, stopped) {
+        (_, Some(e)) => return Err(e),
+        (r, None) => r?,
+    };
+    Ok(ThermalRun::from_nodes(
+        n,
+        tr.temperatures,
+        snapshots,
+        report_of(&tr.report),
+    ))
 }
