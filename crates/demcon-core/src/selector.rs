@@ -39,6 +39,27 @@ impl Face {
             Face::Outer => "Outer",
         }
     }
+
+    /// The axis a flat face is normal to; `None` for the curved `Outer` face.
+    pub fn axis(self) -> Option<crate::Axis> {
+        use crate::Axis;
+        match self {
+            Face::XMin | Face::XMax => Some(Axis::X),
+            Face::YMin | Face::YMax => Some(Axis::Y),
+            Face::ZMin | Face::ZMax => Some(Axis::Z),
+            Face::Outer => None,
+        }
+    }
+
+    /// The two faces normal to `axis`: (min side, max side).
+    pub fn pair(axis: crate::Axis) -> (Face, Face) {
+        use crate::Axis;
+        match axis {
+            Axis::X => (Face::XMin, Face::XMax),
+            Axis::Y => (Face::YMin, Face::YMax),
+            Axis::Z => (Face::ZMin, Face::ZMax),
+        }
+    }
 }
 
 /// Which particles a boundary condition, probe or phase applies to.

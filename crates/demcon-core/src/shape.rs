@@ -204,6 +204,62 @@ impl Container {
         })
     }
 
+    /// Outward unit normal of `face` at (the projection of) point `p`; `None` when the
+    /// container has no such face. On the curved face of a cylinder (sphere) it is the radial
+    /// direction of `p` from the axis (centre); `+x` when `p` lies on the axis (centre).
+    pub fn face_normal(&self, face: Face, p: &Vec3) -> Option<Vec3> {
+        if !self.faces().contains(&face) {
+            return None;
+        }
+        Some(match face {
+            Face::XMin => -Vec3::x(),
+            Face::XMax => Vec3::x(),
+            Face::YMin => -Vec3::y(),
+            Face::YMax => Vec3::y(),
+            Face::ZMin => -Vec3::z(),
+            Face::ZMax => Vec3::z(),
+            Face::Outer => {
+                let r = match self {
+                    Container::Cylinder { .. } => Vec3::new(p.x, p.y, 0.0),
+                    _ => *p,
+                };
+                let l = r.norm();
+                if l > 0.0 { r / l } else { Vec3::x() }
+            }
+        })
+    }
+
+    /// Area (m²) of `face`; `None` when the container has no such face.
+    pub fn face_area(&self, face: Face) -> Option<f64> {
+        use std::f64::consts::PI;
+        if !self.faces().contains(&face) {
+            return None;
+        }
+        Some(match (*self, face) {
+            (Container::Box { size }, f) => {
+                size[0] * size[1] * size[2] / size[f.axis().expect("flat face").index()]
+            }
+            (Container::Cylinder { radius, .. }, Face::ZMin | Face::ZMax) => PI * radius * radius,
+            (Container::Cylinder { radius, length }, _) => 2.0 * PI * radius * length,
+            (Container::Sphere { radius }, _) => 4.0 * PI * radius * radius,
+            (Container::Periodic { .. }, _) => unreachable!("a periodic box has no faces"),
+        })
+    }
+
+    /// Cross-section (m²) normal to `axis` and length along it (m), for containers that are
+    /// prisms along `axis` (box and periodic box: any axis; cylinder: z); `None` otherwise.
+    pub fn section_and_length(&self, axis: Axis) -> Option<(f64, f64)> {
+        let e = self.bounds().extent();
+        let k = axis.index();
+        match *self {
+            Container::Box { .. } | Container::Periodic { .. } => Some((e.x * e.y * e.z / e[k], e[k])),
+            Container::Cylinder { radius, length } if axis == Axis::Z => {
+                Some((std::f64::consts::PI * radius * radius, length))
+            }
+            _ => None,
+        }
+    }
+
     /// Distance (m) from point `p` to the nearest wall, positive inside; `+∞` for a periodic box.
     pub fn wall_distance(&self, p: &Vec3) -> f64 {
         self.faces()
@@ -254,6 +310,36 @@ mod tests {
                 .wall_distance(&p)
                 .is_infinite()
         );
+    }
+
+    #[test]
+    fn face_geometry() {
+        let b = Container::Box {
+            size: [1.0, 2.0, 4.0],
+        };
+        assert_eq!(b.face_area(Face::YMax), Some(4.0));
+        assert_eq!(b.face_area(Face::Outer), None);
+        assert_eq!(b.section_and_length(Axis::Z), Some((2.0, 4.0)));
+        assert_eq!(b.face_normal(Face::XMin, &Vec3::zeros()), Some(-Vec3::x()));
+        let c = Container::Cylinder {
+            radius: 1.0,
+            length: 3.0,
+        };
+        let n = c.face_normal(Face::Outer, &Vec3::new(0.0, 0.5, 2.0)).unwrap();
+        assert!((n - Vec3::y()).norm() < 1e-15);
+        assert!((c.face_area(Face::Outer).unwrap() - 6.0 * std::f64::consts::PI).abs() < 1e-12);
+        assert_eq!(c.section_and_length(Axis::X), None);
+        let s = Container::Sphere { radius: 2.0 };
+        assert!((s.face_area(Face::Outer).unwrap() - 16.0 * std::f64::consts::PI).abs() < 1e-12);
+        assert_eq!(
+            Container::Periodic { size: [1.0; 3] }.face_normal(Face::XMin, &Vec3::zeros()),
+            None
+        );
+        for f in b.faces() {
+            let ax = f.axis().unwrap();
+            let (lo, hi) = Face::pair(ax);
+            assert!(*f == lo || *f == hi);
+        }
     }
 
     #[test]

@@ -64,6 +64,7 @@ mod phase;
 mod search;
 mod surface;
 mod terreros;
+mod wall;
 
 pub use calibrated::surface_calibrated;
 pub use components::Components;
@@ -83,3 +84,4 @@ pub use surface::{SurfaceModel, Surfaces, contact_surfaces, representative_volum
 pub use terreros::{
     TERREROS_ALPHA, TERREROS_NODES, TERREROS_VOLUME_FRACTION, TerrerosValue, surface_terreros, terreros_alpha,
 };
+pub use wall::WallContacts;

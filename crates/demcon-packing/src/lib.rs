@@ -37,5 +37,6 @@ pub use params::{MAX_PHI_ABOVE_JAMMING, PackProgress, PackingParams, StopReason}
 pub use radius::{DEFAULT_TRUNCATION_SIGMAS, MIN_RATIO_FLOOR, RadiusDistribution, jamming_estimate};
 pub use report::{PackingReport, PackingSummary, RadiusSummary, bulk_phi, max_overlap, summarize};
 pub use xyzr::{
-    XyzrFile, parse_xyzr, read_xyzr, read_xyzr_file, write_atomic, write_xyzr, write_xyzr_with_notes,
+    XyzrFile, parse_xyzr, read_xyzr, read_xyzr_container, read_xyzr_file, write_atomic, write_xyzr,
+    write_xyzr_with_notes,
 };

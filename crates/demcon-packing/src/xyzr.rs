@@ -117,6 +117,37 @@ pub fn read_xyzr_file(path: &Path) -> Result<XyzrFile, PackingError> {
     })
 }
 
+/// Reads only the header of a packing file (the comment lines before the first sphere): the
+/// container, if it names one. Cheap on any file size, for checks before the heavy work.
+pub fn read_xyzr_container(path: &Path) -> Result<Option<Container>, PackingError> {
+    use std::io::BufRead;
+    let io = |source| PackingError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let f = std::fs::File::open(path).map_err(io)?;
+    for (k, raw) in std::io::BufReader::new(f).lines().enumerate() {
+        let raw = raw.map_err(io)?;
+        let l = raw.trim();
+        if l.is_empty() {
+            continue;
+        }
+        let Some(h) = l.strip_prefix('#') else {
+            break;
+        };
+        if let Some(rest) = h.trim().strip_prefix("container") {
+            return parse_container(rest)
+                .map(Some)
+                .map_err(|message| PackingError::Parse {
+                    path: path.to_path_buf(),
+                    line: k + 1,
+                    message,
+                });
+        }
+    }
+    Ok(None)
+}
+
 /// Parses the text of a packing file; errors are `(line number, message)`.
 pub fn parse_xyzr(text: &str) -> Result<XyzrFile, (usize, String)> {
     let mut centres = vec![];

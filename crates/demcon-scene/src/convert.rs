@@ -1,7 +1,17 @@
 //! Conversion of file-facing `…Config` types into the lower crates' plain types, with the
-//! field path in every error.
+//! field path in every error: [`problem`] turns a whole scene into one [`Problem`] (what to
+//! build, the thermal and electric physics, the post-processing). Value checks live in
+//! `validate.rs`; this file only translates.
 
 use demcon_core::{Axis, Container, CoreError, Face, Material, MaterialTable, Region, Selector, Vec3};
+use demcon_graph::{ContactParams, InterfaceRule};
+use demcon_model::{
+    CarveRule, CtSpec, ElectricProblem, Electrode, ElectrodeAt, ModelParams, PhaseRule, PhaseSpec,
+    SurfaceSpec, ThermalBc, ThermalProblem, ThermalSolver, TimeStepSpec, VolumeSource,
+};
+use demcon_network::FloatingPolicy;
+use demcon_post::{HaloParams, HaloPhases, Line, ProbeMethod};
+use demcon_thermal::Scheme;
 
 use crate::config::*;
 use crate::error::SceneError;
@@ -158,4 +168,320 @@ pub fn materials(ms: &[MaterialConfig]) -> Result<MaterialTable, SceneError> {
     )
     .map_err(|e: CoreError| SceneError::at("materials", e))?;
     Ok(table)
+}
+
+/// The surface model's specification.
+pub fn surface(s: &SurfaceConfig) -> SurfaceSpec {
+    match s {
+        SurfaceConfig::TerrerosAlpha => SurfaceSpec::TerrerosAlpha,
+        SurfaceConfig::Calibrated { c_t: CtConfig::Auto } => SurfaceSpec::Calibrated(CtSpec::Auto),
+        SurfaceConfig::Calibrated {
+            c_t: CtConfig::Value(v),
+        } => SurfaceSpec::Calibrated(CtSpec::Value(*v)),
+    }
+}
+
+/// The interface rule.
+pub fn interface(i: InterfaceConfig) -> InterfaceRule {
+    match i {
+        InterfaceConfig::Harmonic => InterfaceRule::HarmonicMean,
+        InterfaceConfig::Arithmetic => InterfaceRule::ArithmeticMean,
+    }
+}
+
+/// The floating-cluster policy.
+pub fn floating(f: FloatingConfig) -> FloatingPolicy {
+    match f {
+        FloatingConfig::Exclude => FloatingPolicy::Exclude,
+        FloatingConfig::Fail => FloatingPolicy::Fail,
+    }
+}
+
+/// The phase rule.
+pub fn phase_rule(r: PhaseRuleConfig) -> PhaseRule {
+    match r {
+        PhaseRuleConfig::Centre => PhaseRule::Centre,
+        PhaseRuleConfig::Laminate => PhaseRule::Laminate,
+        PhaseRuleConfig::Segment => PhaseRule::Segment,
+    }
+}
+
+/// Contact parameters: a target coordination (7.5 by default) or a relative gap tolerance.
+pub fn contact_params(c: &ContactsConfig) -> Result<ContactParams, SceneError> {
+    match (c.coordination, c.tolerance) {
+        (Some(_), Some(_)) => Err(SceneError::invalid(
+            "contacts",
+            "both coordination and tolerance",
+            "give one of `coordination` (target mean Z) or `tolerance` (relative gap)",
+        )),
+        (None, Some(t)) => Ok(ContactParams::relative(t)),
+        (Some(z), None) => Ok(ContactParams::target(z)),
+        (None, None) => Ok(ContactParams::target(7.5)),
+    }
+}
+
+/// What to build on the packed particles: materials, carving, phases, contacts.
+pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
+    let materials = materials(&cfg.materials)?;
+    let carve = match &cfg.carve {
+        Some(r) => Some((
+            region(r, "carve")?,
+            match cfg.carve_rule {
+                CarveRuleConfig::WholeSphere => CarveRule::WholeSphere,
+                CarveRuleConfig::Centre => CarveRule::Centre,
+            },
+        )),
+        None => None,
+    };
+    let mut phases = Vec::with_capacity(cfg.phases.len());
+    for (i, ph) in cfg.phases.iter().enumerate() {
+        let field = format!("phases[{i}]");
+        let (PhaseConfig::Region { material, .. } | PhaseConfig::Inclusions { material, .. }) = ph;
+        let phase = materials
+            .phase_of(material)
+            .map_err(|e| SceneError::at(&format!("{field}.material"), e))?;
+        phases.push(match ph {
+            PhaseConfig::Region { region: r, .. } => PhaseSpec::Region {
+                phase,
+                region: region(r, &format!("{field}.region"))?,
+            },
+            PhaseConfig::Inclusions {
+                fraction, size_ratio, ..
+            } => PhaseSpec::Inclusions {
+                phase,
+                fraction: *fraction,
+                size_ratio: *size_ratio,
+            },
+        });
+    }
+    Ok(ModelParams {
+        materials,
+        carve,
+        phases,
+        phase_rule: phase_rule(cfg.phase_rule),
+        contacts: contact_params(&cfg.contacts)?,
+        seed: cfg.seed,
+    })
+}
+
+/// The thermal problem of the scene.
+pub fn thermal_problem(
+    cfg: &SceneConfig,
+    t: &ThermalConfig,
+    materials: &MaterialTable,
+) -> Result<ThermalProblem, SceneError> {
+    let mut bcs = Vec::with_capacity(t.bcs.len());
+    for (i, bc) in t.bcs.iter().enumerate() {
+        bcs.push(match bc {
+            ThermalBcConfig::FixedTemperature { select, value } => ThermalBc::FixedTemperature {
+                select: selector(select, materials, &format!("thermal.bcs[{i}].select"))?,
+                value: *value,
+            },
+            ThermalBcConfig::WallTemperature { face: f, value } => ThermalBc::WallTemperature {
+                face: face(*f),
+                value: *value,
+            },
+            ThermalBcConfig::HeatFlux { face: f, flux } => ThermalBc::HeatFlux {
+                face: face(*f),
+                flux: *flux,
+            },
+        });
+    }
+    let sources = t
+        .sources
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            Ok(VolumeSource {
+                select: selector(&s.select, materials, &format!("thermal.sources[{i}].select"))?,
+                power_density: s.power_density,
+            })
+        })
+        .collect::<Result<_, SceneError>>()?;
+    let solver = match t.solver {
+        ThermalSolverConfig::Explicit { t_end, dt } => ThermalSolver::Explicit {
+            t_end,
+            dt: match dt {
+                TimeStepConfig::Auto { safety } => TimeStepSpec::Auto { safety },
+                TimeStepConfig::Fixed { dt, allow_unstable } => TimeStepSpec::Fixed { dt, allow_unstable },
+                TimeStepConfig::Paper { allow_unstable } => TimeStepSpec::Paper { allow_unstable },
+            },
+        },
+        ThermalSolverConfig::Implicit { t_end, dt, scheme } => ThermalSolver::Implicit {
+            t_end,
+            dt,
+            scheme: match scheme {
+                ImplicitSchemeConfig::BackwardEuler => Scheme::BackwardEuler,
+                ImplicitSchemeConfig::CrankNicolson => Scheme::CrankNicolson,
+            },
+        },
+        ThermalSolverConfig::Steady => ThermalSolver::Steady,
+    };
+    Ok(ThermalProblem {
+        surface: surface(&cfg.surface),
+        interface: interface(cfg.interface),
+        bcs,
+        sources,
+        solver,
+        initial_temperature: t.initial_temperature,
+        output_times: cfg.outputs.times.clone(),
+        floating: floating(cfg.floating),
+    })
+}
+
+/// The electric problem of the scene.
+pub fn electric_problem(
+    cfg: &SceneConfig,
+    e: &ElectricConfig,
+    materials: &MaterialTable,
+) -> Result<ElectricProblem, SceneError> {
+    let mut electrodes = Vec::with_capacity(e.electrodes.len());
+    for (i, el) in e.electrodes.iter().enumerate() {
+        let at = match (&el.select, &el.face) {
+            (Some(sel), None) => ElectrodeAt::Particles(selector(
+                sel,
+                materials,
+                &format!("electric.electrodes[{i}].select"),
+            )?),
+            (None, Some(f)) => ElectrodeAt::Face(face(*f)),
+            (sel, _) => {
+                return Err(SceneError::invalid(
+                    &format!("electric.electrodes[{i}]"),
+                    if sel.is_some() {
+                        "both select and face"
+                    } else {
+                        "neither select nor face"
+                    },
+                    "give exactly one of `select` (particles held at the potential) or `face` (the container face held at it)",
+                ));
+            }
+        };
+        electrodes.push(Electrode {
+            at,
+            potential: el.potential,
+        });
+    }
+    Ok(ElectricProblem {
+        surface: surface(&e.surface),
+        interface: interface(cfg.interface),
+        electrodes,
+        eta: e.eta,
+        floating: floating(cfg.floating),
+        recouple_tolerance: e.recouple_tolerance,
+    })
+}
+
+/// How a probe reads a field.
+pub fn probe_method(m: ProbeMethodConfig) -> ProbeMethod {
+    match m {
+        ProbeMethodConfig::Nearest => ProbeMethod::Nearest,
+        ProbeMethodConfig::Ball(r) => ProbeMethod::BallAverage { radius: r },
+    }
+}
+
+/// A probe point.
+#[derive(Debug, Clone)]
+pub struct Probe {
+    /// Name.
+    pub name: String,
+    /// Point (m).
+    pub point: Vec3,
+    /// Method.
+    pub method: ProbeMethod,
+}
+
+/// A profile.
+#[derive(Debug, Clone)]
+pub struct Profile {
+    /// Name.
+    pub name: String,
+    /// The sampled segment.
+    pub line: Line,
+    /// Method.
+    pub method: ProbeMethod,
+}
+
+/// What the post-processing computes.
+#[derive(Debug, Clone)]
+pub struct PostPlan {
+    /// Probes.
+    pub probes: Vec<Probe>,
+    /// Profiles.
+    pub profiles: Vec<Profile>,
+    /// Per-particle flux.
+    pub flux: bool,
+    /// Halo smoothing of the flux.
+    pub halo: Option<HaloParams>,
+    /// Effective conductivity along this axis.
+    pub etc_axis: Option<Axis>,
+}
+
+/// The post-processing of the scene.
+pub fn post_plan(o: &OutputsConfig) -> PostPlan {
+    PostPlan {
+        probes: o
+            .probes
+            .iter()
+            .map(|p| Probe {
+                name: p.name.clone(),
+                point: v3(p.point),
+                method: probe_method(p.method),
+            })
+            .collect(),
+        profiles: o
+            .profiles
+            .iter()
+            .map(|p| Profile {
+                name: p.name.clone(),
+                line: Line {
+                    from: v3(p.from),
+                    to: v3(p.to),
+                    n_points: p.points,
+                },
+                method: probe_method(p.method),
+            })
+            .collect(),
+        flux: o.flux || o.halo.is_some(),
+        halo: o.halo.map(|k| HaloParams {
+            ratio: k,
+            phases: match o.halo_phases.unwrap_or_default() {
+                HaloPhasesConfig::Same => HaloPhases::Same,
+                HaloPhasesConfig::All => HaloPhases::All,
+            },
+            ..HaloParams::default()
+        }),
+        etc_axis: o.etc_axis.map(axis),
+    }
+}
+
+/// The whole scene on plain types: what to build, the physics, the post-processing.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    /// What to build on the packed particles.
+    pub model: ModelParams,
+    /// The thermal physics.
+    pub thermal: Option<ThermalProblem>,
+    /// The electric physics.
+    pub electric: Option<ElectricProblem>,
+    /// Post-processing.
+    pub post: PostPlan,
+}
+
+/// Converts the whole scene (every conversion error names its field).
+pub fn problem(cfg: &SceneConfig) -> Result<Problem, SceneError> {
+    let model = model_params(cfg)?;
+    let thermal = match &cfg.thermal {
+        Some(t) => Some(thermal_problem(cfg, t, &model.materials)?),
+        None => None,
+    };
+    let electric = match &cfg.electric {
+        Some(e) => Some(electric_problem(cfg, e, &model.materials)?),
+        None => None,
+    };
+    Ok(Problem {
+        model,
+        thermal,
+        electric,
+        post: post_plan(&cfg.outputs),
+    })
 }

@@ -84,3 +84,28 @@ impl SceneError {
         }
     }
 }
+
+impl From<demcon_model::ModelError> for SceneError {
+    /// The model's errors keep their kind (and so their message): a bad value stays
+    /// [`SceneError::Invalid`], a solver failure stays the solver's.
+    fn from(e: demcon_model::ModelError) -> Self {
+        use demcon_model::ModelError as M;
+        match e {
+            M::Invalid {
+                field,
+                value,
+                allowed,
+            } => SceneError::Invalid {
+                field,
+                value,
+                allowed,
+            },
+            M::Core { field, source } => SceneError::Core { field, source },
+            M::Packing(s) => SceneError::Packing(s),
+            M::Graph(e) => SceneError::Graph(e),
+            M::Solve(e) => SceneError::Solve(e),
+            M::Thermal(e) => SceneError::Thermal(e),
+            M::Electric(e) => SceneError::Electric(e),
+        }
+    }
+}

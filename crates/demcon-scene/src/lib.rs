@@ -1,10 +1,11 @@
-//! Scenes: the RON file format users describe their problem in, its validation with clear
-//! errors (file, line, field), and the run pipeline that builds only what the scene asks
-//! for — packing, contacts, thermal and/or electric networks, solvers, post-processing — and
-//! writes `summary.json`, CSV and VTK outputs.
+//! Scenes: the RON file format users describe their problem in (`config`), every value check
+//! before any heavy work with clear errors (file, line, field: `validate`), the conversion to
+//! plain types (`convert` → [`convert::Problem`]), and the run as named stages (`run`: build →
+//! thermal setup → solve → post) that builds only what the scene asks for and writes
+//! `summary.json`, CSV and VTK outputs (`output`).
 //!
-//! This is the only crate that reads RON, and the one place where the electric and thermal
-//! solvers meet (the Joule power vector, ρ_e(T)).
+//! This is the only crate that reads RON. It builds no physics: surfaces, walls, capacities,
+//! calibration, ρ_e(T), Joule power and the electro-thermal coupling live in `demcon-model`.
 //!
 //! ```
 //! use std::path::{Path, PathBuf};
@@ -31,17 +32,18 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod build;
 pub mod config;
 pub mod convert;
-pub mod electric;
 mod error;
-pub mod model;
 pub mod output;
 pub mod run;
-pub mod thermal;
+pub mod validate;
 
+pub use build::build_model;
 pub use config::SceneConfig;
+pub use convert::Problem;
+pub use demcon_model::Model;
 pub use error::SceneError;
-pub use model::{Model, build_model};
 pub use output::{summary_json, write_outputs};
-pub use run::{RunOptions, RunResult, Scene, run, run_on_model};
+pub use run::{RunOptions, RunResult, Scene, Stages, run, run_on_model};

@@ -52,6 +52,7 @@ pub fn summary_json(name: &str, r: &RunResult) -> serde_json::Value {
         "probes": r.probes,
         "profiles": r.profiles,
         "diagnostics": r.diagnostics,
+        "stages": r.stages,
         "post_s": r.post_s,
         "wall_s": r.wall_s,
     })
@@ -73,8 +74,13 @@ pub fn write_outputs(
     if let Some(e) = &r.electric {
         excluded.extend(&e.excluded);
     }
-    if let Some(b) = &r.thermal_bcs {
-        excluded.extend(b.constraints.excluded().iter().filter(|&&p| (p as usize) < n));
+    if let (Some(b), Some(s)) = (&r.thermal_bcs, &r.thermal_setup) {
+        excluded.extend(
+            b.constraints
+                .excluded()
+                .iter()
+                .filter(|&&p| s.walls.is_particle(p)),
+        );
     }
     for &p in &excluded {
         solved[p as usize] = 0;

@@ -1,24 +1,24 @@
-//! The run pipeline: builds only what the scene asks for, solves, post-processes.
-//! Electric and thermal solvers never see each other: the Joule power vector and the
-//! temperature-dependent resistivity are passed between them here.
+//! The run pipeline, as named stages: build (packing, phases, contacts) → thermal setup
+//! (surfaces, walls, capacities, boundary conditions) → solve (thermal, electric, or both
+//! coupled) → post (flux, Halo, ETC, probes, profiles). Each stage is timed by [`Stages`];
+//! outputs are written by [`crate::write_outputs`]. The physics lives in `demcon-model`; this
+//! file only sequences it on the scene's [`Problem`].
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use demcon_core::Vec3;
-use demcon_post::{
-    Domain, HaloParams, HaloPhases, HaloReport, Line, ProbeIndex, ProbeMethod, halo_flux, particle_dipoles,
+use demcon_core::{Axis, Vec3};
+use demcon_model::{
+    ElectricRun, Model, ThermalBcs, ThermalProblem, ThermalRun, ThermalSetup, couple, solve_electric,
+    solve_thermal, thermal_bcs, thermal_setup,
 };
+use demcon_post::{Domain, HaloReport, ProbeIndex, halo_flux, particle_dipoles};
 use serde::Serialize;
 
+use crate::build::build_model;
 use crate::config::*;
-use crate::convert;
-use crate::electric::{ElectricRun, solve_electric};
+use crate::convert::{self, PostPlan, Problem};
 use crate::error::SceneError;
-use crate::model::{Model, build_model};
-use crate::thermal::{
-    ThermalRun, ThermalSetup, section_and_length, solve_thermal, thermal_bcs, thermal_setup,
-};
 
 /// A loaded scene: its configuration and the folder relative paths are resolved against.
 #[derive(Debug, Clone)]
@@ -40,7 +40,7 @@ impl Scene {
         Scene::parse(&text, path, base_dir)
     }
 
-    /// Parses RON text (`path` is only used in messages).
+    /// Parses RON text (`path` is only used in messages) and validates it.
     pub fn parse(text: &str, path: &Path, base_dir: PathBuf) -> Result<Scene, SceneError> {
         let config: SceneConfig = ron::Options::default()
             .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
@@ -51,183 +51,50 @@ impl Scene {
                 col: e.span.start.col,
                 message: e.code.to_string(),
             })?;
-        let scene = Scene { config, base_dir };
-        scene.validate()?;
-        Ok(scene)
+        Scene::from_config(config, base_dir)
     }
 
-    /// A scene from a configuration built in code (paths relative to `base_dir`).
+    /// A scene from a configuration built in code (paths relative to `base_dir`), validated.
     pub fn from_config(config: SceneConfig, base_dir: PathBuf) -> Result<Scene, SceneError> {
         let scene = Scene { config, base_dir };
         scene.validate()?;
         Ok(scene)
     }
 
-    /// Checks what can be checked before any heavy work (materials, regions, selectors,
-    /// solver parameters), so a typo does not surface after a long packing.
+    /// Checks every value before any heavy work (`validate.rs`).
     pub fn validate(&self) -> Result<(), SceneError> {
-        let c = &self.config;
-        let materials = convert::materials(&c.materials)?;
-        crate::model::contact_params(&c.contacts)?;
-        if let Some(r) = &c.carve {
-            convert::region(r, "carve")?;
-        }
-        // Phases name their material and region: check them before any packing.
-        for (i, ph) in c.phases.iter().enumerate() {
-            let (PhaseConfig::Region { material, .. } | PhaseConfig::Inclusions { material, .. }) = ph;
-            materials
-                .phase_of(material)
-                .map_err(|e| SceneError::at(&format!("phases[{i}].material"), e))?;
-            if let PhaseConfig::Region { region, .. } = ph {
-                convert::region(region, &format!("phases[{i}].region"))?;
-            }
-        }
-        // Probes must lie in the domain; with a generated packing it is known before packing.
-        let domain = match (&c.carve, &c.packing) {
-            (Some(r), _) => Some(convert::region(r, "carve")?),
-            (None, PackingConfig::Generate { container, .. }) => {
-                Some(convert::container(container, "packing.container")?.region())
-            }
-            _ => None,
-        };
-        if let Some(d) = domain {
-            for (i, p) in c.outputs.probes.iter().enumerate() {
-                let x = demcon_core::Vec3::new(p.point.0, p.point.1, p.point.2);
-                if !d.contains_point(&x) {
-                    return Err(SceneError::invalid(
-                        &format!("outputs.probes[{i}].point ({})", p.name),
-                        format!("{:?}", p.point),
-                        "the probe point must lie inside the domain (container or carved region) (m)",
-                    ));
-                }
-            }
-        }
-        if c.thermal.is_none() && c.electric.is_none() {
-            return Err(SceneError::invalid(
-                "thermal",
-                "none",
-                "a scene needs `thermal`, `electric` or both",
-            ));
-        }
-        if let Some(t) = &c.thermal {
-            for (i, bc) in t.bcs.iter().enumerate() {
-                if let ThermalBcConfig::FixedTemperature { select, .. } = bc {
-                    convert::selector(select, &materials, &format!("thermal.bcs[{i}].select"))?;
-                }
-            }
-            match t.solver {
-                ThermalSolverConfig::Explicit { t_end, dt } => {
-                    positive_time("thermal.solver.t_end", t_end)?;
-                    match dt {
-                        TimeStepConfig::Auto { safety } if !(safety > 0.0 && safety <= 1.0) => {
-                            return Err(SceneError::invalid(
-                                "thermal.solver.dt.safety",
-                                safety,
-                                "must be in (0, 1]",
-                            ));
-                        }
-                        TimeStepConfig::Fixed { dt, .. } => positive_time("thermal.solver.dt.dt", dt)?,
-                        _ => {}
-                    }
-                }
-                ThermalSolverConfig::Implicit { t_end, dt, .. } => {
-                    positive_time("thermal.solver.t_end", t_end)?;
-                    positive_time("thermal.solver.dt", dt)?;
-                }
-                ThermalSolverConfig::Steady => {}
-            }
-        }
-        if let Some(e) = &c.electric {
-            if !(0.0..=1.0).contains(&e.eta) {
-                return Err(SceneError::invalid("electric.eta", e.eta, "must be in [0, 1]"));
-            }
-            if let Some(tol) = e.recouple_tolerance {
-                if !(tol.is_finite() && tol > 0.0) {
-                    return Err(SceneError::invalid(
-                        "electric.recouple_tolerance",
-                        tol,
-                        "must be a finite temperature change > 0 (K)",
-                    ));
-                }
-                if c.thermal.is_none() {
-                    return Err(SceneError::invalid(
-                        "electric.recouple_tolerance",
-                        tol,
-                        "re-solving with ρ_e(T) needs `thermal` physics to give the temperatures",
-                    ));
-                }
-            }
-            if e.electrodes.len() < 2 {
-                return Err(SceneError::invalid(
-                    "electric.electrodes",
-                    format!("{} electrode(s)", e.electrodes.len()),
-                    "at least two fixed potentials are needed for a current to flow",
-                ));
-            }
-            for (i, m) in c.materials.iter().enumerate() {
-                if m.resistivity.is_none() {
-                    return Err(SceneError::invalid(
-                        &format!("materials[{i}].resistivity"),
-                        "none",
-                        format!(
-                            "material `{}` needs a resistivity (Ω·m) in an electric scene",
-                            m.name
-                        ),
-                    ));
-                }
-            }
-            for (i, el) in e.electrodes.iter().enumerate() {
-                match (&el.select, &el.face) {
-                    (Some(sel), None) => {
-                        convert::selector(sel, &materials, &format!("electric.electrodes[{i}].select"))?;
-                    }
-                    (None, Some(_)) => {}
-                    (sel, _) => {
-                        return Err(SceneError::invalid(
-                            &format!("electric.electrodes[{i}]"),
-                            if sel.is_some() {
-                                "both select and face"
-                            } else {
-                                "neither select nor face"
-                            },
-                            "give exactly one of `select` (particles held at the potential) or `face` (the container face held at it)",
-                        ));
-                    }
-                }
-                if !el.potential.is_finite() {
-                    return Err(SceneError::invalid(
-                        &format!("electric.electrodes[{i}].potential"),
-                        el.potential,
-                        "must be finite (V)",
-                    ));
-                }
-            }
-        }
-        if let Some(k) = c.outputs.halo
-            && !(k.is_finite() && k > 0.0)
-        {
-            return Err(SceneError::invalid(
-                "outputs.halo",
-                k,
-                "the Halo/particle radius ratio must be > 0",
-            ));
-        }
-        if let (Some(ph), None) = (c.outputs.halo_phases, c.outputs.halo) {
-            return Err(SceneError::invalid(
-                "outputs.halo_phases",
-                format!("{ph:?}"),
-                "only meaningful with a Halo: give `halo: Some(k)` too, or remove halo_phases",
-            ));
-        }
-        Ok(())
+        crate::validate::validate(&self.config, &self.base_dir)
     }
 }
 
-fn positive_time(field: &str, v: f64) -> Result<(), SceneError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(field, v, "must be a finite time > 0 (s)"))
+/// Wall time of one stage of a run.
+#[derive(Debug, Clone, Serialize)]
+pub struct StageTime {
+    /// The stage: `build`, `thermal setup`, `solve`, `post`.
+    pub stage: &'static str,
+    /// Wall time (s).
+    pub wall_s: f64,
+}
+
+/// The stages of a run and their wall times, in order.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Stages(pub Vec<StageTime>);
+
+impl Stages {
+    /// Runs `f` as stage `stage`, recording its wall time.
+    pub fn time<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
+        let t0 = Instant::now();
+        let out = f();
+        self.0.push(StageTime {
+            stage,
+            wall_s: t0.elapsed().as_secs_f64(),
+        });
+        out
+    }
+
+    /// The wall time of `stage` (s), 0 if it did not run.
+    pub fn wall_s(&self, stage: &str) -> f64 {
+        self.0.iter().filter(|s| s.stage == stage).map(|s| s.wall_s).sum()
     }
 }
 
@@ -282,7 +149,7 @@ pub struct RunResult {
     /// Thermal network values, when the scene has thermal physics.
     pub thermal_setup: Option<ThermalSetup>,
     /// Resolved thermal boundary conditions and sources.
-    pub thermal_bcs: Option<crate::thermal::ThermalBcs>,
+    pub thermal_bcs: Option<ThermalBcs>,
     /// Thermal solution.
     pub thermal: Option<ThermalRun>,
     /// Electric solution.
@@ -301,6 +168,8 @@ pub struct RunResult {
     pub domain: Domain,
     /// Non-fatal findings, printed by the CLI and stored in `summary.json`.
     pub diagnostics: Vec<String>,
+    /// Wall time of each stage.
+    pub stages: Stages,
     /// Wall time of the post-processing (s).
     pub post_s: f64,
     /// Wall time of the whole run (s).
@@ -318,8 +187,9 @@ pub struct RunOptions<'a> {
 pub fn run(scene: &Scene, opts: &RunOptions<'_>) -> Result<RunResult, SceneError> {
     let t0 = Instant::now();
     let cfg = &scene.config;
-    let model = build_model(cfg, &scene.base_dir, opts.progress)?;
-    let mut result = run_on_model(cfg, model)?;
+    let mut stages = Stages::default();
+    let model = stages.time("build", || build_model(cfg, &scene.base_dir, opts.progress))?;
+    let mut result = run_stages(cfg, model, stages)?;
     result.wall_s = t0.elapsed().as_secs_f64();
     Ok(result)
 }
@@ -327,253 +197,212 @@ pub fn run(scene: &Scene, opts: &RunOptions<'_>) -> Result<RunResult, SceneError
 /// Runs the physics and post-processing of `cfg` on an already built model (so one packing
 /// can serve several solvers).
 pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneError> {
+    run_stages(cfg, model, Stages::default())
+}
+
+/// The stages after the build.
+fn run_stages(cfg: &SceneConfig, model: Model, mut stages: Stages) -> Result<RunResult, SceneError> {
     let t0 = Instant::now();
-    let mut diagnostics: Vec<String> = model.report.contacts.diagnostics.clone();
-    if model.report.carved_away > 0 {
-        diagnostics.push(format!("{} particles carved away", model.report.carved_away));
-    }
-    let output_times = &cfg.outputs.times;
-    // Thermal setup first (C_t calibration), then the electric solve, then the thermal solve
-    // with the Joule sources; with ρ_e(T), iterate until temperatures settle.
-    let thermal_setup = match &cfg.thermal {
-        Some(_) => {
-            let s = thermal_setup(
-                &model,
-                &cfg.surface,
-                cfg.interface,
-                cfg.thermal.as_ref().expect("thermal"),
-            )?;
-            if s.clamped > 0 {
-                diagnostics.push(format!(
-                    "{} particles outside the Terreros table's 4–20 neighbours (α clamped)",
-                    s.clamped
-                ));
-            }
-            Some(s)
-        }
+    let problem = convert::problem(cfg)?;
+    let mut diagnostics = model_diagnostics(&model);
+    let thermal = match &problem.thermal {
+        Some(tp) => Some(stages.time("thermal setup", || setup_thermal(&model, tp, &mut diagnostics))?),
         None => None,
     };
-    let bcs = match &cfg.thermal {
-        Some(t) => Some(thermal_bcs(
+    let (thermal_run, electric) = stages.time("solve", || {
+        solve(&model, &problem, thermal.as_ref(), &mut diagnostics)
+    })?;
+    let (thermal_setup, thermal_bcs) = thermal.unzip();
+    let post = stages.time("post", || {
+        post_process(
             &model,
-            thermal_setup.as_ref().expect("setup"),
-            t,
-            cfg.floating,
-        )?),
-        None => None,
+            cfg,
+            &problem,
+            thermal_setup.as_ref(),
+            thermal_bcs.as_ref(),
+            thermal_run.as_ref(),
+            electric.as_ref(),
+        )
+    })?;
+    Ok(RunResult {
+        model,
+        thermal_setup,
+        thermal_bcs,
+        thermal: thermal_run,
+        electric,
+        flux: post.flux,
+        halo: post.halo,
+        etc: post.etc,
+        probes: post.probes,
+        profiles: post.profiles,
+        domain: post.domain,
+        diagnostics,
+        post_s: stages.wall_s("post"),
+        stages,
+        wall_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// What building the model found: contact diagnostics, carved particles.
+fn model_diagnostics(model: &Model) -> Vec<String> {
+    let mut d = model.report.contacts.diagnostics.clone();
+    if model.report.carved_away > 0 {
+        d.push(format!("{} particles carved away", model.report.carved_away));
+    }
+    d
+}
+
+/// Thermal setup and boundary conditions (C_t calibrated here when `Auto`).
+fn setup_thermal(
+    model: &Model,
+    tp: &ThermalProblem,
+    diagnostics: &mut Vec<String>,
+) -> Result<(ThermalSetup, ThermalBcs), SceneError> {
+    let setup = thermal_setup(model, tp)?;
+    if setup.clamped > 0 {
+        diagnostics.push(format!(
+            "{} particles outside the Terreros table's 4–20 neighbours (α clamped)",
+            setup.clamped
+        ));
+    }
+    let bcs = thermal_bcs(model, &setup, tp)?;
+    diagnostics.extend(
+        bcs.constraints
+            .diagnostics()
+            .iter()
+            .map(|d| format!("thermal: {d}")),
+    );
+    Ok((setup, bcs))
+}
+
+/// The thermal solve, the electric solve, or both coupled.
+fn solve(
+    model: &Model,
+    problem: &Problem,
+    thermal: Option<&(ThermalSetup, ThermalBcs)>,
+    diagnostics: &mut Vec<String>,
+) -> Result<(Option<ThermalRun>, Option<ElectricRun>), SceneError> {
+    let (th, el) = match (&problem.thermal, thermal, &problem.electric) {
+        (Some(tp), Some((setup, bcs)), Some(ep)) => {
+            let c = couple(model, setup, bcs, tp, ep)?;
+            diagnostics.extend(c.diagnostics);
+            (Some(c.thermal), Some(c.electric))
+        }
+        (Some(tp), Some((setup, bcs)), None) => (Some(solve_thermal(model, setup, bcs, tp)?), None),
+        (None, _, Some(ep)) => (None, Some(solve_electric(model, ep, None)?)),
+        _ => unreachable!("validated: a scene has thermal or electric physics, and thermal physics a setup"),
     };
-    if let Some(b) = &bcs {
-        diagnostics.extend(
-            b.constraints
-                .diagnostics()
-                .iter()
-                .map(|d| format!("thermal: {d}")),
-        );
-    }
-    let mut electric: Option<ElectricRun> = None;
-    let mut thermal: Option<ThermalRun> = None;
-    match (&cfg.electric, &cfg.thermal) {
-        (Some(e), None) => {
-            electric = Some(solve_electric(&model, e, cfg.interface, cfg.floating, None)?);
-        }
-        (None, Some(t)) => {
-            let (s, b) = (thermal_setup.as_ref().unwrap(), bcs.as_ref().unwrap());
-            thermal = Some(solve_thermal(
-                &model,
-                s,
-                b,
-                &t.solver,
-                t.initial_temperature,
-                output_times,
-                None,
-            )?);
-        }
-        (Some(e), Some(t)) => {
-            let (s, b) = (thermal_setup.as_ref().unwrap(), bcs.as_ref().unwrap());
-            // Calibrate an `Auto` C_t of the electric surfaces once, not at every re-solve.
-            let e = &resolved_surface(&model, e)?;
-            let mut temps: Option<Vec<f64>> = None;
-            let tol = e.recouple_tolerance;
-            let transient = !matches!(t.solver, ThermalSolverConfig::Steady);
-            // Steady with ρ_e(T): fixed-point rounds; transient with ρ_e(T): one coupled run
-            // below (no rounds); without ρ_e(T): one round.
-            let max_rounds = match (tol, transient) {
-                (Some(_), true) => 0,
-                (Some(_), false) => 50,
-                (None, _) => 1,
-            };
-            if tol.is_none()
-                && model
-                    .materials
-                    .materials
-                    .iter()
-                    .any(|m| m.resistivity_temp_coeff != 0.0)
-            {
-                diagnostics.push(
-                    "electric: resistivity_temp_coeff is set but electric.recouple_tolerance is not: ρ_e was \
-                     evaluated at resistivity_ref_temp (one-way coupling)"
-                        .into(),
-                );
-            }
-            if let (Some(tol), true) = (tol, transient) {
-                let (el, th) = coupled_transient(&model, e, cfg, t, s, b, tol, output_times)?;
-                let r = &el.report;
-                diagnostics.push(format!(
-                    "electro-thermal coupling: {} potential solves during the transient (re-solved whenever a \
-                     temperature moved by more than {tol} K since the last one), {:.3} s",
-                    r.solves, r.solves_wall_s
-                ));
-                electric = Some(el);
-                thermal = Some(th);
-            }
-            for round in 0..max_rounds {
-                let el = solve_electric(&model, e, cfg.interface, cfg.floating, temps.as_deref())?;
-                let th = solve_thermal(
-                    &model,
-                    s,
-                    b,
-                    &t.solver,
-                    t.initial_temperature,
-                    output_times,
-                    Some(&el.joule),
-                )?;
-                let moved = temps
-                    .as_ref()
-                    .map(|old| {
-                        old.iter()
-                            .zip(&th.temperatures)
-                            .map(|(a, b)| (a - b).abs())
-                            .fold(0.0, f64::max)
-                    })
-                    .unwrap_or(f64::INFINITY);
-                temps = Some(th.temperatures.clone());
-                let (solves, solves_s) = electric
-                    .as_ref()
-                    .map_or((0, 0.0), |p| (p.report.solves, p.report.solves_wall_s));
-                let mut el = el;
-                el.report.solves += solves;
-                el.report.solves_wall_s += solves_s;
-                electric = Some(el);
-                thermal = Some(th);
-                if let Some(tol) = tol {
-                    if moved <= tol {
-                        diagnostics.push(format!(
-                            "electro-thermal coupling converged in {} rounds (ΔT ≤ {tol} K)",
-                            round + 1
-                        ));
-                        break;
-                    }
-                    if round + 1 == max_rounds {
-                        return Err(SceneError::invalid(
-                            "electric.recouple_tolerance",
-                            tol,
-                            format!(
-                                "the coupling did not settle in {max_rounds} rounds (last change {moved:.3e} K)"
-                            ),
-                        ));
-                    }
-                }
-            }
-        }
-        (None, None) => unreachable!("validated: a scene has thermal or electric physics"),
-    }
-    if let Some(el) = &electric {
+    if let Some(el) = &el {
         diagnostics.extend(el.diagnostics.iter().cloned());
     }
+    Ok((th, el))
+}
 
-    // Post-processing: only what the outputs ask for.
-    let tp = Instant::now();
-    let domain = match &cfg.carve {
-        Some(r) => Domain::of_region(convert::region(r, "carve")?),
+/// What the post-processing computed.
+struct Post {
+    flux: Option<Vec<Vec3>>,
+    halo: Option<(Vec<Vec3>, Vec<bool>, HaloReport)>,
+    etc: Option<EtcValue>,
+    probes: Vec<ProbeValue>,
+    profiles: Vec<ProfileValues>,
+    domain: Domain,
+}
+
+/// A field sampled by probes and profiles: (name, time (s), value per particle).
+type SampledField = (String, f64, Vec<f64>);
+
+/// Flux, Halo, ETC, probes and profiles: only what the outputs ask for.
+fn post_process(
+    model: &Model,
+    cfg: &SceneConfig,
+    problem: &Problem,
+    setup: Option<&ThermalSetup>,
+    bcs: Option<&ThermalBcs>,
+    th: Option<&ThermalRun>,
+    el: Option<&ElectricRun>,
+) -> Result<Post, SceneError> {
+    let plan = &problem.post;
+    let domain = match &problem.model.carve {
+        Some((region, _)) => Domain::of_region(region.clone()),
         None => Domain::of_container(&model.container)?,
     };
-    let branches: Vec<Vec3> = (0..model.graph.pairs.len())
-        .map(|k| model.graph.branch(k))
-        .collect();
-    let want_flux = cfg.outputs.flux || cfg.outputs.halo.is_some();
     let (mut flux, mut halo) = (None, None);
-    if let (true, Some(th), Some(s)) = (want_flux, &thermal, &thermal_setup) {
-        let m = model.graph.pairs.len();
-        let mut d = particle_dipoles(
-            &model.graph.pairs,
-            &branches,
-            &s.conductances[..m],
-            &th.temperatures,
-        )?;
-        add_wall_dipoles(&model, s, &th.node_temperatures, &mut d);
+    if let (true, Some(th), Some(s)) = (plan.flux, th, setup) {
+        let d = heat_dipoles(model, s, th)?;
         flux = Some(
             d.iter()
                 .zip(&s.rep_volumes)
                 .map(|(d, v)| -d / (2.0 * v))
                 .collect::<Vec<Vec3>>(),
         );
-        if let Some(k) = cfg.outputs.halo {
-            let h = halo_flux(
-                &model.particles,
-                &d,
-                &s.rep_volumes,
-                &domain,
-                &HaloParams {
-                    ratio: k,
-                    phases: match cfg.outputs.halo_phases.unwrap_or_default() {
-                        HaloPhasesConfig::Same => HaloPhases::Same,
-                        HaloPhasesConfig::All => HaloPhases::All,
-                    },
-                    ..HaloParams::default()
-                },
-            )?;
+        if let Some(params) = &plan.halo {
+            let h = halo_flux(&model.particles, &d, &s.rep_volumes, &domain, params)?;
             halo = Some((h.flux, h.truncated, h.report));
         }
     }
-    let etc = match (&cfg.outputs.etc_axis, &thermal, &thermal_setup, &bcs) {
-        (Some(ax), Some(th), Some(s), Some(b)) => Some(effective_conductivity(&model, *ax, th, s, b)?),
+    let etc = match (plan.etc_axis, th, setup, bcs) {
+        (Some(ax), Some(th), Some(s), Some(b)) => Some(effective_conductivity(model, ax, th, s, b)?),
         _ => None,
     };
-    let rep = thermal_setup
-        .as_ref()
-        .map(|s| s.rep_volumes.clone())
-        .unwrap_or_else(|| {
-            (0..model.particles.len())
-                .map(|p| model.particles.volume(p) / model.phi)
-                .collect()
-        });
-    let index = ProbeIndex::new(&model.particles, &rep, &domain)?;
-    let mut probes = Vec::new();
-    let mut profiles = Vec::new();
-    let mut fields: Vec<(String, f64, Vec<f64>)> = Vec::new();
-    if let Some(th) = &thermal {
+    let final_time = problem.thermal.as_ref().map_or(0.0, |t| t.solver.final_time());
+    let mut fields: Vec<SampledField> = Vec::new();
+    if let Some(th) = th {
         for (t, v) in &th.snapshots {
             fields.push(("temperature".into(), *t, v.clone()));
         }
-        if th.snapshots.last().map(|s| s.0) != Some(final_time(cfg)) {
-            fields.push(("temperature".into(), final_time(cfg), th.temperatures.clone()));
+        if th.snapshots.last().map(|s| s.0) != Some(final_time) {
+            fields.push(("temperature".into(), final_time, th.temperatures.clone()));
         }
     }
-    if let Some(el) = &electric {
+    if let Some(el) = el {
         fields.push(("potential".into(), 0.0, el.potentials.clone()));
     }
     if let Some(f) = &flux {
         fields.push((
             "flux_magnitude".into(),
-            final_time(cfg),
+            final_time,
             f.iter().map(|v| v.norm()).collect(),
         ));
     }
     if let Some((h, _, _)) = &halo {
         fields.push((
             "halo_flux_magnitude".into(),
-            final_time(cfg),
+            final_time,
             h.iter().map(|v| v.norm()).collect(),
         ));
     }
-    for (i, p) in cfg.outputs.probes.iter().enumerate() {
-        let point = Vec3::new(p.point.0, p.point.1, p.point.2);
-        let method = probe_method(p.method, &format!("outputs.probes[{i}].method"))?;
-        for (field, t, values) in &fields {
-            let value = index.probe(values, &point, &method).map_err(|e| {
+    let rep = setup.map(|s| s.rep_volumes.clone()).unwrap_or_else(|| {
+        (0..model.particles.len())
+            .map(|p| model.particles.volume(p) / model.phi)
+            .collect()
+    });
+    let index = ProbeIndex::new(&model.particles, &rep, &domain)?;
+    let (probes, profiles) = sample(&index, plan, cfg, &fields)?;
+    Ok(Post {
+        flux,
+        halo,
+        etc,
+        probes,
+        profiles,
+        domain,
+    })
+}
+
+/// Probe readings and profiles of every sampled field.
+fn sample(
+    index: &ProbeIndex,
+    plan: &PostPlan,
+    cfg: &SceneConfig,
+    fields: &[SampledField],
+) -> Result<(Vec<ProbeValue>, Vec<ProfileValues>), SceneError> {
+    let mut probes = Vec::new();
+    let mut profiles = Vec::new();
+    for (i, p) in plan.probes.iter().enumerate() {
+        for (field, t, values) in fields {
+            let value = index.probe(values, &p.point, &p.method).map_err(|e| {
                 SceneError::invalid(
                     &format!("outputs.probes[{i}] ({})", p.name),
-                    format!("{:?}", p.point),
+                    format!("{:?}", cfg.outputs.probes[i].point),
                     e.to_string(),
                 )
             })?;
@@ -585,15 +414,9 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
             });
         }
     }
-    for (i, p) in cfg.outputs.profiles.iter().enumerate() {
-        let line = Line {
-            from: Vec3::new(p.from.0, p.from.1, p.from.2),
-            to: Vec3::new(p.to.0, p.to.1, p.to.2),
-            n_points: p.points,
-        };
-        let method = probe_method(p.method, &format!("outputs.profiles[{i}].method"))?;
-        for (field, t, values) in &fields {
-            let points = index.profile(values, &line, &method).map_err(|e| {
+    for (i, p) in plan.profiles.iter().enumerate() {
+        for (field, t, values) in fields {
+            let points = index.profile(values, &p.line, &p.method).map_err(|e| {
                 SceneError::invalid(
                     &format!("outputs.profiles[{i}] ({})", p.name),
                     "line",
@@ -608,109 +431,23 @@ pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneE
             });
         }
     }
-    let post_s = tp.elapsed().as_secs_f64();
-    Ok(RunResult {
-        model,
-        thermal_setup,
-        thermal_bcs: bcs,
-        thermal,
-        electric,
-        flux,
-        halo,
-        etc,
-        probes,
-        profiles,
-        domain,
-        diagnostics,
-        post_s,
-        wall_s: t0.elapsed().as_secs_f64(),
-    })
+    Ok((probes, profiles))
 }
 
-/// `e` with an `Auto` C_t of its surfaces replaced by the value calibrated on `model`.
-fn resolved_surface(model: &Model, e: &ElectricConfig) -> Result<ElectricConfig, SceneError> {
-    let mut e = e.clone();
-    if let SurfaceConfig::Calibrated { c_t: CtConfig::Auto } = e.surface
-        && let demcon_graph::SurfaceModel::Calibrated { c_t } =
-            crate::electric::electric_surface_model(model, &e.surface)?
-    {
-        e.surface = SurfaceConfig::Calibrated {
-            c_t: CtConfig::Value(c_t),
-        };
-    }
-    Ok(e)
-}
-
-/// The time-accurate ρ_e(T) coupling of a transient: the potential is solved at the initial
-/// temperatures, then re-solved (and the Joule sources replaced) after any step that leaves a
-/// particle more than `tol` (K) away from its temperature at the last solve. The check is
-/// O(n) per step, beside the O(n Z) step. Returns the last electric solve (the one in force at
-/// the end, its report counting every solve) and the thermal run.
-#[allow(clippy::too_many_arguments)]
-fn coupled_transient(
-    model: &Model,
-    e: &ElectricConfig,
-    cfg: &SceneConfig,
-    t: &ThermalConfig,
-    setup: &ThermalSetup,
-    bcs: &crate::thermal::ThermalBcs,
-    tol: f64,
-    output_times: &[f64],
-) -> Result<(ElectricRun, ThermalRun), SceneError> {
-    let n = model.particles.len();
-    let t_init = crate::thermal::initial_node_temperatures(model, setup, bcs, t.initial_temperature);
-    let mut last_t = t_init[..n].to_vec();
-    let mut el = solve_electric(model, e, cfg.interface, cfg.floating, Some(&last_t))?;
-    let first_joule = el.joule.clone();
-    let (mut solves, mut solves_s) = (1usize, el.report.solves_wall_s);
-    let mut update = |_time: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, SceneError> {
-        let moved = temps[..n]
-            .iter()
-            .zip(&last_t)
-            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        if moved <= tol {
-            return Ok(None);
-        }
-        last_t.copy_from_slice(&temps[..n]);
-        el = solve_electric(model, e, cfg.interface, cfg.floating, Some(&last_t))?;
-        solves += 1;
-        solves_s += el.report.solves_wall_s;
-        Ok(Some(el.joule.clone()))
-    };
-    let th = crate::thermal::solve_thermal_with(
-        model,
-        setup,
-        bcs,
-        &t.solver,
-        t.initial_temperature,
-        output_times,
-        Some(&first_joule),
-        &mut update,
+/// Particle dipoles D_p = Σ_q H_pq (T_q − T_p) ℓ_pq of the contacts and the wall links.
+fn heat_dipoles(model: &Model, s: &ThermalSetup, th: &ThermalRun) -> Result<Vec<Vec3>, SceneError> {
+    let branches: Vec<Vec3> = (0..model.graph.pairs.len())
+        .map(|k| model.graph.branch(k))
+        .collect();
+    let mut d = particle_dipoles(
+        &model.graph.pairs,
+        &branches,
+        s.contact_conductances(),
+        &th.temperatures,
     )?;
-    el.report.solves = solves;
-    el.report.solves_wall_s = solves_s;
-    Ok((el, th))
-}
-
-fn final_time(cfg: &SceneConfig) -> f64 {
-    match cfg.thermal.as_ref().map(|t| t.solver) {
-        Some(ThermalSolverConfig::Explicit { t_end, .. } | ThermalSolverConfig::Implicit { t_end, .. }) => {
-            t_end
-        }
-        _ => 0.0,
-    }
-}
-
-fn probe_method(m: ProbeMethodConfig, field: &str) -> Result<ProbeMethod, SceneError> {
-    Ok(match m {
-        ProbeMethodConfig::Nearest => ProbeMethod::Nearest,
-        ProbeMethodConfig::Ball(r) => {
-            if !(r.is_finite() && r > 0.0) {
-                return Err(SceneError::invalid(field, r, "the ball radius must be > 0 (m)"));
-            }
-            ProbeMethod::BallAverage { radius: r }
-        }
-    })
+    s.walls
+        .add_dipoles(s.wall_conductances(), &th.node_temperatures(), &mut d);
+    Ok(d)
 }
 
 /// λ_e = (Q/A) L / ΔT along `axis` from a steady run with fixed temperatures on the two
@@ -718,20 +455,21 @@ fn probe_method(m: ProbeMethodConfig, field: &str) -> Result<ProbeMethod, SceneE
 /// two fixed values, L and A the container's length and cross-section.
 fn effective_conductivity(
     model: &Model,
-    axis: AxisConfig,
+    axis: Axis,
     th: &ThermalRun,
     s: &ThermalSetup,
-    b: &crate::thermal::ThermalBcs,
+    b: &ThermalBcs,
 ) -> Result<EtcValue, SceneError> {
-    let ax = convert::axis(axis);
-    let (area, length) = section_and_length(&model.container, ax).ok_or_else(|| {
+    // Checked by `validate` when the container is known before packing (not for a file
+    // without a container in the scene).
+    let (area, length) = model.container.section_and_length(axis).ok_or_else(|| {
         SceneError::invalid(
             "outputs.etc_axis",
             format!("{axis:?}"),
             "the container has no flat faces normal to this axis",
         )
     })?;
-    if b.fixed_sets.len() != 2 {
+    let [first, second] = b.fixed_sets.as_slice() else {
         return Err(SceneError::invalid(
             "outputs.etc_axis",
             format!("{axis:?}"),
@@ -740,19 +478,19 @@ fn effective_conductivity(
                 b.fixed_sets.len()
             ),
         ));
-    }
-    let (hot, cold) = if b.fixed_sets[0].2 >= b.fixed_sets[1].2 {
-        (0, 1)
+    };
+    let (hot, cold) = if first.value >= second.value {
+        (first, second)
     } else {
-        (1, 0)
+        (second, first)
     };
     let q = demcon_network::boundary_flow(
         s.network(model),
         &s.conductances,
-        &th.node_temperatures,
-        &b.fixed_sets[hot].1,
+        &th.node_temperatures(),
+        &hot.nodes(&s.walls),
     )?;
-    let delta_t = b.fixed_sets[hot].2 - b.fixed_sets[cold].2;
+    let delta_t = hot.value - cold.value;
     let lambda_e = demcon_post::effective_conductivity(q, area, length, delta_t)?;
     Ok(EtcValue {
         axis: format!("{axis:?}"),
@@ -762,44 +500,4 @@ fn effective_conductivity(
         delta_t,
         lambda_e,
     })
-}
-
-/// Adds the wall links' share to the particle dipoles D_p = Σ g (T_q − T_p) ℓ_pq: a link of
-/// conductance g_w over the half-length h is the bond to the mirror image at 2h, of
-/// conductance g_w/2 and temperature difference 2 (T_w − T_p), so it adds
-/// 2 g_w (T_w − T_p) h n (n the outward normal of the face).
-fn add_wall_dipoles(model: &Model, s: &ThermalSetup, node_t: &[f64], d: &mut [Vec3]) {
-    for w in &s.walls {
-        let tw = node_t[w.node as usize];
-        for (&p, &g) in w.particles.iter().zip(&w.conductances) {
-            let pu = p as usize;
-            let c = model.particles.centres[pu];
-            let Some(h) = model.container.face_distance(w.face, &c) else {
-                continue;
-            };
-            let n = outward_normal(&model.container, w.face, &c);
-            d[pu] += 2.0 * g * (tw - node_t[pu]) * h.max(0.5 * model.particles.radii[pu]) * n;
-        }
-    }
-}
-
-/// Outward unit normal of a container face at (the projection of) point `c`.
-fn outward_normal(container: &demcon_core::Container, face: demcon_core::Face, c: &Vec3) -> Vec3 {
-    use demcon_core::Face;
-    match face {
-        Face::XMin => -Vec3::x(),
-        Face::XMax => Vec3::x(),
-        Face::YMin => -Vec3::y(),
-        Face::YMax => Vec3::y(),
-        Face::ZMin => -Vec3::z(),
-        Face::ZMax => Vec3::z(),
-        Face::Outer => {
-            let r = match container {
-                demcon_core::Container::Cylinder { .. } => Vec3::new(c.x, c.y, 0.0),
-                _ => *c,
-            };
-            let l = r.norm();
-            if l > 0.0 { r / l } else { Vec3::x() }
-        }
-    }
 }

@@ -201,11 +201,10 @@ fn positive_beta_recouples_to_the_independent_fixed_point_and_raises_r() {
     // Self-consistency: the potential was solved with the final temperatures' ρ_e.
     let el = r.electric.as_ref().unwrap();
     let th = r.thermal.as_ref().unwrap();
-    let again = demcon_scene::electric::solve_electric(
+    let problem = demcon_scene::convert::problem(&s.config).unwrap();
+    let again = demcon_model::solve_electric(
         &r.model,
-        s.config.electric.as_ref().unwrap(),
-        demcon_scene::config::InterfaceConfig::Harmonic,
-        demcon_scene::config::FloatingConfig::Exclude,
+        problem.electric.as_ref().unwrap(),
         Some(&th.temperatures),
     )
     .unwrap();

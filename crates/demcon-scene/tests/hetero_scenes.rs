@@ -53,8 +53,8 @@ fn halo_slab_scene_gives_the_uniform_flux() {
     assert_eq!(rep.ratio, 3.0);
     let fixed = &r.thermal_bcs.as_ref().unwrap().fixed_sets;
     let mut free = vec![true; flux.len()];
-    for (_, ids, _) in fixed {
-        ids.iter().for_each(|&i| free[i as usize] = false);
+    for set in fixed {
+        set.particles().iter().for_each(|&i| free[i as usize] = false);
     }
     // Volume-weighted mean (the volume average of the flux field) and CoV over free particles.
     let w = &r.thermal_setup.as_ref().unwrap().rep_volumes;
@@ -221,10 +221,9 @@ fn laminate_rule_resolves_the_inclusion_below_a_particle() {
 
 #[test]
 fn cut_particles_conduct_heat_and_current_alike_and_store_heat_by_volume() {
+    use demcon_model::{electric_conductances, thermal_setup};
     use demcon_scene::build_model;
     use demcon_scene::config::{PhaseRuleConfig, SurfaceConfig};
-    use demcon_scene::electric::electric_conductances;
-    use demcon_scene::thermal::thermal_setup;
     for rule in [PhaseRuleConfig::Laminate, PhaseRuleConfig::Segment] {
         let mut s = small("single-inclusion.ron", 2000, 2.0);
         s.config.phase_rule = rule;
@@ -236,9 +235,10 @@ fn cut_particles_conduct_heat_and_current_alike_and_store_heat_by_volume() {
         s.config.materials[1].density = 2.0 * s.config.materials[0].density;
         let model = build_model(&s.config, &s.base_dir, None).unwrap();
         assert!(!model.mixes.is_empty());
-        let th = s.config.thermal.as_ref().unwrap();
-        let setup = thermal_setup(&model, &s.config.surface, s.config.interface, th).unwrap();
-        let ge = electric_conductances(&model, &s.config.surface, s.config.interface, None).unwrap();
+        let problem = demcon_scene::convert::problem(&s.config).unwrap();
+        let tp = problem.thermal.as_ref().unwrap();
+        let setup = thermal_setup(&model, tp).unwrap();
+        let ge = electric_conductances(&model, &tp.surface, tp.interface, None).unwrap();
         assert_eq!(ge.len(), model.graph.pairs.len());
         for (k, (e, t)) in ge.iter().zip(&setup.conductances).enumerate() {
             assert!((e - t).abs() <= 1e-9 * t, "{rule:?}, contact {k}: {e} vs {t}");

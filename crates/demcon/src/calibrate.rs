@@ -6,8 +6,9 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use demcon_model::calibrate_ct;
 use demcon_scene::config::{ContactsConfig, PackingConfig};
-use demcon_scene::{Scene, build_model, thermal::calibrate_ct};
+use demcon_scene::{Scene, build_model};
 
 /// Arguments of `demcon calibrate`.
 #[derive(Debug, Args)]

@@ -136,13 +136,11 @@ pub fn layer_profile(
         .collect()
 }
 
-/// Mask of the fixed-temperature particles of a run (wall nodes, numbered after the
-/// particles, are skipped).
-pub fn fixed_mask(model: &Model, fixed_sets: &[(String, Vec<u32>, f64)]) -> Vec<bool> {
-    let n = model.particles.len();
-    let mut m = vec![false; n];
-    for (_, ids, _) in fixed_sets {
-        for &i in ids.iter().filter(|&&i| (i as usize) < n) {
+/// Mask of the fixed-temperature particles of a run (walls hold no particle).
+pub fn fixed_mask(model: &Model, fixed_sets: &[demcon_model::FixedSet]) -> Vec<bool> {
+    let mut m = vec![false; model.particles.len()];
+    for set in fixed_sets {
+        for &i in set.particles() {
             m[i as usize] = true;
         }
     }
@@ -151,7 +149,7 @@ pub fn fixed_mask(model: &Model, fixed_sets: &[(String, Vec<u32>, f64)]) -> Vec<
 
 /// Mask of the particles that are not results of a thermal run: fixed-temperature particles
 /// and particles excluded as floating.
-pub fn unsolved_mask(model: &Model, bcs: &demcon_scene::thermal::ThermalBcs) -> Vec<bool> {
+pub fn unsolved_mask(model: &Model, bcs: &demcon_model::ThermalBcs) -> Vec<bool> {
     let mut m = fixed_mask(model, &bcs.fixed_sets);
     for &i in bcs.constraints.excluded() {
         m[i as usize] = true;

@@ -14,8 +14,8 @@
 
 use std::time::Instant;
 
+use demcon_model::calibrate_ct;
 use demcon_scene::config::*;
-use demcon_scene::thermal::calibrate_ct;
 use serde_json::{Map, Value};
 
 use super::common::*;

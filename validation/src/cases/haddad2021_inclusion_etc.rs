@@ -26,9 +26,9 @@
 
 use std::time::Instant;
 
+use demcon_model::{CalibrationBc, calibrate_ct_with, set_region_phases};
 use demcon_scene::config::*;
-use demcon_scene::model::set_region_phases;
-use demcon_scene::thermal::{CalibrationBc, calibrate_ct_with};
+use demcon_scene::convert::phase_rule;
 use serde_json::{Map, Value};
 
 use super::common::*;
@@ -333,7 +333,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         .iter()
         .map(|&r| {
             let mut m = centre_model.clone();
-            set_region_phases(&mut m, &[(sphere.clone(), 1)], r);
+            set_region_phases(&mut m, &[(sphere.clone(), 1)], phase_rule(r));
             m
         })
         .collect();

@@ -47,7 +47,8 @@ use super::haddad2021_inclusion_etc::{
 };
 use crate::chart::draw_raster;
 use crate::{CaseOutcome, Comparison, Ctx, Table};
-use demcon_scene::model::set_region_phases;
+use demcon_model::set_region_phases;
+use demcon_scene::convert::phase_rule;
 
 /// The Halo ratio of the paper's field pictures.
 pub const HALO_K: f64 = 11.0;
@@ -305,7 +306,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             .iter()
             .map(|&rule| {
                 let mut m = centre_model.clone();
-                set_region_phases(&mut m, &[(sphere.clone(), 1)], rule);
+                set_region_phases(&mut m, &[(sphere.clone(), 1)], phase_rule(rule));
                 m
             })
             .collect();

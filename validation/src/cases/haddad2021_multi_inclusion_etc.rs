@@ -24,8 +24,9 @@
 
 use std::time::Instant;
 
+use demcon_model::{place_inclusions, set_region_phases};
 use demcon_scene::config::*;
-use demcon_scene::model::{place_inclusions, set_region_phases};
+use demcon_scene::convert::phase_rule;
 use serde_json::{Map, Value};
 
 use super::common::*;
@@ -75,7 +76,7 @@ pub fn with_inclusions(model: &Model, f: f64, seed: u64) -> anyhow::Result<(Vec<
         .iter()
         .map(|&r| {
             let mut m = model.clone();
-            set_region_phases(&mut m, &[(union.clone(), 1)], r);
+            set_region_phases(&mut m, &[(union.clone(), 1)], phase_rule(r));
             m
         })
         .collect();

@@ -23,9 +23,10 @@ use std::time::Instant;
 
 use demcon_core::{Face, Selector};
 use demcon_electric::{ElectricParams, ElectricSolution, solve_potential};
+use demcon_model::electric_conductances;
 use demcon_network::{FloatingPolicy, Method, SolveParams};
 use demcon_scene::config::*;
-use demcon_scene::electric::electric_conductances;
+use demcon_scene::convert;
 
 use super::common::*;
 use super::hubert2017_scenes::*;
@@ -85,8 +86,8 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     out.n_particles = model.particles.len();
     let g = electric_conductances(
         &model,
-        &SurfaceConfig::TerrerosAlpha,
-        InterfaceConfig::Harmonic,
+        &convert::surface(&SurfaceConfig::TerrerosAlpha),
+        convert::interface(InterfaceConfig::Harmonic),
         None,
     )?;
     let sel = |f: Face| Selector::Face(f).select_nonempty(&model.particles, &model.container, f.name());

@@ -1,15 +1,77 @@
-//! Electric part of a scene: resistivities (optionally temperature-dependent), surfaces,
-//! contact conductances S/(ρ_e d), electrodes, the potential solve and its Joule power.
+//! The electric problem on a model: resistivities (optionally ρ_e(T)), transmission surfaces,
+//! contact conductances S/(ρ_e d), electrodes on particles or on container faces, the
+//! potential solve and the Joule power per particle.
 
+use demcon_core::{Face, Selector, Vec3};
 use demcon_electric::{ElectricParams, joule_power, solve_potential};
-use demcon_graph::{InterfaceRule, SurfaceModel, contact_surfaces, interface_value};
+use demcon_graph::{InterfaceRule, Mix, SurfaceModel, WallContacts, contact_surfaces, interface_value};
+use demcon_network::FloatingPolicy;
 use serde::Serialize;
 
-use crate::config::*;
-use crate::convert;
-use crate::error::SceneError;
+use crate::calibrate::calibrate_ct;
+use crate::error::ModelError;
 use crate::model::Model;
-use crate::thermal::{default_solve_params, extended_network, floating_policy};
+use crate::thermal::{CtSpec, SurfaceSpec, default_solve_params, network_with_walls};
+
+/// Where an electrode holds its potential.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ElectrodeAt {
+    /// On the selected particles.
+    Particles(Selector),
+    /// On a container face, linked to the particles touching it by half-contacts.
+    Face(Face),
+}
+
+/// A fixed potential.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Electrode {
+    /// Where.
+    pub at: ElectrodeAt,
+    /// Potential (V).
+    pub potential: f64,
+}
+
+/// Everything the electric physics of a run needs, on plain types.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ElectricProblem {
+    /// Transmission surfaces of the electric network.
+    pub surface: SurfaceSpec,
+    /// Conductivity of a contact across two phases.
+    pub interface: InterfaceRule,
+    /// Electrodes (errors name `electric.electrodes[i]`).
+    pub electrodes: Vec<Electrode>,
+    /// Share of each branch's Joule power given to its particles, in [0, 1].
+    pub eta: f64,
+    /// Floating clusters: excluded or refused.
+    pub floating: FloatingPolicy,
+    /// Re-solve with ρ_e(T) when a temperature moved more than this (K); `None`: one-way.
+    pub recouple_tolerance: Option<f64>,
+}
+
+impl ElectricProblem {
+    /// The faces carrying an electrode, with their potentials, in order.
+    pub fn face_electrodes(&self) -> (Vec<Face>, Vec<f64>) {
+        self.electrodes
+            .iter()
+            .filter_map(|e| match e.at {
+                ElectrodeAt::Face(f) => Some((f, e.potential)),
+                ElectrodeAt::Particles(_) => None,
+            })
+            .unzip()
+    }
+
+    /// The problem with an `Auto` C_t of its surfaces replaced by the value calibrated on
+    /// `model` (so a coupled run calibrates once, not at every re-solve).
+    pub fn resolved(&self, model: &Model) -> Result<ElectricProblem, ModelError> {
+        let mut p = self.clone();
+        if let SurfaceSpec::Calibrated(CtSpec::Auto) = p.surface
+            && let SurfaceModel::Calibrated { c_t } = electric_surface_model(model, &p.surface)?
+        {
+            p.surface = SurfaceSpec::Calibrated(CtSpec::Value(c_t));
+        }
+        Ok(p)
+    }
+}
 
 /// What the electric solve gave.
 #[derive(Debug, Clone)]
@@ -23,6 +85,8 @@ pub struct ElectricRun {
     pub branch_currents: Vec<f64>,
     /// Conductances 1/R (S): the contacts, then the face-electrode links.
     pub conductances: Vec<f64>,
+    /// The face electrodes and their links.
+    pub walls: WallContacts,
     /// Joule power per particle (W), η applied.
     pub joule: Vec<f64>,
     /// Summary.
@@ -60,16 +124,12 @@ pub struct ElectricReport {
 }
 
 /// The surface model of the electric network (C_t calibrated on the model when `Auto`).
-pub fn electric_surface_model(model: &Model, surface: &SurfaceConfig) -> Result<SurfaceModel, SceneError> {
+pub fn electric_surface_model(model: &Model, surface: &SurfaceSpec) -> Result<SurfaceModel, ModelError> {
     Ok(match surface {
-        SurfaceConfig::TerrerosAlpha => SurfaceModel::TerrerosAlpha,
-        SurfaceConfig::Calibrated {
-            c_t: CtConfig::Value(c),
-        } => SurfaceModel::Calibrated { c_t: *c },
-        SurfaceConfig::Calibrated { c_t: CtConfig::Auto } => {
-            let cal = crate::thermal::calibrate_ct(model)?;
-            SurfaceModel::Calibrated { c_t: cal.c_t }
-        }
+        SurfaceSpec::Calibrated(CtSpec::Auto) => SurfaceModel::Calibrated {
+            c_t: calibrate_ct(model)?.c_t,
+        },
+        s => s.model(None),
     })
 }
 
@@ -80,13 +140,13 @@ pub struct ParticleConductivities {
     /// σ of the particle's own phase (S/m).
     pub own: Vec<f64>,
     /// The interface mix and σ of the other phase (S/m), for cut particles.
-    pub other: Vec<Option<(demcon_graph::Mix, f64)>>,
+    pub other: Vec<Option<(Mix, f64)>>,
 }
 
 impl ParticleConductivities {
     /// Particle p's conductivity along the unit vector `e` over a half-bond of length `half`
     /// (m) (S/m).
-    pub fn half_bond(&self, p: usize, e: &demcon_core::Vec3, half: f64) -> f64 {
+    pub fn half_bond(&self, p: usize, e: &Vec3, half: f64) -> f64 {
         match &self.other[p] {
             Some((m, s)) => m.half_bond_value(self.own[p], *s, e, half),
             None => self.own[p],
@@ -99,21 +159,21 @@ impl ParticleConductivities {
 pub fn particle_conductivities(
     model: &Model,
     temperatures: Option<&[f64]>,
-) -> Result<ParticleConductivities, SceneError> {
+) -> Result<ParticleConductivities, ModelError> {
     let n = model.particles.len();
     // σ = 1/ρ_e(T_p) of a phase at a particle's temperature.
-    let sigma_of = |phase: u16, p: usize| -> Result<f64, SceneError> {
+    let sigma_of = |phase: u16, p: usize| -> Result<f64, ModelError> {
         let m = &model.materials.materials[phase as usize];
         let t = temperatures.map(|t| t[p]).unwrap_or(m.resistivity_ref_temp);
         let rho = m.resistivity_at(t).ok_or_else(|| {
-            SceneError::invalid(
+            ModelError::invalid(
                 &format!("materials[{}].resistivity", m.name),
                 "none",
                 "an electric scene needs it",
             )
         })?;
         if !(rho.is_finite() && rho > 0.0) {
-            return Err(SceneError::invalid(
+            return Err(ModelError::invalid(
                 &format!("materials[{}].resistivity", m.name),
                 rho,
                 format!("ρ_e(T = {t:.3}) must stay > 0: check resistivity_temp_coeff"),
@@ -139,10 +199,10 @@ pub fn particle_conductivities(
 /// by the interface rule (two half-bonds in series for the harmonic mean).
 pub fn electric_conductances(
     model: &Model,
-    surface: &SurfaceConfig,
-    interface: InterfaceConfig,
+    surface: &SurfaceSpec,
+    interface: InterfaceRule,
     temperatures: Option<&[f64]>,
-) -> Result<Vec<f64>, SceneError> {
+) -> Result<Vec<f64>, ModelError> {
     let sm = electric_surface_model(model, surface)?;
     let sigma = particle_conductivities(model, temperatures)?;
     contact_conductances(model, &sm, interface, &sigma)
@@ -151,14 +211,10 @@ pub fn electric_conductances(
 fn contact_conductances(
     model: &Model,
     sm: &SurfaceModel,
-    interface: InterfaceConfig,
+    rule: InterfaceRule,
     sigma: &ParticleConductivities,
-) -> Result<Vec<f64>, SceneError> {
+) -> Result<Vec<f64>, ModelError> {
     let s = contact_surfaces(&model.graph, &model.particles, sm)?;
-    let rule = match interface {
-        InterfaceConfig::Harmonic => InterfaceRule::HarmonicMean,
-        InterfaceConfig::Arithmetic => InterfaceRule::ArithmeticMean,
-    };
     Ok(model
         .graph
         .pairs
@@ -177,70 +233,58 @@ fn contact_conductances(
         .collect())
 }
 
-/// Solves the potential with the scene's electrodes; `temperatures` feed ρ_e(T).
+/// Solves the potential with the problem's electrodes; `temperatures` (°C) feed ρ_e(T).
 ///
-/// Face electrodes add one node per face to the network (after the particles), held at the
-/// potential and linked to the particles touching the face by half-contacts σ_p S_p / h_p
-/// (the construction of the thermal `WallTemperature`, [`extended_network`]). The Joule
-/// power of such a link goes wholly to its particle (the face is not a particle).
+/// Face electrodes add one node per face to the network, held at the potential and linked to
+/// the particles touching the face by half-contacts σ_p S_p / h_p ([`WallContacts`], the
+/// construction of the thermal `WallTemperature`). The Joule power of such a link goes wholly
+/// to its particle (the face is not a particle).
 pub fn solve_electric(
     model: &Model,
-    cfg: &ElectricConfig,
-    interface: InterfaceConfig,
-    floating: FloatingConfig,
+    problem: &ElectricProblem,
     temperatures: Option<&[f64]>,
-) -> Result<ElectricRun, SceneError> {
+) -> Result<ElectricRun, ModelError> {
     let start = std::time::Instant::now();
     let n = model.particles.len();
-    let sm = electric_surface_model(model, &cfg.surface)?;
+    let sm = electric_surface_model(model, &problem.surface)?;
     let sigma = particle_conductivities(model, temperatures)?;
-    let g = contact_conductances(model, &sm, interface, &sigma)?;
-    let faces: Vec<(demcon_core::Face, f64)> = cfg
-        .electrodes
-        .iter()
-        .filter_map(|e| e.face.map(|f| (convert::face(f), e.potential)))
-        .collect();
-    let half_bond = |p: usize, e: &demcon_core::Vec3, h: f64| sigma.half_bond(p, e, h);
-    let (ext, g, walls) = extended_network(model, &sm, &g, &half_bond, &faces, "electric.electrodes")?;
+    let g = contact_conductances(model, &sm, problem.interface, &sigma)?;
+    let (faces, _) = problem.face_electrodes();
+    let walls = WallContacts::build(&model.particles, &model.container, &faces, "electric.electrodes")
+        .map_err(|e| ModelError::at("electric.electrodes", e))?;
+    let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
+    let wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
+    let m = g.len();
+    let (ext, g) = network_with_walls(model, &walls, g, wall_g)?;
     let net = ext.as_ref().unwrap_or(&model.network);
-    let mut walls_iter = walls.iter();
+    let mut next_wall = 0..walls.n_walls();
     let mut electrodes = Vec::new();
-    for (i, e) in cfg.electrodes.iter().enumerate() {
-        match (&e.select, &e.face) {
-            (Some(select), None) => {
+    for (i, e) in problem.electrodes.iter().enumerate() {
+        match &e.at {
+            ElectrodeAt::Particles(sel) => {
                 let field = format!("electric.electrodes[{i}].select");
-                let sel = convert::selector(select, &model.materials, &field)?;
                 let ids = sel
                     .select_nonempty(&model.particles, &model.container, &format!("electrode {i}"))
-                    .map_err(|err| SceneError::at(&field, err))?;
+                    .map_err(|err| ModelError::at(&field, err))?;
                 electrodes.push((ids, e.potential));
             }
-            (None, Some(_)) => {
-                let w = walls_iter.next().expect("one wall per face electrode");
-                electrodes.push((vec![w.node], e.potential));
-            }
-            _ => {
-                return Err(SceneError::invalid(
-                    &format!("electric.electrodes[{i}]"),
-                    "select and face",
-                    "give exactly one of `select` or `face`",
-                ));
+            ElectrodeAt::Face(_) => {
+                let w = next_wall.next().expect("one wall per face electrode");
+                electrodes.push((vec![walls.node(w)], e.potential));
             }
         }
     }
     let params = ElectricParams {
-        floating: floating_policy(floating),
+        floating: problem.floating,
         solve: default_solve_params(),
     };
     let sol = solve_potential(net, &g, &electrodes, &params)?;
-    let mut joule = joule_power(net, &g, &sol.potentials, cfg.eta)?;
+    let mut joule = joule_power(net, &g, &sol.potentials, problem.eta)?;
     // A wall link's power: the half booked to the wall node goes to the particle too.
-    for w in &walls {
-        let u_w = sol.potentials[w.node as usize];
-        for (&p, &gw) in w.particles.iter().zip(&w.conductances) {
-            let du = sol.potentials[p as usize] - u_w;
-            joule[p as usize] += 0.5 * cfg.eta * gw * du * du;
-        }
+    for (k, w) in walls.wall_of_links().enumerate() {
+        let p = walls.particle[k] as usize;
+        let du = sol.potentials[p] - sol.potentials[walls.node(w) as usize];
+        joule[p] += 0.5 * problem.eta * g[m + k] * du * du;
     }
     joule.truncate(n);
     let mut potentials = sol.potentials;
@@ -265,6 +309,7 @@ pub fn solve_electric(
         excluded: sol.excluded,
         branch_currents: sol.branch_currents,
         conductances: g,
+        walls,
         joule,
     })
 }

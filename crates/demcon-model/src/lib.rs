@@ -1,0 +1,44 @@
+//! Physics assembly on plain types (layer 3 of demcon): everything between a built packing
+//! and the solvers, with no file format in sight — a function here never names a `…Config`.
+//!
+//! - [`model`]: the [`Model`] (particles, phases, contacts, network structure) built from a
+//!   packing by [`build_model`], phase layouts ([`PhaseSpec`], [`PhaseRule`],
+//!   [`set_region_phases`]) and inclusion placement.
+//! - [`thermal`]: a [`ThermalProblem`] → [`thermal_setup`] (surfaces, conductances, wall links,
+//!   capacities) → [`thermal_bcs`] (resolved boundary conditions and sources) →
+//!   [`solve_thermal`] (explicit, implicit or steady).
+//! - [`calibrate`]: C_t on the model's own packing ([`calibrate_ct_with`]).
+//! - [`electric`]: an [`ElectricProblem`] → [`solve_electric`] (conductances with ρ_e(T),
+//!   electrodes on particles or faces, Joule power).
+//! - [`couple`](mod@couple): the electro-thermal coupling ([`couple()`]: one-way, steady fixed
+//!   point, or time-accurate re-solves in a transient).
+//!
+//! Walls (faces held at a temperature or a potential) are [`demcon_graph::WallContacts`]:
+//! one structure that the thermal and electric conductances, the Joule bookkeeping and the
+//! flux dipoles all read.
+#![warn(missing_docs)]
+
+pub mod calibrate;
+pub mod couple;
+pub mod electric;
+mod error;
+pub mod model;
+pub mod thermal;
+
+pub use calibrate::{CalibrationBc, CtCalibration, calibrate_ct, calibrate_ct_with};
+pub use couple::{Coupled, couple};
+pub use electric::{
+    ElectricProblem, ElectricReport, ElectricRun, Electrode, ElectrodeAt, electric_conductances,
+    electric_surface_model, particle_conductivities, solve_electric,
+};
+pub use error::ModelError;
+pub use model::{
+    CarveRule, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed, PhaseRule,
+    PhaseSpec, build_model, place_inclusions, set_region_phases,
+};
+pub use thermal::{
+    CtSpec, ExtraSourceUpdate, ExtraSources, FixedSet, FixedTarget, SurfaceSpec, ThermalBc, ThermalBcs,
+    ThermalProblem, ThermalRun, ThermalSetup, ThermalSolveReport, ThermalSolver, TimeStepSpec, VolumeSource,
+    default_solve_params, initial_node_temperatures, solve_thermal, solve_thermal_with, thermal_bcs,
+    thermal_setup,
+};

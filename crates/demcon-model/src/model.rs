@@ -1,0 +1,409 @@
+//! The model every physics runs on: particles (carved, with phases), contacts with their
+//! geometry, and the network structure — built from plain inputs, with a report of what each
+//! stage did and cost.
+
+use std::time::Instant;
+
+use demcon_core::{Container, MaterialTable, ParticleSet, Region, Vec3};
+use demcon_graph::{
+    ContactGraph, ContactParams, ContactReport, HalfBond, Laminates, Mix, assign_phase,
+    assign_phase_laminate, detect_contacts,
+};
+use demcon_network::Network;
+use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReason, carve, pack};
+use serde::Serialize;
+
+use crate::error::ModelError;
+
+/// Everything the solvers need that does not depend on the physics.
+#[derive(Debug, Clone)]
+pub struct Model {
+    /// The particles (Morton-ordered when generated), carved and with phases set.
+    pub particles: ParticleSet,
+    /// The container the packing was made in (faces for boundary conditions).
+    pub container: Container,
+    /// Volume of the solid the particles represent (m³): the container's, or the carved region's.
+    pub domain_volume: f64,
+    /// Solid fraction Σ V_p / domain volume, used for the representative volume V_p/φ.
+    pub phi: f64,
+    /// The materials, indexed by phase.
+    pub materials: MaterialTable,
+    /// Particles cut by a phase interface under the laminate or segment rule, sorted by
+    /// particle (empty under the centre rule).
+    pub mixes: Vec<Mix>,
+    /// Contacts with their geometry.
+    pub graph: ContactGraph,
+    /// Laplacian structure over the contacts.
+    pub network: Network,
+    /// What the build did.
+    pub report: ModelReport,
+}
+
+impl Model {
+    /// The laminate mixes indexed by particle.
+    pub fn laminates(&self) -> Laminates<'_> {
+        Laminates::new(self.particles.len(), &self.mixes)
+    }
+}
+
+/// What building the model did and cost.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModelReport {
+    /// Packing report, when the packing was generated here.
+    pub packing: Option<PackingReport>,
+    /// Particles read from a file, when imported.
+    pub imported_from: Option<String>,
+    /// Particles removed by carving.
+    pub carved_away: usize,
+    /// Particles per phase (by centre).
+    pub phase_counts: Vec<usize>,
+    /// Volume fraction of the solid carried by each phase: Σ v_p V_p / Σ V_p (the
+    /// particles' own phases, and the laminate fractions of the cut ones).
+    pub phase_fractions: Vec<f64>,
+    /// Particles cut by an interface (laminate rule).
+    pub mixed_particles: usize,
+    /// Inclusions placed (centres and radius), when asked for.
+    pub inclusions: Option<InclusionReport>,
+    /// Contact detection summary.
+    pub contacts: ContactSummary,
+    /// Wall time of each stage (s): packing, contacts, network.
+    pub pack_s: f64,
+    /// Contact detection (s).
+    pub contacts_s: f64,
+    /// Network structure (s).
+    pub network_s: f64,
+}
+
+/// The inclusions of a multi-inclusion composite.
+#[derive(Debug, Clone, Serialize)]
+pub struct InclusionReport {
+    /// Number of inclusions.
+    pub count: usize,
+    /// Inclusion radius (m).
+    pub radius: f64,
+    /// Volume fraction of the inclusion spheres in the box.
+    pub fraction: f64,
+    /// Fraction of the solid (by volume) the model carries in the inclusion phase (by
+    /// centre, or with the laminate fractions under the laminate rule).
+    pub particle_fraction: f64,
+    /// Centres (m).
+    pub centres: Vec<[f64; 3]>,
+}
+
+/// A serialisable summary of the contact report.
+#[derive(Debug, Clone, Serialize)]
+pub struct ContactSummary {
+    /// Relative gap tolerance ε used.
+    pub epsilon: f64,
+    /// Mean coordination reached.
+    pub coordination: f64,
+    /// Contacts.
+    pub n_contacts: usize,
+    /// Particles with no contact.
+    pub rattlers: usize,
+    /// Particles with fewer than 2 contacts.
+    pub under_two_contacts: usize,
+    /// Connected components.
+    pub n_components: usize,
+    /// Size of the largest component.
+    pub largest_component: usize,
+    /// Diagnostics as text.
+    pub diagnostics: Vec<String>,
+}
+
+impl ContactSummary {
+    fn from(r: &ContactReport) -> Self {
+        Self {
+            epsilon: r.epsilon,
+            coordination: r.coordination,
+            n_contacts: r.n_contacts,
+            rattlers: r.rattlers.len(),
+            under_two_contacts: r.under_two_contacts,
+            n_components: r.n_components,
+            largest_component: r.largest_component,
+            diagnostics: r.diagnostics.iter().map(|d| d.to_string()).collect(),
+        }
+    }
+}
+
+/// How a particle cut by a phase interface is treated.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub enum PhaseRule {
+    /// The phase of its centre.
+    #[default]
+    Centre,
+    /// A laminate of the two phases (volume fractions and interface normal).
+    Laminate,
+    /// Each half-bond mixes what lies along its own segment, in series.
+    Segment,
+}
+
+/// Which particles carving keeps.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum CarveRule {
+    /// Particles wholly inside the region.
+    #[default]
+    WholeSphere,
+    /// Particles whose centre is inside.
+    Centre,
+}
+
+/// A phase assignment, applied in order over phase 0 (the first material).
+#[derive(Debug, Clone, PartialEq)]
+pub enum PhaseSpec {
+    /// The particles in a region take `phase`.
+    Region {
+        /// Phase id (index into the material table).
+        phase: u16,
+        /// The region (m).
+        region: Region,
+    },
+    /// Monodisperse spheres placed by the LS algorithm; the particles inside take `phase`.
+    Inclusions {
+        /// Phase id.
+        phase: u16,
+        /// Volume fraction of the inclusions in the container's bounding box, in (0, 0.6).
+        fraction: f64,
+        /// Box edge over inclusion diameter, ≥ 1.
+        size_ratio: f64,
+    },
+}
+
+/// The particles a model starts from, and where they came from.
+#[derive(Debug, Clone)]
+pub struct Packed {
+    /// The particles.
+    pub particles: ParticleSet,
+    /// Their container.
+    pub container: Container,
+    /// Packing report, when generated.
+    pub report: Option<PackingReport>,
+    /// The file they were read from, when imported.
+    pub imported_from: Option<String>,
+    /// Wall time of the packing or reading (s).
+    pub pack_s: f64,
+}
+
+/// What to build on the packed particles.
+#[derive(Debug, Clone)]
+pub struct ModelParams {
+    /// Material table (phase = index).
+    pub materials: MaterialTable,
+    /// Carving region and rule (the domain becomes the region).
+    pub carve: Option<(Region, CarveRule)>,
+    /// Phase assignments, in order.
+    pub phases: Vec<PhaseSpec>,
+    /// Treatment of particles cut by an interface.
+    pub phase_rule: PhaseRule,
+    /// Contact detection.
+    pub contacts: ContactParams,
+    /// Seed (inclusion placement).
+    pub seed: u64,
+}
+
+/// Builds the model: carving, phases, contacts, network structure.
+pub fn build_model(packed: Packed, params: &ModelParams) -> Result<Model, ModelError> {
+    let Packed {
+        mut particles,
+        container,
+        report: packing,
+        imported_from,
+        pack_s,
+    } = packed;
+    let materials = params.materials.clone();
+    let mut domain_volume = container.volume();
+    let mut carved_away = 0;
+    if let Some((region, rule)) = &params.carve {
+        let (kept, _) = match rule {
+            CarveRule::WholeSphere => carve(&particles, region),
+            CarveRule::Centre => particles.retain(|i| region.contains_point(&particles.centres[i])),
+        };
+        carved_away = particles.len() - kept.len();
+        if kept.is_empty() {
+            return Err(ModelError::invalid(
+                "carve",
+                "region",
+                "no particle lies inside the carving region",
+            ));
+        }
+        particles = kept;
+        domain_volume = region.volume(256);
+    }
+    let mut mixes = Vec::new();
+    let inclusions = apply_phases(params, &mut particles, &container, &materials, &mut mixes)?;
+    let phase_fractions =
+        Laminates::new(particles.len(), &mixes).phase_fractions(&particles, materials.materials.len());
+    let t1 = Instant::now();
+    let graph = detect_contacts(&particles, &container, &params.contacts)?;
+    let contacts_s = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let network = Network::new(particles.len(), &graph.pairs)?;
+    let network_s = t2.elapsed().as_secs_f64();
+    let mut phase_counts = vec![0; materials.materials.len()];
+    for &p in &particles.phases {
+        phase_counts[p as usize] += 1;
+    }
+    let phi = particles.solid_volume() / domain_volume;
+    Ok(Model {
+        report: ModelReport {
+            packing,
+            imported_from,
+            carved_away,
+            phase_counts,
+            phase_fractions,
+            mixed_particles: mixes.len(),
+            inclusions,
+            contacts: ContactSummary::from(&graph.report),
+            pack_s,
+            contacts_s,
+            network_s,
+        },
+        particles,
+        container,
+        domain_volume,
+        phi,
+        materials,
+        mixes,
+        graph,
+        network,
+    })
+}
+
+/// Places monodisperse, non-overlapping inclusion spheres in the container's bounding box
+/// with the LS algorithm and returns them (centres (m), radius (m)). `fraction` is their
+/// volume fraction, `size_ratio` the box edge over the inclusion diameter.
+pub fn place_inclusions(
+    container: &Container,
+    fraction: f64,
+    size_ratio: f64,
+    seed: u64,
+) -> Result<(Vec<Vec3>, f64), ModelError> {
+    if !(fraction > 0.0 && fraction < 0.6) {
+        return Err(ModelError::invalid(
+            "phases.Inclusions.fraction",
+            fraction,
+            "must be in (0, 0.6)",
+        ));
+    }
+    if !(size_ratio.is_finite() && size_ratio >= 1.0) {
+        return Err(ModelError::invalid(
+            "phases.Inclusions.size_ratio",
+            size_ratio,
+            "must be ≥ 1 (box edge / diameter)",
+        ));
+    }
+    let b = container.bounds();
+    let e = b.extent();
+    let edge = e.x.min(e.y).min(e.z);
+    let d = edge / size_ratio;
+    let sphere_v = std::f64::consts::PI / 6.0 * d * d * d;
+    let count = ((fraction * b.volume() / sphere_v).round() as usize).max(1);
+    let boxc = Container::Box {
+        size: [e.x, e.y, e.z],
+    };
+    let mut params = PackingParams::new(boxc, count, fraction, RadiusDistribution::Monodisperse);
+    params.max_wall_s = 120.0;
+    let (spheres, report) = pack(&params, seed ^ 0x9e37_79b9_7f4a_7c15, None)
+        .map_err(|e| ModelError::Packing(format!("placing inclusions: {e}")))?;
+    if report.stop != StopReason::TargetReached {
+        return Err(ModelError::invalid(
+            "phases.Inclusions.fraction",
+            fraction,
+            format!(
+                "the inclusions could not be placed: reached φ = {:.4} ({:?}) with {count} spheres",
+                report.packing.phi, report.stop
+            ),
+        ));
+    }
+    let centres = spheres.centres.iter().map(|c| c + b.min).collect();
+    Ok((centres, spheres.radii[0]))
+}
+
+/// Sets the particles in `region` to `phase` under `rule` (cut particles get a [`Mix`]).
+fn assign(particles: &mut ParticleSet, region: &Region, phase: u16, rule: PhaseRule, mixes: &mut Vec<Mix>) {
+    match rule {
+        PhaseRule::Centre => {
+            assign_phase(particles, region, phase);
+        }
+        PhaseRule::Laminate => {
+            assign_phase_laminate(particles, region, phase, mixes, HalfBond::Laminate);
+        }
+        PhaseRule::Segment => {
+            assign_phase_laminate(particles, region, phase, mixes, HalfBond::Segment);
+        }
+    }
+}
+
+/// Applies the phase assignments in order.
+fn apply_phases(
+    params: &ModelParams,
+    particles: &mut ParticleSet,
+    container: &Container,
+    materials: &MaterialTable,
+    mixes: &mut Vec<Mix>,
+) -> Result<Option<InclusionReport>, ModelError> {
+    let mut inclusions = None;
+    let mut inclusion_phase = None;
+    for ph in &params.phases {
+        match ph {
+            PhaseSpec::Region { phase, region } => {
+                assign(particles, region, *phase, params.phase_rule, mixes)
+            }
+            PhaseSpec::Inclusions {
+                phase,
+                fraction,
+                size_ratio,
+            } => {
+                let (centres, radius) = place_inclusions(container, *fraction, *size_ratio, params.seed)?;
+                let union = Region::Union(
+                    centres
+                        .iter()
+                        .map(|c| Region::Sphere { centre: *c, radius })
+                        .collect(),
+                );
+                assign(particles, &union, *phase, params.phase_rule, mixes);
+                let b = container.bounds();
+                inclusion_phase = Some(*phase);
+                inclusions = Some(InclusionReport {
+                    count: centres.len(),
+                    radius,
+                    fraction: centres.len() as f64 * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
+                        / b.volume(),
+                    particle_fraction: 0.0, // set once all phases are applied
+                    centres: centres.iter().map(|c| [c.x, c.y, c.z]).collect(),
+                });
+            }
+        }
+    }
+    materials
+        .check_phases(&particles.phases)
+        .map_err(|e| ModelError::at("phases", e))?;
+    if let Some(inc) = inclusions.as_mut() {
+        let phase = inclusion_phase.unwrap_or(0);
+        let f = Laminates::new(particles.len(), mixes).phase_fractions(particles, materials.materials.len());
+        inc.particle_fraction = f.get(phase as usize).copied().unwrap_or(0.0);
+    }
+    Ok(inclusions)
+}
+
+/// Re-assigns the phases of a built model (same packing and contacts): every particle back
+/// to phase 0 with no mix, then each `(region, phase)` in order under `rule`; updates the
+/// report's phase counts, carried fractions and cut-particle count. For studies that compare
+/// phase layouts or rules on one packing.
+pub fn set_region_phases(model: &mut Model, regions: &[(Region, u16)], rule: PhaseRule) {
+    model.particles.phases.iter_mut().for_each(|p| *p = 0);
+    model.mixes.clear();
+    for (region, phase) in regions {
+        assign(&mut model.particles, region, *phase, rule, &mut model.mixes);
+    }
+    let n_phases = model.materials.materials.len();
+    let mut counts = vec![0; n_phases];
+    for &p in &model.particles.phases {
+        if (p as usize) < n_phases {
+            counts[p as usize] += 1;
+        }
+    }
+    model.report.phase_counts = counts;
+    model.report.phase_fractions = model.laminates().phase_fractions(&model.particles, n_phases);
+    model.report.mixed_particles = model.mixes.len();
+}

@@ -1,0 +1,741 @@
+//! The thermal problem on a model: transmission surfaces (C_t calibrated when asked), contact
+//! and wall conductances, heat capacities, boundary conditions and sources, and the three
+//! solvers (explicit, implicit, steady).
+
+use demcon_core::{Face, Selector};
+use demcon_graph::{
+    InterfaceRule, SurfaceModel, WallContacts, conductances, contact_property_laminate, contact_surfaces,
+    representative_volumes,
+};
+use demcon_network::{Constraints, FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
+use demcon_thermal::{
+    ExplicitParams, ImplicitParams, RepresentativeVolume, Scheme, TimeStep, capacities, face_flux_sources,
+    paper_dt_estimate, run_explicit_with, run_implicit_with, solve_steady_temperature,
+};
+use serde::Serialize;
+
+use crate::calibrate::{CalibrationBc, CtCalibration, calibrate_ct_with};
+use crate::error::ModelError;
+use crate::model::Model;
+
+/// Default steady/implicit solver: MIC-preconditioned CG below 10⁴ unknowns,
+/// smoothed-aggregation AMG-PCG above (`Method::Auto`), to a relative residual of 1e-10.
+pub fn default_solve_params() -> SolveParams {
+    SolveParams {
+        method: Method::Auto {
+            rel_tol: 1e-10,
+            max_iter: 200_000,
+        },
+    }
+}
+
+/// The C_t of the calibrated surface model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CtSpec {
+    /// Calibrated on the model's own packing before the run.
+    Auto,
+    /// A given value (dimensionless, > 0).
+    Value(f64),
+}
+
+/// Which transmission-surface model a network uses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SurfaceSpec {
+    /// S = C_t π R_m² (Haddad 2021).
+    Calibrated(CtSpec),
+    /// Terreros α (Hubert 2017).
+    TerrerosAlpha,
+}
+
+impl SurfaceSpec {
+    /// The surface model with C_t resolved (`c_t` from a calibration when `Auto`; 1 if none).
+    pub fn model(&self, c_t: Option<f64>) -> SurfaceModel {
+        match *self {
+            SurfaceSpec::TerrerosAlpha => SurfaceModel::TerrerosAlpha,
+            SurfaceSpec::Calibrated(CtSpec::Value(v)) => SurfaceModel::Calibrated { c_t: v },
+            SurfaceSpec::Calibrated(CtSpec::Auto) => SurfaceModel::Calibrated {
+                c_t: c_t.unwrap_or(1.0),
+            },
+        }
+    }
+}
+
+/// A thermal boundary condition, resolved on the model by [`thermal_bcs`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum ThermalBc {
+    /// The selected particles held at `value` (°C).
+    FixedTemperature {
+        /// Which particles.
+        select: Selector,
+        /// Temperature (°C).
+        value: f64,
+    },
+    /// The face itself held at `value` (°C) through wall half-contacts.
+    WallTemperature {
+        /// The face.
+        face: Face,
+        /// Temperature (°C).
+        value: f64,
+    },
+    /// A heat flux density into the face (W/m²), shared among the particles touching it by
+    /// their projected areas.
+    HeatFlux {
+        /// The face.
+        face: Face,
+        /// Flux density (W/m²), positive into the body.
+        flux: f64,
+    },
+}
+
+/// A volumetric heat source on selected particles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VolumeSource {
+    /// Which particles.
+    pub select: Selector,
+    /// Power per unit volume of solid (W/m³).
+    pub power_density: f64,
+}
+
+/// How the explicit step is chosen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TimeStepSpec {
+    /// safety × the exact positivity bound.
+    Auto {
+        /// Safety factor in (0, 1].
+        safety: f64,
+    },
+    /// A given step (s).
+    Fixed {
+        /// Time step (s).
+        dt: f64,
+        /// Accept a step above the bound (divergence is then detected).
+        allow_unstable: bool,
+    },
+    /// The paper's eq. 16 estimate (calibrated surfaces only).
+    Paper {
+        /// Accept it above the bound.
+        allow_unstable: bool,
+    },
+}
+
+/// The thermal solver.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ThermalSolver {
+    /// Forward Euler to `t_end` (s).
+    Explicit {
+        /// End time (s).
+        t_end: f64,
+        /// Step choice.
+        dt: TimeStepSpec,
+    },
+    /// Backward Euler or Crank–Nicolson to `t_end` (s) with step `dt` (s).
+    Implicit {
+        /// End time (s).
+        t_end: f64,
+        /// Step (s).
+        dt: f64,
+        /// Scheme.
+        scheme: Scheme,
+    },
+    /// Steady state.
+    Steady,
+}
+
+impl ThermalSolver {
+    /// A transient (explicit or implicit)?
+    pub fn is_transient(&self) -> bool {
+        !matches!(self, ThermalSolver::Steady)
+    }
+
+    /// The time of the final state (s): `t_end`, or 0 for a steady solve.
+    pub fn final_time(&self) -> f64 {
+        match *self {
+            ThermalSolver::Explicit { t_end, .. } | ThermalSolver::Implicit { t_end, .. } => t_end,
+            ThermalSolver::Steady => 0.0,
+        }
+    }
+}
+
+/// Everything the thermal physics of a run needs, on plain types.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThermalProblem {
+    /// Transmission surfaces.
+    pub surface: SurfaceSpec,
+    /// Conductivity of a contact across two phases.
+    pub interface: InterfaceRule,
+    /// Boundary conditions (in the scene's order: errors name `thermal.bcs[i]`).
+    pub bcs: Vec<ThermalBc>,
+    /// Volumetric sources (errors name `thermal.sources[i]`).
+    pub sources: Vec<VolumeSource>,
+    /// Solver.
+    pub solver: ThermalSolver,
+    /// Initial temperature of a transient; excluded particles of a steady solve keep it (°C).
+    pub initial_temperature: f64,
+    /// Times (s) at which a transient's temperatures are kept.
+    pub output_times: Vec<f64>,
+    /// Floating clusters: excluded or refused.
+    pub floating: FloatingPolicy,
+}
+
+impl ThermalProblem {
+    /// The faces held at a temperature (`WallTemperature`), in order.
+    pub fn wall_faces(&self) -> Vec<Face> {
+        self.bcs
+            .iter()
+            .filter_map(|bc| match bc {
+                ThermalBc::WallTemperature { face, .. } => Some(*face),
+                _ => None,
+            })
+            .collect()
+    }
+}
+
+/// Conductances, capacities and volumes of the thermal network.
+#[derive(Debug, Clone)]
+pub struct ThermalSetup {
+    /// The surface model used (C_t resolved).
+    pub surface: SurfaceModel,
+    /// Calibration, when C_t was `Auto`.
+    pub calibration: Option<CtCalibration>,
+    /// Transmission surface per contact (m²).
+    pub areas: Vec<f64>,
+    /// Contact conductivity λ per contact (W/(m·K)), interface rule applied.
+    pub contact_lambda: Vec<f64>,
+    /// Conductances (W/K): H = λ S / d per contact, then the wall links.
+    pub conductances: Vec<f64>,
+    /// The faces held at a temperature and their links to the particles.
+    pub walls: WallContacts,
+    /// The network with the wall nodes, when there are walls (else the model's is used).
+    network: Option<Network>,
+    /// Representative volume per particle (m³).
+    pub rep_volumes: Vec<f64>,
+    /// Heat capacity per node (J/K): particles, then 1 J/K for each (fixed) wall node.
+    pub capacities: Vec<f64>,
+    /// Particles whose neighbour count lay outside the Terreros table (clamped).
+    pub clamped: usize,
+    /// Haddad eq. 16 estimate of the critical step (s), for comparison only.
+    pub paper_dt: Option<f64>,
+}
+
+impl ThermalSetup {
+    /// The thermal network: the model's, or the one extended with wall nodes.
+    pub fn network<'a>(&'a self, model: &'a Model) -> &'a Network {
+        self.network.as_ref().unwrap_or(&model.network)
+    }
+
+    /// The contact conductances (W/K), without the wall links.
+    pub fn contact_conductances(&self) -> &[f64] {
+        &self.conductances[..self.areas.len()]
+    }
+
+    /// The wall-link conductances (W/K), in the order of [`WallContacts`]' links.
+    pub fn wall_conductances(&self) -> &[f64] {
+        &self.conductances[self.areas.len()..]
+    }
+}
+
+/// The model's network extended by one node per wall (`None` without walls), and the
+/// conductances of the contacts followed by those of the wall links.
+pub(crate) fn network_with_walls(
+    model: &Model,
+    walls: &WallContacts,
+    contact_g: Vec<f64>,
+    wall_g: Vec<f64>,
+) -> Result<(Option<Network>, Vec<f64>), ModelError> {
+    if walls.is_empty() {
+        return Ok((None, contact_g));
+    }
+    let mut edges = model.graph.pairs.clone();
+    edges.extend(walls.edges());
+    let mut g = contact_g;
+    g.extend(wall_g);
+    Ok((Some(Network::new(walls.n_nodes(), &edges)?), g))
+}
+
+/// Builds the thermal network values (calibrating C_t when asked): surfaces, conductances
+/// with the interface rule, wall links of the `WallTemperature` faces, heat capacities
+/// (laminate particles mix ρ and ρc arithmetically) and the paper's step estimate.
+pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalSetup, ModelError> {
+    let faces = problem.wall_faces();
+    let calibration = match problem.surface {
+        SurfaceSpec::Calibrated(CtSpec::Auto) => {
+            let bc = if faces.is_empty() {
+                CalibrationBc::Particles
+            } else {
+                CalibrationBc::Walls
+            };
+            Some(calibrate_ct_with(model, bc)?)
+        }
+        _ => None,
+    };
+    let sm = problem.surface.model(calibration.as_ref().map(|c| c.c_t));
+    let s = contact_surfaces(&model.graph, &model.particles, &sm)?;
+    let lam_phase: Vec<f64> = model.materials.materials.iter().map(|m| m.conductivity).collect();
+    let contact_lambda = contact_property_laminate(
+        &model.graph,
+        &model.particles.phases,
+        &lam_phase,
+        &model.mixes,
+        problem.interface,
+    )?;
+    let g = conductances(&model.graph, &s.area, &contact_lambda)?;
+    let rep = representative_volumes(&model.graph, &model.particles, &sm, model.phi)?;
+    let vols: Vec<f64> = (0..model.particles.len())
+        .map(|p| model.particles.volume(p))
+        .collect();
+    let fv: Vec<f64> = vols.iter().zip(&rep).map(|(v, r)| (v / r).min(1.0)).collect();
+    // Laminate particles: ρ and ρc mix arithmetically (c = ρc/ρ).
+    let lam = model.laminates();
+    let phases = &model.particles.phases;
+    let rho_phase: Vec<f64> = model.materials.materials.iter().map(|m| m.density).collect();
+    let rc_phase: Vec<f64> = model
+        .materials
+        .materials
+        .iter()
+        .map(|m| m.density * m.specific_heat)
+        .collect();
+    let rho: Vec<f64> = (0..vols.len())
+        .map(|p| lam.arithmetic(p, phases, &rho_phase))
+        .collect();
+    let c: Vec<f64> = (0..vols.len())
+        .map(|p| lam.arithmetic(p, phases, &rc_phase) / rho[p])
+        .collect();
+    let mut caps = capacities(&vols, &c, &rho, RepresentativeVolume::VolumeFraction(&fv))?;
+    let walls = WallContacts::build(&model.particles, &model.container, &faces, "thermal.bcs")
+        .map_err(|e| ModelError::at("thermal.bcs", e))?;
+    let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
+    let wall_g = walls.conductances(&wall_s, |p, e, h| lam.half_bond(p, phases, &lam_phase, e, h));
+    let (network, g) = network_with_walls(model, &walls, g, wall_g)?;
+    caps.resize(caps.len() + walls.n_walls(), 1.0);
+    let paper_dt = match sm {
+        SurfaceModel::Calibrated { c_t } if matches!(problem.surface, SurfaceSpec::Calibrated(_)) => {
+            paper_step(model, c_t)
+        }
+        _ => None,
+    };
+    Ok(ThermalSetup {
+        surface: sm,
+        calibration,
+        areas: s.area,
+        contact_lambda,
+        conductances: g,
+        walls,
+        network,
+        rep_volumes: rep,
+        capacities: caps,
+        clamped: s.clamped,
+        paper_dt,
+    })
+}
+
+/// Haddad eq. 16 estimate of the critical step (s) at C_t = `c_t`, with the smallest contact
+/// distance and the largest diffusivity over the phases (a = λ/(c ρ_d), ρ_d = ρ_c/φ).
+fn paper_step(model: &Model, c_t: f64) -> Option<f64> {
+    let d_min = model
+        .graph
+        .geometry
+        .iter()
+        .map(|g| g.distance)
+        .fold(f64::INFINITY, f64::min);
+    let a = model
+        .materials
+        .materials
+        .iter()
+        .map(|m| m.conductivity * model.phi / (m.specific_heat * m.density))
+        .fold(0.0, f64::max);
+    let z = model.graph.coordination();
+    (d_min.is_finite() && z > 0.0).then(|| paper_dt_estimate(d_min, a, z, c_t))
+}
+
+/// What a set of fixed temperatures holds.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FixedTarget {
+    /// These particles.
+    Particles(Vec<u32>),
+    /// Wall `w` of [`ThermalSetup::walls`].
+    Wall(usize),
+}
+
+/// A set held at one temperature.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FixedSet {
+    /// What is held.
+    pub target: FixedTarget,
+    /// Temperature (°C).
+    pub value: f64,
+}
+
+impl FixedSet {
+    /// The network nodes held.
+    pub fn nodes(&self, walls: &WallContacts) -> Vec<u32> {
+        match &self.target {
+            FixedTarget::Particles(ids) => ids.clone(),
+            FixedTarget::Wall(w) => vec![walls.node(*w)],
+        }
+    }
+
+    /// The particles held (none for a wall).
+    pub fn particles(&self) -> &[u32] {
+        match &self.target {
+            FixedTarget::Particles(ids) => ids,
+            FixedTarget::Wall(_) => &[],
+        }
+    }
+}
+
+/// Resolved thermal boundary conditions and sources.
+#[derive(Debug, Clone)]
+pub struct ThermalBcs {
+    /// Fixed temperatures and excluded floating clusters.
+    pub constraints: Constraints,
+    /// Heat sources per node (W): imposed fluxes and volumetric sources (0 on wall nodes).
+    pub sources: Vec<f64>,
+    /// The fixed sets in the order of the boundary conditions.
+    pub fixed_sets: Vec<FixedSet>,
+}
+
+/// Resolves the boundary conditions and sources of `problem` on the model.
+///
+/// Errors: a selection that selects nothing, a heat flux on a face the container lacks, no
+/// fixed temperature for a steady solve, floating clusters refused by the policy.
+pub fn thermal_bcs(
+    model: &Model,
+    setup: &ThermalSetup,
+    problem: &ThermalProblem,
+) -> Result<ThermalBcs, ModelError> {
+    let net = setup.network(model);
+    let mut sources = vec![0.0; net.n_nodes()];
+    let mut next_wall = 0..setup.walls.n_walls();
+    let mut fixed_sets = Vec::new();
+    for (i, bc) in problem.bcs.iter().enumerate() {
+        let field = format!("thermal.bcs[{i}]");
+        match bc {
+            ThermalBc::FixedTemperature { select, value } => {
+                let ids = select
+                    .select_nonempty(
+                        &model.particles,
+                        &model.container,
+                        &format!("{field} (FixedTemperature)"),
+                    )
+                    .map_err(|e| ModelError::at(&format!("{field}.select"), e))?;
+                fixed_sets.push(FixedSet {
+                    target: FixedTarget::Particles(ids),
+                    value: *value,
+                });
+            }
+            ThermalBc::HeatFlux { face, flux } => {
+                let ids = Selector::Face(*face)
+                    .select_nonempty(&model.particles, &model.container, &format!("{field} (HeatFlux)"))
+                    .map_err(|e| ModelError::at(&format!("{field}.face"), e))?;
+                let area = model.container.face_area(*face).ok_or_else(|| {
+                    ModelError::invalid(
+                        &format!("{field}.face"),
+                        face.name(),
+                        "this container has no such face",
+                    )
+                })?;
+                let s = face_flux_sources(&model.particles, &ids, flux * area)?;
+                sources.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+            }
+            ThermalBc::WallTemperature { face, value } => {
+                let w = next_wall
+                    .next()
+                    .expect("one wall per WallTemperature, built by thermal_setup");
+                debug_assert_eq!(setup.walls.faces[w], *face);
+                fixed_sets.push(FixedSet {
+                    target: FixedTarget::Wall(w),
+                    value: *value,
+                });
+            }
+        }
+    }
+    for (i, src) in problem.sources.iter().enumerate() {
+        let field = format!("thermal.sources[{i}]");
+        let ids = src
+            .select
+            .select_nonempty(&model.particles, &model.container, &field)
+            .map_err(|e| ModelError::at(&format!("{field}.select"), e))?;
+        for &p in &ids {
+            sources[p as usize] += src.power_density * model.particles.volume(p as usize) / model.phi;
+        }
+    }
+    let transient = problem.solver.is_transient();
+    if fixed_sets.is_empty() && !transient {
+        return Err(ModelError::invalid(
+            "thermal.bcs",
+            "no FixedTemperature or WallTemperature",
+            "a steady thermal solve needs at least one fixed temperature",
+        ));
+    }
+    // A transient run is well posed without fixed values: heat capacity holds each cluster.
+    let policy = if transient && fixed_sets.is_empty() {
+        FloatingPolicy::Keep
+    } else {
+        problem.floating
+    };
+    let sets: Vec<(Vec<u32>, f64)> = fixed_sets
+        .iter()
+        .map(|s| (s.nodes(&setup.walls), s.value))
+        .collect();
+    let constraints = resolve_fixed(net, &sets, policy)?;
+    Ok(ThermalBcs {
+        constraints,
+        sources,
+        fixed_sets,
+    })
+}
+
+/// What a thermal solve did and cost.
+#[derive(Debug, Clone, Serialize)]
+pub struct ThermalSolveReport {
+    /// `forward-euler`, `backward-euler`, `crank-nicolson` or `steady`.
+    pub scheme: String,
+    /// Time steps (transient).
+    pub steps: u64,
+    /// Time step (s) (transient).
+    pub dt: f64,
+    /// Exact forward-Euler positivity bound min_p C_p / Σ H (s).
+    pub dt_bound: f64,
+    /// Haddad eq. 16 estimate (s).
+    pub dt_paper: Option<f64>,
+    /// Linear-solver iterations (implicit, steady).
+    pub iterations: u64,
+    /// Largest relative residual of the linear solves.
+    pub residual: f64,
+    /// Wall time (s).
+    pub wall_s: f64,
+    /// Explicit throughput (contact updates per second).
+    pub contacts_per_s: f64,
+    /// Energy balance error (fraction).
+    pub energy_balance_error: f64,
+    /// Particles excluded from the solve (floating clusters).
+    pub excluded: usize,
+}
+
+/// Temperatures of a thermal solve.
+#[derive(Debug, Clone)]
+pub struct ThermalRun {
+    /// Final temperatures of the particles (°C). Excluded particles keep their initial temperature.
+    pub temperatures: Vec<f64>,
+    /// Final temperatures of the walls (°C), in the order of [`ThermalSetup::walls`].
+    pub wall_temperatures: Vec<f64>,
+    /// Snapshots of the particles at the requested output times (t (s), temperatures (°C)).
+    pub snapshots: Vec<(f64, Vec<f64>)>,
+    /// Cost and step data.
+    pub report: ThermalSolveReport,
+}
+
+impl ThermalRun {
+    fn from_nodes(
+        walls: &WallContacts,
+        nodes: Vec<f64>,
+        snapshots: Vec<(f64, Vec<f64>)>,
+        report: ThermalSolveReport,
+    ) -> Self {
+        let (p, w) = walls.split(&nodes);
+        Self {
+            wall_temperatures: w.to_vec(),
+            temperatures: p.to_vec(),
+            snapshots,
+            report,
+        }
+    }
+
+    /// Temperatures of every node of the thermal network: the particles, then the walls (°C).
+    pub fn node_temperatures(&self) -> Vec<f64> {
+        [&self.temperatures[..], &self.wall_temperatures[..]].concat()
+    }
+}
+
+/// Extra sources that change during a transient: called after every time step with the time
+/// (s) and the temperatures of every node (particles first, °C); returns new extra sources
+/// (W per particle) for the following steps, or `None` to keep the current ones. An error
+/// stops the run and is returned by [`solve_thermal`].
+pub type ExtraSourceUpdate<'a> = dyn FnMut(f64, &[f64]) -> Result<Option<Vec<f64>>, ModelError> + 'a;
+
+/// The initial temperature of every node of the thermal network (°C): `initial`, with the
+/// fixed values imposed.
+pub fn initial_node_temperatures(
+    model: &Model,
+    setup: &ThermalSetup,
+    bcs: &ThermalBcs,
+    initial: f64,
+) -> Vec<f64> {
+    let mut t = vec![initial; setup.network(model).n_nodes()];
+    bcs.constraints.impose(&mut t);
+    t
+}
+
+/// Extra per-particle sources of a solve (W), and how they change during a transient.
+pub struct ExtraSources<'a, 'b> {
+    /// Added to the boundary sources from the start.
+    pub initial: Option<&'b [f64]>,
+    /// Re-evaluated after every step of a transient (not called by the steady solve).
+    pub update: &'b mut ExtraSourceUpdate<'a>,
+}
+
+/// Runs the thermal solver of `problem` with no extra sources.
+pub fn solve_thermal(
+    model: &Model,
+    setup: &ThermalSetup,
+    bcs: &ThermalBcs,
+    problem: &ThermalProblem,
+) -> Result<ThermalRun, ModelError> {
+    solve_thermal_with(
+        model,
+        setup,
+        bcs,
+        problem,
+        ExtraSources {
+            initial: None,
+            update: &mut |_, _| Ok(None),
+        },
+    )
+}
+
+/// Runs the thermal solver of `problem` with `extra` sources (W per particle, e.g. Joule
+/// heat) added to the boundary sources, re-evaluated during a transient by `extra.update`.
+pub fn solve_thermal_with(
+    model: &Model,
+    setup: &ThermalSetup,
+    bcs: &ThermalBcs,
+    problem: &ThermalProblem,
+    extra: ExtraSources<'_, '_>,
+) -> Result<ThermalRun, ModelError> {
+    let n = model.particles.len();
+    let initial = problem.initial_temperature;
+    let mut sources = bcs.sources.clone();
+    if let Some(x) = extra.initial {
+        sources.iter_mut().zip(x).for_each(|(a, b)| *a += b);
+    }
+    let update = extra.update;
+    // The model's error that stopped a run, returned instead of the solver's.
+    let mut stopped: Option<ModelError> = None;
+    let mut hook = |t: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, demcon_thermal::ThermalError> {
+        match update(t, temps) {
+            Ok(None) => Ok(None),
+            Ok(Some(extra)) => {
+                let mut s = bcs.sources.clone();
+                s.iter_mut().zip(&extra).for_each(|(a, b)| *a += b);
+                Ok(Some(s))
+            }
+            Err(e) => {
+                stopped = Some(e);
+                Err(demcon_thermal::ThermalError::invalid(
+                    "source update",
+                    t,
+                    "the run was stopped by the coupled solve",
+                ))
+            }
+        }
+    };
+    let net = setup.network(model);
+    let t_init = initial_node_temperatures(model, setup, bcs, initial);
+    let mut snapshots = Vec::new();
+    let excluded = bcs.constraints.excluded().len();
+    let g = &setup.conductances;
+    let caps = &setup.capacities;
+    let report_of = |r: &demcon_thermal::TransientReport| ThermalSolveReport {
+        scheme: r.scheme.to_string(),
+        steps: r.steps,
+        dt: r.dt,
+        dt_bound: r.dt_bound,
+        dt_paper: setup.paper_dt,
+        iterations: r.solver_iterations,
+        residual: r.max_relative_residual,
+        wall_s: r.wall_s,
+        contacts_per_s: r.contacts_per_s,
+        energy_balance_error: r.energy_balance_error,
+        excluded,
+    };
+    let tr = match problem.solver {
+        ThermalSolver::Explicit { t_end, dt } => {
+            let step = match dt {
+                TimeStepSpec::Auto { safety } => TimeStep::Auto { safety },
+                TimeStepSpec::Fixed { dt, allow_unstable } => TimeStep::Fixed { dt, allow_unstable },
+                TimeStepSpec::Paper { allow_unstable } => {
+                    let dt = setup.paper_dt.ok_or_else(|| {
+                        ModelError::invalid(
+                            "thermal.solver.dt",
+                            "Paper",
+                            "the paper's estimate needs the Calibrated surface model",
+                        )
+                    })?;
+                    TimeStep::Fixed { dt, allow_unstable }
+                }
+            };
+            let params = ExplicitParams {
+                t_end,
+                dt: step,
+                output_times: problem.output_times.clone(),
+                paper_dt: setup.paper_dt,
+                ..ExplicitParams::default()
+            };
+            run_explicit_with(
+                net,
+                g,
+                caps,
+                &bcs.constraints,
+                &sources,
+                &t_init,
+                &params,
+                |t, v| snapshots.push((t, v[..n].to_vec())),
+                &mut hook,
+            )
+        }
+        ThermalSolver::Implicit { t_end, dt, scheme } => {
+            let params = ImplicitParams {
+                t_end,
+                dt,
+                scheme,
+                output_times: problem.output_times.clone(),
+                solve: default_solve_params(),
+            };
+            run_implicit_with(
+                net,
+                g,
+                caps,
+                &bcs.constraints,
+                &sources,
+                &t_init,
+                &params,
+                |t, v| snapshots.push((t, v[..n].to_vec())),
+                &mut hook,
+            )
+        }
+        ThermalSolver::Steady => {
+            let st = solve_steady_temperature(net, g, &bcs.constraints, &sources, &default_solve_params())?;
+            let mut temps = st.solution.values;
+            for &p in bcs.constraints.excluded() {
+                temps[p as usize] = initial;
+            }
+            let r = &st.solution.report;
+            let bound = demcon_thermal::stable_dt_bound(net, g, caps, &bcs.constraints)?;
+            let report = ThermalSolveReport {
+                scheme: "steady".into(),
+                steps: 0,
+                dt: 0.0,
+                dt_bound: bound.dt_max,
+                dt_paper: setup.paper_dt,
+                iterations: r.iterations as u64,
+                residual: r.relative_residual,
+                wall_s: r.wall_s + r.setup_s,
+                contacts_per_s: 0.0,
+                energy_balance_error: st.balance_error,
+                excluded,
+            };
+            return Ok(ThermalRun::from_nodes(&setup.walls, temps, snapshots, report));
+        }
+    };
+    // A model error raised in the hook is returned in place of the solver's "stopped".
+    let tr = match (tr, stopped) {
+        (_, Some(e)) => return Err(e),
+        (r, None) => r?,
+    };
+    Ok(ThermalRun::from_nodes(
+        &setup.walls,
+        tr.temperatures,
+        snapshots,
+        report_of(&tr.report),
+    ))
+}

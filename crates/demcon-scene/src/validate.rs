@@ -1,0 +1,323 @@
+//! Every value check of a scene, run before any heavy work (packing, contacts, solves), so a
+//! typo does not surface after a long packing. Errors name the field path, the value and what
+//! is allowed. Conversions that can fail (regions, selectors, materials) are checked by
+//! running them ([`crate::convert::problem`]).
+
+use std::path::Path;
+
+use demcon_core::{Container, Face, Vec3};
+
+use crate::config::*;
+use crate::convert;
+use crate::error::SceneError;
+
+/// Checks the whole scene; relative paths resolve against `base_dir`.
+pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
+    // Materials, contacts, carving, phases, selectors, electrodes' select/face: by conversion.
+    convert::problem(c)?;
+    let container = known_container(c, base_dir)?;
+    check_probes(c)?;
+    if c.thermal.is_none() && c.electric.is_none() {
+        return Err(SceneError::invalid(
+            "thermal",
+            "none",
+            "a scene needs `thermal`, `electric` or both",
+        ));
+    }
+    check_surface("surface", &c.surface)?;
+    if let Some(t) = &c.thermal {
+        check_thermal(c, t, container.as_ref())?;
+    }
+    if let Some(e) = &c.electric {
+        check_electric(c, e, container.as_ref())?;
+    }
+    check_outputs(c, container.as_ref())
+}
+
+/// The container, when it is known before packing: a generated packing's, the one the scene
+/// gives a file, or the one in the file's header (read alone; a file that cannot be read is
+/// reported by the build, as the first thing it does).
+fn known_container(c: &SceneConfig, base_dir: &Path) -> Result<Option<Container>, SceneError> {
+    Ok(match &c.packing {
+        PackingConfig::Generate { container, .. } => {
+            Some(convert::container(container, "packing.container")?)
+        }
+        PackingConfig::File {
+            container: Some(container),
+            ..
+        } => Some(convert::container(container, "packing.container")?),
+        PackingConfig::File {
+            path,
+            container: None,
+        } => demcon_packing::read_xyzr_container(&base_dir.join(path))
+            .ok()
+            .flatten(),
+    })
+}
+
+/// Probes must lie in the domain; with a generated packing it is known before packing.
+fn check_probes(c: &SceneConfig) -> Result<(), SceneError> {
+    let domain = match (&c.carve, &c.packing) {
+        (Some(r), _) => Some(convert::region(r, "carve")?),
+        (None, PackingConfig::Generate { container, .. }) => {
+            Some(convert::container(container, "packing.container")?.region())
+        }
+        _ => None,
+    };
+    if let Some(d) = domain {
+        for (i, p) in c.outputs.probes.iter().enumerate() {
+            let x = Vec3::new(p.point.0, p.point.1, p.point.2);
+            if !d.contains_point(&x) {
+                return Err(SceneError::invalid(
+                    &format!("outputs.probes[{i}].point ({})", p.name),
+                    format!("{:?}", p.point),
+                    "the probe point must lie inside the domain (container or carved region) (m)",
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_surface(field: &str, s: &SurfaceConfig) -> Result<(), SceneError> {
+    if let SurfaceConfig::Calibrated {
+        c_t: CtConfig::Value(v),
+    } = s
+        && !(v.is_finite() && *v > 0.0)
+    {
+        return Err(SceneError::invalid(
+            &format!("{field}.c_t"),
+            v,
+            "must be a finite number > 0",
+        ));
+    }
+    Ok(())
+}
+
+fn finite(field: &str, v: f64, what: &str) -> Result<(), SceneError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(field, v, format!("must be finite ({what})")))
+    }
+}
+
+fn positive_time(field: &str, v: f64) -> Result<(), SceneError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(field, v, "must be a finite time > 0 (s)"))
+    }
+}
+
+/// A face used by a boundary condition must exist on the container (when it is known).
+fn check_face(field: &str, f: FaceConfig, container: Option<&Container>) -> Result<(), SceneError> {
+    let face = convert::face(f);
+    match container {
+        Some(c) if !c.faces().contains(&face) => Err(SceneError::invalid(
+            field,
+            face.name(),
+            format!("a {} container has the faces {}", c.kind(), face_list(c.faces())),
+        )),
+        _ => Ok(()),
+    }
+}
+
+fn face_list(faces: &[Face]) -> String {
+    if faces.is_empty() {
+        "[] (none)".into()
+    } else {
+        faces.iter().map(|f| f.name()).collect::<Vec<_>>().join(", ")
+    }
+}
+
+fn check_thermal(
+    c: &SceneConfig,
+    t: &ThermalConfig,
+    container: Option<&Container>,
+) -> Result<(), SceneError> {
+    finite(
+        "thermal.initial_temperature",
+        t.initial_temperature,
+        "a temperature (°C)",
+    )?;
+    let mut fixed = 0;
+    for (i, bc) in t.bcs.iter().enumerate() {
+        let field = format!("thermal.bcs[{i}]");
+        match bc {
+            ThermalBcConfig::FixedTemperature { value, .. } => {
+                fixed += 1;
+                finite(&format!("{field}.value"), *value, "a temperature (°C)")?;
+            }
+            ThermalBcConfig::WallTemperature { face, value } => {
+                fixed += 1;
+                finite(&format!("{field}.value"), *value, "a temperature (°C)")?;
+                check_face(&format!("{field}.face"), *face, container)?;
+            }
+            ThermalBcConfig::HeatFlux { face, flux } => {
+                finite(&format!("{field}.flux"), *flux, "a flux density (W/m²)")?;
+                check_face(&format!("{field}.face"), *face, container)?;
+            }
+        }
+    }
+    for (i, s) in t.sources.iter().enumerate() {
+        finite(
+            &format!("thermal.sources[{i}].power_density"),
+            s.power_density,
+            "W/m³",
+        )?;
+    }
+    match t.solver {
+        ThermalSolverConfig::Explicit { t_end, dt } => {
+            positive_time("thermal.solver.t_end", t_end)?;
+            match dt {
+                TimeStepConfig::Auto { safety } if !(safety > 0.0 && safety <= 1.0) => {
+                    return Err(SceneError::invalid(
+                        "thermal.solver.dt.safety",
+                        safety,
+                        "must be in (0, 1]",
+                    ));
+                }
+                TimeStepConfig::Fixed { dt, .. } => positive_time("thermal.solver.dt.dt", dt)?,
+                TimeStepConfig::Paper { .. } if !matches!(c.surface, SurfaceConfig::Calibrated { .. }) => {
+                    return Err(SceneError::invalid(
+                        "thermal.solver.dt",
+                        "Paper",
+                        "the paper's estimate needs the Calibrated surface model",
+                    ));
+                }
+                _ => {}
+            }
+        }
+        ThermalSolverConfig::Implicit { t_end, dt, .. } => {
+            positive_time("thermal.solver.t_end", t_end)?;
+            positive_time("thermal.solver.dt", dt)?;
+        }
+        ThermalSolverConfig::Steady => {
+            if fixed == 0 {
+                return Err(SceneError::invalid(
+                    "thermal.bcs",
+                    "no FixedTemperature or WallTemperature",
+                    "a steady thermal solve needs at least one fixed temperature",
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_electric(
+    c: &SceneConfig,
+    e: &ElectricConfig,
+    container: Option<&Container>,
+) -> Result<(), SceneError> {
+    if !(0.0..=1.0).contains(&e.eta) {
+        return Err(SceneError::invalid("electric.eta", e.eta, "must be in [0, 1]"));
+    }
+    check_surface("electric.surface", &e.surface)?;
+    if let Some(tol) = e.recouple_tolerance {
+        if !(tol.is_finite() && tol > 0.0) {
+            return Err(SceneError::invalid(
+                "electric.recouple_tolerance",
+                tol,
+                "must be a finite temperature change > 0 (K)",
+            ));
+        }
+        if c.thermal.is_none() {
+            return Err(SceneError::invalid(
+                "electric.recouple_tolerance",
+                tol,
+                "re-solving with ρ_e(T) needs `thermal` physics to give the temperatures",
+            ));
+        }
+    }
+    if e.electrodes.len() < 2 {
+        return Err(SceneError::invalid(
+            "electric.electrodes",
+            format!("{} electrode(s)", e.electrodes.len()),
+            "at least two fixed potentials are needed for a current to flow",
+        ));
+    }
+    for (i, m) in c.materials.iter().enumerate() {
+        if m.resistivity.is_none() {
+            return Err(SceneError::invalid(
+                &format!("materials[{i}].resistivity"),
+                "none",
+                format!(
+                    "material `{}` needs a resistivity (Ω·m) in an electric scene",
+                    m.name
+                ),
+            ));
+        }
+    }
+    for (i, el) in e.electrodes.iter().enumerate() {
+        if let Some(f) = el.face {
+            check_face(&format!("electric.electrodes[{i}].face"), f, container)?;
+        }
+        finite(&format!("electric.electrodes[{i}].potential"), el.potential, "V")?;
+    }
+    Ok(())
+}
+
+fn check_outputs(c: &SceneConfig, container: Option<&Container>) -> Result<(), SceneError> {
+    let o = &c.outputs;
+    if let Some(k) = o.halo
+        && !(k.is_finite() && k > 0.0)
+    {
+        return Err(SceneError::invalid(
+            "outputs.halo",
+            k,
+            "the Halo/particle radius ratio must be > 0",
+        ));
+    }
+    if let (Some(ph), None) = (o.halo_phases, o.halo) {
+        return Err(SceneError::invalid(
+            "outputs.halo_phases",
+            format!("{ph:?}"),
+            "only meaningful with a Halo: give `halo: Some(k)` too, or remove halo_phases",
+        ));
+    }
+    let methods = o
+        .probes
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (format!("outputs.probes[{i}].method"), p.method))
+        .chain(
+            o.profiles
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (format!("outputs.profiles[{i}].method"), p.method)),
+        );
+    for (field, m) in methods {
+        if let ProbeMethodConfig::Ball(r) = m
+            && !(r.is_finite() && r > 0.0)
+        {
+            return Err(SceneError::invalid(&field, r, "the ball radius must be > 0 (m)"));
+        }
+    }
+    if let Some(ax) = o.etc_axis {
+        let fixed = c.thermal.as_ref().map_or(0, |t| {
+            t.bcs
+                .iter()
+                .filter(|b| !matches!(b, ThermalBcConfig::HeatFlux { .. }))
+                .count()
+        });
+        if fixed != 2 {
+            return Err(SceneError::invalid(
+                "outputs.etc_axis",
+                format!("{ax:?}"),
+                format!("ETC needs exactly two fixed-temperature sets (found {fixed})"),
+            ));
+        }
+        if let Some(cont) = container
+            && cont.section_and_length(convert::axis(ax)).is_none()
+        {
+            return Err(SceneError::invalid(
+                "outputs.etc_axis",
+                format!("{ax:?}"),
+                "the container has no flat faces normal to this axis",
+            ));
+        }
+    }
+    Ok(())
+}
