@@ -1,10 +1,17 @@
-//! Scene builders and comparison helpers shared by the heat-paper cases.
+//! Scene builders and comparison helpers shared by every case, and the one gateway to
+//! `demcon-scene`: besides each case's `use demcon_scene::config::*`, the cases name the scene
+//! crate's items only through the re-exports below, so a move of those items is one edit here.
 
 use std::path::PathBuf;
 
 use demcon_scene::config::*;
-pub use demcon_scene::{Model, RunResult, SceneConfig};
 use demcon_scene::{Scene, build_model, run_on_model};
+
+pub use demcon_scene::convert::region as scene_region;
+pub use demcon_scene::electric::electric_conductances;
+pub use demcon_scene::model::{place_inclusions, set_region_phases};
+pub use demcon_scene::thermal::{CalibrationBc, ThermalBcs, calibrate_ct, calibrate_ct_with};
+pub use demcon_scene::{Model, RunResult, SceneConfig, SceneError, write_outputs};
 
 /// Haddad 2021 Table 1 "steel" (ρ = 7800 kg/m³, λ = 33 W/(m·K), c = 0.9 J/(kg·K): the
 /// paper's unphysically small c sets its 0.05–0.2 s time scale).
@@ -151,7 +158,7 @@ pub fn fixed_mask(model: &Model, fixed_sets: &[(String, Vec<u32>, f64)]) -> Vec<
 
 /// Mask of the particles that are not results of a thermal run: fixed-temperature particles
 /// and particles excluded as floating.
-pub fn unsolved_mask(model: &Model, bcs: &demcon_scene::thermal::ThermalBcs) -> Vec<bool> {
+pub fn unsolved_mask(model: &Model, bcs: &ThermalBcs) -> Vec<bool> {
     let mut m = fixed_mask(model, &bcs.fixed_sets);
     for &i in bcs.constraints.excluded() {
         m[i as usize] = true;
@@ -164,15 +171,8 @@ pub fn wall(face: FaceConfig, value: f64) -> ThermalBcConfig {
     ThermalBcConfig::WallTemperature { face, value }
 }
 
-/// Population coefficient of variation of `v` (fraction).
-pub fn cov(v: &[f64]) -> f64 {
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
-    var.sqrt() / mean.abs()
-}
-
-/// Rounds to 4 significant digits for JSON metrics keyed by size.
+/// The JSON key of a metric keyed by particle count: the count in decimal, unrounded
+/// (`20000`), as the metric names documented in the report expect.
 pub fn key(n: usize) -> String {
     n.to_string()
 }
