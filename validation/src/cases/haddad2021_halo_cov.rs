@@ -34,7 +34,7 @@ use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
-use super::haddad2021_inclusion_etc::{L, T_COLD, T_HOT, slab_scene};
+use super::composite::{L, T_COLD, T_HOT, slab_scene};
 use crate::chart::{Chart, Scale, Series, draw};
 use crate::{CaseOutcome, Comparison, Ctx, Table};
 

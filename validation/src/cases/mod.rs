@@ -1,6 +1,7 @@
 //! The registry: the one list of validation cases, in report order. One file per paper case.
 
 pub mod common;
+pub mod composite;
 pub mod haddad2021_cost_accuracy;
 pub mod haddad2021_ct_calibration;
 pub mod haddad2021_halo_cov;
