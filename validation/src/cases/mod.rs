@@ -17,6 +17,7 @@ pub mod hubert2017_notch_joule;
 pub mod hubert2017_scenes;
 pub mod hubert2017_solver_timing;
 pub mod joule_transient;
+pub mod transient;
 
 use crate::Case;
 
