@@ -27,11 +27,10 @@
 use std::time::Instant;
 
 use demcon_scene::config::*;
-use demcon_scene::thermal::calibrate_ct;
 use serde_json::{Map, Value};
 
 use super::common::*;
-use super::hubert2017_scenes::*;
+use super::cylinder::*;
 use crate::analytic::uniform_resistance;
 use crate::chart::{Chart, Scale, Series, draw};
 use crate::{CaseOutcome, Comparison, Ctx, Table};

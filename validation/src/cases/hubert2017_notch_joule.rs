@@ -32,7 +32,7 @@ use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
-use super::hubert2017_scenes::*;
+use super::cylinder::*;
 use crate::analytic::kohlrausch_max_rise;
 use crate::chart::{Chart, Scale, Series, draw};
 use crate::{CaseOutcome, Comparison, Ctx, Table};
@@ -208,7 +208,7 @@ fn measure(
             vtk: true,
             ..OutputsConfig::default()
         };
-        demcon_scene::write_outputs("notch-joule", &outputs, &r, &dir)?;
+        write_outputs("notch-joule", &outputs, &r, &dir)?;
     }
     Ok(Sample {
         n,

@@ -25,10 +25,9 @@ use demcon_core::{Face, Selector};
 use demcon_electric::{ElectricParams, ElectricSolution, solve_potential};
 use demcon_network::{FloatingPolicy, Method, SolveParams};
 use demcon_scene::config::*;
-use demcon_scene::electric::electric_conductances;
 
 use super::common::*;
-use super::hubert2017_scenes::*;
+use super::cylinder::*;
 use crate::{CaseOutcome, Comparison, Ctx, Table};
 
 /// Timings of one method: medians (ms) of the linear solve and of the whole call, and the

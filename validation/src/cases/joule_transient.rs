@@ -38,7 +38,7 @@ use demcon_core::{Container, ParticleSet, Vec3};
 use demcon_scene::config::*;
 
 use super::common::*;
-use super::hubert2017_scenes::*;
+use super::cylinder::*;
 use crate::{CaseOutcome, Comparison, Ctx, Table};
 
 /// ρ_e temperature coefficient β (1/K).
