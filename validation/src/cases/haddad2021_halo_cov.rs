@@ -37,7 +37,7 @@ use super::common::*;
 use super::composite::{L, T_COLD, T_HOT, slab_scene};
 use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use crate::{CaseOutcome, Comparison, Ctx};
 
 /// Conductivity (W/(m·K)).
 const LAMBDA: f64 = 33.0;
@@ -74,8 +74,10 @@ pub struct HaloRow {
     pub mean_all: f64,
     /// Mean q_y over the interior particles (W/m²).
     pub mean_interior: f64,
-    /// Smallest and largest q_y over the interior particles (W/m²).
-    pub min_max_interior: (f64, f64),
+    /// Smallest q_y over the interior particles (W/m²).
+    pub min_interior: f64,
+    /// Largest q_y over the interior particles (W/m²).
+    pub max_interior: f64,
     /// Interior / cut particles.
     pub n_interior: usize,
     /// Particles whose Halo is cut.
@@ -100,12 +102,26 @@ pub struct HaloSweep {
     pub rows: Vec<HaloRow>,
     /// Measured λ_e (W/(m·K)).
     pub lambda_e: f64,
-    /// Steady solve wall time (s) and iterations.
-    pub solve: (f64, u64),
-    /// Particles at a fixed temperature and excluded.
-    pub fixed_excluded: (usize, usize),
-    /// CoV of q_y without Halo by radius class (R/R̄ < 0.7, 0.7–1.3, > 1.3): (class, count, CoV).
-    pub by_radius: Vec<(&'static str, usize, f64)>,
+    /// Steady solve wall time (s).
+    pub solve_s: f64,
+    /// Steady solve CG iterations.
+    pub iterations: u64,
+    /// Particles at a fixed temperature.
+    pub n_fixed: usize,
+    /// Particles excluded as floating.
+    pub n_excluded: usize,
+    /// CoV of q_y without Halo by radius class (R/R̄ < 0.7, 0.7–1.3, > 1.3).
+    pub by_radius: Vec<RadiusClass>,
+}
+
+/// The CoV of q_y without Halo over one class of particle radii.
+pub struct RadiusClass {
+    /// The class, e.g. `R/R̄ < 0.7`.
+    pub class: &'static str,
+    /// Free particles in the class.
+    pub particles: usize,
+    /// CoV of q_y over them (NaN if none).
+    pub cov: f64,
 }
 
 fn weighted_mean_cov(v: &[f64], w: &[f64], m: &[bool]) -> (f64, f64) {
@@ -214,7 +230,11 @@ pub fn sweep(n: usize, seed: u64) -> anyhow::Result<HaloSweep> {
                 } else {
                     f64::NAN
                 };
-                by_radius.push((name, c, v));
+                by_radius.push(RadiusClass {
+                    class: name,
+                    particles: c,
+                    cov: v,
+                });
             }
         }
         rows.push(HaloRow {
@@ -231,7 +251,8 @@ pub fn sweep(n: usize, seed: u64) -> anyhow::Result<HaloSweep> {
             cov_all: coefficient_of_variation(&qy, Some(&free))?,
             mean_all: mean_masked(&qy, &free),
             mean_interior: mean_masked(&qy, &interior),
-            min_max_interior: (lo, hi),
+            min_interior: lo,
+            max_interior: hi,
             n_interior,
             n_cut,
             mean_members: h.report.mean_members,
@@ -242,8 +263,10 @@ pub fn sweep(n: usize, seed: u64) -> anyhow::Result<HaloSweep> {
         n: model.particles.len(),
         rows,
         lambda_e: r.etc.as_ref().map(|e| e.lambda_e).unwrap_or(f64::NAN),
-        solve: (th.report.wall_s, th.report.iterations),
-        fixed_excluded: (n_fixed, n_excl),
+        solve_s: th.report.wall_s,
+        iterations: th.report.iterations,
+        n_fixed,
+        n_excluded: n_excl,
         by_radius,
     })
 }
@@ -408,13 +431,6 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
     out.metric("explicit_vs_steady_max_abs_diff_k", st.max_abs_diff);
 }
 
-/// A line of the radius-class table.
-struct RadiusClass<'a> {
-    class: &'a str,
-    particles: usize,
-    cov: f64,
-}
-
 /// The tables per N, the two charts and the notes.
 fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
     let by_k = Columns::new()
@@ -425,7 +441,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         .column("interior / cut", |r| format!("{} / {}", r.n_interior, r.n_cut))
         .column("mean q_y all (W/m²)", |r| format!("{:.1}", r.mean_all))
         .column("min … max interior (W/m²)", |r| {
-            format!("{:.0} … {:.0}", r.min_max_interior.0, r.min_max_interior.1)
+            format!("{:.0} … {:.0}", r.min_interior, r.max_interior)
         })
         .column("CoV vol.-weighted", |r| {
             format!("{:.2} %", 100.0 * r.cov_interior_volume)
@@ -444,24 +460,14 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         out.tables.push(by_k.table(
             format!(
                 "CoV of q_y against the Halo ratio, N = {} ({} fixed, {} excluded particles left out; λ_e = {:.3} W/(m·K); steady solve {:.2} s, {} CG iterations)",
-                s.n, s.fixed_excluded.0, s.fixed_excluded.1, s.lambda_e, s.solve.0, s.solve.1
+                s.n, s.n_fixed, s.n_excluded, s.lambda_e, s.solve_s, s.iterations
             ),
             &s.rows,
         ));
-        let classes: Vec<RadiusClass> = s
-            .by_radius
-            .iter()
-            .map(|&(class, particles, cov)| RadiusClass {
-                class,
-                particles,
-                cov,
-            })
-            .collect();
-        let t: Table = by_radius.table(
+        out.tables.push(by_radius.table(
             format!("CoV of q_y without Halo by particle size, N = {}", s.n),
-            &classes,
-        );
-        out.tables.push(t);
+            &s.by_radius,
+        ));
     }
 
     let mut by_k = Vec::new();

@@ -104,8 +104,12 @@ struct Sample {
     phi_plain: f64,
     slope_groove: f64,
     excluded: usize,
-    iterations: (usize, u64),
-    solve_ms: (f64, f64),
+    /// CG iterations of the electric and the thermal solve.
+    iterations_electric: usize,
+    iterations_thermal: u64,
+    /// Wall time (ms) of the electric and the thermal solve.
+    solve_ms_electric: f64,
+    solve_ms_thermal: f64,
     profile: Vec<(f64, f64)>,
     build_s: f64,
 }
@@ -228,8 +232,10 @@ fn measure_model(
         phi_plain,
         slope_groove,
         excluded: el.excluded.len(),
-        iterations: (el.report.iterations, th.report.iterations),
-        solve_ms: (1e3 * el.report.wall_s, 1e3 * th.report.wall_s),
+        iterations_electric: el.report.iterations,
+        iterations_thermal: th.report.iterations,
+        solve_ms_electric: 1e3 * el.report.wall_s,
+        solve_ms_thermal: 1e3 * th.report.wall_s,
         profile,
         build_s,
     })
@@ -439,10 +445,10 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
             )
         })
         .column("CG iter. el./th.", |r| {
-            format!("{} / {}", r.centre.iterations.0, r.centre.iterations.1)
+            format!("{} / {}", r.centre.iterations_electric, r.centre.iterations_thermal)
         })
         .column("solve ms el./th.", |r| {
-            format!("{:.1} / {:.1}", r.centre.solve_ms.0, r.centre.solve_ms.1)
+            format!("{:.1} / {:.1}", r.centre.solve_ms_electric, r.centre.solve_ms_thermal)
         })
         .column("build (s)", |r| format!("{:.1}", r.centre.build_s))
         .table(
