@@ -17,6 +17,7 @@ pub mod chart;
 pub mod outcome;
 pub mod refs;
 pub mod report;
+pub mod table;
 
 use std::path::PathBuf;
 

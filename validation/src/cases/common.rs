@@ -1,10 +1,39 @@
-//! Scene builders and comparison helpers shared by the heat-paper cases.
+//! Scene builders and comparison helpers shared by every case, and the one gateway to
+//! `demcon-scene` and `demcon-model`: besides each case's `use demcon_scene::config::*`, the
+//! cases name those crates' items only through the re-exports and adapters below, so a move
+//! of those items is one edit here.
 
 use std::path::PathBuf;
 
 use demcon_scene::config::*;
-pub use demcon_scene::{Model, RunResult, SceneConfig};
 use demcon_scene::{Scene, build_model, run_on_model};
+
+pub use demcon_model::{
+    CalibrationBc, FixedSet, ThermalBcs, calibrate_ct, calibrate_ct_with, place_inclusions,
+};
+pub use demcon_scene::convert::region as scene_region;
+pub use demcon_scene::{Model, RunResult, SceneConfig, SceneError, write_outputs};
+
+/// [`demcon_model::set_region_phases`] with the scene's phase rule.
+pub fn set_region_phases(model: &mut Model, regions: &[(demcon_core::Region, u16)], rule: PhaseRuleConfig) {
+    demcon_model::set_region_phases(model, regions, demcon_scene::convert::phase_rule(rule));
+}
+
+/// [`demcon_model::electric_conductances`] (S) with the scene's surface and interface rule.
+pub fn electric_conductances(
+    model: &Model,
+    surface: &SurfaceConfig,
+    interface: InterfaceConfig,
+    temperatures: Option<&[f64]>,
+) -> Result<Vec<f64>, demcon_model::ModelError> {
+    use demcon_scene::convert;
+    demcon_model::electric_conductances(
+        model,
+        &convert::surface(surface),
+        convert::interface(interface),
+        temperatures,
+    )
+}
 
 /// Haddad 2021 Table 1 "steel" (ρ = 7800 kg/m³, λ = 33 W/(m·K), c = 0.9 J/(kg·K): the
 /// paper's unphysically small c sets its 0.05–0.2 s time scale).
@@ -137,7 +166,7 @@ pub fn layer_profile(
 }
 
 /// Mask of the fixed-temperature particles of a run (walls hold no particle).
-pub fn fixed_mask(model: &Model, fixed_sets: &[demcon_model::FixedSet]) -> Vec<bool> {
+pub fn fixed_mask(model: &Model, fixed_sets: &[FixedSet]) -> Vec<bool> {
     let mut m = vec![false; model.particles.len()];
     for set in fixed_sets {
         for &i in set.particles() {
@@ -149,7 +178,7 @@ pub fn fixed_mask(model: &Model, fixed_sets: &[demcon_model::FixedSet]) -> Vec<b
 
 /// Mask of the particles that are not results of a thermal run: fixed-temperature particles
 /// and particles excluded as floating.
-pub fn unsolved_mask(model: &Model, bcs: &demcon_model::ThermalBcs) -> Vec<bool> {
+pub fn unsolved_mask(model: &Model, bcs: &ThermalBcs) -> Vec<bool> {
     let mut m = fixed_mask(model, &bcs.fixed_sets);
     for &i in bcs.constraints.excluded() {
         m[i as usize] = true;
@@ -162,15 +191,8 @@ pub fn wall(face: FaceConfig, value: f64) -> ThermalBcConfig {
     ThermalBcConfig::WallTemperature { face, value }
 }
 
-/// Population coefficient of variation of `v` (fraction).
-pub fn cov(v: &[f64]) -> f64 {
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
-    var.sqrt() / mean.abs()
-}
-
-/// Rounds to 4 significant digits for JSON metrics keyed by size.
+/// The JSON key of a metric keyed by particle count: the count in decimal, unrounded
+/// (`20000`), as the metric names documented in the report expect.
 pub fn key(n: usize) -> String {
     n.to_string()
 }

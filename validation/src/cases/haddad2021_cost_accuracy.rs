@@ -11,93 +11,136 @@
 use serde_json::{Map, Value};
 
 use super::common::*;
-use super::haddad2021_slab_transient as slab;
-use super::haddad2021_sphere_transient as sphere;
+use super::transient::{slab, sphere};
 use crate::chart::{Chart, Scale, Series, draw};
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
+
+/// The two problems.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Problem {
+    /// The slab, relative error of the layer profile.
+    Slab,
+    /// The sphere to 10 s, largest absolute error of the centre temperature (°C).
+    Sphere,
+}
+
+/// One run: a problem at one N with one solver.
+struct Cost {
+    problem: Problem,
+    /// Requested particles.
+    n: usize,
+    /// `explicit` or `implicit`.
+    solver: &'static str,
+    /// Slab: relative error (fraction); sphere: °C.
+    error: f64,
+    /// Solver wall time (s).
+    wall_s: f64,
+    steps: u64,
+    /// Packing and contacts of this problem at this N (s).
+    build_s: f64,
+}
+
+/// Everything the case measures.
+struct Measured {
+    /// Slab and sphere, explicit then implicit, per N in order.
+    runs: Vec<Cost>,
+    /// Largest slab packing.
+    n_particles: usize,
+}
+
+impl Measured {
+    /// The runs of one problem and solver, in N order.
+    fn of(&self, problem: Problem, solver: &str) -> impl Iterator<Item = &Cost> {
+        self.runs
+            .iter()
+            .filter(move |c| c.problem == problem && c.solver == solver)
+    }
+}
 
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
+    let m = measure(ctx)?;
+    let mut out = CaseOutcome::new("cost-accuracy-thermal", ctx.mode);
+    out.n_particles = m.n_particles;
+    compare(&m, &mut out);
+    report(ctx, &m, &mut out)?;
+    Ok(out)
+}
+
+/// Slab and sphere (to 10 s), explicit and implicit, at every N.
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let sizes: Vec<usize> = ctx.pick(
         vec![2_000, 5_000, 10_000, 20_000],
         vec![10_000, 30_000, 100_000, 300_000],
     );
-    let mut out = CaseOutcome::new("cost-accuracy-thermal", ctx.mode);
-    let mut table = Table {
-        title: "Error and cost against N".into(),
-        header: vec![
-            "problem".into(),
-            "N".into(),
-            "solver".into(),
-            "error".into(),
-            "solver wall (s)".into(),
-            "steps".into(),
-            "build (s)".into(),
-        ],
-        rows: Vec::new(),
-    };
-    let (mut se_n, mut si_n, mut se_t, mut si_t) = (vec![], vec![], vec![], vec![]);
-    let (mut pe_n, mut pi_n, mut pe_t, mut pi_t) = (vec![], vec![], vec![], vec![]);
-    let mut metrics_slab = Map::new();
-    let mut metrics_sphere = Map::new();
-    let mut all_finite = true;
+    let mut runs = Vec::new();
+    let mut n_particles = 0;
     for &n in &sizes {
         // Slab.
         let t0 = std::time::Instant::now();
         let model = model_of(&slab::scene(n, ctx.seed, slab::explicit()))?;
-        let build = t0.elapsed().as_secs_f64();
-        out.n_particles = out.n_particles.max(model.particles.len());
-        let ex = slab::measure(&model, &slab::scene(n, ctx.seed, slab::explicit()))?;
-        let im = slab::measure(&model, &slab::scene(n, ctx.seed, slab::implicit()))?;
-        all_finite &= ex.profile.is_finite() && im.profile.is_finite();
-        se_n.push((n as f64, ex.profile));
-        si_n.push((n as f64, im.profile));
-        se_t.push((ex.wall_s.max(1e-3), ex.profile));
-        si_t.push((im.wall_s.max(1e-3), im.profile));
-        metrics_slab.insert(
-            key(n),
-            serde_json::json!({"explicit": ex.profile, "implicit": im.profile, "explicit_s": ex.wall_s, "implicit_s": im.wall_s}),
-        );
-        for (name, e) in [("explicit", &ex), ("implicit", &im)] {
-            table.rows.push(vec![
-                "slab".into(),
-                n.to_string(),
-                name.into(),
-                format!("{:.3} %", 100.0 * e.profile),
-                format!("{:.2}", e.wall_s),
-                e.steps.to_string(),
-                format!("{build:.1}"),
-            ]);
+        let build_s = t0.elapsed().as_secs_f64();
+        n_particles = n_particles.max(model.particles.len());
+        for (solver, cfg) in [
+            ("explicit", slab::scene(n, ctx.seed, slab::explicit())),
+            ("implicit", slab::scene(n, ctx.seed, slab::implicit())),
+        ] {
+            let e = slab::measure(&model, &cfg)?;
+            runs.push(Cost {
+                problem: Problem::Slab,
+                n,
+                solver,
+                error: e.profile,
+                wall_s: e.wall_s,
+                steps: e.steps,
+                build_s,
+            });
         }
         // Sphere, to 10 s.
         let t0 = std::time::Instant::now();
         let model = model_of(&sphere::scene(n, ctx.seed, sphere::explicit(10.0)))?;
-        let build = t0.elapsed().as_secs_f64();
-        let ex = sphere::measure(&model, &sphere::scene(n, ctx.seed, sphere::explicit(10.0)))?;
-        let im = sphere::measure(&model, &sphere::scene(n, ctx.seed, sphere::implicit(10.0)))?;
-        all_finite &= ex.max_abs_error_centre.is_finite() && im.max_abs_error_centre.is_finite();
-        pe_n.push((n as f64, ex.max_abs_error_centre));
-        pi_n.push((n as f64, im.max_abs_error_centre));
-        pe_t.push((ex.wall_s.max(1e-3), ex.max_abs_error_centre));
-        pi_t.push((im.wall_s.max(1e-3), im.max_abs_error_centre));
-        metrics_sphere.insert(
-            key(n),
-            serde_json::json!({"explicit_c": ex.max_abs_error_centre, "implicit_c": im.max_abs_error_centre, "explicit_s": ex.wall_s, "implicit_s": im.wall_s}),
-        );
-        for (name, e) in [("explicit", &ex), ("implicit", &im)] {
-            table.rows.push(vec![
-                "sphere (to 10 s)".into(),
-                n.to_string(),
-                name.into(),
-                format!("{:.3} °C", e.max_abs_error_centre),
-                format!("{:.2}", e.wall_s),
-                e.steps.to_string(),
-                format!("{build:.1}"),
-            ]);
+        let build_s = t0.elapsed().as_secs_f64();
+        for (solver, cfg) in [
+            ("explicit", sphere::scene(n, ctx.seed, sphere::explicit(10.0))),
+            ("implicit", sphere::scene(n, ctx.seed, sphere::implicit(10.0))),
+        ] {
+            let e = sphere::measure(&model, &cfg)?;
+            runs.push(Cost {
+                problem: Problem::Sphere,
+                n,
+                solver,
+                error: e.max_abs_error_centre,
+                wall_s: e.wall_s,
+                steps: e.steps,
+                build_s,
+            });
         }
     }
-    out.metric("slab_max_rel_error", Value::Object(metrics_slab));
-    out.metric("sphere_max_abs_error_centre_c", Value::Object(metrics_sphere));
+    Ok(Measured { runs, n_particles })
+}
+
+/// Metrics keyed by N and the sanity check (every error finite).
+fn compare(m: &Measured, out: &mut CaseOutcome) {
+    let by_n = |problem: Problem, error_key: &str| -> Map<String, Value> {
+        m.of(problem, "explicit")
+            .zip(m.of(problem, "implicit"))
+            .map(|(ex, im)| {
+                let mut v = Map::new();
+                v.insert(format!("explicit{error_key}"), Value::from(ex.error));
+                v.insert(format!("implicit{error_key}"), Value::from(im.error));
+                v.insert("explicit_s".into(), Value::from(ex.wall_s));
+                v.insert("implicit_s".into(), Value::from(im.wall_s));
+                (key(ex.n), Value::Object(v))
+            })
+            .collect()
+    };
+    let all_finite = m.runs.iter().all(|c| c.error.is_finite());
+    out.metric("slab_max_rel_error", Value::Object(by_n(Problem::Slab, "")));
+    out.metric(
+        "sphere_max_abs_error_centre_c",
+        Value::Object(by_n(Problem::Sphere, "_c")),
+    );
     out.reference("slab_max_rel_error", "paper 0.7 % at 1e5 DE");
     out.reference("sphere_max_abs_error_centre_c", "paper 1.93 °C at 1e5 DE");
     out.compare(Comparison {
@@ -109,53 +152,81 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         source: "sanity".into(),
         pass: all_finite,
     });
+}
+
+/// The table, the four charts and the note.
+fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let table = Columns::new()
+        .column("problem", |c: &Cost| match c.problem {
+            Problem::Slab => "slab".into(),
+            Problem::Sphere => "sphere (to 10 s)".into(),
+        })
+        .column("N", |c| c.n.to_string())
+        .column("solver", |c| c.solver.into())
+        .column("error", |c| match c.problem {
+            Problem::Slab => format!("{:.3} %", 100.0 * c.error),
+            Problem::Sphere => format!("{:.3} °C", c.error),
+        })
+        .column("solver wall (s)", |c| format!("{:.2}", c.wall_s))
+        .column("steps", |c| c.steps.to_string())
+        .column("build (s)", |c| format!("{:.1}", c.build_s))
+        .table("Error and cost against N", &m.runs);
     out.tables.push(table);
-    let chart = |title: &str, x: &str, y: &str, a: Vec<(f64, f64)>, b: Vec<(f64, f64)>, file: &str| {
-        draw(
-            &Chart {
-                title: title.into(),
-                x_label: x.into(),
-                y_label: y.into(),
-                x_scale: Scale::Log,
-                y_scale: Scale::Log,
-                series: vec![
-                    Series::line("explicit (forward Euler)", a),
-                    Series::line("implicit (backward Euler)", b),
-                ],
-            },
-            &ctx.out.join(file),
-        )
-    };
+    let against_n = |c: &Cost| (c.n as f64, c.error);
+    let against_time = |c: &Cost| (c.wall_s.max(1e-3), c.error);
+    let chart =
+        |title: &str, x: &str, y: &str, problem: Problem, point: &dyn Fn(&Cost) -> (f64, f64), file: &str| {
+            draw(
+                &Chart {
+                    title: title.into(),
+                    x_label: x.into(),
+                    y_label: y.into(),
+                    x_scale: Scale::Log,
+                    y_scale: Scale::Log,
+                    series: vec![
+                        Series::line(
+                            "explicit (forward Euler)",
+                            m.of(problem, "explicit").map(point).collect(),
+                        ),
+                        Series::line(
+                            "implicit (backward Euler)",
+                            m.of(problem, "implicit").map(point).collect(),
+                        ),
+                    ],
+                },
+                &ctx.out.join(file),
+            )
+        };
     chart(
         "Slab: error against N",
         "N (particles)",
         "max relative error of T(y)",
-        se_n,
-        si_n,
+        Problem::Slab,
+        &against_n,
         "cost-accuracy-slab-n.png",
     )?;
     chart(
         "Slab: error against solver wall time",
         "wall time (s)",
         "max relative error of T(y)",
-        se_t,
-        si_t,
+        Problem::Slab,
+        &against_time,
         "cost-accuracy-slab-time.png",
     )?;
     chart(
         "Sphere: centre error against N",
         "N (particles)",
         "max |T_centre − analytic| (°C)",
-        pe_n,
-        pi_n,
+        Problem::Sphere,
+        &against_n,
         "cost-accuracy-sphere-n.png",
     )?;
     chart(
         "Sphere: centre error against solver wall time",
         "wall time (s)",
         "max |T_centre − analytic| (°C)",
-        pe_t,
-        pi_t,
+        Problem::Sphere,
+        &against_time,
         "cost-accuracy-sphere-time.png",
     )?;
     for f in [
@@ -167,5 +238,5 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         out.charts.push(f.into());
     }
     out.note("Wall times are the solver's only (packing and contacts in the `build` column), on this 2-core machine.");
-    Ok(out)
+    Ok(())
 }

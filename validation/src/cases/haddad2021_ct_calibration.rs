@@ -14,13 +14,14 @@
 
 use std::time::Instant;
 
-use demcon_model::calibrate_ct;
+use demcon_post::coefficient_of_variation;
 use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
 use crate::chart::{Chart, Scale, Series, draw};
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
 
 fn scene(n: usize, seed: u64) -> SceneConfig {
     thermal_scene(
@@ -48,8 +49,47 @@ fn paper_ct(n: usize) -> f64 {
     c1 + (c2 - c1) * ((n as f64).log10() - n1.log10()) / (n2.log10() - n1.log10())
 }
 
+/// The calibration at one N, over its realisations.
+struct SizeRow {
+    /// Requested particle count.
+    n: usize,
+    realisations: u64,
+    /// Mean C_t with L = the sample length.
+    ct: f64,
+    /// Population CoV of C_t over the realisations (fraction).
+    cov: f64,
+    /// Mean C_t with L = the distance between the mean centres of the boundary layers.
+    ct_centres: f64,
+    /// Mean contact tolerance ε (gap/(R_p+R_q)).
+    epsilon: f64,
+    /// Mean coordination.
+    coordination: f64,
+    /// Mean packing + contacts time (s).
+    pack_s: f64,
+    /// Mean solve time (s).
+    solve_s: f64,
+    /// Mean CG iterations (integer division).
+    iterations: usize,
+}
+
+/// Everything the case measures.
+struct Measured {
+    rows: Vec<SizeRow>,
+    n_particles: usize,
+}
+
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
+    let m = measure(ctx)?;
+    let mut out = CaseOutcome::new("ct-calibration", ctx.mode);
+    out.n_particles = m.n_particles;
+    compare(&m, &mut out)?;
+    report(ctx, &m, &mut out)?;
+    Ok(out)
+}
+
+/// Calibrates C_t on every realisation of every N.
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let sizes: Vec<usize> = ctx.pick(
         vec![10_000, 30_000, 100_000],
         vec![10_000, 30_000, 100_000, 300_000, 1_000_000],
@@ -61,29 +101,8 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             4
         }
     };
-    let mut out = CaseOutcome::new("ct-calibration", ctx.mode);
-    let mut ct = Map::new();
-    let mut ct_centres = Map::new();
-    let mut covs = Map::new();
-    let mut worst_cov = 0.0f64;
-    let mut table = Table {
-        title: "C_t on our packings".into(),
-        header: vec![
-            "N".into(),
-            "realisations".into(),
-            "C_t mean".into(),
-            "CoV".into(),
-            "C_t (centre-to-centre L)".into(),
-            "ε (gap/(R_p+R_q))".into(),
-            "Z".into(),
-            "pack (s)".into(),
-            "solve (s)".into(),
-            "CG iter.".into(),
-            "paper C_t".into(),
-        ],
-        rows: Vec::new(),
-    };
-    let mut points = Vec::new();
+    let mut rows = Vec::new();
+    let mut n_particles = 0;
     for &n in &sizes {
         let (mut vals, mut vals_c, mut eps, mut z, mut pack_s, mut solve_s, mut iters) =
             (vec![], vec![], 0.0, 0.0, 0.0, 0.0, 0);
@@ -98,33 +117,33 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             z += model.graph.coordination();
             solve_s += cal.solve_s;
             iters += cal.iterations;
-            out.n_particles = out.n_particles.max(model.particles.len());
+            n_particles = n_particles.max(model.particles.len());
         }
         let r = realisations(n) as f64;
-        let mean = vals.iter().sum::<f64>() / r;
-        let mean_c = vals_c.iter().sum::<f64>() / r;
-        let c = cov(&vals);
-        worst_cov = worst_cov.max(c);
-        ct.insert(key(n), Value::from(mean));
-        ct_centres.insert(key(n), Value::from(mean_c));
-        covs.insert(key(n), Value::from(c));
-        points.push((n as f64, mean));
-        table.rows.push(vec![
-            n.to_string(),
-            realisations(n).to_string(),
-            format!("{mean:.4}"),
-            format!("{:.3} %", 100.0 * c),
-            format!("{mean_c:.4}"),
-            format!("{:.4}", eps / r),
-            format!("{:.3}", z / r),
-            format!("{:.1}", pack_s / r),
-            format!("{:.3}", solve_s / r),
-            format!("{}", iters / realisations(n) as usize),
-            format!("{:.3}", paper_ct(n)),
-        ]);
+        rows.push(SizeRow {
+            n,
+            realisations: realisations(n),
+            ct: vals.iter().sum::<f64>() / r,
+            cov: coefficient_of_variation(&vals, None)?,
+            ct_centres: vals_c.iter().sum::<f64>() / r,
+            epsilon: eps / r,
+            coordination: z / r,
+            pack_s: pack_s / r,
+            solve_s: solve_s / r,
+            iterations: iters / realisations(n) as usize,
+        });
     }
+    Ok(Measured { rows, n_particles })
+}
+
+/// Metrics, references and the two checks: C_t rises with N, its CoV stays below 1 %.
+fn compare(m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let by_n = |f: fn(&SizeRow) -> f64| -> Map<String, Value> {
+        m.rows.iter().map(|r| (key(r.n), Value::from(f(r)))).collect()
+    };
+    let worst_cov = m.rows.iter().map(|r| r.cov).fold(0.0f64, f64::max);
     // C_t must rise with N (the paper's trend; the boundary layers weigh less at larger N).
-    let rising = points.windows(2).all(|w| w[1].1 > w[0].1);
+    let rising = m.rows.windows(2).all(|w| w[1].ct > w[0].ct);
     out.compare(Comparison {
         name: "C_t rises with N".into(),
         measured: f64::from(u8::from(rising)),
@@ -134,10 +153,10 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         source: "Haddad 2021 Fig. 3 (trend)".into(),
         pass: rising,
     });
-    out.metric("ct", Value::Object(ct));
+    out.metric("ct", Value::Object(by_n(|r| r.ct)));
     out.metric("ct_cov", worst_cov);
-    out.metric("ct_centres", Value::Object(ct_centres));
-    out.metric("ct_cov_by_n", Value::Object(covs));
+    out.metric("ct_centres", Value::Object(by_n(|r| r.ct_centres)));
+    out.metric("ct_cov_by_n", Value::Object(by_n(|r| r.cov)));
     out.reference("ct", "0.75–0.84 rising with N (0.806 at 1e5, 0.834 at 1e6)");
     out.reference("ct_cov", 0.002);
     out.reference("source", "Haddad 2021 §2.1 Fig. 3");
@@ -147,7 +166,26 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         0.01,
         "paper < 0.2 %",
     ));
+    Ok(())
+}
+
+/// The table, the chart and the note.
+fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let table = Columns::new()
+        .column("N", |r: &SizeRow| r.n.to_string())
+        .column("realisations", |r| r.realisations.to_string())
+        .column("C_t mean", |r| format!("{:.4}", r.ct))
+        .column("CoV", |r| format!("{:.3} %", 100.0 * r.cov))
+        .column("C_t (centre-to-centre L)", |r| format!("{:.4}", r.ct_centres))
+        .column("ε (gap/(R_p+R_q))", |r| format!("{:.4}", r.epsilon))
+        .column("Z", |r| format!("{:.3}", r.coordination))
+        .column("pack (s)", |r| format!("{:.1}", r.pack_s))
+        .column("solve (s)", |r| format!("{:.3}", r.solve_s))
+        .column("CG iter.", |r| format!("{}", r.iterations))
+        .column("paper C_t", |r| format!("{:.3}", paper_ct(r.n)))
+        .table("C_t on our packings", &m.rows);
     out.tables.push(table);
+    let points: Vec<(f64, f64)> = m.rows.iter().map(|r| (r.n as f64, r.ct)).collect();
     let paper: Vec<(f64, f64)> = [1e4, 3e4, 1e5, 3e5, 1e6]
         .iter()
         .map(|&n| (n, paper_ct(n as usize)))
@@ -171,5 +209,5 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         "C_t uses L = the sample length (the paper's definition); the column 'centre-to-centre L' uses the distance between the mean \
          centres of the two boundary layers instead, which removes most of the N dependence (the boundary layers are thinner at larger N).",
     );
-    Ok(out)
+    Ok(())
 }

@@ -34,9 +34,10 @@ use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
-use super::haddad2021_inclusion_etc::{L, T_COLD, T_HOT, slab_scene};
+use super::composite::{L, T_COLD, T_HOT, slab_scene};
 use crate::chart::{Chart, Scale, Series, draw};
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
 
 /// Conductivity (W/(m·K)).
 const LAMBDA: f64 = 33.0;
@@ -73,8 +74,10 @@ pub struct HaloRow {
     pub mean_all: f64,
     /// Mean q_y over the interior particles (W/m²).
     pub mean_interior: f64,
-    /// Smallest and largest q_y over the interior particles (W/m²).
-    pub min_max_interior: (f64, f64),
+    /// Smallest q_y over the interior particles (W/m²).
+    pub min_interior: f64,
+    /// Largest q_y over the interior particles (W/m²).
+    pub max_interior: f64,
     /// Interior / cut particles.
     pub n_interior: usize,
     /// Particles whose Halo is cut.
@@ -99,12 +102,26 @@ pub struct HaloSweep {
     pub rows: Vec<HaloRow>,
     /// Measured λ_e (W/(m·K)).
     pub lambda_e: f64,
-    /// Steady solve wall time (s) and iterations.
-    pub solve: (f64, u64),
-    /// Particles at a fixed temperature and excluded.
-    pub fixed_excluded: (usize, usize),
-    /// CoV of q_y without Halo by radius class (R/R̄ < 0.7, 0.7–1.3, > 1.3): (class, count, CoV).
-    pub by_radius: Vec<(&'static str, usize, f64)>,
+    /// Steady solve wall time (s).
+    pub solve_s: f64,
+    /// Steady solve CG iterations.
+    pub iterations: u64,
+    /// Particles at a fixed temperature.
+    pub n_fixed: usize,
+    /// Particles excluded as floating.
+    pub n_excluded: usize,
+    /// CoV of q_y without Halo by radius class (R/R̄ < 0.7, 0.7–1.3, > 1.3).
+    pub by_radius: Vec<RadiusClass>,
+}
+
+/// The CoV of q_y without Halo over one class of particle radii.
+pub struct RadiusClass {
+    /// The class, e.g. `R/R̄ < 0.7`.
+    pub class: &'static str,
+    /// Free particles in the class.
+    pub particles: usize,
+    /// CoV of q_y over them (NaN if none).
+    pub cov: f64,
 }
 
 fn weighted_mean_cov(v: &[f64], w: &[f64], m: &[bool]) -> (f64, f64) {
@@ -213,7 +230,11 @@ pub fn sweep(n: usize, seed: u64) -> anyhow::Result<HaloSweep> {
                 } else {
                     f64::NAN
                 };
-                by_radius.push((name, c, v));
+                by_radius.push(RadiusClass {
+                    class: name,
+                    particles: c,
+                    cov: v,
+                });
             }
         }
         rows.push(HaloRow {
@@ -230,7 +251,8 @@ pub fn sweep(n: usize, seed: u64) -> anyhow::Result<HaloSweep> {
             cov_all: coefficient_of_variation(&qy, Some(&free))?,
             mean_all: mean_masked(&qy, &free),
             mean_interior: mean_masked(&qy, &interior),
-            min_max_interior: (lo, hi),
+            min_interior: lo,
+            max_interior: hi,
             n_interior,
             n_cut,
             mean_members: h.report.mean_members,
@@ -241,15 +263,34 @@ pub fn sweep(n: usize, seed: u64) -> anyhow::Result<HaloSweep> {
         n: model.particles.len(),
         rows,
         lambda_e: r.etc.as_ref().map(|e| e.lambda_e).unwrap_or(f64::NAN),
-        solve: (th.report.wall_s, th.report.iterations),
-        fixed_excluded: (n_fixed, n_excl),
+        solve_s: th.report.wall_s,
+        iterations: th.report.iterations,
+        n_fixed,
+        n_excluded: n_excl,
         by_radius,
     })
 }
 
-/// Steady solver against explicit marching on the same packing: (steady wall s, CG
-/// iterations, explicit wall s, explicit steps, max |T_explicit − T_steady| (K), t_end (s)).
-pub fn steady_vs_explicit(n: usize, seed: u64) -> anyhow::Result<(f64, u64, f64, u64, f64, f64)> {
+/// One steady state reached both ways on the same packing.
+pub struct SteadyVsExplicit {
+    /// Particles requested.
+    pub n: usize,
+    /// Steady solve wall time (s).
+    pub steady_s: f64,
+    /// Steady solve CG iterations.
+    pub steady_iterations: u64,
+    /// Explicit marching wall time (s).
+    pub explicit_s: f64,
+    /// Explicit marching steps.
+    pub explicit_steps: u64,
+    /// max |T_explicit − T_steady| (K).
+    pub max_abs_diff: f64,
+    /// End time of the marching (s).
+    pub t_end: f64,
+}
+
+/// Steady solver against explicit marching to t = 10 L²/(π² a) on a packing of `n` particles.
+pub fn steady_vs_explicit(n: usize, seed: u64) -> anyhow::Result<SteadyVsExplicit> {
     let steady = scene(n, seed);
     let model = model_of(&steady)?;
     let a = LAMBDA / (7800.0 * 0.9);
@@ -274,27 +315,57 @@ pub fn steady_vs_explicit(n: usize, seed: u64) -> anyhow::Result<(f64, u64, f64,
         .zip(&te.temperatures)
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
-    Ok((
-        ts.report.wall_s,
-        ts.report.iterations,
-        te.report.wall_s,
-        te.report.steps,
-        diff,
+    Ok(SteadyVsExplicit {
+        n,
+        steady_s: ts.report.wall_s,
+        steady_iterations: ts.report.iterations,
+        explicit_s: te.report.wall_s,
+        explicit_steps: te.report.steps,
+        max_abs_diff: diff,
         t_end,
-    ))
+    })
+}
+
+/// Everything the case measures.
+struct Measured {
+    /// One sweep per N; the first is the gated one.
+    sweeps: Vec<HaloSweep>,
+    steady: SteadyVsExplicit,
+}
+
+impl Measured {
+    /// The first sweep's row at Halo ratio `k`.
+    fn at(&self, k: f64) -> &HaloRow {
+        self.sweeps[0].rows.iter().find(|r| r.k == k).expect("k in KS")
+    }
 }
 
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
-    let sizes = ctx.pick(vec![20_000], vec![100_000, 500_000]);
+    let m = measure(ctx)?;
     let mut out = CaseOutcome::new("halo-cov", ctx.mode);
+    out.n_particles = m.sweeps.iter().map(|s| s.n).max().unwrap_or(0);
+    compare(&m, &mut out);
+    report(ctx, &m, &mut out)?;
+    Ok(out)
+}
+
+/// The Halo sweep at each N, and the steady state both ways on a smaller packing.
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
+    let sizes = ctx.pick(vec![20_000], vec![100_000, 500_000]);
     let mut sweeps = Vec::new();
     for &n in &sizes {
         sweeps.push(sweep(n, ctx.seed)?);
     }
-    let main = &sweeps[0];
-    out.n_particles = sweeps.iter().map(|s| s.n).max().unwrap_or(0);
-    let at = |k: f64| main.rows.iter().find(|r| r.k == k).expect("k in KS");
+    let steady = steady_vs_explicit(ctx.pick(5_000, 20_000), ctx.seed)?;
+    Ok(Measured { sweeps, steady })
+}
+
+/// Metrics, references and the three checks (volume-weighted CoV without Halo, CoV at
+/// k = 11, mean flux).
+fn compare(m: &Measured, out: &mut CaseOutcome) {
+    let main = &m.sweeps[0];
+    let at = |k: f64| m.at(k);
     let mean_err = (at(0.0).mean_all_volume - Q_Y).abs() / Q_Y.abs();
     let mean_err_k = main
         .rows
@@ -321,12 +392,13 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     out.metric("cov_k4_cut", at(4.0).cov_cut);
     out.metric("cov_k11_cut", at(11.0).cov_cut);
     out.metric("lambda_e", main.lambda_e);
-    for s in &sweeps {
-        let mut m = Map::new();
-        for r in &s.rows {
-            m.insert(format!("{}", r.k), Value::from(r.cov_interior));
-        }
-        out.metric(&format!("cov_interior_by_k_{}", s.n), Value::Object(m));
+    for s in &m.sweeps {
+        let by_k: Map<String, Value> = s
+            .rows
+            .iter()
+            .map(|r| (format!("{}", r.k), Value::from(r.cov_interior)))
+            .collect();
+        out.metric(&format!("cov_interior_by_k_{}", s.n), Value::Object(by_k));
     }
     out.reference("cov_no_halo", 0.27);
     out.reference("cov_k4", 0.05);
@@ -351,60 +423,56 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         0.02,
         "exact 3300 W/m²",
     ));
+    let st = &m.steady;
+    out.metric("steady_wall_s", st.steady_s);
+    out.metric("explicit_to_steady_wall_s", st.explicit_s);
+    out.metric("explicit_to_steady_steps", st.explicit_steps);
+    out.metric("steady_speedup", st.explicit_s / st.steady_s);
+    out.metric("explicit_vs_steady_max_abs_diff_k", st.max_abs_diff);
+}
 
-    for s in &sweeps {
-        let mut t = Table {
-            title: format!(
+/// The tables per N, the two charts and the notes.
+fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let by_k = Columns::new()
+        .column("k", |r: &HaloRow| format!("{}", r.k))
+        .column("CoV interior", |r| format!("{:.2} %", 100.0 * r.cov_interior))
+        .column("CoV Halo cut", |r| format!("{:.2} %", 100.0 * r.cov_cut))
+        .column("CoV all", |r| format!("{:.2} %", 100.0 * r.cov_all))
+        .column("interior / cut", |r| format!("{} / {}", r.n_interior, r.n_cut))
+        .column("mean q_y all (W/m²)", |r| format!("{:.1}", r.mean_all))
+        .column("min … max interior (W/m²)", |r| {
+            format!("{:.0} … {:.0}", r.min_interior, r.max_interior)
+        })
+        .column("CoV vol.-weighted", |r| {
+            format!("{:.2} %", 100.0 * r.cov_interior_volume)
+        })
+        .column("CoV, Halo k·R̄", |r| {
+            format!("{:.2} %", 100.0 * r.cov_interior_mean_radius)
+        })
+        .column("mean q_y vol.-weighted", |r| format!("{:.1}", r.mean_all_volume))
+        .column("Halo members", |r| format!("{:.1}", r.mean_members))
+        .column("Halo wall (s)", |r| format!("{:.3}", r.wall_s));
+    let by_radius = Columns::new()
+        .column("radius class", |c: &RadiusClass| c.class.to_string())
+        .column("particles", |c| c.particles.to_string())
+        .column("CoV", |c| format!("{:.1} %", 100.0 * c.cov));
+    for s in &m.sweeps {
+        out.tables.push(by_k.table(
+            format!(
                 "CoV of q_y against the Halo ratio, N = {} ({} fixed, {} excluded particles left out; λ_e = {:.3} W/(m·K); steady solve {:.2} s, {} CG iterations)",
-                s.n, s.fixed_excluded.0, s.fixed_excluded.1, s.lambda_e, s.solve.0, s.solve.1
+                s.n, s.n_fixed, s.n_excluded, s.lambda_e, s.solve_s, s.iterations
             ),
-            header: vec![
-                "k".into(),
-                "CoV interior".into(),
-                "CoV Halo cut".into(),
-                "CoV all".into(),
-                "interior / cut".into(),
-                "mean q_y all (W/m²)".into(),
-                "min … max interior (W/m²)".into(),
-                "CoV vol.-weighted".into(),
-                "CoV, Halo k·R̄".into(),
-                "mean q_y vol.-weighted".into(),
-                "Halo members".into(),
-                "Halo wall (s)".into(),
-            ],
-            rows: Vec::new(),
-        };
-        for r in &s.rows {
-            t.rows.push(vec![
-                format!("{}", r.k),
-                format!("{:.2} %", 100.0 * r.cov_interior),
-                format!("{:.2} %", 100.0 * r.cov_cut),
-                format!("{:.2} %", 100.0 * r.cov_all),
-                format!("{} / {}", r.n_interior, r.n_cut),
-                format!("{:.1}", r.mean_all),
-                format!("{:.0} … {:.0}", r.min_max_interior.0, r.min_max_interior.1),
-                format!("{:.2} %", 100.0 * r.cov_interior_volume),
-                format!("{:.2} %", 100.0 * r.cov_interior_mean_radius),
-                format!("{:.1}", r.mean_all_volume),
-                format!("{:.1}", r.mean_members),
-                format!("{:.3}", r.wall_s),
-            ]);
-        }
-        out.tables.push(t);
-        out.tables.push(Table {
-            title: format!("CoV of q_y without Halo by particle size, N = {}", s.n),
-            header: vec!["radius class".into(), "particles".into(), "CoV".into()],
-            rows: s
-                .by_radius
-                .iter()
-                .map(|(c, n, v)| vec![c.to_string(), n.to_string(), format!("{:.1} %", 100.0 * v)])
-                .collect(),
-        });
+            &s.rows,
+        ));
+        out.tables.push(by_radius.table(
+            format!("CoV of q_y without Halo by particle size, N = {}", s.n),
+            &s.by_radius,
+        ));
     }
 
     let mut by_k = Vec::new();
     let mut by_cost = Vec::new();
-    for s in &sweeps {
+    for s in &m.sweeps {
         by_k.push(Series::line(
             &format!("interior, N = {}", s.n),
             s.rows.iter().map(|r| (r.k, r.cov_interior)).collect(),
@@ -459,26 +527,27 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     out.charts.push("halo-cov.png".into());
     out.charts.push("halo-cov-cost.png".into());
 
-    let n_ex = ctx.pick(5_000, 20_000);
-    let (st_s, st_it, ex_s, ex_steps, diff, t_end) = steady_vs_explicit(n_ex, ctx.seed)?;
-    out.metric("steady_wall_s", st_s);
-    out.metric("explicit_to_steady_wall_s", ex_s);
-    out.metric("explicit_to_steady_steps", ex_steps);
-    out.metric("steady_speedup", ex_s / st_s);
-    out.metric("explicit_vs_steady_max_abs_diff_k", diff);
+    let st = &m.steady;
     out.note(format!(
-        "Steady state both ways on a {n_ex}-particle slab: the steady solver (Jacobi-PCG to 1e-10) took {st_s:.3} s \
-         ({st_it} iterations); marching the explicit scheme to t = 10 L²/(π² a) = {t_end:.2} s took {ex_s:.1} s \
-         ({ex_steps} steps), {:.0}× longer, and ended within {diff:.1e} K of it (the slowest mode's \
+        "Steady state both ways on a {}-particle slab: the steady solver (Jacobi-PCG to 1e-10) took {:.3} s \
+         ({} iterations); marching the explicit scheme to t = 10 L²/(π² a) = {:.2} s took {:.1} s \
+         ({} steps), {:.0}× longer, and ended within {:.1e} K of it (the slowest mode's \
          e^-10 residual is 3·10⁻⁴ K).",
-        ex_s / st_s
+        st.n,
+        st.steady_s,
+        st.steady_iterations,
+        st.t_end,
+        st.explicit_s,
+        st.explicit_steps,
+        st.explicit_s / st.steady_s,
+        st.max_abs_diff
     ));
     out.note(format!(
         "{} mode: N = {:?}, k = 0 … 12 on one packing each. 'Interior' = free particles whose Halo lies inside the cube \
          (the metric); 'cut' = those whose Halo crosses a face (one-sided average). The Halo radius is k·R_p with the \
          particle's own radius (the paper's definition), so small particles keep small Halos.",
         ctx.mode.name(),
-        sweeps.iter().map(|s| s.n).collect::<Vec<_>>()
+        m.sweeps.iter().map(|s| s.n).collect::<Vec<_>>()
     ));
-    Ok(out)
+    Ok(())
 }

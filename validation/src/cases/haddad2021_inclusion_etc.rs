@@ -21,257 +21,21 @@
 //! is dominated by the resolution of the interface and of the boundary layers by particles,
 //! an error ∝ particle size ∝ N^(-1/3); the tolerance is the paper's error scaled so,
 //! 0.65 % × (1.5·10⁵/N)^(1/3): 1.27 % at 2·10⁴ (`--quick`), 0.65 % at 1.5·10⁵ (`--full`).
-//!
-//! This file also holds the slab helpers the other heterogeneous cases share.
 
 use std::time::Instant;
 
-use demcon_model::{CalibrationBc, calibrate_ct_with, set_region_phases};
 use demcon_scene::config::*;
-use demcon_scene::convert::phase_rule;
 use serde_json::{Map, Value};
 
 use super::common::*;
+use super::composite::*;
 use crate::analytic::maxwell;
 use crate::chart::{Chart, Scale, Series, draw};
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
 
-/// Cube edge (m).
-pub const L: f64 = 0.1;
-/// Temperature on y = 0 (°C).
-pub const T_COLD: f64 = 25.0;
-/// Temperature on y = L (°C).
-pub const T_HOT: f64 = 35.0;
-/// Volume fraction of the centred inclusion of radius L/3.
-pub const F_SINGLE: f64 = 4.0 / 3.0 * std::f64::consts::PI / 27.0;
-
-/// The paper's cube (§2.2 conditions) at steady state: T = 25 °C on y = 0, 35 °C on y = L,
-/// other faces adiabatic, ETC along y; `materials[0]` is the matrix. Gaussian radii (std/mean
-/// 0.3), bulk φ ≈ 0.64 (`common::packing`).
-pub fn slab_scene(
-    name: &str,
-    seed: u64,
-    n: usize,
-    materials: Vec<MaterialConfig>,
-    phases: Vec<PhaseConfig>,
-) -> SceneConfig {
-    let mut s = thermal_scene(
-        name,
-        seed,
-        packing(ContainerConfig::Box { size: (L, L, L) }, n),
-        materials,
-        ThermalConfig {
-            initial_temperature: T_COLD,
-            bcs: vec![fixed(FaceConfig::YMin, T_COLD), fixed(FaceConfig::YMax, T_HOT)],
-            sources: Vec::new(),
-            solver: ThermalSolverConfig::Steady,
-        },
-    );
-    s.phases = phases;
-    s.outputs.etc_axis = Some(AxisConfig::Y);
-    s
-}
-
-/// The centred spherical inclusion of radius L/3.
-pub fn centred_inclusion(material: &str) -> PhaseConfig {
-    PhaseConfig::Region {
-        material: material.into(),
-        region: RegionConfig::Sphere {
-            centre: (0.5 * L, 0.5 * L, 0.5 * L),
-            radius: L / 3.0,
-        },
-    }
-}
-
-/// A clone of `model` whose materials have the conductivities `lambdas` (W/(m·K), one per
-/// phase): same packing, contacts and phases, other physics.
-pub fn with_conductivities(model: &Model, lambdas: &[f64]) -> Model {
-    let mut m = model.clone();
-    for (mat, &l) in m.materials.materials.iter_mut().zip(lambdas) {
-        mat.conductivity = l;
-    }
-    m
-}
-
-/// Volume fraction of the solid the model carries in `phase`: the particles of that phase
-/// by centre, and under the laminate rule the fractions of the cut particles.
-pub fn phase_fraction(model: &Model, phase: u16) -> f64 {
-    model
-        .laminates()
-        .phase_fractions(&model.particles, model.materials.materials.len())
-        .get(phase as usize)
-        .copied()
-        .unwrap_or(0.0)
-}
-
-/// How the boundary temperatures of a slab are held.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Bc {
-    /// On the particles touching the faces (`FixedTemperature`, the paper's way).
-    Particles,
-    /// On the faces themselves through wall half-contacts (`WallTemperature`).
-    Wall,
-}
-
-/// The phase rules compared.
-pub const RULES: [PhaseRuleConfig; 3] = [
-    PhaseRuleConfig::Centre,
-    PhaseRuleConfig::Laminate,
-    PhaseRuleConfig::Segment,
-];
-
-/// Index of a rule in [`RULES`].
-pub fn rule_index(rule: PhaseRuleConfig) -> usize {
-    RULES
-        .iter()
-        .position(|r| *r == rule)
-        .expect("every rule is in RULES")
-}
-
-/// One DEM model of a composite: surface model × boundary × phase rule.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Variant {
-    /// Terreros α surfaces (else calibrated C_t π R_m²).
-    pub terreros: bool,
-    /// Boundary temperatures.
-    pub bc: Bc,
-    /// Phase rule at the inclusion interfaces.
-    pub rule: PhaseRuleConfig,
-}
-
-impl Variant {
-    /// The recommended model: Terreros α (the contact surfaces follow each contact's local
-    /// geometry, so the conductance is right locally — near interfaces and walls — not only
-    /// on average as a global C_t fit), temperatures held on the faces (the FEM/FFT boundary
-    /// condition itself; fixed particles put the isothermal surface about a radius inside) and
-    /// the segment rule (each half-bond conducts as the series mix of what lies along its own
-    /// segment). History, stated because it matters for the checks: Terreros and walls were
-    /// chosen before any comparison (from the slab case); the phase rule chosen then was the
-    /// laminate, which lost to every alternative for a diagnosed reason (it gives a half-bond
-    /// along the interface the volume-averaged conductivity although the network's flow runs
-    /// through the centre's phase there); the segment rule was built from that diagnosis and
-    /// replaced it after the laminate results were seen. The tolerances did not change.
-    pub const RECOMMENDED: Variant = Variant {
-        terreros: true,
-        bc: Bc::Wall,
-        rule: PhaseRuleConfig::Segment,
-    };
-
-    /// The twelve variants, the recommended one first, the former default (calibrated,
-    /// particle-fixed, centre rule) second.
-    pub fn all() -> Vec<Variant> {
-        let mut v = vec![
-            Self::RECOMMENDED,
-            Variant {
-                terreros: false,
-                bc: Bc::Particles,
-                rule: PhaseRuleConfig::Centre,
-            },
-        ];
-        for terreros in [false, true] {
-            for bc in [Bc::Particles, Bc::Wall] {
-                for rule in RULES {
-                    let x = Variant { terreros, bc, rule };
-                    if !v.contains(&x) {
-                        v.push(x);
-                    }
-                }
-            }
-        }
-        v
-    }
-
-    /// Short id used in metric names: `terreros-wall-laminate`, `calibrated-particles-centre`, ….
-    pub fn id(&self) -> String {
-        format!(
-            "{}-{}-{}",
-            if self.terreros { "terreros" } else { "calibrated" },
-            match self.bc {
-                Bc::Particles => "particles",
-                Bc::Wall => "wall",
-            },
-            match self.rule {
-                PhaseRuleConfig::Centre => "centre",
-                PhaseRuleConfig::Laminate => "laminate",
-                PhaseRuleConfig::Segment => "segment",
-            }
-        )
-    }
-
-    /// `cfg` with this variant's surface (C_t given for the calibrated model) and boundary.
-    pub fn scene(&self, cfg: &SceneConfig, c_t: f64) -> SceneConfig {
-        let mut c = with_surface(cfg, (!self.terreros).then_some(c_t));
-        if let Some(th) = c.thermal.as_mut() {
-            th.bcs = match self.bc {
-                Bc::Particles => vec![fixed(FaceConfig::YMin, T_COLD), fixed(FaceConfig::YMax, T_HOT)],
-                Bc::Wall => vec![wall(FaceConfig::YMin, T_COLD), wall(FaceConfig::YMax, T_HOT)],
-            };
-        }
-        c.phase_rule = self.rule;
-        c
-    }
-}
-
-/// C_t calibrated on `model` under each boundary (particles, walls): C_t only scales every
-/// conductance, so it cancels from λ_e/λ_hom; it is kept so that raw ratios mean something.
-pub fn calibrations(model: &Model) -> anyhow::Result<[f64; 2]> {
-    Ok([
-        calibrate_ct_with(model, CalibrationBc::Particles)?.c_t,
-        calibrate_ct_with(model, CalibrationBc::Walls)?.c_t,
-    ])
-}
-
-/// Tolerance of a headline check from the paper's error at its particle count scaled as an
-/// interface error ∝ particle size ∝ N^(-1/3): e_paper · (N_paper/N)^(1/3).
-pub fn scaled_tolerance(paper_error: f64, n_paper: f64, n: usize) -> f64 {
-    paper_error * (n_paper / n as f64).cbrt()
-}
-
-/// An ETC measurement: λ_e (W/(m·K)) and the cost of its steady solve.
-#[derive(Debug, Clone, Copy)]
-pub struct Etc {
-    /// λ_e = (Q/A) L / ΔT (W/(m·K)).
-    pub lambda_e: f64,
-    /// CG iterations.
-    pub iterations: u64,
-    /// Solve wall time (s).
-    pub solve_s: f64,
-    /// Relative residual reached.
-    pub residual: f64,
-}
-
-/// Runs the steady slab `cfg` on `model` (whose conductivities are already set) and
-/// returns λ_e along y with its cost.
-pub fn etc_of(cfg: &SceneConfig, model: Model) -> anyhow::Result<Etc> {
-    let r = run_with(cfg, &model)?;
-    let etc = r
-        .etc
-        .as_ref()
-        .ok_or_else(|| anyhow::anyhow!("the scene produced no ETC"))?;
-    let th = r
-        .thermal
-        .as_ref()
-        .ok_or_else(|| anyhow::anyhow!("no thermal run"))?;
-    Ok(Etc {
-        lambda_e: etc.lambda_e,
-        iterations: th.report.iterations,
-        solve_s: th.report.wall_s,
-        residual: th.report.residual,
-    })
-}
-
-/// `cfg` with the calibrated surface model at a given C_t (so a calibration made once serves
-/// every run on the same packing) or the Terreros α model.
-pub fn with_surface(cfg: &SceneConfig, c_t: Option<f64>) -> SceneConfig {
-    let mut c = cfg.clone();
-    c.surface = match c_t {
-        Some(v) => SurfaceConfig::Calibrated {
-            c_t: CtConfig::Value(v),
-        },
-        None => SurfaceConfig::TerrerosAlpha,
-    };
-    c
-}
+/// Matrix conductivity λ_m (W/(m·K)).
+const LAMBDA_M: f64 = 33.0;
 
 /// The scene of this case: matrix 33 W/(m·K), inclusion 33·contrast.
 pub fn scene(n: usize, seed: u64, contrast: f64) -> SceneConfig {
@@ -280,11 +44,29 @@ pub fn scene(n: usize, seed: u64, contrast: f64) -> SceneConfig {
         seed,
         n,
         vec![
-            material("matrix", 33.0, 7800.0, 0.9),
-            material("inclusion", 33.0 * contrast, 7800.0, 0.9),
+            material("matrix", LAMBDA_M, 7800.0, 0.9),
+            material("inclusion", LAMBDA_M * contrast, 7800.0, 0.9),
         ],
         vec![centred_inclusion("inclusion")],
     )
+}
+
+/// One contrast of the FEM reference.
+struct FemPoint {
+    /// λ_i/λ_m.
+    contrast: f64,
+    /// FEM λ_e/λ_m.
+    ratio: f64,
+}
+
+/// One contrast of one model's sweep.
+struct Ratio {
+    /// λ_i/λ_m.
+    contrast: f64,
+    /// λ_e/λ_hom (λ_hom measured with one phase on the same model).
+    normalised: f64,
+    /// λ_e/λ_m with the nominal λ_m.
+    raw: f64,
 }
 
 /// One model's sweep over the contrasts.
@@ -292,199 +74,280 @@ struct Sweep {
     v: Variant,
     /// λ measured with one phase (W/(m·K)).
     lambda_hom: f64,
-    /// (contrast, λ_e/λ_hom, λ_e/λ_m nominal).
-    ratios: Vec<(f64, f64, f64)>,
+    ratios: Vec<Ratio>,
     iterations: u64,
     solve_s: f64,
     /// Wall time of the sweep (s).
     wall_s: f64,
 }
 
+impl Sweep {
+    /// Largest relative error of `pick(ratio)` against `against(contrast)`.
+    fn max_err(&self, pick: fn(&Ratio) -> f64, against: &dyn Fn(f64) -> f64) -> f64 {
+        self.ratios
+            .iter()
+            .map(|r| (pick(r) - against(r.contrast)).abs() / against(r.contrast))
+            .fold(0.0f64, f64::max)
+    }
+}
+
+/// Everything the case measures, on one packing.
+struct Measured {
+    fem: Vec<FemPoint>,
+    /// Particles.
+    n: usize,
+    /// Overall solid fraction of the walled packing.
+    phi: f64,
+    /// One sweep per variant, the recommended one first.
+    sweeps: Vec<Sweep>,
+    cts: Calibrations,
+    /// Inclusion share of the solid by centre, with the laminate rule, and the bulk estimate.
+    f_centre: f64,
+    f_laminate: f64,
+    f_bulk: f64,
+    /// Particles cut by the interface (laminate rule).
+    cut_particles: usize,
+    /// Packing, contacts and phases (s).
+    build_s: f64,
+}
+
+impl Measured {
+    /// The FEM ratio at a contrast of the reference.
+    fn fem_of(&self, c: f64) -> f64 {
+        self.fem
+            .iter()
+            .find(|r| r.contrast == c)
+            .map(|r| r.ratio)
+            .unwrap_or(f64::NAN)
+    }
+
+    /// The recommended model's sweep.
+    fn recommended(&self) -> &Sweep {
+        &self.sweeps[0]
+    }
+
+    /// Largest relative error of a sweep's λ_e/λ_hom against the FEM.
+    fn err_fem(&self, sw: &Sweep) -> f64 {
+        sw.max_err(|r| r.normalised, &|c| self.fem_of(c))
+    }
+
+    /// The a-priori tolerance at this N.
+    fn tolerance(&self) -> f64 {
+        scaled_tolerance(0.0065, 150_000.0, self.n)
+    }
+}
+
+/// Maxwell's λ_e/λ_m at the nominal inclusion fraction.
+fn maxwell_nominal(c: f64) -> f64 {
+    maxwell(1.0, c, F_SINGLE)
+}
+
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
-    let n = ctx.pick(20_000, 150_000);
-    let lm = 33.0;
+    let m = measure(ctx)?;
     let mut out = CaseOutcome::new("inclusion-etc", ctx.mode);
+    out.n_particles = m.n;
+    compare(&m, &mut out);
+    report(ctx, &m, &mut out)?;
+    Ok(out)
+}
+
+/// The FEM reference points, sorted by contrast.
+fn fem_reference() -> anyhow::Result<Vec<FemPoint>> {
     let fem = crate::refs::single_inclusion_fem();
     let table = fem["etc_vs_contrast"]
         .as_object()
         .ok_or_else(|| anyhow::anyhow!("single-inclusion-fem.json: no etc_vs_contrast"))?;
-    let mut refs: Vec<(f64, f64)> = table
+    let mut refs: Vec<FemPoint> = table
         .iter()
         .map(|(k, v)| {
-            Ok((
-                k.parse::<f64>()?,
-                v["fem_lambda_eff_over_lambda_m"]
+            Ok(FemPoint {
+                contrast: k.parse::<f64>()?,
+                ratio: v["fem_lambda_eff_over_lambda_m"]
                     .as_f64()
                     .ok_or_else(|| anyhow::anyhow!("no FEM value for contrast {k}"))?,
-            ))
+            })
         })
         .collect::<anyhow::Result<_>>()?;
-    refs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    refs.sort_by(|a, b| a.contrast.total_cmp(&b.contrast));
+    Ok(refs)
+}
 
+/// One packing, its phases under each rule, and every model's sweep over the contrasts.
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
+    let n = ctx.pick(20_000, 150_000);
+    let fem = fem_reference()?;
     let t0 = Instant::now();
     let base = scene(n, ctx.seed, 1.0);
     let centre_model = model_of(&base)?;
-    let sphere = demcon_core::Region::Sphere {
-        centre: demcon_core::Vec3::new(0.5 * L, 0.5 * L, 0.5 * L),
-        radius: L / 3.0,
-    };
-    let by_rule: Vec<Model> = RULES
-        .iter()
-        .map(|&r| {
-            let mut m = centre_model.clone();
-            set_region_phases(&mut m, &[(sphere.clone(), 1)], phase_rule(r));
-            m
-        })
-        .collect();
-    let laminate_model = &by_rule[rule_index(PhaseRuleConfig::Laminate)];
+    let by_rule = ModelsByRule::new(&centre_model, &[(centred_sphere(), 1)]);
+    let laminate_model = by_rule.get(PhaseRuleConfig::Laminate);
     let build_s = t0.elapsed().as_secs_f64();
-    out.n_particles = centre_model.particles.len();
-    let cts = calibrations(&centre_model)?;
-    let f_centre = phase_fraction(&centre_model, 1);
-    let f_laminate = phase_fraction(laminate_model, 1);
-    // The sphere's share of the solid if the solid were uniform at the bulk φ: the walled
-    // packing is looser in its wall layers, so the inner sphere holds more than 4π/81 of it.
-    let f_bulk = F_SINGLE * 0.64 / centre_model.phi;
-
-    let variants = Variant::all();
+    let cts = Calibrations::of(&centre_model)?;
     let mut sweeps = Vec::new();
-    for v in &variants {
+    for v in Variant::all() {
         let t1 = Instant::now();
-        let model = &by_rule[rule_index(v.rule)];
-        let c_t = cts[usize::from(v.bc == Bc::Wall)];
-        let cfg = v.scene(&base, c_t);
-        let hom = etc_of(&cfg, with_conductivities(model, &[lm, lm]))?;
+        let model = by_rule.get(v.rule);
+        let cfg = v.calibrated_scene(&base, &cts);
+        let hom = etc_of(&cfg, with_conductivities(model, &[LAMBDA_M, LAMBDA_M]))?;
         let mut sw = Sweep {
-            v: *v,
+            v,
             lambda_hom: hom.lambda_e,
             ratios: Vec::new(),
             iterations: hom.iterations,
             solve_s: hom.solve_s,
             wall_s: 0.0,
         };
-        for &(c, _) in &refs {
-            let e = etc_of(&cfg, with_conductivities(model, &[lm, lm * c]))?;
-            sw.ratios.push((c, e.lambda_e / hom.lambda_e, e.lambda_e / lm));
+        for point in &fem {
+            let c = point.contrast;
+            let e = etc_of(&cfg, with_conductivities(model, &[LAMBDA_M, LAMBDA_M * c]))?;
+            sw.ratios.push(Ratio {
+                contrast: c,
+                normalised: e.lambda_e / hom.lambda_e,
+                raw: e.lambda_e / LAMBDA_M,
+            });
             sw.iterations += e.iterations;
             sw.solve_s += e.solve_s;
         }
         sw.wall_s = t1.elapsed().as_secs_f64();
         sweeps.push(sw);
     }
+    debug_assert_eq!(sweeps[0].v, Variant::RECOMMENDED);
+    Ok(Measured {
+        fem,
+        n: centre_model.particles.len(),
+        phi: centre_model.phi,
+        sweeps,
+        cts,
+        f_centre: phase_fraction(&centre_model, 1),
+        f_laminate: phase_fraction(laminate_model, 1),
+        // The sphere's share of the solid if the solid were uniform at the bulk φ: the walled
+        // packing is looser in its wall layers, so the inner sphere holds more than 4π/81 of it.
+        f_bulk: F_SINGLE * 0.64 / centre_model.phi,
+        cut_particles: laminate_model.mixes.len(),
+        build_s,
+    })
+}
 
-    let err = |sw: &Sweep, pick: fn(&(f64, f64, f64)) -> f64, against: &dyn Fn(f64) -> f64| {
-        sw.ratios
-            .iter()
-            .map(|r| (pick(r) - against(r.0)).abs() / against(r.0))
-            .fold(0.0f64, f64::max)
-    };
-    let fem_of = |c: f64| refs.iter().find(|r| r.0 == c).map(|r| r.1).unwrap_or(f64::NAN);
-    let maxwell_nominal = |c: f64| maxwell(1.0, c, F_SINGLE);
-    let maxwell_particles = |c: f64| maxwell(1.0, c, f_centre);
-    let norm = |r: &(f64, f64, f64)| r.1;
-    let raw = |r: &(f64, f64, f64)| r.2;
-    let rec = &sweeps[0];
-    debug_assert_eq!(rec.v, Variant::RECOMMENDED);
-    let e_fem = err(rec, norm, &fem_of);
+/// Metrics, references and the headline check (the recommended model against the FEM).
+fn compare(m: &Measured, out: &mut CaseOutcome) {
+    let fem_of = |c: f64| m.fem_of(c);
+    let maxwell_particles = |c: f64| maxwell(1.0, c, m.f_centre);
+    let rec = m.recommended();
+    let e_fem = m.err_fem(rec);
     out.metric("max_rel_error_vs_fem", e_fem);
     out.metric("recommended_model", rec.v.id());
-    out.metric("max_rel_error_vs_maxwell", err(rec, norm, &maxwell_nominal));
+    out.metric(
+        "max_rel_error_vs_maxwell",
+        rec.max_err(|r| r.normalised, &maxwell_nominal),
+    );
     out.metric(
         "max_rel_error_vs_maxwell_particle_fraction",
-        err(rec, norm, &maxwell_particles),
+        rec.max_err(|r| r.normalised, &maxwell_particles),
     );
-    out.metric("max_rel_error_vs_fem_raw", err(rec, raw, &fem_of));
+    out.metric("max_rel_error_vs_fem_raw", rec.max_err(|r| r.raw, &fem_of));
     let mut by_variant = Map::new();
-    for sw in &sweeps {
-        by_variant.insert(sw.v.id(), Value::from(err(sw, norm, &fem_of)));
-        let mut m = Map::new();
-        for r in &sw.ratios {
-            m.insert(format!("{}", r.0), Value::from(r.1));
-        }
-        out.metric(&format!("etc_ratio_{}", sw.v.id()), Value::Object(m));
+    for sw in &m.sweeps {
+        by_variant.insert(sw.v.id(), Value::from(m.err_fem(sw)));
+        let ratios: Map<String, Value> = sw
+            .ratios
+            .iter()
+            .map(|r| (format!("{}", r.contrast), Value::from(r.normalised)))
+            .collect();
+        out.metric(&format!("etc_ratio_{}", sw.v.id()), Value::Object(ratios));
         out.metric(
             &format!("lambda_hom_over_lambda_{}", sw.v.id()),
-            sw.lambda_hom / lm,
+            sw.lambda_hom / LAMBDA_M,
         );
     }
     out.metric("max_rel_error_vs_fem_by_model", Value::Object(by_variant));
-    out.metric("solve_s", sweeps.iter().map(|s| s.solve_s).sum::<f64>());
-    out.metric("cg_iterations", sweeps.iter().map(|s| s.iterations).sum::<u64>());
-    out.metric("c_t_particles", cts[0]);
-    out.metric("c_t_walls", cts[1]);
-    out.metric("inclusion_particle_fraction", f_centre);
-    out.metric("inclusion_fraction_laminate", f_laminate);
-    out.metric("inclusion_fraction_bulk_estimate", f_bulk);
-    out.metric("cut_particles", laminate_model.mixes.len());
-    out.metric("build_s", build_s);
-    out.metric("phi", centre_model.phi);
+    out.metric("solve_s", m.sweeps.iter().map(|s| s.solve_s).sum::<f64>());
+    out.metric(
+        "cg_iterations",
+        m.sweeps.iter().map(|s| s.iterations).sum::<u64>(),
+    );
+    out.metric("c_t_particles", m.cts.particles);
+    out.metric("c_t_walls", m.cts.walls);
+    out.metric("inclusion_particle_fraction", m.f_centre);
+    out.metric("inclusion_fraction_laminate", m.f_laminate);
+    out.metric("inclusion_fraction_bulk_estimate", m.f_bulk);
+    out.metric("cut_particles", m.cut_particles);
+    out.metric("build_s", m.build_s);
+    out.metric("phi", m.phi);
     out.reference("max_rel_error_vs_fem", 0.0065);
     out.reference(
         "source",
         "Haddad 2021 §4.1 Fig. 14 (1.5·10⁵ DE, 0.65 %); FEM: shared/refs/single-inclusion-fem.json",
     );
-    let tol = scaled_tolerance(0.0065, 150_000.0, centre_model.particles.len());
     out.compare(Comparison::at_most(
         &format!(
             "max |λ_e/λ_hom − FEM|/FEM over the contrasts ({}, the recommended model)",
             rec.v.id()
         ),
         e_fem,
-        tol,
+        m.tolerance(),
         "paper 0.65 % at 1.5·10⁵ DE",
     ));
+}
 
-    let mut t = Table {
-        title: format!(
-            "λ_e/λ_hom against the contrast, N = {}: FEM, Maxwell, and the relative error of each model \
-             (surface-boundary-phase rule; the first is the recommended one)",
-            centre_model.particles.len(),
-        ),
-        header: ["λ_i/λ_m", "FEM", "Maxwell", "recommended λ_e/λ_hom"]
-            .iter()
-            .map(|s| s.to_string())
-            .chain(sweeps.iter().map(|s| s.v.id()))
-            .collect(),
-        rows: Vec::new(),
+/// A line of the contrast table: one contrast of the reference with every model's error, or
+/// one of the two summary lines.
+enum ContrastLine {
+    /// The i-th contrast.
+    Contrast(usize),
+    /// Largest error per model.
+    MaxErr,
+    /// λ_hom/λ and solve time per model.
+    Cost,
+}
+
+/// The table, the chart and the notes.
+fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let rec = m.recommended();
+    let contrast = |i: usize| rec.ratios[i].contrast;
+    let blank_unless = |line: &ContrastLine, label: &str, cell: &dyn Fn(usize) -> String| match line {
+        ContrastLine::Contrast(i) => cell(*i),
+        _ => label.to_string(),
     };
-    for (i, r) in rec.ratios.iter().enumerate() {
-        let f = fem_of(r.0);
-        let mut row = vec![
-            format!("{}", r.0),
-            format!("{f:.5}"),
-            format!("{:.5}", maxwell_nominal(r.0)),
-            format!("{:.5}", r.1),
-        ];
-        for sw in &sweeps {
-            row.push(format!("{:+.2} %", 100.0 * (sw.ratios[i].1 - f) / f));
-        }
-        t.rows.push(row);
-    }
-    let mut last = vec![
-        "max |err|".to_string(),
-        String::new(),
-        String::new(),
-        String::new(),
-    ];
-    last.extend(
-        sweeps
-            .iter()
-            .map(|sw| format!("{:.2} %", 100.0 * err(sw, norm, &fem_of))),
-    );
-    t.rows.push(last);
-    let mut cost = vec![
-        "λ_hom/λ; solves (s)".to_string(),
-        String::new(),
-        String::new(),
-        String::new(),
-    ];
-    cost.extend(
-        sweeps
-            .iter()
-            .map(|sw| format!("{:.4}; {:.2}", sw.lambda_hom / lm, sw.solve_s)),
-    );
-    t.rows.push(cost);
+    let lines: Vec<ContrastLine> = (0..rec.ratios.len())
+        .map(ContrastLine::Contrast)
+        .chain([ContrastLine::MaxErr, ContrastLine::Cost])
+        .collect();
+    let t = Columns::new()
+        .column("λ_i/λ_m", |l: &ContrastLine| match l {
+            ContrastLine::Contrast(i) => format!("{}", contrast(*i)),
+            ContrastLine::MaxErr => "max |err|".into(),
+            ContrastLine::Cost => "λ_hom/λ; solves (s)".into(),
+        })
+        .column("FEM", |l| {
+            blank_unless(l, "", &|i| format!("{:.5}", m.fem_of(contrast(i))))
+        })
+        .column("Maxwell", |l| {
+            blank_unless(l, "", &|i| format!("{:.5}", maxwell_nominal(contrast(i))))
+        })
+        .column("recommended λ_e/λ_hom", |l| {
+            blank_unless(l, "", &|i| format!("{:.5}", rec.ratios[i].normalised))
+        })
+        .columns_for(
+            m.sweeps.iter(),
+            |sw| sw.v.id(),
+            |sw, l| match l {
+                ContrastLine::Contrast(i) => {
+                    let f = m.fem_of(contrast(*i));
+                    format!("{:+.2} %", 100.0 * (sw.ratios[*i].normalised - f) / f)
+                }
+                ContrastLine::MaxErr => format!("{:.2} %", 100.0 * m.err_fem(sw)),
+                ContrastLine::Cost => format!("{:.4}; {:.2}", sw.lambda_hom / LAMBDA_M, sw.solve_s),
+            },
+        )
+        .table(
+            format!(
+                "λ_e/λ_hom against the contrast, N = {}: FEM, Maxwell, and the relative error of each model \
+                 (surface-boundary-phase rule; the first is the recommended one)",
+                m.n,
+            ),
+            &lines,
+        );
     out.tables.push(t);
 
     let maxwell_curve: Vec<(f64, f64)> = (0..=40)
@@ -493,26 +356,21 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             (c, maxwell_nominal(c))
         })
         .collect();
+    let curve = |sw: &Sweep| sw.ratios.iter().map(|r| (r.contrast, r.normalised)).collect();
     draw(
         &Chart {
             title: format!(
                 "Single inclusion: λ_e/λ_m against contrast, N = {} (Haddad 2021 Fig. 14)",
-                centre_model.particles.len()
+                m.n
             ),
             x_label: "contrast λ_i/λ_m".into(),
             y_label: "λ_e/λ_m".into(),
             x_scale: Scale::Log,
             y_scale: Scale::Linear,
             series: vec![
-                Series::line(
-                    &format!("DEM {} (recommended)", rec.v.id()),
-                    rec.ratios.iter().map(|r| (r.0, r.1)).collect(),
-                ),
-                Series::line(
-                    &format!("DEM {}", sweeps[1].v.id()),
-                    sweeps[1].ratios.iter().map(|r| (r.0, r.1)).collect(),
-                ),
-                Series::markers("FEM", refs.clone()),
+                Series::line(&format!("DEM {} (recommended)", rec.v.id()), curve(rec)),
+                Series::line(&format!("DEM {}", m.sweeps[1].v.id()), curve(&m.sweeps[1])),
+                Series::markers("FEM", m.fem.iter().map(|p| (p.contrast, p.ratio)).collect()),
                 Series::line("Maxwell", maxwell_curve),
             ],
         },
@@ -526,15 +384,15 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
          our own calibration: {:.4} with particle-fixed faces, {:.4} with walls) scales every conductance, so it cancels \
          from λ_e/λ_hom: calibrated and Terreros differ only by how the surface is shared among contacts.",
         ctx.mode.name(),
-        centre_model.particles.len(),
-        refs.len(),
-        sweeps.len(),
-        sweeps.iter().map(|s| s.iterations).sum::<u64>(),
-        sweeps.iter().map(|s| s.solve_s).sum::<f64>(),
+        m.n,
+        m.fem.len(),
+        m.sweeps.len(),
+        m.sweeps.iter().map(|s| s.iterations).sum::<u64>(),
+        m.sweeps.iter().map(|s| s.solve_s).sum::<f64>(),
         rec.wall_s,
-        rec.lambda_hom / lm,
-        cts[0],
-        cts[1],
+        rec.lambda_hom / LAMBDA_M,
+        m.cts.particles,
+        m.cts.walls,
     ));
     out.note(format!(
         "Recommended model, chosen by physics before comparing: {} — Terreros α surfaces follow each contact's local \
@@ -544,18 +402,17 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         rec.v.id()
     ));
     out.note(format!(
-        "Inclusion volume carried: {f_centre:.4} of the solid by centre, {f_laminate:.4} with the laminate rule \
+        "Inclusion volume carried: {:.4} of the solid by centre, {:.4} with the laminate rule \
          ({} cut particles), against the nominal 4π/81 = {F_SINGLE:.4}. Most of the difference is not the rule: the walled \
          packing's wall layers are looser (overall φ = {:.4} against ≈ 0.64 in the bulk), so the inner sphere holds \
-         ≈ {f_bulk:.4} of the solid. The ETC ratio to λ_hom is unaffected by that (the whole solid is scaled alike).",
-        laminate_model.mixes.len(),
-        centre_model.phi
+         ≈ {:.4} of the solid. The ETC ratio to λ_hom is unaffected by that (the whole solid is scaled alike).",
+        m.f_centre, m.f_laminate, m.cut_particles, m.phi, m.f_bulk
     ));
     out.note(format!(
         "Tolerance (a priori): the paper's 0.65 % at 1.5·10⁵ particles, scaled as an interface error ∝ particle size ∝ \
          N^(-1/3): 0.65 % × (1.5·10⁵/N)^(1/3) = {:.2} % at N = {}.",
-        100.0 * tol,
-        centre_model.particles.len()
+        100.0 * m.tolerance(),
+        m.n
     ));
-    Ok(out)
+    Ok(())
 }

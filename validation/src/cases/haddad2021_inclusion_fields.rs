@@ -32,26 +32,15 @@
 //! equator) and the one-sided Halo cut by the face x = 0, both shrinking with the Halo radius
 //! ∝ N^(-1/3); so the quick gate stays at A.
 
-use std::path::Path;
-
 use demcon_core::{Axis, Vec3};
-use demcon_post::{
-    HaloParams, HaloPhases, HaloReport, Plane, ProbeIndex, ProbeMethod, SliceParams, halo_flux, slice_grid,
-};
+use demcon_post::HaloReport;
 use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
-use super::haddad2021_inclusion_etc::{
-    L, RULES, Variant, calibrations, centred_inclusion, rule_index, scaled_tolerance, slab_scene,
-};
-use crate::chart::draw_raster;
-use crate::{CaseOutcome, Comparison, Ctx, Table};
-use demcon_model::set_region_phases;
-use demcon_scene::convert::phase_rule;
-
-/// The Halo ratio of the paper's field pictures.
-pub const HALO_K: f64 = 11.0;
+use super::composite::*;
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
 
 /// The scene: matrix 33, inclusion 165 W/(m·K), Halo k = 11, probes at `points` (name, point
 /// in units of L) read at the nearest particle and as a ball average (named `<name>-ball`).
@@ -71,147 +60,17 @@ pub fn scene(n: usize, seed: u64, points: &[(String, [f64; 3])]) -> SceneConfig 
     s
 }
 
-/// Radius (m) of the ball probes for a packing of `n` particles in the cube: the FEM
-/// reference's 0.02L, or 2.5 mean radii when the packing is too coarse for that ball to hold
-/// several centres (R̄ estimated from φ = 0.64 and Gaussian-0.3 radii).
-pub fn ball_radius(n: usize) -> f64 {
-    let mean_r = L * (3.0 * 0.64 / (4.0 * std::f64::consts::PI * n as f64 * (1.0 + 3.0 * 0.09))).cbrt();
-    (0.02 * L).max(2.5 * mean_r)
-}
-
-/// Nearest and ball probes (radius [`ball_radius`]) at points given in units of L.
-pub fn probes(points: &[(String, [f64; 3])], n: usize) -> Vec<ProbeConfig> {
-    let mut v = Vec::new();
-    for (name, p) in points {
-        let point = (p[0] * L, p[1] * L, p[2] * L);
-        v.push(ProbeConfig {
-            name: name.clone(),
-            point,
-            method: ProbeMethodConfig::Nearest,
-        });
-        v.push(ProbeConfig {
-            name: format!("{name}-ball"),
-            point,
-            method: ProbeMethodConfig::Ball(ball_radius(n)),
-        });
-    }
-    v
-}
-
-/// The value of probe `name` for `field` in a run.
-pub fn probe_value(r: &RunResult, name: &str, field: &str) -> anyhow::Result<f64> {
-    r.probes
-        .iter()
-        .find(|p| p.name == name && p.field == field)
-        .map(|p| p.value)
-        .ok_or_else(|| anyhow::anyhow!("no probe {name} for {field}"))
-}
-
-/// The Halo flux magnitude (W/m²) of every particle with the other phase setting than the
-/// run's: the run's scene asks for the default ([`HaloPhases::Same`], each particle averaged
-/// over its own phase), this gives [`HaloPhases::All`] (the paper's Halo as printed) for
-/// comparison. Recomputed from the run's per-particle flux (`D_p = −2 V_rep,p q_p`, eq. 20)
-/// with the same ratio, domain and radius scale — the scene's own post-processing, one
-/// option changed, without a second solve.
-pub fn all_phases_halo(r: &RunResult) -> anyhow::Result<(Vec<f64>, HaloReport)> {
-    let (Some(q), Some(setup), Some((_, _, rep))) = (&r.flux, &r.thermal_setup, &r.halo) else {
-        anyhow::bail!("the run has no Halo flux");
-    };
-    anyhow::ensure!(
-        rep.phases == HaloPhases::Same,
-        "the run's Halo is already {:?}",
-        rep.phases
-    );
-    let d: Vec<Vec3> = q
-        .iter()
-        .zip(&setup.rep_volumes)
-        .map(|(q, v)| q * (-2.0 * v))
-        .collect();
-    let h = halo_flux(
-        &r.model.particles,
-        &d,
-        &setup.rep_volumes,
-        &r.domain,
-        &HaloParams {
-            phases: HaloPhases::All,
-            ..HaloParams::ratio(rep.ratio)
-        },
-    )?;
-    Ok((h.flux.iter().map(|v| v.norm()).collect(), h.report))
-}
-
-/// Reads a per-particle field at `point` (m) as the scene's probes do: nearest particle and
-/// ball average of radius `ball` (m).
-pub fn probe_pair(r: &RunResult, values: &[f64], point: Vec3, ball: f64) -> anyhow::Result<(f64, f64)> {
-    let rep = &r
-        .thermal_setup
-        .as_ref()
-        .ok_or_else(|| anyhow::anyhow!("no thermal setup"))?
-        .rep_volumes;
-    let index = ProbeIndex::new(&r.model.particles, rep, &r.domain)?;
-    Ok((
-        index.probe(values, &point, &ProbeMethod::Nearest)?,
-        index.probe(values, &point, &ProbeMethod::BallAverage { radius: ball })?,
-    ))
-}
-
-/// Whether the Halo of the particle nearest to `point` (m) is cut by the boundary.
-pub fn nearest_truncated(r: &RunResult, point: Vec3) -> bool {
-    let Some((_, trunc, _)) = &r.halo else {
-        return false;
-    };
-    let p = &r.model.particles;
-    let best = (0..p.len())
-        .min_by(|&a, &b| {
-            (p.centres[a] - point)
-                .norm_squared()
-                .total_cmp(&(p.centres[b] - point).norm_squared())
-        })
-        .unwrap_or(0);
-    trunc.get(best).copied().unwrap_or(false)
-}
-
-/// Draws a slice of a particle field on the plane `axis = position` (m): each cell shows the
-/// particle whose section covers it (`slice_grid`); cells in the gaps between sections
-/// take the value of the particle with the nearest centre. Returns the covered fraction.
-pub fn slice_picture(
-    r: &RunResult,
-    values: &[f64],
-    axis: Axis,
-    position: f64,
-    title: &str,
-    unit: &str,
-    path: &Path,
-) -> anyhow::Result<f64> {
-    let p = &r.model.particles;
-    let g = slice_grid(
-        p,
-        values,
-        &r.domain,
-        &SliceParams {
-            plane: Plane { axis, position },
-            resolution: 160,
-        },
-    )?;
-    let rep: Vec<f64> = r
-        .thermal_setup
-        .as_ref()
-        .map(|s| s.rep_volumes.clone())
-        .unwrap_or_else(|| (0..p.len()).map(|i| p.volume(i) / r.model.phi).collect());
-    let index = ProbeIndex::new(p, &rep, &r.domain)?;
-    let mut cells = Vec::with_capacity(g.values.len());
-    for iv in 0..g.shape[1] {
-        for iu in 0..g.shape[0] {
-            let i = iv * g.shape[0] + iu;
-            cells.push(Some(if g.covered[i] {
-                g.values[i]
-            } else {
-                index.probe(values, &g.centre(iu, iv), &ProbeMethod::Nearest)?
-            }));
-        }
-    }
-    draw_raster(title, g.shape[0], g.shape[1], &cells, unit, path)?;
-    Ok(g.coverage())
+/// The FEM reference at one of the paper's points.
+struct FemRef {
+    name: String,
+    /// Point in units of L.
+    point: [f64; 3],
+    /// T (°C).
+    t: f64,
+    /// |q| at the point (W/m²).
+    q: f64,
+    /// |q| ball average over r = 0.02L (W/m²).
+    q_ball: f64,
 }
 
 /// One run's reading at a point.
@@ -231,18 +90,11 @@ struct Reading {
     cut: bool,
 }
 
-type Readings = Vec<Reading>;
-
 /// Readings at `points` (units of L); `q_all` is the all-phases Halo |q| per particle.
-fn readings(
-    r: &RunResult,
-    points: &[(String, [f64; 3])],
-    q_all: &[f64],
-    n: usize,
-) -> anyhow::Result<Readings> {
-    points
-        .iter()
-        .map(|(name, p)| {
+fn readings(r: &RunResult, refs: &[FemRef], q_all: &[f64], n: usize) -> anyhow::Result<Vec<Reading>> {
+    refs.iter()
+        .map(|f| {
+            let (name, p) = (&f.name, f.point);
             let point = Vec3::new(p[0] * L, p[1] * L, p[2] * L);
             let (q_all, q_all_ball) = probe_pair(r, q_all, point, ball_radius(n))?;
             Ok(Reading {
@@ -259,177 +111,219 @@ fn readings(
         .collect()
 }
 
+/// Relative difference |a − b|/|b|.
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+/// Largest relative error over the points of reading `f` against reference `g`.
+fn max_err(rd: &[Reading], refs: &[FemRef], f: fn(&Reading) -> f64, g: fn(&FemRef) -> f64) -> f64 {
+    rd.iter()
+        .zip(refs)
+        .map(|(m, r)| rel(f(m), g(r)))
+        .fold(0.0f64, f64::max)
+}
+
+/// One model's errors on the first N.
+struct ModelErrors {
+    id: String,
+    /// Largest relative error of T, |q| (own phase) and |q| (all phases) over the points.
+    t: f64,
+    q: f64,
+    q_all: f64,
+    /// Relative error of |q| at A.
+    q_a: f64,
+    readings: Vec<Reading>,
+}
+
+/// The recommended model's readings at one N.
+struct SizeReadings {
+    /// Particles.
+    n: usize,
+    readings: Vec<Reading>,
+}
+
+/// Everything the case measures.
+struct Measured {
+    /// Requested sizes.
+    sizes: Vec<usize>,
+    refs: Vec<FemRef>,
+    /// The paper's Table 2 as stored in the reference file.
+    paper_table2: Value,
+    /// Every model on the first N, the recommended one first.
+    by_model: Vec<ModelErrors>,
+    /// The recommended model at each N.
+    by_size: Vec<SizeReadings>,
+    /// The recommended model's run on the first N.
+    first: RunResult,
+    /// Its calibrations.
+    cts: Calibrations,
+    /// The all-phases Halo report of that run.
+    all_phases: HaloReport,
+}
+
+impl Measured {
+    /// The recommended model's readings on the first N.
+    fn main(&self) -> &[Reading] {
+        &self.by_size[0].readings
+    }
+
+    /// Particles of the first N.
+    fn n0(&self) -> usize {
+        self.by_size[0].n
+    }
+
+    /// The a-priori tolerances of T and |q| at the first N.
+    fn tolerances(&self) -> (f64, f64) {
+        (
+            scaled_tolerance(0.01, 150_000.0, self.n0()),
+            scaled_tolerance(0.04, 150_000.0, self.n0()),
+        )
+    }
+}
+
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
-    let sizes = ctx.pick(vec![20_000], vec![150_000, 500_000]);
+    let m = measure(ctx)?;
     let mut out = CaseOutcome::new("inclusion-fields", ctx.mode);
+    out.n_particles = m.first.model.particles.len();
+    compare(ctx, &m, &mut out);
+    report(ctx, &m, &mut out)?;
+    Ok(out)
+}
+
+/// The FEM reference at A, B, C and the paper's Table 2.
+fn fem_reference() -> anyhow::Result<(Vec<FemRef>, Value)> {
     let fem = crate::refs::single_inclusion_fem();
     let f5 = &fem["fields_contrast_5"];
-    let names = ["A", "B", "C"];
-    let mut points = Vec::new();
     let mut refs = Vec::new();
-    for name in names {
+    for name in ["A", "B", "C"] {
         let p = f5["points_in_units_of_L"][name]
             .as_array()
             .ok_or_else(|| anyhow::anyhow!("FEM reference: no point {name}"))?;
         let p: Vec<f64> = p.iter().filter_map(Value::as_f64).collect();
         anyhow::ensure!(p.len() == 3, "FEM reference: point {name} needs 3 coordinates");
-        points.push((name.to_string(), [p[0], p[1], p[2]]));
         let get = |k: &str| {
             f5["fem"][name][k]
                 .as_f64()
                 .ok_or_else(|| anyhow::anyhow!("FEM reference: no {k} at {name}"))
         };
-        refs.push((
-            get("T_C")?,
-            get("q_mag_W_m2")?,
-            get("q_mag_ball_avg_r0.02L_W_m2")?,
-        ));
+        refs.push(FemRef {
+            name: name.to_string(),
+            point: [p[0], p[1], p[2]],
+            t: get("T_C")?,
+            q: get("q_mag_W_m2")?,
+            q_ball: get("q_mag_ball_avg_r0.02L_W_m2")?,
+        });
     }
+    Ok((refs, f5["paper_table2"].clone()))
+}
 
+/// Every model on the first N, the recommended one on the others.
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
+    let sizes = ctx.pick(vec![20_000], vec![150_000, 500_000]);
+    let (refs, paper_table2) = fem_reference()?;
+    let points: Vec<(String, [f64; 3])> = refs.iter().map(|f| (f.name.clone(), f.point)).collect();
     let variants = Variant::all();
-    let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
-    let mut all = Vec::new();
-    // Per model on the first N: (id, max T error, max |q| error (own phase, all phases), |q|
-    // error at A, readings).
-    let mut by_model: Vec<(String, f64, f64, f64, f64, Readings)> = Vec::new();
-    // The all-phases Halo report of the recommended model on the first N.
-    let mut all_rep = None;
+    let mut by_model = Vec::new();
+    let mut by_size = Vec::new();
+    let mut first_run = None;
     for (i, &n) in sizes.iter().enumerate() {
         let base = scene(n, ctx.seed, &points);
         let centre_model = model_of(&base)?;
-        let sphere = demcon_core::Region::Sphere {
-            centre: Vec3::new(0.5 * L, 0.5 * L, 0.5 * L),
-            radius: L / 3.0,
-        };
-        let by_rule: Vec<Model> = RULES
-            .iter()
-            .map(|&rule| {
-                let mut m = centre_model.clone();
-                set_region_phases(&mut m, &[(sphere.clone(), 1)], phase_rule(rule));
-                m
-            })
-            .collect();
-        let cts = calibrations(&centre_model)?;
-        // Every model on the first N, the recommended one on the others.
+        let by_rule = ModelsByRule::new(&centre_model, &[(centred_sphere(), 1)]);
+        let cts = Calibrations::of(&centre_model)?;
         let vs = if i == 0 { &variants[..] } else { &variants[..1] };
-        let mut first = None;
+        let mut recommended = None;
         for v in vs {
-            let cfg = v.scene(
-                &base,
-                cts[usize::from(v.bc == super::haddad2021_inclusion_etc::Bc::Wall)],
-            );
-            let r = run_with(&cfg, &by_rule[rule_index(v.rule)])?;
+            let cfg = v.calibrated_scene(&base, &cts);
+            let r = run_with(&cfg, by_rule.get(v.rule))?;
             let (q_all, rep_all) = all_phases_halo(&r)?;
-            if i == 0 && all_rep.is_none() {
-                all_rep = Some(rep_all);
-            }
-            let rd = readings(&r, &points, &q_all, n)?;
+            let rd = readings(&r, &refs, &q_all, n)?;
             if i == 0 {
-                let max_err = |f: &dyn Fn(&Reading) -> f64, k: usize| {
-                    rd.iter()
-                        .zip(&refs)
-                        .map(|(m, r)| rel(f(m), [r.0, r.1][k]))
-                        .fold(0.0f64, f64::max)
-                };
-                let et = max_err(&|m| m.t, 0);
-                let eq = max_err(&|m| m.q, 1);
-                let eqa = max_err(&|m| m.q_all, 1);
-                by_model.push((v.id(), et, eq, eqa, rel(rd[0].q, refs[0].1), rd.clone()));
+                by_model.push(ModelErrors {
+                    id: v.id(),
+                    t: max_err(&rd, &refs, |m| m.t, |f| f.t),
+                    q: max_err(&rd, &refs, |m| m.q, |f| f.q),
+                    q_all: max_err(&rd, &refs, |m| m.q_all, |f| f.q),
+                    q_a: rel(rd[0].q, refs[0].q),
+                    readings: rd.clone(),
+                });
             }
-            if first.is_none() {
-                first = Some((r, rd));
+            if recommended.is_none() {
+                recommended = Some((r, rd, rep_all));
             }
         }
-        let (r, rd) = first.expect("at least the recommended model");
+        let (r, rd, rep_all) = recommended.expect("at least the recommended model");
+        by_size.push(SizeReadings {
+            n: r.model.particles.len(),
+            readings: rd,
+        });
         if i == 0 {
-            let th = r.thermal.as_ref().expect("thermal");
-            let temps = &th.temperatures;
-            let (halo, _, hrep) = r.halo.as_ref().expect("halo requested");
-            let qmag: Vec<f64> = halo.iter().map(|v| v.norm()).collect();
-            let cov_t = slice_picture(
-                &r,
-                temps,
-                Axis::Z,
-                0.5 * L,
-                &format!(
-                    "T on Z = 0.5L, N = {} (Haddad 2021 Fig. 15a)",
-                    r.model.particles.len()
-                ),
-                "°C",
-                &ctx.out.join("inclusion-fields-T.png"),
-            )?;
-            slice_picture(
-                &r,
-                &qmag,
-                Axis::Z,
-                0.5 * L,
-                &format!(
-                    "|q| (Halo k = 11) on Z = 0.5L, N = {} (Haddad 2021 Fig. 16a)",
-                    r.model.particles.len()
-                ),
-                "W/m²",
-                &ctx.out.join("inclusion-fields-q.png"),
-            )?;
-            out.charts.push("inclusion-fields-T.png".into());
-            out.charts.push("inclusion-fields-q.png".into());
-            out.n_particles = r.model.particles.len();
-            out.metric("c_t_particles", cts[0]);
-            out.metric("c_t_walls", cts[1]);
-            out.metric("recommended_model", variants[0].id());
-            out.metric("steady_solve_s", th.report.wall_s);
-            out.metric("cg_iterations", th.report.iterations);
-            let arep = all_rep.expect("set with the first model");
-            out.metric("halo_phases", format!("{:?}", hrep.phases));
-            out.metric("halo_wall_s", hrep.wall_s);
-            out.metric("halo_mean_members", hrep.mean_members);
-            out.metric("halo_all_phases_wall_s", arep.wall_s);
-            out.metric("halo_all_phases_mean_members", arep.mean_members);
-            out.note(format!(
-                "Slices: each pixel shows the particle whose section by the plane covers it ({:.0} % of the pixels); the gaps \
-                 between sections show the particle with the nearest centre. Halo k = 11 cost {:.2} s ({:.0} members on \
-                 average, own phase; all phases: {:.2} s, {:.0} members), the steady solve {:.2} s ({} CG iterations).",
-                100.0 * cov_t,
-                hrep.wall_s,
-                hrep.mean_members,
-                arep.wall_s,
-                arep.mean_members,
-                th.report.wall_s,
-                th.report.iterations
-            ));
+            first_run = Some((r, cts, rep_all));
         }
-        all.push((r.model.particles.len(), rd));
     }
+    let (first, cts, all_phases) = first_run.expect("at least one size");
+    Ok(Measured {
+        sizes,
+        refs,
+        paper_table2,
+        by_model,
+        by_size,
+        first,
+        cts,
+        all_phases,
+    })
+}
 
-    let (_, main) = &all[0];
-    // Largest relative error over the points of reading `f` against reference column `k`
-    // (0: T, 1: |q| at the point, 2: |q| ball average).
-    let max_err = |f: &dyn Fn(&Reading) -> f64, k: usize| {
-        main.iter()
-            .zip(&refs)
-            .map(|(m, r)| rel(f(m), [r.0, r.1, r.2][k]))
-            .fold(0.0f64, f64::max)
-    };
-    let err_t = max_err(&|m| m.t, 0);
-    let err_q = max_err(&|m| m.q, 1);
-    let err_q_ball = max_err(&|m| m.q_ball, 2);
+/// Metrics, references and the checks of T and |q| (the quick |q| gate is at A).
+fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+    let (first, main, refs) = (&m.first, m.main(), &m.refs);
+    let th = first.thermal.as_ref().expect("thermal");
+    let (_, _, hrep) = first.halo.as_ref().expect("halo requested");
+    let recommended = &m.by_model[0].id;
+    out.metric("c_t_particles", m.cts.particles);
+    out.metric("c_t_walls", m.cts.walls);
+    out.metric("recommended_model", recommended.clone());
+    out.metric("steady_solve_s", th.report.wall_s);
+    out.metric("cg_iterations", th.report.iterations);
+    out.metric("halo_phases", format!("{:?}", hrep.phases));
+    out.metric("halo_wall_s", hrep.wall_s);
+    out.metric("halo_mean_members", hrep.mean_members);
+    out.metric("halo_all_phases_wall_s", m.all_phases.wall_s);
+    out.metric("halo_all_phases_mean_members", m.all_phases.mean_members);
+
+    let err_t = max_err(main, refs, |x| x.t, |f| f.t);
+    let err_q = max_err(main, refs, |x| x.q, |f| f.q);
     out.metric("max_rel_error_T", err_t);
     out.metric("max_rel_error_q", err_q);
-    out.metric("max_rel_error_q_ball", err_q_ball);
-    out.metric("max_rel_error_q_all_phases", max_err(&|m| m.q_all, 1));
-    out.metric("max_rel_error_q_ball_all_phases", max_err(&|m| m.q_all_ball, 2));
-    for (n, rd) in &all {
-        let mut m = Map::new();
-        for x in rd {
-            m.insert(
-                x.name.clone(),
-                serde_json::json!({
-                    "T": x.t, "q": x.q, "T_ball": x.t_ball, "q_ball": x.q_ball,
-                    "q_all_phases": x.q_all, "q_ball_all_phases": x.q_all_ball, "halo_cut": x.cut
-                }),
-            );
-        }
-        out.metric(&format!("points_{n}"), Value::Object(m));
+    out.metric(
+        "max_rel_error_q_ball",
+        max_err(main, refs, |x| x.q_ball, |f| f.q_ball),
+    );
+    out.metric(
+        "max_rel_error_q_all_phases",
+        max_err(main, refs, |x| x.q_all, |f| f.q),
+    );
+    out.metric(
+        "max_rel_error_q_ball_all_phases",
+        max_err(main, refs, |x| x.q_all_ball, |f| f.q_ball),
+    );
+    for s in &m.by_size {
+        let points: Map<String, Value> = s
+            .readings
+            .iter()
+            .map(|x| {
+                (
+                    x.name.clone(),
+                    serde_json::json!({
+                        "T": x.t, "q": x.q, "T_ball": x.t_ball, "q_ball": x.q_ball,
+                        "q_all_phases": x.q_all, "q_ball_all_phases": x.q_all_ball, "halo_cut": x.cut
+                    }),
+                )
+            })
+            .collect();
+        out.metric(&format!("points_{}", s.n), Value::Object(points));
     }
     out.reference("max_rel_error_T", 0.01);
     out.reference("max_rel_error_q", 0.040);
@@ -437,148 +331,206 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         "source",
         "Haddad 2021 §4.2 Table 2 (1.5·10⁵ DE: |q| 7796, 2370, 6183 W/m²); FEM: shared/refs/single-inclusion-fem.json",
     );
-    let n0 = all[0].0;
-    let tol_t = scaled_tolerance(0.01, 150_000.0, n0);
-    let tol_q = scaled_tolerance(0.04, 150_000.0, n0);
+    let (tol_t, tol_q) = m.tolerances();
     out.compare(Comparison::at_most(
-        &format!("max relative error of T at A, B, C ({})", variants[0].id()),
+        &format!("max relative error of T at A, B, C ({recommended})"),
         err_t,
         tol_t,
         "paper < 1 % at 1.5·10⁵ DE",
     ));
-    let err_q_a = rel(main[0].q, refs[0].1);
+    let err_q_a = rel(main[0].q, refs[0].q);
     out.metric("rel_error_q_A", err_q_a);
-    out.metric("rel_error_q_A_all_phases", rel(main[0].q_all, refs[0].1));
-    let mut m_t = Map::new();
-    let mut m_q = Map::new();
-    let mut m_q_all = Map::new();
-    let mut m_qa = Map::new();
-    for (id, et, eq, eq_all, eqa, _) in &by_model {
-        m_t.insert(id.clone(), Value::from(*et));
-        m_q.insert(id.clone(), Value::from(*eq));
-        m_q_all.insert(id.clone(), Value::from(*eq_all));
-        m_qa.insert(id.clone(), Value::from(*eqa));
-    }
-    out.metric("max_rel_error_T_by_model", Value::Object(m_t));
-    out.metric("max_rel_error_q_by_model", Value::Object(m_q));
-    out.metric("max_rel_error_q_all_phases_by_model", Value::Object(m_q_all));
-    out.metric("rel_error_q_A_by_model", Value::Object(m_qa));
+    out.metric("rel_error_q_A_all_phases", rel(main[0].q_all, refs[0].q));
+    let by_model = |f: fn(&ModelErrors) -> f64| -> Value {
+        Value::Object(
+            m.by_model
+                .iter()
+                .map(|e| (e.id.clone(), Value::from(f(e))))
+                .collect(),
+        )
+    };
+    out.metric("max_rel_error_T_by_model", by_model(|e| e.t));
+    out.metric("max_rel_error_q_by_model", by_model(|e| e.q));
+    out.metric("max_rel_error_q_all_phases_by_model", by_model(|e| e.q_all));
+    out.metric("rel_error_q_A_by_model", by_model(|e| e.q_a));
     match ctx.mode {
         crate::Mode::Full => out.compare(Comparison::at_most(
-            &format!(
-                "max relative error of |q| (Halo 11) at A, B, C ({})",
-                variants[0].id()
-            ),
+            &format!("max relative error of |q| (Halo 11) at A, B, C ({recommended})"),
             err_q,
             tol_q,
             "paper up to 4.0 % from our FEM at 1.5·10⁵ DE",
         )),
         crate::Mode::Quick => out.compare(Comparison::at_most(
-            &format!(
-                "relative error of |q| (Halo 11) at A ({}; B and C: see the notes)",
-                variants[0].id()
-            ),
+            &format!("relative error of |q| (Halo 11) at A ({recommended}; B and C: see the notes)"),
             err_q_a,
             tol_q,
             "paper up to 4.0 % from our FEM at 1.5·10⁵ DE",
         )),
     }
-    let mut tm = Table {
-        title: format!(
-            "Relative errors of T and |q| (Halo 11, nearest particle; own-phase Halo, then all-phases) at A, B, C \
-             for every model, N = {n0} (surface-boundary-phase rule; the first is the recommended one)"
+}
+
+/// A line of the points table: a reading of ours against the FEM, or a line of the paper's
+/// Table 2.
+enum PointLine<'a> {
+    /// Particles, our reading, the FEM at that point.
+    Ours(usize, &'a Reading, &'a FemRef),
+    /// The paper's values at a point.
+    Paper(&'a str),
+}
+
+/// The slices, the two tables and the notes.
+fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let r = &m.first;
+    let th = r.thermal.as_ref().expect("thermal");
+    let (halo, _, hrep) = r.halo.as_ref().expect("halo requested");
+    let qmag: Vec<f64> = halo.iter().map(|v| v.norm()).collect();
+    let cov_t = slice_picture(
+        r,
+        &th.temperatures,
+        Axis::Z,
+        0.5 * L,
+        &format!(
+            "T on Z = 0.5L, N = {} (Haddad 2021 Fig. 15a)",
+            r.model.particles.len()
         ),
-        header: [
-            "model", "T A", "T B", "T C", "|q| A", "|q| B", "|q| C", "all A", "all B", "all C",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect(),
-        rows: Vec::new(),
-    };
-    for (id, _, _, _, _, rd) in &by_model {
-        let mut row = vec![id.clone()];
-        row.extend(
-            rd.iter()
-                .zip(&refs)
-                .map(|(m, f)| format!("{:+.2} %", 100.0 * (m.t - f.0) / f.0)),
+        "°C",
+        &ctx.out.join("inclusion-fields-T.png"),
+    )?;
+    slice_picture(
+        r,
+        &qmag,
+        Axis::Z,
+        0.5 * L,
+        &format!(
+            "|q| (Halo k = 11) on Z = 0.5L, N = {} (Haddad 2021 Fig. 16a)",
+            r.model.particles.len()
+        ),
+        "W/m²",
+        &ctx.out.join("inclusion-fields-q.png"),
+    )?;
+    out.charts.push("inclusion-fields-T.png".into());
+    out.charts.push("inclusion-fields-q.png".into());
+    out.note(format!(
+        "Slices: each pixel shows the particle whose section by the plane covers it ({:.0} % of the pixels); the gaps \
+         between sections show the particle with the nearest centre. Halo k = 11 cost {:.2} s ({:.0} members on \
+         average, own phase; all phases: {:.2} s, {:.0} members), the steady solve {:.2} s ({} CG iterations).",
+        100.0 * cov_t,
+        hrep.wall_s,
+        hrep.mean_members,
+        m.all_phases.wall_s,
+        m.all_phases.mean_members,
+        th.report.wall_s,
+        th.report.iterations
+    ));
+
+    let n0 = m.n0();
+    let refs = &m.refs;
+    let tm = Columns::new()
+        .column("model", |e: &ModelErrors| e.id.clone())
+        .columns_for(
+            0..refs.len(),
+            |&k| format!("T {}", refs[k].name),
+            |&k, e| {
+                let f = &refs[k];
+                format!("{:+.2} %", 100.0 * (e.readings[k].t - f.t) / f.t)
+            },
+        )
+        .columns_for(
+            0..refs.len(),
+            |&k| format!("|q| {}", refs[k].name),
+            |&k, e| {
+                let f = &refs[k];
+                format!("{:+.1} %", 100.0 * (e.readings[k].q - f.q) / f.q)
+            },
+        )
+        .columns_for(
+            0..refs.len(),
+            |&k| format!("all {}", refs[k].name),
+            |&k, e| {
+                let f = &refs[k];
+                format!("{:+.1} %", 100.0 * (e.readings[k].q_all - f.q) / f.q)
+            },
+        )
+        .table(
+            format!(
+                "Relative errors of T and |q| (Halo 11, nearest particle; own-phase Halo, then all-phases) at A, B, C \
+                 for every model, N = {n0} (surface-boundary-phase rule; the first is the recommended one)"
+            ),
+            &m.by_model,
         );
-        for q in [|m: &Reading| m.q, |m: &Reading| m.q_all] {
-            row.extend(
-                rd.iter()
-                    .zip(&refs)
-                    .map(|(m, f)| format!("{:+.1} %", 100.0 * (q(m) - f.1) / f.1)),
-            );
-        }
-        tm.rows.push(row);
-    }
     out.tables.push(tm);
+    let (tol_t, tol_q) = m.tolerances();
     out.note(format!(
         "Tolerances (a priori): the paper's errors at 1.5·10⁵ particles (T < 1 %, |q| up to 4.0 %) scaled as an \
          interface error ∝ particle size ∝ N^(-1/3): × (1.5·10⁵/N)^(1/3), i.e. T {:.2} % and |q| {:.2} % at N = {n0}. \
          The headline is the recommended model ({}; see inclusion-etc for when and why it was chosen).",
         100.0 * tol_t,
         100.0 * tol_q,
-        variants[0].id()
+        m.by_model[0].id
     ));
-    let mut t = Table {
-        title: "T and |q| at the paper's points (nearest particle; ball = volume average over r = 0.02L)"
-            .into(),
-        header: vec![
-            "N".into(),
-            "point".into(),
-            "T (°C)".into(),
-            "T FEM".into(),
-            "|q| (W/m²)".into(),
-            "|q| ball".into(),
-            "|q| all phases".into(),
-            "|q| FEM".into(),
-            "err |q|".into(),
-            "err all phases".into(),
-            "Halo cut".into(),
-        ],
-        rows: Vec::new(),
+
+    let paper = &m.paper_table2;
+    let ours = |l: &PointLine, cell: &dyn Fn(usize, &Reading, &FemRef) -> String| match l {
+        PointLine::Ours(n, x, f) => cell(*n, x, f),
+        PointLine::Paper(_) => String::new(),
     };
-    for (n, rd) in &all {
-        for (x, f) in rd.iter().zip(&refs) {
-            t.rows.push(vec![
-                n.to_string(),
-                x.name.clone(),
-                format!("{:.3}", x.t),
-                format!("{:.3}", f.0),
-                format!("{:.0}", x.q),
-                format!("{:.0}", x.q_ball),
-                format!("{:.0}", x.q_all),
-                format!("{:.1}", f.1),
-                format!("{:.2} %", 100.0 * (x.q - f.1) / f.1),
-                format!("{:.2} %", 100.0 * (x.q_all - f.1) / f.1),
-                if x.cut { "yes" } else { "no" }.into(),
-            ]);
-        }
-    }
-    let paper = &f5["paper_table2"];
-    for name in names {
-        t.rows.push(vec![
-            "paper 150 000".into(),
-            name.into(),
-            format!("{}", paper[name]["T_C"]),
-            String::new(),
-            format!("{}", paper[name]["q_mag_W_m2"]["DE_150k"]),
-            String::new(),
-            String::new(),
-            format!("{} (its FE)", paper[name]["q_mag_W_m2"]["FE"]),
-            String::new(),
-            String::new(),
-            String::new(),
-        ]);
-    }
+    let lines: Vec<PointLine> = m
+        .by_size
+        .iter()
+        .flat_map(|s| {
+            s.readings
+                .iter()
+                .zip(refs)
+                .map(|(x, f)| PointLine::Ours(s.n, x, f))
+        })
+        .chain(refs.iter().map(|f| PointLine::Paper(&f.name)))
+        .collect();
+    let t = Columns::new()
+        .column("N", |l: &PointLine| match l {
+            PointLine::Ours(n, ..) => n.to_string(),
+            PointLine::Paper(_) => "paper 150 000".into(),
+        })
+        .column("point", |l| match l {
+            PointLine::Ours(_, x, _) => x.name.clone(),
+            PointLine::Paper(name) => name.to_string(),
+        })
+        .column("T (°C)", |l| match l {
+            PointLine::Ours(_, x, _) => format!("{:.3}", x.t),
+            PointLine::Paper(name) => format!("{}", paper[*name]["T_C"]),
+        })
+        .column("T FEM", |l| ours(l, &|_, _, f| format!("{:.3}", f.t)))
+        .column("|q| (W/m²)", |l| match l {
+            PointLine::Ours(_, x, _) => format!("{:.0}", x.q),
+            PointLine::Paper(name) => format!("{}", paper[*name]["q_mag_W_m2"]["DE_150k"]),
+        })
+        .column("|q| ball", |l| ours(l, &|_, x, _| format!("{:.0}", x.q_ball)))
+        .column("|q| all phases", |l| {
+            ours(l, &|_, x, _| format!("{:.0}", x.q_all))
+        })
+        .column("|q| FEM", |l| match l {
+            PointLine::Ours(_, _, f) => format!("{:.1}", f.q),
+            PointLine::Paper(name) => format!("{} (its FE)", paper[*name]["q_mag_W_m2"]["FE"]),
+        })
+        .column("err |q|", |l| {
+            ours(l, &|_, x, f| format!("{:.2} %", 100.0 * (x.q - f.q) / f.q))
+        })
+        .column("err all phases", |l| {
+            ours(l, &|_, x, f| format!("{:.2} %", 100.0 * (x.q_all - f.q) / f.q))
+        })
+        .column("Halo cut", |l| {
+            ours(l, &|_, x, _| if x.cut { "yes" } else { "no" }.into())
+        })
+        .table(
+            "T and |q| at the paper's points (nearest particle; ball = volume average over r = 0.02L)",
+            &lines,
+        );
     out.tables.push(t);
     out.note(format!(
         "{} mode: N = {:?}; T and Halo flux from the scene pipeline (steady solver, C_t from our own calibration, \
          harmonic-mean interface, Halo k = 11 on the particle's own radius, over the particle's own phase — the \
          default; the all-phases Halo beside it). The metrics use the first N.",
         ctx.mode.name(),
-        sizes
+        m.sizes
     ));
-    Ok(out)
+    Ok(())
 }

@@ -24,71 +24,53 @@
 
 use std::time::Instant;
 
-use demcon_model::{place_inclusions, set_region_phases};
 use demcon_scene::config::*;
-use demcon_scene::convert::phase_rule;
 use serde_json::{Map, Value};
 
 use super::common::*;
-use super::haddad2021_inclusion_etc::{
-    RULES, Variant, calibrations, etc_of, phase_fraction, rule_index, scaled_tolerance, slab_scene,
-};
+use super::composite::*;
 use crate::analytic::{maxwell, third_order};
 use crate::chart::{Chart, Scale, Series, draw};
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
 
-/// Epoxy conductivity (W/(m·K)).
-pub const LAMBDA_EPOXY: f64 = 0.195;
-/// Silica conductivity (W/(m·K)).
-pub const LAMBDA_SILICA: f64 = 1.5;
-/// Cube edge / inclusion diameter.
-pub const SIZE_RATIO: f64 = 6.0;
 /// Upper bound of the ETC excess of our walled, face-heated sample over the periodic FFT
 /// reference on the same microstructure, from the reference's own notes (fixed temperatures
 /// with adiabatic sides 0.3–0.7 %, wall-confined spheres 0.5–1.1 %).
 pub const SETUP_BIAS: f64 = 0.018;
 
-/// Epoxy and silica (density and heat capacity do not enter the steady state).
-pub fn materials() -> Vec<MaterialConfig> {
-    vec![
-        material("epoxy", LAMBDA_EPOXY, 1200.0, 1000.0),
-        material("silica", LAMBDA_SILICA, 2200.0, 740.0),
-    ]
-}
+/// The volume fraction of the convergence ladder.
+const F_LADDER: f64 = 0.3;
 
 /// The matrix-only slab; inclusions are added to its model by [`with_inclusions`].
 pub fn base_scene(n: usize, seed: u64) -> SceneConfig {
-    slab_scene("multi-inclusion-etc", seed, n, materials(), Vec::new())
+    slab_scene("multi-inclusion-etc", seed, n, epoxy_silica(), Vec::new())
 }
 
-/// Clones of `model` with silica inclusions at fraction `f` placed exactly as the scene's
-/// `PhaseConfig::Inclusions` does (LS placement in the container's box), phases set by each
-/// rule of [`RULES`] in order; and the number of spheres.
-pub fn with_inclusions(model: &Model, f: f64, seed: u64) -> anyhow::Result<(Vec<Model>, usize)> {
-    let (centres, radius) = place_inclusions(&model.container, f, SIZE_RATIO, seed)?;
-    let union = demcon_core::Region::Union(
-        centres
-            .iter()
-            .map(|c| demcon_core::Region::Sphere { centre: *c, radius })
-            .collect(),
-    );
-    let models = RULES
-        .iter()
-        .map(|&r| {
-            let mut m = model.clone();
-            set_region_phases(&mut m, &[(union.clone(), 1)], phase_rule(r));
-            m
-        })
-        .collect();
-    Ok((models, centres.len()))
+/// The FFT reference at one volume fraction.
+struct FftPoint {
+    /// Silica volume fraction.
+    f: f64,
+    /// ETC (W/(m·K)).
+    etc: f64,
+    /// Standard deviation between its realisations (W/(m·K)).
+    sd: f64,
 }
 
-/// One fraction of a packing run: (f, spheres, carried fraction centre, laminate, ETC per
-/// variant in W/(m·K)).
-type FractionRow = (f64, usize, f64, f64, Vec<f64>);
+/// One fraction of a packing run.
+struct FractionRow {
+    /// Spheres placed.
+    spheres: usize,
+    /// Silica fraction of the solid carried by centre and with the laminate rule.
+    carried_centre: f64,
+    carried_laminate: f64,
+    /// ETC (W/(m·K)) of each variant run, in the order of the variants given.
+    etc: Vec<f64>,
+}
 
 /// ETC of one packing at the fractions `fs` for each model variant.
 struct PackingRun {
+    /// Particles.
     n: usize,
     /// Per fraction.
     rows: Vec<FractionRow>,
@@ -112,17 +94,9 @@ fn run_packing(
         Some((m, s)) => (m.clone(), s),
         None => (model_of(&base)?, t0.elapsed().as_secs_f64()),
     };
-    let cts = calibrations(&model)?;
+    let cts = Calibrations::of(&model)?;
     let (mut solve_s, mut iterations) = (0.0, 0);
-    let cfgs: Vec<SceneConfig> = variants
-        .iter()
-        .map(|v| {
-            v.scene(
-                &base,
-                cts[usize::from(v.bc == super::haddad2021_inclusion_etc::Bc::Wall)],
-            )
-        })
-        .collect();
+    let cfgs: Vec<SceneConfig> = variants.iter().map(|v| v.calibrated_scene(&base, &cts)).collect();
     // One-phase λ per variant (the phase rule does not matter with one phase).
     let mut hom = Vec::new();
     for c in &cfgs {
@@ -133,17 +107,20 @@ fn run_packing(
     }
     let mut rows = Vec::new();
     for &f in fs {
-        let (ms, count) = with_inclusions(&model, f, seed)?;
-        let (mc, ml) = (&ms[0], &ms[rule_index(PhaseRuleConfig::Laminate)]);
-        let mut etcs = Vec::new();
-        for (v, c) in variants.iter().zip(&cfgs) {
-            let m = &ms[rule_index(v.rule)];
-            let e = etc_of(c, m.clone())?;
+        let (ms, spheres) = with_inclusions(&model, f, seed)?;
+        let mut etc = Vec::new();
+        for ((v, c), h) in variants.iter().zip(&cfgs).zip(&hom) {
+            let e = etc_of(c, ms.get(v.rule).clone())?;
             solve_s += e.solve_s;
             iterations += e.iterations;
-            etcs.push(LAMBDA_EPOXY * e.lambda_e / hom[etcs.len()]);
+            etc.push(LAMBDA_EPOXY * e.lambda_e / h);
         }
-        rows.push((f, count, phase_fraction(mc, 1), phase_fraction(ml, 1), etcs));
+        rows.push(FractionRow {
+            spheres,
+            carried_centre: phase_fraction(ms.get(PhaseRuleConfig::Centre), 1),
+            carried_laminate: phase_fraction(ms.get(PhaseRuleConfig::Laminate), 1),
+            etc,
+        });
     }
     Ok((
         PackingRun {
@@ -158,66 +135,172 @@ fn run_packing(
     ))
 }
 
+/// One rung of the convergence ladder at f = [`F_LADDER`].
+struct Rung {
+    run: PackingRun,
+    /// Wall time of the rung (s).
+    wall_s: f64,
+}
+
+impl Rung {
+    /// ETC of variant `k` at f = [`F_LADDER`].
+    fn etc(&self, k: usize) -> f64 {
+        self.run.rows[0].etc[k]
+    }
+}
+
+/// Where one model's ETC stops moving on the ladder.
+struct Convergence {
+    /// Index of the first rung from which every finer rung is within 0.5 % of the finest.
+    idx: usize,
+    /// Whether a coarser rung than the finest qualifies.
+    converged: bool,
+    /// ETC of the finest rung.
+    finest: f64,
+}
+
+/// Per model: the smallest N from which every finer rung stays within 0.5 % of the finest;
+/// the finest rung itself proves nothing, so "converged" needs a coarser rung that qualifies.
+fn convergence(ladder: &[Rung], k: usize) -> Convergence {
+    let finest = ladder.last().expect("ladder").etc(k);
+    let idx = (0..ladder.len())
+        .find(|&i| {
+            ladder[i..]
+                .iter()
+                .all(|r| (r.etc(k) - finest).abs() / finest <= 0.005)
+        })
+        .unwrap_or(ladder.len() - 1);
+    Convergence {
+        idx,
+        converged: idx + 1 < ladder.len(),
+        finest,
+    }
+}
+
+/// One fraction of the sweep, over the realisations, beside its references.
+struct SweepRow {
+    f: f64,
+    /// Spheres of the first realisation.
+    spheres: usize,
+    /// Carried fractions, mean over the realisations.
+    carried_centre: f64,
+    carried_laminate: f64,
+    /// Recommended model's ETC: mean and population standard deviation over the realisations.
+    mean: f64,
+    sd: f64,
+    fft: f64,
+    fft_sd: f64,
+    maxwell: f64,
+    third_order: f64,
+    /// Every variant's ETC on the first realisation.
+    first_etc: Vec<f64>,
+}
+
+/// Everything the case measures.
+struct Measured {
+    variants: Vec<Variant>,
+    fft: Vec<FftPoint>,
+    /// Requested ladder sizes.
+    ladder_n: Vec<usize>,
+    ladder: Vec<Rung>,
+    /// The sweep's particle count (requested) and realisations.
+    n_sweep: usize,
+    realisations: u64,
+    runs: Vec<PackingRun>,
+    sweep: Vec<SweepRow>,
+}
+
+impl Measured {
+    /// The FFT value at the ladder's fraction.
+    fn fft_ladder(&self) -> f64 {
+        self.fft
+            .iter()
+            .find(|r| r.f == F_LADDER)
+            .map(|r| r.etc)
+            .unwrap_or(f64::NAN)
+    }
+
+    /// The recommended model's convergence.
+    fn convergence(&self) -> Convergence {
+        convergence(&self.ladder, 0)
+    }
+
+    /// Particles of the first sweep realisation (the checked N).
+    fn n_checked(&self) -> usize {
+        self.runs[0].n
+    }
+
+    /// The discretisation share of the tolerance and the whole tolerance.
+    fn tolerances(&self) -> (f64, f64) {
+        let tol_disc = scaled_tolerance(0.005, 8.0e6, self.n_checked());
+        (tol_disc, tol_disc + SETUP_BIAS)
+    }
+}
+
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
+    let m = measure(ctx)?;
     let mut out = CaseOutcome::new("multi-inclusion-etc", ctx.mode);
+    out.n_particles = m
+        .ladder
+        .iter()
+        .map(|r| r.run.n)
+        .chain(m.runs.iter().map(|r| r.n))
+        .max()
+        .unwrap_or(0);
+    compare(&m, &mut out);
+    report(ctx, &m, &mut out)?;
+    Ok(out)
+}
+
+/// The FFT reference, sorted by fraction.
+fn fft_reference() -> anyhow::Result<Vec<FftPoint>> {
     let fft = crate::refs::multi_inclusion_fft();
     let table = fft["by_volume_fraction"]
         .as_object()
         .ok_or_else(|| anyhow::anyhow!("multi-inclusion-fft.json: no by_volume_fraction"))?;
-    let mut refs: Vec<(f64, f64, f64)> = table
+    let mut refs: Vec<FftPoint> = table
         .iter()
         .map(|(k, v)| {
-            Ok((
-                k.parse::<f64>()?,
-                v["fft"]
+            Ok(FftPoint {
+                f: k.parse::<f64>()?,
+                etc: v["fft"]
                     .as_f64()
                     .ok_or_else(|| anyhow::anyhow!("no FFT value at f = {k}"))?,
-                v["fft_std_between_realisations"].as_f64().unwrap_or(f64::NAN),
-            ))
+                sd: v["fft_std_between_realisations"].as_f64().unwrap_or(f64::NAN),
+            })
         })
         .collect::<anyhow::Result<_>>()?;
-    refs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let fs: Vec<f64> = refs.iter().map(|r| r.0).collect();
+    refs.sort_by(|a, b| a.f.total_cmp(&b.f));
+    Ok(refs)
+}
+
+/// The ladder at f = 0.3 (every model), then the sweep over f at the converged N.
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
+    let fft = fft_reference()?;
+    let fs: Vec<f64> = fft.iter().map(|r| r.f).collect();
 
     // 1. Convergence ladder at f = 0.3 on one inclusion layout, every model.
     let variants = Variant::all();
     let ladder_n = ctx.pick(vec![5_000, 20_000], vec![25_000, 50_000, 100_000, 200_000]);
-    let f_ladder = 0.3;
     let mut ladder = Vec::new();
     let mut models = Vec::new();
     for &n in &ladder_n {
         let t0 = Instant::now();
-        let (r, m) = run_packing(n, ctx.seed, &[f_ladder], &variants, None)?;
+        let (r, m) = run_packing(n, ctx.seed, &[F_LADDER], &variants, None)?;
         let wall = t0.elapsed().as_secs_f64();
         eprintln!(
             "   ladder N = {}: ETC {:.5} ({}), build {:.1} s, solves {:.1} s, rung {wall:.1} s",
             r.n,
-            r.rows[0].4[0],
+            r.rows[0].etc[0],
             variants[0].id(),
             r.build_s,
             r.solve_s
         );
-        ladder.push((r, wall));
+        ladder.push(Rung { run: r, wall_s: wall });
         models.push((n, m));
     }
-    // Per model: the smallest N from which every finer rung stays within 0.5 % of the
-    // finest; the finest rung itself proves nothing, so "converged" needs a coarser rung
-    // that qualifies.
-    let convergence = |k: usize| {
-        let finest = ladder.last().expect("ladder").0.rows[0].4[k];
-        let idx = (0..ladder.len())
-            .find(|&i| {
-                ladder[i..]
-                    .iter()
-                    .all(|(r, _)| (r.rows[0].4[k] - finest).abs() / finest <= 0.005)
-            })
-            .unwrap_or(ladder.len() - 1);
-        (idx, idx + 1 < ladder.len(), finest)
-    };
-    let (conv_idx, converged, finest) = convergence(0);
-    let n_conv = ladder[conv_idx].0.n;
-    let n_sweep = ctx.pick(20_000, ladder_n[conv_idx]);
+    let n_sweep = ctx.pick(20_000, ladder_n[convergence(&ladder, 0).idx]);
 
     // 2. Sweep over f at n_sweep: every model on the first realisation, the recommended one
     // on the others.
@@ -229,86 +312,111 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             .iter()
             .zip(&ladder)
             .find(|((n, _), _)| k == 0 && *n == n_sweep)
-            .map(|((_, m), (r, _))| (m, r.build_s));
+            .map(|((_, m), r)| (m, r.run.build_s));
         let vs = if k == 0 { &variants[..] } else { &variants[..1] };
         runs.push(run_packing(n_sweep, ctx.seed + k, &fs, vs, built)?.0);
     }
-    out.n_particles = ladder
-        .iter()
-        .map(|(r, _)| r.n)
-        .chain(runs.iter().map(|r| r.n))
-        .max()
-        .unwrap_or(0);
 
-    let mut etc = Map::new();
-    let mut rows = Vec::new();
-    let mut max_err = 0.0f64;
-    let mut max_err_v = vec![0.0f64; variants.len()];
-    for (i, &(f, fft_v, fft_sd)) in refs.iter().enumerate() {
-        let vals: Vec<f64> = runs.iter().map(|r| r.rows[i].4[0]).collect();
-        let mean = vals.iter().sum::<f64>() / vals.len() as f64;
-        let sd = (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / vals.len() as f64).sqrt();
-        let e = (mean - fft_v).abs() / fft_v;
-        max_err = max_err.max(e);
-        for (k, m) in max_err_v.iter_mut().enumerate() {
-            *m = m.max((runs[0].rows[i].4[k] - fft_v).abs() / fft_v);
-        }
-        etc.insert(format!("{f}"), Value::from(mean));
-        let mx = LAMBDA_EPOXY * maxwell(1.0, LAMBDA_SILICA / LAMBDA_EPOXY, f);
-        let to = LAMBDA_EPOXY * third_order(1.0, LAMBDA_SILICA / LAMBDA_EPOXY, f);
-        let avg =
-            |g: fn(&FractionRow) -> f64| runs.iter().map(|r| g(&r.rows[i])).sum::<f64>() / runs.len() as f64;
-        let (pfc, pfl) = (avg(|r| r.2), avg(|r| r.3));
-        rows.push((f, runs[0].rows[i].1, pfc, pfl, mean, sd, fft_v, fft_sd, mx, to));
-    }
+    let ratio = LAMBDA_SILICA / LAMBDA_EPOXY;
+    let sweep = fft
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let vals: Vec<f64> = runs.iter().map(|r| r.rows[i].etc[0]).collect();
+            let mean = vals.iter().sum::<f64>() / vals.len() as f64;
+            let sd = (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / vals.len() as f64).sqrt();
+            let avg = |g: fn(&FractionRow) -> f64| {
+                runs.iter().map(|r| g(&r.rows[i])).sum::<f64>() / runs.len() as f64
+            };
+            SweepRow {
+                f: p.f,
+                spheres: runs[0].rows[i].spheres,
+                carried_centre: avg(|r| r.carried_centre),
+                carried_laminate: avg(|r| r.carried_laminate),
+                mean,
+                sd,
+                fft: p.etc,
+                fft_sd: p.sd,
+                maxwell: LAMBDA_EPOXY * maxwell(1.0, ratio, p.f),
+                third_order: LAMBDA_EPOXY * third_order(1.0, ratio, p.f),
+                first_etc: runs[0].rows[i].etc.clone(),
+            }
+        })
+        .collect();
+    Ok(Measured {
+        variants,
+        fft,
+        ladder_n,
+        ladder,
+        n_sweep,
+        realisations,
+        runs,
+        sweep,
+    })
+}
+
+/// Metrics, references and the headline check (the recommended model against the FFT).
+fn compare(m: &Measured, out: &mut CaseOutcome) {
+    let rel = |a: f64, b: f64| (a - b).abs() / b;
+    let max_err = m.sweep.iter().map(|r| rel(r.mean, r.fft)).fold(0.0f64, f64::max);
+    let etc: Map<String, Value> = m
+        .sweep
+        .iter()
+        .map(|r| (format!("{}", r.f), Value::from(r.mean)))
+        .collect();
     out.metric("etc", Value::Object(etc));
-    out.metric("recommended_model", variants[0].id());
+    out.metric("recommended_model", m.variants[0].id());
     out.metric("max_rel_error_vs_fft", max_err);
-    let mut by_variant = Map::new();
-    for (v, e) in variants.iter().zip(&max_err_v) {
-        by_variant.insert(v.id(), Value::from(*e));
-    }
+    let by_variant: Map<String, Value> = m
+        .variants
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            let e = m
+                .sweep
+                .iter()
+                .map(|r| rel(r.first_etc[k], r.fft))
+                .fold(0.0f64, f64::max);
+            (v.id(), Value::from(e))
+        })
+        .collect();
     out.metric("max_rel_error_vs_fft_by_model", Value::Object(by_variant));
     out.metric(
         "max_rel_error_vs_third_order",
-        rows.iter()
-            .map(|r| (r.4 - r.9).abs() / r.9)
+        m.sweep
+            .iter()
+            .map(|r| (r.mean - r.third_order).abs() / r.third_order)
             .fold(0.0f64, f64::max),
     );
-    out.metric(
-        "n_converged",
-        if converged {
-            Value::from(n_conv)
+    let converged_n = |c: Convergence| {
+        if c.converged {
+            Value::from(m.ladder[c.idx].run.n)
         } else {
             Value::Null
-        },
-    );
-    let mut conv_by = Map::new();
-    for (k, v) in variants.iter().enumerate() {
-        let (idx, ok, _) = convergence(k);
-        conv_by.insert(
-            v.id(),
-            if ok {
-                Value::from(ladder[idx].0.n)
-            } else {
-                Value::Null
-            },
-        );
-    }
+        }
+    };
+    out.metric("n_converged", converged_n(m.convergence()));
+    let conv_by: Map<String, Value> = m
+        .variants
+        .iter()
+        .enumerate()
+        .map(|(k, v)| (v.id(), converged_n(convergence(&m.ladder, k))))
+        .collect();
     out.metric("n_converged_by_model", Value::Object(conv_by));
-    out.metric("n_sweep", n_sweep);
-    out.metric("realisations", realisations);
-    let mut lad = Map::new();
-    for (r, _) in &ladder {
-        lad.insert(r.n.to_string(), Value::from(r.rows[0].4[0]));
-    }
+    out.metric("n_sweep", m.n_sweep);
+    out.metric("realisations", m.realisations);
+    let lad: Map<String, Value> = m
+        .ladder
+        .iter()
+        .map(|r| (r.run.n.to_string(), Value::from(r.etc(0))))
+        .collect();
     out.metric("etc_f0.3_by_n", Value::Object(lad));
     out.metric(
         "ladder_wall_s",
         Value::Object(
-            ladder
+            m.ladder
                 .iter()
-                .map(|(r, w)| (r.n.to_string(), Value::from(*w)))
+                .map(|r| (r.run.n.to_string(), Value::from(r.wall_s)))
                 .collect(),
         ),
     );
@@ -317,112 +425,79 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         "source",
         "Haddad 2021 §5.1 Fig. 17 (8·10⁶ DE, < 0.5 % from its FFT); FFT: shared/refs/multi-inclusion-fft.json",
     );
-    let n_checked = runs[0].n;
-    let tol_disc = scaled_tolerance(0.005, 8.0e6, n_checked);
-    let tol = tol_disc + SETUP_BIAS;
+    let (_, tol) = m.tolerances();
     out.compare(Comparison::at_most(
         &format!(
             "max |ETC − FFT|/FFT over f = 0.1 … 0.5 ({}, the recommended model)",
-            variants[0].id()
+            m.variants[0].id()
         ),
         max_err,
         tol,
         "paper < 0.5 % from its own FFT at 8·10⁶ DE",
     ));
+}
 
-    let mut t = Table {
-        title: format!(
-            "ETC (W/(m·K)) against f, N = {n_sweep}, {realisations} realisation(s) of the recommended model ({}); \
-             the relative error vs FFT of every model on the first realisation",
-            variants[0].id()
-        ),
-        header: [
-            "f",
-            "spheres",
-            "carried f (centre)",
-            "carried f (laminate)",
-            "DEM recommended",
-            "± (realisations)",
-            "FFT",
-            "FFT ±",
-            "Maxwell",
-            "third order",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .chain(variants.iter().map(|v| v.id()))
-        .collect(),
-        rows: Vec::new(),
-    };
-    for (i, r) in rows.iter().enumerate() {
-        let mut row = vec![
-            format!("{}", r.0),
-            r.1.to_string(),
-            format!("{:.4}", r.2),
-            format!("{:.4}", r.3),
-            format!("{:.4}", r.4),
-            format!("{:.4}", r.5),
-            format!("{:.4}", r.6),
-            format!("{:.4}", r.7),
-            format!("{:.4}", r.8),
-            format!("{:.4}", r.9),
-        ];
-        for k in 0..variants.len() {
-            let e = runs[0].rows[i].4[k];
-            row.push(format!("{:+.2} %", 100.0 * (e - r.6) / r.6));
-        }
-        t.rows.push(row);
-    }
+/// The two tables, the two charts and the notes.
+fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let (n_sweep, realisations) = (m.n_sweep, m.realisations);
+    let variants = &m.variants;
+    let t = Columns::new()
+        .column("f", |r: &SweepRow| format!("{}", r.f))
+        .column("spheres", |r| r.spheres.to_string())
+        .column("carried f (centre)", |r| format!("{:.4}", r.carried_centre))
+        .column("carried f (laminate)", |r| format!("{:.4}", r.carried_laminate))
+        .column("DEM recommended", |r| format!("{:.4}", r.mean))
+        .column("± (realisations)", |r| format!("{:.4}", r.sd))
+        .column("FFT", |r| format!("{:.4}", r.fft))
+        .column("FFT ±", |r| format!("{:.4}", r.fft_sd))
+        .column("Maxwell", |r| format!("{:.4}", r.maxwell))
+        .column("third order", |r| format!("{:.4}", r.third_order))
+        .columns_for(
+            variants.iter().enumerate(),
+            |(_, v)| v.id(),
+            |&(k, _), r| format!("{:+.2} %", 100.0 * (r.first_etc[k] - r.fft) / r.fft),
+        )
+        .table(
+            format!(
+                "ETC (W/(m·K)) against f, N = {n_sweep}, {realisations} realisation(s) of the recommended model ({}); \
+                 the relative error vs FFT of every model on the first realisation",
+                variants[0].id()
+            ),
+            &m.sweep,
+        );
     out.tables.push(t);
-    let fft03 = refs
-        .iter()
-        .find(|r| r.0 == f_ladder)
-        .map(|r| r.1)
-        .unwrap_or(f64::NAN);
-    let mut tl = Table {
-        title: format!(
-            "Convergence in N at f = {f_ladder} (one inclusion layout, seed {}): ETC of each model, then its distance to \
-             the finest rung and to the FFT; converged = within 0.5 % of the finest",
-            ctx.seed
-        ),
-        header: [
-            "N",
-            "particles per inclusion",
-            "pack+contacts (s)",
-            "solves (s)",
-            "CG iterations",
-            "rung wall (s)",
-            "λ_hom/λ (recommended)",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .chain(variants.iter().map(|v| v.id()))
-        .collect(),
-        rows: Vec::new(),
-    };
-    for (r, wall) in &ladder {
-        // Particles whose centre falls in one sphere: N × (sphere volume / cube volume).
-        let d = std::f64::consts::PI / 6.0 / SIZE_RATIO.powi(3);
-        let mut row = vec![
-            r.n.to_string(),
-            format!("{:.0}", r.n as f64 * d),
-            format!("{:.1}", r.build_s),
-            format!("{:.2}", r.solve_s),
-            r.iterations.to_string(),
-            format!("{wall:.1}"),
-            format!("{:.4}", r.lambda_hom[0]),
-        ];
-        for k in 0..variants.len() {
-            let e = r.rows[0].4[k];
-            let fin = ladder.last().expect("ladder").0.rows[0].4[k];
-            row.push(format!(
-                "{e:.4} ({:+.2} %; {:+.2} %)",
-                100.0 * (e - fin) / fin,
-                100.0 * (e - fft03) / fft03
-            ));
-        }
-        tl.rows.push(row);
-    }
+    let fft03 = m.fft_ladder();
+    // Particles whose centre falls in one sphere: N × (sphere volume / cube volume).
+    let d = std::f64::consts::PI / 6.0 / SIZE_RATIO.powi(3);
+    let finest = m.ladder.last().expect("ladder");
+    let tl = Columns::new()
+        .column("N", |r: &Rung| r.run.n.to_string())
+        .column("particles per inclusion", |r| format!("{:.0}", r.run.n as f64 * d))
+        .column("pack+contacts (s)", |r| format!("{:.1}", r.run.build_s))
+        .column("solves (s)", |r| format!("{:.2}", r.run.solve_s))
+        .column("CG iterations", |r| r.run.iterations.to_string())
+        .column("rung wall (s)", |r| format!("{:.1}", r.wall_s))
+        .column("λ_hom/λ (recommended)", |r| format!("{:.4}", r.run.lambda_hom[0]))
+        .columns_for(
+            variants.iter().enumerate(),
+            |(_, v)| v.id(),
+            |&(k, _), r| {
+                let (e, fin) = (r.etc(k), finest.etc(k));
+                format!(
+                    "{e:.4} ({:+.2} %; {:+.2} %)",
+                    100.0 * (e - fin) / fin,
+                    100.0 * (e - fft03) / fft03
+                )
+            },
+        )
+        .table(
+            format!(
+                "Convergence in N at f = {F_LADDER} (one inclusion layout, seed {}): ETC of each model, then its distance to \
+                 the finest rung and to the FFT; converged = within 0.5 % of the finest",
+                ctx.seed
+            ),
+            &m.ladder,
+        );
     out.tables.push(tl);
 
     let curve = |g: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
@@ -444,16 +519,13 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             series: vec![
                 Series::line(
                     &format!("DEM {} (recommended)", variants[0].id()),
-                    rows.iter().map(|r| (r.0, r.4)).collect(),
+                    m.sweep.iter().map(|r| (r.f, r.mean)).collect(),
                 ),
                 Series::line(
                     &format!("DEM {}", variants[1].id()),
-                    rows.iter()
-                        .enumerate()
-                        .map(|(i, r)| (r.0, runs[0].rows[i].4[1]))
-                        .collect(),
+                    m.sweep.iter().map(|r| (r.f, r.first_etc[1])).collect(),
                 ),
-                Series::markers("FFT (periodic)", rows.iter().map(|r| (r.0, r.6)).collect()),
+                Series::markers("FFT (periodic)", m.sweep.iter().map(|r| (r.f, r.fft)).collect()),
                 Series::line("Maxwell", curve(&|f| maxwell(1.0, ratio, f))),
                 Series::line("third order", curve(&|f| third_order(1.0, ratio, f))),
             ],
@@ -462,7 +534,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     )?;
     draw(
         &Chart {
-            title: format!("ETC at f = {f_ladder} against N (one inclusion layout)"),
+            title: format!("ETC at f = {F_LADDER} against N (one inclusion layout)"),
             x_label: "N (particles)".into(),
             y_label: "ETC (W/(m·K))".into(),
             x_scale: Scale::Log,
@@ -474,12 +546,12 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
                 .map(|(k, v)| {
                     Series::line(
                         &format!("DEM {}", v.id()),
-                        ladder.iter().map(|(r, _)| (r.n as f64, r.rows[0].4[k])).collect(),
+                        m.ladder.iter().map(|r| (r.run.n as f64, r.etc(k))).collect(),
                     )
                 })
                 .chain(std::iter::once(Series::markers(
                     "FFT (periodic, mean of 3 layouts)",
-                    ladder.iter().map(|(r, _)| (r.n as f64, fft03)).collect(),
+                    m.ladder.iter().map(|r| (r.run.n as f64, fft03)).collect(),
                 )))
                 .collect(),
         },
@@ -487,32 +559,37 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     )?;
     out.charts.push("multi-inclusion-etc.png".into());
     out.charts.push("multi-inclusion-etc-n.png".into());
+    let conv = m.convergence();
+    let n_conv = m.ladder[conv.idx].run.n;
     out.note(format!(
-        "{} mode: ladder N = {:?} at f = {f_ladder}; recommended model: {}; the sweep over f runs at N = {n_sweep} with \
+        "{} mode: ladder N = {:?} at f = {F_LADDER}; recommended model: {}; the sweep over f runs at N = {n_sweep} with \
          {realisations} realisation(s) (packing and inclusion layout change with the seed). Inclusions are placed by the \
          scene crate's own `place_inclusions` on clones of one matrix model per packing, so the five fractions and the \
          {} models share a packing and its contacts.",
         ctx.mode.name(),
-        ladder_n,
-        if converged {
+        m.ladder_n,
+        if conv.converged {
             format!(
-                "the ETC stays within 0.5 % of the finest rung ({finest:.4}) from N = {n_conv}"
+                "the ETC stays within 0.5 % of the finest rung ({:.4}) from N = {n_conv}",
+                conv.finest
             )
         } else {
             "the ETC has NOT converged within the ladder (no coarser rung within 0.5 % of the finest)".to_string()
         },
         variants.len()
     ));
+    let (tol_disc, tol) = m.tolerances();
     out.note(format!(
         "Recommended model ({}): see inclusion-etc for when and why it was chosen. Tolerance (a priori): the paper's 0.5 % at \
-         8·10⁶ particles scaled as an interface error ∝ N^(-1/3), 0.5 % × (8·10⁶/N)^(1/3) = {:.2} % at N = {n_checked}, \
+         8·10⁶ particles scaled as an interface error ∝ N^(-1/3), 0.5 % × (8·10⁶/N)^(1/3) = {:.2} % at N = {}, \
          plus the setup bias {:.1} %: the FFT reference is periodic, our sample has walls and fixed-temperature faces, \
          which by the reference's own notes raise the ETC by ≈ 0.8–1.8 % at f = 0.2–0.4 over the periodic value; {:.2} % \
          in all.",
         variants[0].id(),
         100.0 * tol_disc,
+        m.n_checked(),
         100.0 * SETUP_BIAS,
         100.0 * tol
     ));
-    Ok(out)
+    Ok(())
 }

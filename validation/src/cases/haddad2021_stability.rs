@@ -14,21 +14,35 @@
 //! and the steady solve converges. The packing's radii are truncated at [0.1, 1.9] × the mean
 //! (as in the independent experiment of `literature-notes.md` §8).
 
-use demcon_scene::SceneError;
 use demcon_scene::config::*;
 use demcon_thermal::ThermalError;
 use serde_json::{Map, Value};
 
 use super::common::*;
-use super::haddad2021_slab_transient as slab;
+use super::transient::slab;
 use crate::analytic::slab_temperature;
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
 
 const T_END: f64 = 0.05;
 
+/// How a run ended.
 enum Outcome {
-    Error(f64, u64, f64),
+    /// It finished: the profile's relative error, time steps and solver wall time (s).
+    Error { error: f64, steps: u64, wall_s: f64 },
+    /// The solver detected divergence (its message).
     Diverged(String),
+}
+
+/// One run of the slab at a given time step.
+struct Attempt {
+    /// `0.5`, …, `paper` for explicit steps; `paper`, `100x_bound` for implicit ones.
+    label: String,
+    /// Δt/Δt_bound for explicit steps, `None` for implicit ones.
+    ratio: Option<f64>,
+    /// Δt (s).
+    dt: f64,
+    outcome: Outcome,
 }
 
 /// The paper's slab setup (calibrated surfaces, particle boundaries) on a Gaussian-0.3
@@ -59,7 +73,11 @@ fn attempt(model: &Model, n: usize, seed: u64, solver: ThermalSolverConfig) -> a
                     (v - an).abs() / an
                 })
                 .fold(0.0, f64::max);
-            Ok(Outcome::Error(e, th.report.steps, th.report.wall_s))
+            Ok(Outcome::Error {
+                error: e,
+                steps: th.report.steps,
+                wall_s: th.report.wall_s,
+            })
         }
         Err(e) => match e.downcast_ref::<SceneError>() {
             Some(SceneError::Thermal(d @ ThermalError::Diverged { .. })) => {
@@ -70,48 +88,55 @@ fn attempt(model: &Model, n: usize, seed: u64, solver: ThermalSolverConfig) -> a
     }
 }
 
+/// Everything the case measures, on one packing.
+struct Measured {
+    /// Particles.
+    n: usize,
+    /// The exact positivity bound and the paper's eq. 16 step (s).
+    dt_bound: f64,
+    dt_paper: f64,
+    /// The steady solve's relative residual and iterations.
+    steady_residual: f64,
+    steady_iterations: u64,
+    /// Explicit steps, in the order 0.5, 0.9, 1.0, 1.5, 3 × the bound, then the paper's.
+    explicit: Vec<Attempt>,
+    /// Backward Euler at the paper's step and at 100 × the bound.
+    implicit: Vec<Attempt>,
+}
+
+impl Measured {
+    fn ratio_paper(&self) -> f64 {
+        self.dt_paper / self.dt_bound
+    }
+}
+
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
-    let n = ctx.pick(10_000, 100_000);
+    let m = measure(ctx)?;
     let mut out = CaseOutcome::new("stability", ctx.mode);
+    out.n_particles = m.n;
+    compare(&m, &mut out);
+    report(&m, &mut out);
+    Ok(out)
+}
+
+/// The bound and the paper's step from a steady run, then every explicit and implicit step.
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
+    let n = ctx.pick(10_000, 100_000);
     let model = model_of(&scene(n, ctx.seed, slab::explicit()))?;
-    out.n_particles = model.particles.len();
-    // The bound and the paper's estimate, from a short run at the bound's safety 0.5.
+    // The bound and the paper's estimate, from the steady run's report.
     let probe_cfg = scene(n, ctx.seed, ThermalSolverConfig::Steady);
     let probe = run_with(&probe_cfg, &model)?;
     let rep = &probe.thermal.as_ref().expect("thermal").report;
     let dt_bound = rep.dt_bound;
     let dt_paper = rep.dt_paper.ok_or_else(|| anyhow::anyhow!("no paper estimate"))?;
-    let ratio_paper = dt_paper / dt_bound;
-    out.metric("dt_bound_s", dt_bound);
-    out.metric("dt_paper_s", dt_paper);
-    out.metric("dt_paper_over_dt_bound", ratio_paper);
-    let mut errors = Map::new();
-    let mut table = Table {
-        title: format!(
-            "Explicit steps on a Gaussian-0.3 packing, N = {}",
-            model.particles.len()
-        ),
-        header: vec![
-            "Δt / Δt_bound".into(),
-            "Δt (s)".into(),
-            "outcome".into(),
-            "steps".into(),
-            "wall (s)".into(),
-        ],
-        rows: Vec::new(),
-    };
-    let mut accurate_below_bound = true;
-    // The error at half the bound: time-step error negligible, what remains is spatial.
-    let mut e_ref = f64::NAN;
     let mut ratios: Vec<(String, f64)> = [0.5, 0.9, 1.0, 1.5, 3.0]
         .iter()
         .map(|r| (format!("{r}"), *r))
         .collect();
-    ratios.push(("paper".into(), ratio_paper));
-    let mut blowup_at_paper = false;
-    let mut paper_error = f64::NAN;
-    for (label, r) in &ratios {
+    ratios.push(("paper".into(), dt_paper / dt_bound));
+    let mut explicit = Vec::new();
+    for (label, r) in ratios {
         let dt = r * dt_bound;
         let solver = ThermalSolverConfig::Explicit {
             t_end: T_END,
@@ -120,48 +145,14 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
                 allow_unstable: true,
             },
         };
-        match attempt(&model, n, ctx.seed, solver)? {
-            Outcome::Error(e, steps, wall) => {
-                errors.insert(label.clone(), Value::from(e));
-                if *r == 0.5 {
-                    e_ref = e;
-                }
-                if *r <= 1.0 && (e - e_ref).abs() > 0.002 {
-                    accurate_below_bound = false;
-                }
-                if label == "paper" {
-                    paper_error = e;
-                }
-                table.rows.push(vec![
-                    format!("{r:.3}"),
-                    format!("{dt:.3e}"),
-                    format!("error {:.3} %", 100.0 * e),
-                    steps.to_string(),
-                    format!("{wall:.2}"),
-                ]);
-            }
-            Outcome::Diverged(msg) => {
-                errors.insert(label.clone(), Value::from("diverged"));
-                if label == "paper" {
-                    blowup_at_paper = true;
-                }
-                if *r <= 1.0 {
-                    accurate_below_bound = false;
-                }
-                table.rows.push(vec![
-                    format!("{r:.3}"),
-                    format!("{dt:.3e}"),
-                    format!("diverged: {msg}"),
-                    "-".into(),
-                    "-".into(),
-                ]);
-            }
-        }
+        explicit.push(Attempt {
+            label,
+            ratio: Some(r),
+            dt,
+            outcome: attempt(&model, n, ctx.seed, solver)?,
+        });
     }
-    out.metric("error_explicit", Value::Object(errors));
-    out.metric("blowup_detected_at_paper_dt", blowup_at_paper);
-    // Implicit and steady.
-    let mut implicit = Map::new();
+    let mut implicit = Vec::new();
     for (label, dt) in [("paper", dt_paper), ("100x_bound", 100.0 * dt_bound)] {
         let dt = dt.min(T_END);
         let solver = ThermalSolverConfig::Implicit {
@@ -169,34 +160,89 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             dt,
             scheme: ImplicitSchemeConfig::BackwardEuler,
         };
-        match attempt(&model, n, ctx.seed, solver)? {
-            Outcome::Error(e, steps, wall) => {
-                implicit.insert(label.into(), Value::from(e));
-                table.rows.push(vec![
-                    format!("implicit {label}"),
-                    format!("{dt:.3e}"),
-                    format!("error {:.3} %", 100.0 * e),
-                    steps.to_string(),
-                    format!("{wall:.2}"),
-                ]);
-                out.compare(Comparison::absolute(
-                    &format!("implicit (BE) at Δt = {label}: error"),
-                    e,
-                    e_ref,
-                    0.005,
-                    "explicit at 0.5 × bound",
-                ));
+        let outcome = attempt(&model, n, ctx.seed, solver)?;
+        if let Outcome::Diverged(msg) = &outcome {
+            anyhow::bail!("implicit solver diverged: {msg}");
+        }
+        implicit.push(Attempt {
+            label: label.into(),
+            ratio: None,
+            dt,
+            outcome,
+        });
+    }
+    let st = &probe.thermal.as_ref().expect("thermal").report;
+    Ok(Measured {
+        n: model.particles.len(),
+        dt_bound,
+        dt_paper,
+        steady_residual: st.residual,
+        steady_iterations: st.iterations,
+        explicit,
+        implicit,
+    })
+}
+
+/// Metrics, references and the checks: steps ≤ the bound are accurate, the paper's step is
+/// detected when it diverges, implicit steps and the steady solve converge.
+fn compare(m: &Measured, out: &mut CaseOutcome) {
+    out.metric("dt_bound_s", m.dt_bound);
+    out.metric("dt_paper_s", m.dt_paper);
+    out.metric("dt_paper_over_dt_bound", m.ratio_paper());
+    let mut errors = Map::new();
+    let mut accurate_below_bound = true;
+    // The error at half the bound: time-step error negligible, what remains is spatial.
+    let mut e_ref = f64::NAN;
+    let mut blowup_at_paper = false;
+    let mut paper_error = f64::NAN;
+    for a in &m.explicit {
+        let r = a.ratio.expect("explicit steps have a ratio");
+        match &a.outcome {
+            Outcome::Error { error: e, .. } => {
+                let e = *e;
+                errors.insert(a.label.clone(), Value::from(e));
+                if r == 0.5 {
+                    e_ref = e;
+                }
+                if r <= 1.0 && (e - e_ref).abs() > 0.002 {
+                    accurate_below_bound = false;
+                }
+                if a.label == "paper" {
+                    paper_error = e;
+                }
             }
-            Outcome::Diverged(msg) => anyhow::bail!("implicit solver diverged: {msg}"),
+            Outcome::Diverged(_) => {
+                errors.insert(a.label.clone(), Value::from("diverged"));
+                if a.label == "paper" {
+                    blowup_at_paper = true;
+                }
+                if r <= 1.0 {
+                    accurate_below_bound = false;
+                }
+            }
+        }
+    }
+    out.metric("error_explicit", Value::Object(errors));
+    out.metric("blowup_detected_at_paper_dt", blowup_at_paper);
+    let mut implicit = Map::new();
+    for a in &m.implicit {
+        if let Outcome::Error { error: e, .. } = a.outcome {
+            implicit.insert(a.label.clone(), Value::from(e));
+            out.compare(Comparison::absolute(
+                &format!("implicit (BE) at Δt = {}: error", a.label),
+                e,
+                e_ref,
+                0.005,
+                "explicit at 0.5 × bound",
+            ));
         }
     }
     out.metric("error_implicit", Value::Object(implicit));
-    let st = probe.thermal.as_ref().expect("thermal");
-    out.metric("steady_residual", st.report.residual);
-    out.metric("steady_iterations", st.report.iterations);
+    out.metric("steady_residual", m.steady_residual);
+    out.metric("steady_iterations", m.steady_iterations);
     out.compare(Comparison::at_most(
         "steady solve relative residual",
-        st.report.residual,
+        m.steady_residual,
         1e-8,
         "converged",
     ));
@@ -223,9 +269,35 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         source: "no silent garbage".into(),
         pass: honest,
     });
+}
+
+/// The table of every step and the note.
+fn report(m: &Measured, out: &mut CaseOutcome) {
+    let table = Columns::new()
+        .column("Δt / Δt_bound", |a: &Attempt| match a.ratio {
+            Some(r) => format!("{r:.3}"),
+            None => format!("implicit {}", a.label),
+        })
+        .column("Δt (s)", |a| format!("{:.3e}", a.dt))
+        .column("outcome", |a| match &a.outcome {
+            Outcome::Error { error, .. } => format!("error {:.3} %", 100.0 * error),
+            Outcome::Diverged(msg) => format!("diverged: {msg}"),
+        })
+        .column("steps", |a| match &a.outcome {
+            Outcome::Error { steps, .. } => steps.to_string(),
+            Outcome::Diverged(_) => "-".into(),
+        })
+        .column("wall (s)", |a| match &a.outcome {
+            Outcome::Error { wall_s, .. } => format!("{wall_s:.2}"),
+            Outcome::Diverged(_) => "-".into(),
+        })
+        .table(
+            format!("Explicit steps on a Gaussian-0.3 packing, N = {}", m.n),
+            m.explicit.iter().chain(&m.implicit),
+        );
     out.tables.push(table);
     out.note(format!(
-        "The paper's eq. 16 step is {ratio_paper:.1}× the exact positivity bound on this packing (smallest particles set the bound)."
+        "The paper's eq. 16 step is {:.1}× the exact positivity bound on this packing (smallest particles set the bound).",
+        m.ratio_paper()
     ));
-    Ok(out)
 }

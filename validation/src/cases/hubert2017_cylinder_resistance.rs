@@ -26,35 +26,69 @@
 
 use std::time::Instant;
 
-use demcon_model::calibrate_ct;
 use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
-use super::hubert2017_scenes::*;
+use super::cylinder::*;
 use crate::analytic::uniform_resistance;
 use crate::chart::{Chart, Scale, Series, draw};
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
 
-/// The paper's Table 3: (N, mean radius µm, errors of the 3 packings in %).
-const PAPER: [(usize, f64, [f64; 3]); 5] = [
-    (1000, 133.0, [6.08, 10.51, 9.19]),
-    (2000, 106.0, [12.28, 12.57, 15.56]),
-    (5000, 78.0, [4.11, 5.80, 4.04]),
-    (10000, 62.0, [3.60, 4.41, 3.31]),
-    (20000, 49.0, [2.60, 2.92, 3.04]),
+/// A line of the paper's Table 3.
+struct PaperRow {
+    n: usize,
+    /// Errors of its 3 packings (%).
+    errors_percent: [f64; 3],
+}
+
+/// The paper's Table 3 (its mean radii, 133 … 49 µm, are not used).
+const PAPER: [PaperRow; 5] = [
+    PaperRow {
+        n: 1000,
+        errors_percent: [6.08, 10.51, 9.19],
+    },
+    PaperRow {
+        n: 2000,
+        errors_percent: [12.28, 12.57, 15.56],
+    },
+    PaperRow {
+        n: 5000,
+        errors_percent: [4.11, 5.80, 4.04],
+    },
+    PaperRow {
+        n: 10000,
+        errors_percent: [3.60, 4.41, 3.31],
+    },
+    PaperRow {
+        n: 20000,
+        errors_percent: [2.60, 2.92, 3.04],
+    },
 ];
+
+impl PaperRow {
+    /// Mean of the 3 packings' errors (%).
+    fn mean_percent(&self) -> f64 {
+        self.errors_percent.iter().sum::<f64>() / 3.0
+    }
+}
+
+/// The paper's row at `n`, if it has that size.
+fn paper_at(n: usize) -> Option<&'static PaperRow> {
+    PAPER.iter().find(|p| p.n == n)
+}
 
 /// The paper's mean error (fraction) at `n`, if it has that size.
 fn paper_mean(n: usize) -> Option<f64> {
-    PAPER
-        .iter()
-        .find(|p| p.0 == n)
-        .map(|p| p.2.iter().sum::<f64>() / 300.0)
+    paper_at(n).map(|p| p.errors_percent.iter().sum::<f64>() / 300.0)
 }
 
 /// Potential difference (V) between the end faces, as the paper (1 V).
 const V0: f64 = 1.0;
+
+/// Packings per N.
+const REALISATIONS: u64 = 3;
 
 /// One packing's measurements.
 struct Sample {
@@ -78,7 +112,74 @@ struct Sample {
     z_bulk: f64,
 }
 
-fn measure(n: usize, seed: u64) -> anyhow::Result<Sample> {
+/// Signed relative errors R/R_th − 1 of one packing's models.
+struct Errors {
+    /// Terreros α, particle electrodes, Z = 7.5.
+    terreros: f64,
+    /// The same at Z = 6.2.
+    z62: f64,
+    /// Calibrated C_t, particle electrodes.
+    calibrated: f64,
+    /// Terreros, particle electrodes, R · l / L_eff.
+    length_corrected: f64,
+    /// Terreros α, face electrodes.
+    face: f64,
+    /// Calibrated C_t, face electrodes.
+    face_calibrated: f64,
+}
+
+impl Sample {
+    /// The errors against the uniform-conductor resistance `r_th` (Ω).
+    fn errors(&self, r_th: f64) -> Errors {
+        Errors {
+            terreros: self.r_terreros / r_th - 1.0,
+            z62: self.r_terreros_62 / r_th - 1.0,
+            calibrated: self.r_calibrated / r_th - 1.0,
+            // The network spans L_eff, not l: the resistance a length-l conductor of the
+            // network's effective resistivity would have is R · l / L_eff.
+            length_corrected: self.r_terreros * LENGTH / self.l_eff / r_th - 1.0,
+            face: self.r_face / r_th - 1.0,
+            face_calibrated: self.r_face_calibrated / r_th - 1.0,
+        }
+    }
+}
+
+/// One packing of the table: requested N, packing index, its measurements and errors.
+struct PackingLine {
+    n: usize,
+    k: u64,
+    s: Sample,
+    e: Errors,
+}
+
+/// Means over the packings of one N: |errors| (fractions), C_t and the mean radius (m).
+struct SizeMeans {
+    n: usize,
+    terreros: f64,
+    calibrated: f64,
+    length_corrected: f64,
+    z62: f64,
+    c_t: f64,
+    mean_radius: f64,
+    face: f64,
+    face_calibrated: f64,
+}
+
+/// Everything the case measures.
+struct Measured {
+    sizes: Vec<usize>,
+    /// ρ_e l / A (Ω).
+    r_th: f64,
+    packings: Vec<PackingLine>,
+    means: Vec<SizeMeans>,
+    worst_mismatch: f64,
+    excluded: usize,
+    pack_s: f64,
+    n_particles: usize,
+}
+
+/// Packs one realisation and measures every model on it.
+fn measure_packing(n: usize, seed: u64) -> anyhow::Result<Sample> {
     let t0 = Instant::now();
     let terreros = electric_scene(
         "cylinder-resistance",
@@ -161,156 +262,93 @@ fn measure(n: usize, seed: u64) -> anyhow::Result<Sample> {
 
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
+    let m = measure(ctx)?;
+    let mut out = CaseOutcome::new("cylinder-resistance", ctx.mode);
+    out.n_particles = m.n_particles;
+    compare(&m, &mut out);
+    report(ctx, &m, &mut out)?;
+    Ok(out)
+}
+
+/// Every packing of every N, and the means per N.
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let sizes: Vec<usize> = ctx.pick(
         vec![1000, 2000, 5000, 10_000],
         vec![1000, 2000, 5000, 10_000, 20_000],
     );
-    let realisations = 3u64;
     let r_th = uniform_resistance(RHO_E, LENGTH, std::f64::consts::PI * RADIUS * RADIUS);
-    let mut out = CaseOutcome::new("cylinder-resistance", ctx.mode);
-    let mut maps: [Map<String, Value>; 8] = Default::default();
-    let mut table = Table {
-        title: format!(
-            "Equivalent resistance against ρ_e l / A = {:.5} mΩ, per packing",
-            1e3 * r_th
-        ),
-        header: [
-            "N",
-            "packing",
-            "r̄ (µm)",
-            "φ",
-            "Z wall / bulk",
-            "R Terreros (mΩ)",
-            "error",
-            "error, Z = 6.2",
-            "R calibrated (mΩ)",
-            "error",
-            "C_t",
-            "L_eff / l",
-            "Terreros error, L_eff-corrected",
-            "R Terreros, face electrodes (mΩ)",
-            "error",
-            "error, calibrated, face electrodes",
-            "CG iter.",
-            "solve (ms)",
-            "solve, face electrodes (ms)",
-            "paper error",
-        ]
-        .iter()
-        .map(|h| h.to_string())
-        .collect(),
-        rows: Vec::new(),
-    };
-    let mut pts: [Vec<(f64, f64)>; 7] = Default::default();
-    let (mut worst_mismatch, mut excluded, mut pack_s) = (0.0f64, 0usize, 0.0);
-    let mut by_n = Vec::new();
+    let mut packings = Vec::new();
+    let mut means = Vec::new();
     for &n in &sizes {
-        let mut sums = [0.0; 8];
-        for k in 0..realisations {
-            let s = measure(n, ctx.seed + k)?;
-            let err_t = s.r_terreros / r_th - 1.0;
-            let err_62 = s.r_terreros_62 / r_th - 1.0;
-            let err_c = s.r_calibrated / r_th - 1.0;
-            // The network spans L_eff, not l: the resistance a length-l conductor of the
-            // network's effective resistivity would have is R · l / L_eff.
-            let err_l = s.r_terreros * LENGTH / s.l_eff / r_th - 1.0;
-            let err_f = s.r_face / r_th - 1.0;
-            let err_fc = s.r_face_calibrated / r_th - 1.0;
-            for (acc, v) in sums.iter_mut().zip([
-                err_t.abs(),
-                err_c.abs(),
-                err_l.abs(),
-                err_62.abs(),
-                s.c_t,
-                s.mean_radius,
-                err_f.abs(),
-                err_fc.abs(),
-            ]) {
-                *acc += v;
-            }
-            worst_mismatch = worst_mismatch.max(s.mismatch);
-            excluded += s.excluded;
-            pack_s += s.pack_s;
-            out.n_particles = out.n_particles.max(s.n);
-            let paper = PAPER
-                .iter()
-                .find(|p| p.0 == n)
-                .map(|p| format!("{:.2} %", p.2[k as usize]))
-                .unwrap_or_default();
-            table.rows.push(vec![
-                s.n.to_string(),
-                (k + 1).to_string(),
-                format!("{:.1}", 1e6 * s.mean_radius),
-                format!("{:.3}", s.phi),
-                format!("{:.2} / {:.2}", s.z_wall, s.z_bulk),
-                format!("{:.5}", 1e3 * s.r_terreros),
-                format!("{:+.2} %", 100.0 * err_t),
-                format!("{:+.2} %", 100.0 * err_62),
-                format!("{:.5}", 1e3 * s.r_calibrated),
-                format!("{:+.2} %", 100.0 * err_c),
-                format!("{:.4}", s.c_t),
-                format!("{:.4}", s.l_eff / LENGTH),
-                format!("{:+.2} %", 100.0 * err_l),
-                format!("{:.5}", 1e3 * s.r_face),
-                format!("{:+.2} %", 100.0 * err_f),
-                format!("{:+.2} %", 100.0 * err_fc),
-                s.iterations.to_string(),
-                format!("{:.1}", s.solve_ms),
-                format!("{:.1}", s.face_ms),
-                paper,
-            ]);
+        let first = packings.len();
+        for k in 0..REALISATIONS {
+            let s = measure_packing(n, ctx.seed + k)?;
+            let e = s.errors(r_th);
+            packings.push(PackingLine { n, k, s, e });
         }
-        let mean = sums.map(|v| v / realisations as f64);
-        let values = [
-            mean[0],
-            mean[1],
-            mean[2],
-            mean[3],
-            mean[4],
-            1e6 * mean[5],
-            mean[6],
-            mean[7],
-        ];
-        for (m, v) in maps.iter_mut().zip(values) {
-            m.insert(key(n), Value::from(v));
-        }
-        for (p, v) in pts.iter_mut().zip(&mean[..4]) {
-            p.push((n as f64, 100.0 * v));
-        }
-        pts[5].push((n as f64, 100.0 * mean[6]));
-        pts[6].push((n as f64, 100.0 * mean[7]));
-        by_n.push((n, mean[0], mean[1], mean[6]));
+        let these = &packings[first..];
+        let mean =
+            |f: fn(&PackingLine) -> f64| these.iter().fold(0.0, |acc, p| acc + f(p)) / REALISATIONS as f64;
+        means.push(SizeMeans {
+            n,
+            terreros: mean(|p| p.e.terreros.abs()),
+            calibrated: mean(|p| p.e.calibrated.abs()),
+            length_corrected: mean(|p| p.e.length_corrected.abs()),
+            z62: mean(|p| p.e.z62.abs()),
+            c_t: mean(|p| p.s.c_t),
+            mean_radius: mean(|p| p.s.mean_radius),
+            face: mean(|p| p.e.face.abs()),
+            face_calibrated: mean(|p| p.e.face_calibrated.abs()),
+        });
     }
-    for p in PAPER.iter().filter(|p| sizes.contains(&p.0)) {
-        pts[4].push((p.0 as f64, p.2.iter().sum::<f64>() / 3.0));
-    }
-    let [m_t, m_c, m_l, m_62, m_ct, m_rad, m_f, m_fc] = maps;
-    out.metric("mean_rel_error", Value::Object(m_f));
-    out.metric("mean_rel_error_particle_electrodes", Value::Object(m_t));
-    out.metric("mean_rel_error_calibrated", Value::Object(m_c));
-    out.metric("mean_rel_error_length_corrected", Value::Object(m_l));
-    out.metric("mean_rel_error_z62", Value::Object(m_62));
-    out.metric("mean_rel_error_face_calibrated", Value::Object(m_fc));
-    out.metric("c_t", Value::Object(m_ct));
-    out.metric("mean_radius_um", Value::Object(m_rad));
-    out.metric("current_mismatch_max", worst_mismatch);
-    out.metric("excluded_particles", excluded);
-    out.metric("r_analytic_ohm", r_th);
-    let mut paper_ref = Map::new();
-    for p in PAPER.iter() {
-        paper_ref.insert(key(p.0), Value::from(p.2.iter().sum::<f64>() / 300.0));
-    }
+    Ok(Measured {
+        r_th,
+        worst_mismatch: packings.iter().map(|p| p.s.mismatch).fold(0.0f64, f64::max),
+        excluded: packings.iter().map(|p| p.s.excluded).sum(),
+        pack_s: packings.iter().fold(0.0, |acc, p| acc + p.s.pack_s),
+        n_particles: packings.iter().map(|p| p.s.n).max().unwrap_or(0),
+        sizes,
+        packings,
+        means,
+    })
+}
+
+/// Metrics, references and the checks (headline: Terreros with face electrodes).
+fn compare(m: &Measured, out: &mut CaseOutcome) {
+    let by_n = |f: fn(&SizeMeans) -> f64| -> Value {
+        Value::Object(m.means.iter().map(|s| (key(s.n), Value::from(f(s)))).collect())
+    };
+    out.metric("mean_rel_error", by_n(|s| s.face));
+    out.metric("mean_rel_error_particle_electrodes", by_n(|s| s.terreros));
+    out.metric("mean_rel_error_calibrated", by_n(|s| s.calibrated));
+    out.metric("mean_rel_error_length_corrected", by_n(|s| s.length_corrected));
+    out.metric("mean_rel_error_z62", by_n(|s| s.z62));
+    out.metric("mean_rel_error_face_calibrated", by_n(|s| s.face_calibrated));
+    out.metric("c_t", by_n(|s| s.c_t));
+    out.metric("mean_radius_um", by_n(|s| 1e6 * s.mean_radius));
+    out.metric("current_mismatch_max", m.worst_mismatch);
+    out.metric("excluded_particles", m.excluded);
+    out.metric("r_analytic_ohm", m.r_th);
+    let paper_ref: Map<String, Value> = PAPER
+        .iter()
+        .map(|p| {
+            (
+                key(p.n),
+                Value::from(p.errors_percent.iter().sum::<f64>() / 300.0),
+            )
+        })
+        .collect();
     out.reference("mean_rel_error", Value::Object(paper_ref));
     out.reference(
         "source",
         "Hubert 2017 §3.1 Table 3 / Fig. 4 (Terreros surfaces, 3 packings per N); analytic ρ_e l / A",
     );
-    let (n_min, e_first, _, e_f_first) = by_n[0];
-    let (n_max, e_t, e_c, e_f) = by_n[by_n.len() - 1];
+    let (first, last) = (&m.means[0], &m.means[m.means.len() - 1]);
+    let (n_min, n_max) = (first.n, last.n);
     if let Some(p) = paper_mean(n_max) {
         out.compare(Comparison::at_most(
             &format!("Terreros, face electrodes: mean |R/R_th − 1| at N = {n_max}"),
-            e_f,
+            last.face,
             p,
             &format!(
                 "the paper's mean {:.2} % at this N (its own code, Terreros)",
@@ -320,36 +358,88 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     }
     out.compare(Comparison::at_most(
         &format!("Terreros, face electrodes: the error falls with N (N = {n_max} against N = {n_min})"),
-        e_f,
-        e_f_first,
+        last.face,
+        first.face,
         "the paper's convergence (Fig. 4)",
     ));
     out.compare(Comparison::at_most(
         &format!("Terreros, particle electrodes: the error falls with N (N = {n_max} against N = {n_min})"),
-        e_t,
-        e_first,
+        last.terreros,
+        first.terreros,
         "the paper's convergence (Fig. 4)",
     ));
     out.compare(Comparison::at_most(
         &format!("Terreros, face electrodes: mean |R/R_th − 1| at N = {n_max}, against particle electrodes"),
-        e_f,
-        e_t,
+        last.face,
+        last.terreros,
         "face electrodes remove the electrode-layer bias (R low by about 2 r̄/l) and add nothing else",
     ));
     out.compare(Comparison::at_most(
         &format!("calibrated C_t: mean |R/R_th − 1| at N = {n_max}"),
-        e_c,
+        last.calibrated,
         0.02,
         "C_t calibrated on the same packing along the same axis",
     ));
     out.compare(Comparison::at_most(
         "Kirchhoff balance |I_in − I_out|/I_in",
-        worst_mismatch,
+        m.worst_mismatch,
         1e-6,
         "CG to a relative residual of 1e-10",
     ));
+}
+
+/// Signed error as a percentage cell.
+fn pct(e: f64) -> String {
+    format!("{:+.2} %", 100.0 * e)
+}
+
+/// The per-packing table, the chart and the notes.
+fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let table = Columns::new()
+        .column("N", |p: &PackingLine| p.s.n.to_string())
+        .column("packing", |p| (p.k + 1).to_string())
+        .column("r̄ (µm)", |p| format!("{:.1}", 1e6 * p.s.mean_radius))
+        .column("φ", |p| format!("{:.3}", p.s.phi))
+        .column("Z wall / bulk", |p| {
+            format!("{:.2} / {:.2}", p.s.z_wall, p.s.z_bulk)
+        })
+        .column("R Terreros (mΩ)", |p| format!("{:.5}", 1e3 * p.s.r_terreros))
+        .column("error", |p| pct(p.e.terreros))
+        .column("error, Z = 6.2", |p| pct(p.e.z62))
+        .column("R calibrated (mΩ)", |p| format!("{:.5}", 1e3 * p.s.r_calibrated))
+        .column("error", |p| pct(p.e.calibrated))
+        .column("C_t", |p| format!("{:.4}", p.s.c_t))
+        .column("L_eff / l", |p| format!("{:.4}", p.s.l_eff / LENGTH))
+        .column("Terreros error, L_eff-corrected", |p| pct(p.e.length_corrected))
+        .column("R Terreros, face electrodes (mΩ)", |p| {
+            format!("{:.5}", 1e3 * p.s.r_face)
+        })
+        .column("error", |p| pct(p.e.face))
+        .column("error, calibrated, face electrodes", |p| pct(p.e.face_calibrated))
+        .column("CG iter.", |p| p.s.iterations.to_string())
+        .column("solve (ms)", |p| format!("{:.1}", p.s.solve_ms))
+        .column("solve, face electrodes (ms)", |p| format!("{:.1}", p.s.face_ms))
+        .column("paper error", |p| {
+            paper_at(p.n)
+                .map(|row| format!("{:.2} %", row.errors_percent[p.k as usize]))
+                .unwrap_or_default()
+        })
+        .table(
+            format!(
+                "Equivalent resistance against ρ_e l / A = {:.5} mΩ, per packing",
+                1e3 * m.r_th
+            ),
+            &m.packings,
+        );
     out.tables.push(table);
-    let [p_t, p_c, p_l, p_62, p_paper, p_f, p_fc] = pts;
+    let series = |f: fn(&SizeMeans) -> f64| -> Vec<(f64, f64)> {
+        m.means.iter().map(|s| (s.n as f64, 100.0 * f(s))).collect()
+    };
+    let paper: Vec<(f64, f64)> = PAPER
+        .iter()
+        .filter(|p| m.sizes.contains(&p.n))
+        .map(|p| (p.n as f64, p.mean_percent()))
+        .collect();
     draw(
         &Chart {
             title: "Cylinder resistance: mean |R − ρ_e l/A| / (ρ_e l/A) against N (Hubert 2017 Fig. 4)"
@@ -359,13 +449,19 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             x_scale: Scale::Log,
             y_scale: Scale::Linear,
             series: vec![
-                Series::line("demcon, Terreros α, Z = 7.5", p_t),
-                Series::line("demcon, Terreros α, Z = 6.2", p_62),
-                Series::line("demcon, calibrated C_t", p_c),
-                Series::line("demcon, Terreros α, Z = 7.5, L_eff-corrected (see notes)", p_l),
-                Series::line("demcon, Terreros α, face electrodes", p_f),
-                Series::line("demcon, calibrated C_t, face electrodes", p_fc),
-                Series::markers("Hubert 2017 Table 3 (mean of 3)", p_paper),
+                Series::line("demcon, Terreros α, Z = 7.5", series(|s| s.terreros)),
+                Series::line("demcon, Terreros α, Z = 6.2", series(|s| s.z62)),
+                Series::line("demcon, calibrated C_t", series(|s| s.calibrated)),
+                Series::line(
+                    "demcon, Terreros α, Z = 7.5, L_eff-corrected (see notes)",
+                    series(|s| s.length_corrected),
+                ),
+                Series::line("demcon, Terreros α, face electrodes", series(|s| s.face)),
+                Series::line(
+                    "demcon, calibrated C_t, face electrodes",
+                    series(|s| s.face_calibrated),
+                ),
+                Series::markers("Hubert 2017 Table 3 (mean of 3)", paper),
             ],
         },
         &ctx.out.join("cylinder-resistance.png"),
@@ -376,11 +472,12 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
          the cylinder, Gaussian radii std/mean 0.3, aiming at φ = 0.64 and accepting the jammed state (column φ: the narrow \
          cylinder's wall layers jam below 0.64); contacts for Z = 7.5 (the column 'Z = 6.2' re-detects the contacts of the same \
          packing for the electric paper's coordination); electrodes = particles touching each end face (surface within half a \
-         radius), {V0} V apart. Packing and contacts took {pack_s:.1} s in all.",
+         radius), {V0} V apart. Packing and contacts took {:.1} s in all.",
         ctx.mode.name(),
-        sizes,
+        m.sizes,
         ctx.seed,
-        ctx.seed + realisations - 1,
+        ctx.seed + REALISATIONS - 1,
+        m.pack_s,
     ));
     out.note(
         "With the paper's particle electrodes (`mean_rel_error_particle_electrodes`), Terreros α is worse than the paper \
@@ -415,5 +512,5 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
          `c_t: Auto`), so its error mostly measures the difference between a flux and a fixed-potential boundary on the \
          top layer; it is a consistency check, not an independent prediction.",
     );
-    Ok(out)
+    Ok(())
 }

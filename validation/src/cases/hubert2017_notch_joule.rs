@@ -29,13 +29,14 @@
 use std::time::Instant;
 
 use demcon_scene::config::*;
-use serde_json::{Map, Value};
+use serde_json::Value;
 
 use super::common::*;
-use super::hubert2017_scenes::*;
+use super::cylinder::*;
 use crate::analytic::kohlrausch_max_rise;
 use crate::chart::{Chart, Scale, Series, draw};
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
 
 /// Potential difference (V) between the end faces, as the FEM reference.
 pub const V0: f64 = 0.01;
@@ -90,6 +91,7 @@ fn series_potential(z: f64) -> f64 {
     V0 * r_per_len(z) / total
 }
 
+/// One carved model's measurements.
 struct Sample {
     n: usize,
     mean_radius: f64,
@@ -102,8 +104,12 @@ struct Sample {
     phi_plain: f64,
     slope_groove: f64,
     excluded: usize,
-    iterations: (usize, u64),
-    solve_ms: (f64, f64),
+    /// CG iterations of the electric and the thermal solve.
+    iterations_electric: usize,
+    iterations_thermal: u64,
+    /// Wall time (ms) of the electric and the thermal solve.
+    solve_ms_electric: f64,
+    solve_ms_thermal: f64,
     profile: Vec<(f64, f64)>,
     build_s: f64,
 }
@@ -121,7 +127,8 @@ fn models(nominal: usize, seed: u64) -> anyhow::Result<(Model, Model, f64)> {
     Ok((centre, sphere, t0.elapsed().as_secs_f64()))
 }
 
-fn measure(
+/// Runs the scene on one carved model and measures it; writes its VTK when asked.
+fn measure_model(
     ctx: &Ctx,
     nominal: usize,
     model: &Model,
@@ -208,7 +215,7 @@ fn measure(
             vtk: true,
             ..OutputsConfig::default()
         };
-        demcon_scene::write_outputs("notch-joule", &outputs, &r, &dir)?;
+        write_outputs("notch-joule", &outputs, &r, &dir)?;
     }
     Ok(Sample {
         n,
@@ -225,15 +232,69 @@ fn measure(
         phi_plain,
         slope_groove,
         excluded: el.excluded.len(),
-        iterations: (el.report.iterations, th.report.iterations),
-        solve_ms: (1e3 * el.report.wall_s, 1e3 * th.report.wall_s),
+        iterations_electric: el.report.iterations,
+        iterations_thermal: th.report.iterations,
+        solve_ms_electric: 1e3 * el.report.wall_s,
+        solve_ms_thermal: 1e3 * th.report.wall_s,
         profile,
         build_s,
     })
 }
 
+/// One N: the centre-carved model (the headline) and the whole-sphere-carved one.
+struct SizeRun {
+    /// Nominal particles in the grooved body.
+    nominal: usize,
+    centre: Sample,
+    whole_sphere: Sample,
+}
+
+impl SizeRun {
+    /// Signed R/R_FEM − 1 of the centre-carved model, particle and face electrodes.
+    fn e_r(&self, r_fem: f64) -> f64 {
+        self.centre.r / r_fem - 1.0
+    }
+    fn e_face(&self, r_fem: f64) -> f64 {
+        self.centre.r_face / r_fem - 1.0
+    }
+    /// The same for the whole-sphere carving.
+    fn e_r_whole(&self, r_fem: f64) -> f64 {
+        self.whole_sphere.r / r_fem - 1.0
+    }
+    fn e_face_whole(&self, r_fem: f64) -> f64 {
+        self.whole_sphere.r_face / r_fem - 1.0
+    }
+    /// Signed ΔT_max/ΔT_exact − 1 of the centre-carved model.
+    fn e_t(&self, exact: f64) -> f64 {
+        self.centre.rise / exact - 1.0
+    }
+}
+
+/// Everything the case measures.
+struct Measured {
+    sizes: Vec<usize>,
+    /// FEM resistance and its 1-D series lower bound (Ω).
+    r_fem: f64,
+    r_series: f64,
+    /// Kohlrausch ΔT_max (K).
+    exact: f64,
+    runs: Vec<SizeRun>,
+    /// The N whose VTK was written.
+    vtk_at: usize,
+}
+
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
+    let m = measure(ctx)?;
+    let mut out = CaseOutcome::new("notch-joule", ctx.mode);
+    out.n_particles = m.runs.iter().map(|r| r.centre.n).max().unwrap_or(0);
+    compare(&m, &mut out);
+    report(ctx, &m, &mut out)?;
+    Ok(out)
+}
+
+/// Both carvings at every N.
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let sizes: Vec<usize> = ctx.pick(vec![5000, 10_000], vec![5000, 10_000, 20_000, 40_000]);
     let fem = crate::refs::notch_electric_fem();
     let r_fem = fem["results"]["R_grooved_ohm"]
@@ -242,133 +303,67 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let r_series = fem["results"]["R_grooved_1D_series_lower_bound_ohm"]
         .as_f64()
         .unwrap_or(f64::NAN);
-    let exact = kohlrausch_max_rise(V0, RHO_E, LAMBDA);
-    let mut out = CaseOutcome::new("notch-joule", ctx.mode);
-    let (mut m_r, mut m_t, mut m_k, mut m_sec, mut m_rs, mut m_w, mut m_f, mut m_fw) = (
-        Map::new(),
-        Map::new(),
-        Map::new(),
-        Map::new(),
-        Map::new(),
-        Map::new(),
-        Map::new(),
-        Map::new(),
-    );
-    let mut table = Table {
-        title: format!(
-            "Grooved cylinder, V0 = {V0} V: R against the FEM ({:.5} mΩ), ΔT_max against Kohlrausch ({exact:.4} K)",
-            1e3 * r_fem
-        ),
-        header: vec![
-            "N (nominal)".into(),
-            "N".into(),
-            "r̄ (µm)".into(),
-            "in 4r̄ slice".into(),
-            "R (mΩ)".into(),
-            "R error".into(),
-            "R error, whole-sphere carving".into(),
-            "R error, face electrodes".into(),
-            "same, whole-sphere carving".into(),
-            "paper".into(),
-            "ΔT_max (K)".into(),
-            "ΔT error".into(),
-            "paper".into(),
-            "φ groove (whole-sphere) / plain".into(),
-            "CG iter. el./th.".into(),
-            "solve ms el./th.".into(),
-            "build (s)".into(),
-        ],
-        rows: Vec::new(),
-    };
-    let mut series = Vec::new();
-    let (mut worst_r, mut worst_t, mut worst_k, mut excluded) = (0.0f64, 0.0f64, 0.0f64, 0usize);
-    let mut last = (0usize, 0.0);
     let vtk_at = *sizes.iter().find(|&&n| n == 10_000).unwrap_or(&sizes[0]);
-    let mut vtk_note = String::new();
+    let mut runs = Vec::new();
     for &n in &sizes {
         let (centre, sphere, build_s) = models(n, ctx.seed)?;
-        let s = measure(ctx, n, &centre, build_s, n == vtk_at)?;
-        let w = measure(ctx, n, &sphere, build_s, false)?;
-        let e_w = w.r / r_fem - 1.0;
-        m_w.insert(key(n), Value::from(e_w.abs()));
-        let (e_f, e_fw) = (s.r_face / r_fem - 1.0, w.r_face / r_fem - 1.0);
-        m_f.insert(key(n), Value::from(e_f.abs()));
-        m_fw.insert(key(n), Value::from(e_fw.abs()));
-        worst_t = worst_t.max((w.rise / exact - 1.0).abs());
-        worst_k = worst_k.max(w.kohl_particle);
-        if n == vtk_at {
-            vtk_note = format!(
-                "VTK of the N = {n} run (potential, current density, Joule power, temperature): notch-joule-{n}/particles.vtu."
-            );
-        }
-        let e_r = s.r / r_fem - 1.0;
-        let e_t = s.rise / exact - 1.0;
-        worst_r = worst_r.max(e_r.abs());
-        worst_t = worst_t.max(e_t.abs());
-        worst_k = worst_k.max(s.kohl_particle);
-        excluded += s.excluded;
-        out.n_particles = out.n_particles.max(s.n);
-        m_r.insert(key(n), Value::from(e_r.abs()));
-        m_t.insert(key(n), Value::from(e_t.abs()));
-        m_k.insert(key(n), Value::from(s.kohl_particle));
-        m_sec.insert(key(n), Value::from(s.section_count));
-        m_rs.insert(key(n), Value::from(s.r));
-        last = (n, e_r.abs());
-        table.rows.push(vec![
-            n.to_string(),
-            s.n.to_string(),
-            format!("{:.1}", 1e6 * s.mean_radius),
-            s.section_count.to_string(),
-            format!("{:.5}", 1e3 * s.r),
-            format!("{:+.2} %", 100.0 * e_r),
-            format!("{:+.2} %", 100.0 * e_w),
-            format!("{:+.2} %", 100.0 * e_f),
-            format!("{:+.2} %", 100.0 * e_fw),
-            format!("{:.1} %", 100.0 * paper_r_error(n)),
-            format!("{:.5}", s.rise),
-            format!("{:+.1e}", e_t),
-            format!("{:.1} %", 100.0 * paper_t_error(n)),
-            format!("{:.3} ({:.3}) / {:.3}", s.phi_groove, w.phi_groove, s.phi_plain),
-            format!("{} / {}", s.iterations.0, s.iterations.1),
-            format!("{:.1} / {:.1}", s.solve_ms.0, s.solve_ms.1),
-            format!("{:.1}", s.build_s),
-        ]);
-        let series_slope = V0
-            / (GROOVE_RADIUS * GROOVE_RADIUS)
-            / ((LENGTH - (GROOVE_Z.1 - GROOVE_Z.0)) / (RADIUS * RADIUS)
-                + (GROOVE_Z.1 - GROOVE_Z.0) / (GROOVE_RADIUS * GROOVE_RADIUS));
-        out.note(format!(
-            "N = {n}: axis potential gradient in the middle of the groove (2.3–2.7 mm) {:.3} V/m; the 1-D series model's mean \
-             gradient there is {series_slope:.3} V/m (the paper finds its DEM gradient 14.5 % above its FEM at 10 000; the FEM \
-             axis gradient is not in our reference).",
-            s.slope_groove
-        ));
-        series.push(Series::line(
-            &format!("demcon N = {}", s.n),
-            s.profile.iter().map(|&(z, u)| (1e3 * z, 1e3 * u)).collect(),
-        ));
+        runs.push(SizeRun {
+            nominal: n,
+            centre: measure_model(ctx, n, &centre, build_s, n == vtk_at)?,
+            whole_sphere: measure_model(ctx, n, &sphere, build_s, false)?,
+        });
     }
-    series.push(Series::line(
-        "1-D series model (lower bound on R)",
-        (0..=100)
-            .map(|i| {
-                let z = LENGTH * i as f64 / 100.0;
-                (1e3 * z, 1e3 * series_potential(z))
-            })
-            .collect(),
-    ));
-    out.metric("r_rel_error_vs_fem", Value::Object(m_r));
-    out.metric("tmax_rel_error", Value::Object(m_t));
-    out.metric("kohlrausch_particle_error", Value::Object(m_k));
-    out.metric("notch_slice_particles", Value::Object(m_sec));
-    out.metric("r_ohm", Value::Object(m_rs));
-    out.metric("r_rel_error_vs_fem_whole_sphere_carving", Value::Object(m_w));
-    out.metric("r_rel_error_vs_fem_face", Value::Object(m_f));
+    Ok(Measured {
+        sizes,
+        r_fem,
+        r_series,
+        exact: kohlrausch_max_rise(V0, RHO_E, LAMBDA),
+        runs,
+        vtk_at,
+    })
+}
+
+/// Metrics, references and the three checks (R at the largest N, ΔT_max, the identity).
+fn compare(m: &Measured, out: &mut CaseOutcome) {
+    let (r_fem, exact) = (m.r_fem, m.exact);
+    let by_n = |f: &dyn Fn(&SizeRun) -> Value| -> Value {
+        Value::Object(m.runs.iter().map(|r| (key(r.nominal), f(r))).collect())
+    };
+    // Worst over both carvings (whole-sphere first, as measured).
+    let worst_t = m.runs.iter().fold(0.0f64, |w, r| {
+        w.max((r.whole_sphere.rise / exact - 1.0).abs())
+            .max(r.e_t(exact).abs())
+    });
+    let worst_k = m.runs.iter().fold(0.0f64, |w, r| {
+        w.max(r.whole_sphere.kohl_particle).max(r.centre.kohl_particle)
+    });
+    out.metric("r_rel_error_vs_fem", by_n(&|r| Value::from(r.e_r(r_fem).abs())));
+    out.metric("tmax_rel_error", by_n(&|r| Value::from(r.e_t(exact).abs())));
+    out.metric(
+        "kohlrausch_particle_error",
+        by_n(&|r| Value::from(r.centre.kohl_particle)),
+    );
+    out.metric(
+        "notch_slice_particles",
+        by_n(&|r| Value::from(r.centre.section_count)),
+    );
+    out.metric("r_ohm", by_n(&|r| Value::from(r.centre.r)));
+    out.metric(
+        "r_rel_error_vs_fem_whole_sphere_carving",
+        by_n(&|r| Value::from(r.e_r_whole(r_fem).abs())),
+    );
+    out.metric(
+        "r_rel_error_vs_fem_face",
+        by_n(&|r| Value::from(r.e_face(r_fem).abs())),
+    );
     out.metric(
         "r_rel_error_vs_fem_face_whole_sphere_carving",
-        Value::Object(m_fw),
+        by_n(&|r| Value::from(r.e_face_whole(r_fem).abs())),
     );
-    out.metric("excluded_particles", excluded);
+    out.metric(
+        "excluded_particles",
+        m.runs.iter().map(|r| r.centre.excluded).sum::<usize>(),
+    );
     out.reference(
         "r_rel_error_vs_fem",
         "0.092 at 5000 falling to 0.067 at 40 000 (paper, vs its FEM)",
@@ -383,7 +378,8 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         "source",
         "Hubert 2017 §3.2 Figs. 6–8; FEM shared/refs/notch-electric-fem.json; Kohlrausch analytic.md §6",
     );
-    let (n_max, e_r) = last;
+    let last = m.runs.last().expect("at least one size");
+    let (n_max, e_r) = (last.nominal, last.e_r(r_fem).abs());
     out.compare(Comparison::at_most(
         &format!("|R/R_FEM − 1| at N = {n_max}"),
         e_r,
@@ -405,7 +401,87 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         1e-4,
         "T_p = T0 + u_p (V0 − u_p)/(2 ρ_e λ) on the network",
     ));
+}
+
+/// The per-N notes, the table, the axis-potential chart and the closing notes.
+fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let (r_fem, exact) = (m.r_fem, m.exact);
+    let series_slope = V0
+        / (GROOVE_RADIUS * GROOVE_RADIUS)
+        / ((LENGTH - (GROOVE_Z.1 - GROOVE_Z.0)) / (RADIUS * RADIUS)
+            + (GROOVE_Z.1 - GROOVE_Z.0) / (GROOVE_RADIUS * GROOVE_RADIUS));
+    for r in &m.runs {
+        out.note(format!(
+            "N = {}: axis potential gradient in the middle of the groove (2.3–2.7 mm) {:.3} V/m; the 1-D series model's mean \
+             gradient there is {series_slope:.3} V/m (the paper finds its DEM gradient 14.5 % above its FEM at 10 000; the FEM \
+             axis gradient is not in our reference).",
+            r.nominal, r.centre.slope_groove
+        ));
+    }
+    let table = Columns::new()
+        .column("N (nominal)", |r: &SizeRun| r.nominal.to_string())
+        .column("N", |r| r.centre.n.to_string())
+        .column("r̄ (µm)", |r| format!("{:.1}", 1e6 * r.centre.mean_radius))
+        .column("in 4r̄ slice", |r| r.centre.section_count.to_string())
+        .column("R (mΩ)", |r| format!("{:.5}", 1e3 * r.centre.r))
+        .column("R error", |r| format!("{:+.2} %", 100.0 * r.e_r(r_fem)))
+        .column("R error, whole-sphere carving", |r| {
+            format!("{:+.2} %", 100.0 * r.e_r_whole(r_fem))
+        })
+        .column("R error, face electrodes", |r| {
+            format!("{:+.2} %", 100.0 * r.e_face(r_fem))
+        })
+        .column("same, whole-sphere carving", |r| {
+            format!("{:+.2} %", 100.0 * r.e_face_whole(r_fem))
+        })
+        .column("paper", |r| format!("{:.1} %", 100.0 * paper_r_error(r.nominal)))
+        .column("ΔT_max (K)", |r| format!("{:.5}", r.centre.rise))
+        .column("ΔT error", |r| format!("{:+.1e}", r.e_t(exact)))
+        .column("paper", |r| format!("{:.1} %", 100.0 * paper_t_error(r.nominal)))
+        .column("φ groove (whole-sphere) / plain", |r| {
+            format!(
+                "{:.3} ({:.3}) / {:.3}",
+                r.centre.phi_groove, r.whole_sphere.phi_groove, r.centre.phi_plain
+            )
+        })
+        .column("CG iter. el./th.", |r| {
+            format!("{} / {}", r.centre.iterations_electric, r.centre.iterations_thermal)
+        })
+        .column("solve ms el./th.", |r| {
+            format!("{:.1} / {:.1}", r.centre.solve_ms_electric, r.centre.solve_ms_thermal)
+        })
+        .column("build (s)", |r| format!("{:.1}", r.centre.build_s))
+        .table(
+            format!(
+                "Grooved cylinder, V0 = {V0} V: R against the FEM ({:.5} mΩ), ΔT_max against Kohlrausch ({exact:.4} K)",
+                1e3 * r_fem
+            ),
+            &m.runs,
+        );
     out.tables.push(table);
+    let mut series: Vec<Series> = m
+        .runs
+        .iter()
+        .map(|r| {
+            Series::line(
+                &format!("demcon N = {}", r.centre.n),
+                r.centre
+                    .profile
+                    .iter()
+                    .map(|&(z, u)| (1e3 * z, 1e3 * u))
+                    .collect(),
+            )
+        })
+        .collect();
+    series.push(Series::line(
+        "1-D series model (lower bound on R)",
+        (0..=100)
+            .map(|i| {
+                let z = LENGTH * i as f64 / 100.0;
+                (1e3 * z, 1e3 * series_potential(z))
+            })
+            .collect(),
+    ));
     draw(
         &Chart {
             title: "Grooved cylinder: potential along the axis (Hubert 2017 Fig. 7)".into(),
@@ -424,9 +500,9 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
          and the thermal network, Z = 7.5, steady thermal solve with the Joule power per particle as its source. `--full` runs \
          5000, 10 000, 20 000 and 40 000. The 1-D series resistance is {:.5} mΩ (FEM {:.5} mΩ).",
         ctx.mode.name(),
-        sizes,
+        m.sizes,
         ctx.seed,
-        1e3 * r_series,
+        1e3 * m.r_series,
         1e3 * r_fem
     ));
     out.note(
@@ -444,8 +520,9 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
          Kohlrausch identity needs the potential and the temperature fixed on the same sets, so the thermal check stays on \
          particle electrodes).",
     );
-    if !vtk_note.is_empty() {
-        out.note(vtk_note);
-    }
-    Ok(out)
+    out.note(format!(
+        "VTK of the N = {0} run (potential, current density, Joule power, temperature): notch-joule-{0}/particles.vtu.",
+        m.vtk_at
+    ));
+    Ok(())
 }

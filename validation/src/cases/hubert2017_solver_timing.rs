@@ -23,14 +23,13 @@ use std::time::Instant;
 
 use demcon_core::{Face, Selector};
 use demcon_electric::{ElectricParams, ElectricSolution, solve_potential};
-use demcon_model::electric_conductances;
 use demcon_network::{FloatingPolicy, Method, SolveParams};
 use demcon_scene::config::*;
-use demcon_scene::convert;
 
 use super::common::*;
-use super::hubert2017_scenes::*;
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use super::cylinder::*;
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
 
 /// Timings of one method: medians (ms) of the linear solve and of the whole call, and the
 /// last solution.
@@ -69,11 +68,44 @@ fn time_method(
     })
 }
 
+/// Everything the case measures, on one 5000-particle cylinder.
+struct Measured {
+    /// Timed repetitions per method.
+    reps: usize,
+    /// Particles, branches and mean coordination of the network.
+    n: usize,
+    n_branches: usize,
+    coordination: f64,
+    /// The default pool's thread count.
+    threads: usize,
+    /// One thread: MIC-PCG, Jacobi-PCG, Cholesky.
+    cg1: Timing,
+    jac1: Timing,
+    ch1: Timing,
+    /// The default pool: Jacobi-PCG, Cholesky.
+    cgp: Timing,
+    chp: Timing,
+}
+
+/// The resistance (Ω) of a timed solve.
+fn resistance(t: &Timing) -> f64 {
+    t.solution.resistance_ohm.unwrap_or(f64::NAN)
+}
+
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
+    let m = measure(ctx)?;
+    let mut out = CaseOutcome::new("electric-solver-timing", ctx.mode);
+    out.n_particles = m.n;
+    compare(&m, &mut out);
+    report(ctx, &m, &mut out);
+    Ok(out)
+}
+
+/// Builds the network once and times each method on one thread and on the default pool.
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let n = 5000;
     let reps = ctx.pick(15, 41);
-    let mut out = CaseOutcome::new("electric-solver-timing", ctx.mode);
     let cfg = electric_scene(
         "electric-solver-timing",
         ctx.seed,
@@ -83,11 +115,10 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         1.0,
     );
     let model = model_of(&cfg)?;
-    out.n_particles = model.particles.len();
     let g = electric_conductances(
         &model,
-        &convert::surface(&SurfaceConfig::TerrerosAlpha),
-        convert::interface(InterfaceConfig::Harmonic),
+        &SurfaceConfig::TerrerosAlpha,
+        InterfaceConfig::Harmonic,
         None,
     )?;
     let sel = |f: Face| Selector::Face(f).select_nonempty(&model.particles, &model.container, f.name());
@@ -110,10 +141,25 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     })?;
     let cgp = time_method(&model, &g, &electrodes, jacobi, reps)?;
     let chp = time_method(&model, &g, &electrodes, Method::Cholesky, reps)?;
-    let threads = rayon::current_num_threads();
-    let r = |t: &Timing| t.solution.resistance_ohm.unwrap_or(f64::NAN);
-    let r_agree = (r(&cg1) - r(&ch1)).abs() / r(&ch1);
-    let r_threads = (r(&jac1) - r(&cgp)).abs() / r(&cgp);
+    Ok(Measured {
+        reps,
+        n: model.particles.len(),
+        n_branches: model.graph.pairs.len(),
+        coordination: model.graph.coordination(),
+        threads: rayon::current_num_threads(),
+        cg1,
+        jac1,
+        ch1,
+        cgp,
+        chp,
+    })
+}
+
+/// Metrics, references and the checks (same R, small residuals, times within 2 × the paper's).
+fn compare(m: &Measured, out: &mut CaseOutcome) {
+    let (cg1, jac1, ch1, cgp, chp) = (&m.cg1, &m.jac1, &m.ch1, &m.cgp, &m.chp);
+    let r_agree = (resistance(cg1) - resistance(ch1)).abs() / resistance(ch1);
+    let r_threads = (resistance(jac1) - resistance(cgp)).abs() / resistance(cgp);
     out.metric("cg_ms", cg1.solve_ms);
     out.metric("cg_jacobi_ms", jac1.solve_ms);
     out.metric("cg_jacobi_iterations", jac1.solution.report.iterations);
@@ -122,13 +168,13 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     out.metric("cholesky_total_ms", ch1.total_ms);
     out.metric("cg_jacobi_ms_all_threads", cgp.solve_ms);
     out.metric("cholesky_ms_all_threads", chp.solve_ms);
-    out.metric("threads", threads);
+    out.metric("threads", m.threads);
     out.metric("cg_iterations", cg1.solution.report.iterations);
     out.metric("cg_residual", cg1.solution.report.relative_residual);
     out.metric("cholesky_residual", ch1.solution.report.relative_residual);
     out.metric("n_unknowns", cg1.solution.report.n_unknowns);
-    out.metric("n_branches", model.graph.pairs.len());
-    out.metric("coordination", model.graph.coordination());
+    out.metric("n_branches", m.n_branches);
+    out.metric("coordination", m.coordination);
     out.metric("r_cg_vs_cholesky", r_agree);
     out.metric("r_one_vs_all_threads", r_threads);
     out.reference("cg_ms", 24.0);
@@ -174,49 +220,52 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         66.0,
         "2 × the paper's 33 ms (2014 laptop core)",
     ));
-    let row = |name: &str, t: &Timing, paper: &str| {
-        vec![
-            name.to_string(),
-            format!("{:.2}", t.solve_ms),
-            format!("{:.2}", t.total_ms),
-            t.solution.report.iterations.to_string(),
-            format!("{:.1e}", t.solution.report.relative_residual),
-            format!("{:.6}", 1e3 * r(t)),
-            paper.to_string(),
-        ]
-    };
-    out.tables.push(Table {
-        title: format!(
-            "One potential solve, {} particles, {} branches (Z = {:.2}), {} unknowns; median of {reps}",
-            model.particles.len(),
-            model.graph.pairs.len(),
-            model.graph.coordination(),
-            cg1.solution.report.n_unknowns
-        ),
-        header: vec![
-            "method".into(),
-            "solve (ms)".into(),
-            "whole call (ms)".into(),
-            "iterations".into(),
-            "residual".into(),
-            "R (mΩ)".into(),
-            "paper (ms)".into(),
-        ],
-        rows: vec![
-            row("MIC-PCG (default), 1 thread", &cg1, "24 (CG)"),
-            row("Jacobi-PCG, 1 thread", &jac1, "24 (CG)"),
-            row("Cholesky (AMD), 1 thread", &ch1, "33"),
-            row(&format!("Jacobi-PCG, {threads} threads"), &cgp, ""),
-            row(&format!("Cholesky (AMD), {threads} threads"), &chp, ""),
-        ],
-    });
+}
+
+/// A line of the timing table.
+struct TimingLine<'a> {
+    method: String,
+    t: &'a Timing,
+    /// The paper's time (ms) for the same kind of method.
+    paper: &'static str,
+}
+
+/// The timing table and the note.
+fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+    let threads = m.threads;
+    let line = |method: String, t, paper| TimingLine { method, t, paper };
+    let lines = [
+        line("MIC-PCG (default), 1 thread".into(), &m.cg1, "24 (CG)"),
+        line("Jacobi-PCG, 1 thread".into(), &m.jac1, "24 (CG)"),
+        line("Cholesky (AMD), 1 thread".into(), &m.ch1, "33"),
+        line(format!("Jacobi-PCG, {threads} threads"), &m.cgp, ""),
+        line(format!("Cholesky (AMD), {threads} threads"), &m.chp, ""),
+    ];
+    let table = Columns::new()
+        .column("method", |l: &TimingLine| l.method.clone())
+        .column("solve (ms)", |l| format!("{:.2}", l.t.solve_ms))
+        .column("whole call (ms)", |l| format!("{:.2}", l.t.total_ms))
+        .column("iterations", |l| l.t.solution.report.iterations.to_string())
+        .column("residual", |l| {
+            format!("{:.1e}", l.t.solution.report.relative_residual)
+        })
+        .column("R (mΩ)", |l| format!("{:.6}", 1e3 * resistance(l.t)))
+        .column("paper (ms)", |l| l.paper.to_string())
+        .table(
+            format!(
+                "One potential solve, {} particles, {} branches (Z = {:.2}), {} unknowns; median of {}",
+                m.n, m.n_branches, m.coordination, m.cg1.solution.report.n_unknowns, m.reps
+            ),
+            &lines,
+        );
+    out.tables.push(table);
     out.note(format!(
-        "Mode {}: {reps} timed repetitions after one warm-up, median reported. Our network has Z = 7.5 (the heat paper's \
+        "Mode {}: {} timed repetitions after one warm-up, median reported. Our network has Z = 7.5 (the heat paper's \
          target), so ~20 % more branches than the electric paper's Z ≈ 6.2. The paper's Eigen CG tolerance is not stated; \
          ours stops at a TRUE relative residual of 1e-8. Cholesky's time includes the symbolic and numeric factorisation \
          (one solve per factorisation, as the paper's comparison); a reused factor costs only its triangular solves. \
          Wall times depend on this machine and its load. MIC-PCG's sweeps are sequential: it runs on one thread          whatever the pool (the default below 10⁴ unknowns; multigrid above).",
-        ctx.mode.name()
+        ctx.mode.name(),
+        m.reps
     ));
-    Ok(out)
 }

@@ -38,8 +38,10 @@ use demcon_core::{Container, ParticleSet, Vec3};
 use demcon_scene::config::*;
 
 use super::common::*;
-use super::hubert2017_scenes::*;
-use crate::{CaseOutcome, Comparison, Ctx, Table};
+use super::cylinder::*;
+use crate::chart::{Chart, Scale, Series, draw};
+use crate::table::Columns;
+use crate::{CaseOutcome, Comparison, Ctx};
 
 /// ρ_e temperature coefficient β (1/K).
 const BETA: f64 = 4e-3;
@@ -153,33 +155,88 @@ fn rises(r: &RunResult) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// One coupled run's measurements.
-struct Coupled {
-    err: f64,
-    bound: f64,
-    solves: usize,
-    solves_s: f64,
-    thermal_s: f64,
-    steps: u64,
-    dt: f64,
-    r_end: f64,
-    spread: f64,
-    balance: f64,
+/// The adiabatic Joule ODE of a sample, from its one-way probe run: C dθ/dt = V0²/(R0 (1 + β θ)).
+struct Ode {
+    /// Resistance at T0 (Ω).
+    r0: f64,
+    /// Total heat capacity Σ C_p (J/K).
+    c: f64,
+    /// Initial power V0²/R0 (W).
+    p0: f64,
+    /// The time at which R has doubled, β θ = 1 (s).
+    t_end: f64,
 }
 
-fn coupled(
-    cfg: &SceneConfig,
-    model: &Model,
-    exact: &dyn Fn(f64) -> f64,
-    beta_p0_over_c: f64,
-) -> anyhow::Result<(Coupled, Vec<(f64, f64)>)> {
+impl Ode {
+    /// R0 and C of the model from a one-way run of `n` particles.
+    fn of(probe: &RunResult, n: usize) -> anyhow::Result<Self> {
+        let r0 = probe
+            .electric
+            .as_ref()
+            .and_then(|e| e.report.resistance_ohm)
+            .ok_or_else(|| anyhow::anyhow!("no resistance: no current flowed"))?;
+        let c: f64 = probe.thermal_setup.as_ref().expect("thermal").capacities[..n]
+            .iter()
+            .sum();
+        let p0 = V0 * V0 / r0;
+        Ok(Self {
+            r0,
+            c,
+            p0,
+            t_end: 1.5 * c / (BETA * p0),
+        })
+    }
+
+    /// The exact mean rise θ(t) (K).
+    fn exact(&self, t: f64) -> f64 {
+        ((1.0 + 2.0 * BETA * self.p0 * t / self.c).sqrt() - 1.0) / BETA
+    }
+
+    /// β P0 / C (1/s), the scale of the time-stepping error bound.
+    fn beta_p0_over_c(&self) -> f64 {
+        BETA * self.p0 / self.c
+    }
+
+    /// `OUTPUTS` output times evenly spaced up to t_end (s).
+    fn times(&self) -> Vec<f64> {
+        (1..=OUTPUTS)
+            .map(|k| self.t_end * k as f64 / OUTPUTS as f64)
+            .collect()
+    }
+}
+
+/// One coupled run's measurements.
+struct Coupled {
+    /// Largest relative error of the mean rise over the output times.
+    err: f64,
+    /// Its a-priori bound.
+    bound: f64,
+    /// Potential solves and their wall time (s).
+    solves: usize,
+    solves_s: f64,
+    /// Thermal wall time, solves included (s).
+    thermal_s: f64,
+    steps: u64,
+    /// Time step (s).
+    dt: f64,
+    /// Resistance at the end (Ω).
+    r_end: f64,
+    /// (T_max − T_min)/θ_end over the particles in contact.
+    spread: f64,
+    /// Energy balance error of the run.
+    balance: f64,
+    /// (t, θ̄) at the output times.
+    rises: Vec<(f64, f64)>,
+}
+
+fn coupled(cfg: &SceneConfig, model: &Model, ode: &Ode) -> anyhow::Result<Coupled> {
     let r = run_with(cfg, model)?;
     let el = r.electric.as_ref().expect("electric");
     let th = r.thermal.as_ref().expect("thermal");
     let pts = rises(&r);
     let err = pts
         .iter()
-        .map(|&(t, th)| (th / exact(t) - 1.0).abs())
+        .map(|&(t, th)| (th / ode.exact(t) - 1.0).abs())
         .fold(0.0, f64::max);
     let dt = th.report.dt;
     let r_end = el.report.resistance_ohm.unwrap_or(f64::NAN);
@@ -194,29 +251,81 @@ fn coupled(
             (a.min(v), b.max(v))
         });
     let t_last = pts.last().map_or(f64::NAN, |p| p.0);
-    Ok((
-        Coupled {
-            err,
-            bound: BETA * TOL + 0.5 * beta_p0_over_c * dt + 1e-9,
-            solves: el.report.solves,
-            solves_s: el.report.solves_wall_s,
-            thermal_s: th.report.wall_s,
-            steps: th.report.steps,
-            dt,
-            r_end,
-            spread: (hi - lo) / exact(t_last),
-            balance: th.report.energy_balance_error,
-        },
-        pts,
-    ))
+    Ok(Coupled {
+        err,
+        bound: BETA * TOL + 0.5 * ode.beta_p0_over_c() * dt + 1e-9,
+        solves: el.report.solves,
+        solves_s: el.report.solves_wall_s,
+        thermal_s: th.report.wall_s,
+        steps: th.report.steps,
+        dt,
+        r_end,
+        spread: (hi - lo) / ode.exact(t_last),
+        balance: th.report.energy_balance_error,
+        rises: pts,
+    })
+}
+
+/// The one-way lattice run (ρ_e frozen at T0).
+struct OneWay {
+    /// Largest relative error of the mean rise against the coupled exact θ(t).
+    err: f64,
+    steps: u64,
+    /// Wall time of the whole run (s).
+    wall_s: f64,
+    /// (t, θ̄) at the output times.
+    rises: Vec<(f64, f64)>,
+}
+
+/// Everything the case measures.
+struct Measured {
+    t_start: Instant,
+    /// Lattice edge in particles, and its particle count.
+    nx: usize,
+    n: usize,
+    lattice: Ode,
+    explicit: Coupled,
+    implicit: Coupled,
+    one_way: OneWay,
+    /// The plain explicit run's thermal wall time (s), no coupling.
+    one_way_explicit_s: f64,
+    /// The random packing (information): particles, ODE, coupled implicit run.
+    pn: usize,
+    packing: Ode,
+    pk: Coupled,
+}
+
+impl Measured {
+    /// Relative cost of the per-step check of the coupled explicit run.
+    fn check_overhead(&self) -> f64 {
+        (self.explicit.thermal_s - self.explicit.solves_s) / self.one_way_explicit_s - 1.0
+    }
+
+    /// Largest energy balance error of the coupled runs.
+    fn balance(&self) -> f64 {
+        self.explicit
+            .balance
+            .max(self.implicit.balance)
+            .max(self.pk.balance)
+    }
 }
 
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
+    let m = measure(ctx)?;
+    let mut out = CaseOutcome::new("joule-transient", ctx.mode);
+    out.n_particles = m.n;
+    compare(&m, &mut out);
+    report(ctx, &m, &mut out)?;
+    Ok(out)
+}
+
+/// The lattice (coupled explicit and implicit, one-way implicit and explicit), then the
+/// packing (coupled implicit).
+fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let t_start = Instant::now();
     let nx = ctx.pick(8, 16);
     let path = write_lattice(&ctx.out, nx)?;
-    let mut out = CaseOutcome::new("joule-transient", ctx.mode);
     // R0 and C from a one-way run over a short time (any t_end: only the first solve matters).
     let probe_cfg = lattice_scene(
         &path,
@@ -230,20 +339,9 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     );
     let model = model_of(&probe_cfg)?;
     let n = model.particles.len();
-    out.n_particles = n;
-    let probe = run_with(&probe_cfg, &model)?;
-    let r0 = probe
-        .electric
-        .as_ref()
-        .and_then(|e| e.report.resistance_ohm)
-        .ok_or_else(|| anyhow::anyhow!("no resistance: no current flowed"))?;
-    let c: f64 = probe.thermal_setup.as_ref().expect("thermal").capacities[..n]
-        .iter()
-        .sum();
-    let p0 = V0 * V0 / r0;
-    let t_end = 1.5 * c / (BETA * p0);
-    let exact = move |t: f64| ((1.0 + 2.0 * BETA * p0 * t / c).sqrt() - 1.0) / BETA;
-    let times: Vec<f64> = (1..=OUTPUTS).map(|k| t_end * k as f64 / OUTPUTS as f64).collect();
+    let lattice = Ode::of(&run_with(&probe_cfg, &model)?, n)?;
+    let t_end = lattice.t_end;
+    let times = lattice.times();
     let explicit = ThermalSolverConfig::Explicit {
         t_end,
         dt: TimeStepConfig::Auto { safety: 0.8 },
@@ -253,33 +351,33 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         dt: t_end / 400.0,
         scheme: ImplicitSchemeConfig::BackwardEuler,
     };
-    let bp = BETA * p0 / c;
-    let (ex, pts_ex) = coupled(
+    let ex = coupled(
         &lattice_scene(&path, explicit, Some(TOL), times.clone()),
         &model,
-        &exact,
-        bp,
+        &lattice,
     )?;
-    let (im, pts_im) = coupled(
+    let im = coupled(
         &lattice_scene(&path, implicit, Some(TOL), times.clone()),
         &model,
-        &exact,
-        bp,
+        &lattice,
     )?;
     // One-way: ρ_e frozen at T0 (the same run without recouple_tolerance).
     let t_ow = Instant::now();
     let ow = run_with(&lattice_scene(&path, implicit, None, times.clone()), &model)?;
     let ow_s = t_ow.elapsed().as_secs_f64();
     let pts_ow = rises(&ow);
+    let one_way = OneWay {
+        err: pts_ow
+            .iter()
+            .map(|&(t, th)| (th / lattice.exact(t) - 1.0).abs())
+            .fold(0.0, f64::max),
+        steps: ow.thermal.as_ref().map_or(0, |t| t.report.steps),
+        wall_s: ow_s,
+        rises: pts_ow,
+    };
     // The plain explicit run (no coupling, no per-step check) for the cost of the coupling.
     let ow_ex = run_with(&lattice_scene(&path, explicit, None, times.clone()), &model)?;
-    let ow_ex_s = ow_ex.thermal.as_ref().expect("thermal").report.wall_s;
-    let check_overhead = (ex.thermal_s - ex.solves_s) / ow_ex_s - 1.0;
-    let err_ow = pts_ow
-        .iter()
-        .map(|&(t, th)| (th / exact(t) - 1.0).abs())
-        .fold(0.0, f64::max);
-    let r_end = |c: &Coupled| c.r_end / r0;
+    let one_way_explicit_s = ow_ex.thermal.as_ref().expect("thermal").report.wall_s;
 
     // Information: the Hubert cylinder, random packing, face electrodes, implicit.
     let n_pack = ctx.pick(2000, 10_000);
@@ -306,38 +404,42 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         e.electrodes = face_electrodes(V0);
     }
     let pack_model = model_of(&pack_cfg)?;
-    let pack_probe = run_with(&pack_cfg, &pack_model)?;
-    let pr0 = pack_probe
-        .electric
-        .as_ref()
-        .and_then(|e| e.report.resistance_ohm)
-        .ok_or_else(|| anyhow::anyhow!("no resistance: no current flowed"))?;
     let pn = pack_model.particles.len();
-    let pc: f64 = pack_probe.thermal_setup.as_ref().expect("thermal").capacities[..pn]
-        .iter()
-        .sum();
-    let pp0 = V0 * V0 / pr0;
-    let pt_end = 1.5 * pc / (BETA * pp0);
-    let pexact = move |t: f64| ((1.0 + 2.0 * BETA * pp0 * t / pc).sqrt() - 1.0) / BETA;
+    let packing = Ode::of(&run_with(&pack_cfg, &pack_model)?, pn)?;
     if let Some(t) = pack_cfg.thermal.as_mut() {
         t.solver = ThermalSolverConfig::Implicit {
-            t_end: pt_end,
-            dt: pt_end / 400.0,
+            t_end: packing.t_end,
+            dt: packing.t_end / 400.0,
             scheme: ImplicitSchemeConfig::BackwardEuler,
         };
     }
-    pack_cfg.outputs.times = (1..=OUTPUTS)
-        .map(|k| pt_end * k as f64 / OUTPUTS as f64)
-        .collect();
+    pack_cfg.outputs.times = packing.times();
     if let Some(e) = pack_cfg.electric.as_mut() {
         e.recouple_tolerance = Some(TOL);
     }
-    let (pk, _) = coupled(&pack_cfg, &pack_model, &pexact, BETA * pp0 / pc)?;
-    let pk_spread = pk.spread;
+    let pk = coupled(&pack_cfg, &pack_model, &packing)?;
+    Ok(Measured {
+        t_start,
+        nx,
+        n,
+        lattice,
+        explicit: ex,
+        implicit: im,
+        one_way,
+        one_way_explicit_s,
+        pn,
+        packing,
+        pk,
+    })
+}
 
+/// Metrics, reference and the three checks (explicit, implicit, energy balance).
+fn compare(m: &Measured, out: &mut CaseOutcome) {
+    let (ex, im, pk) = (&m.explicit, &m.implicit, &m.pk);
+    let r0 = m.lattice.r0;
     out.metric("max_rel_error_explicit", ex.err);
     out.metric("max_rel_error_implicit", im.err);
-    out.metric("max_rel_error_one_way", err_ow);
+    out.metric("max_rel_error_one_way", m.one_way.err);
     out.metric("bound_explicit", ex.bound);
     out.metric("bound_implicit", im.bound);
     out.metric("resolves_explicit", ex.solves);
@@ -346,19 +448,16 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     out.metric("resolve_wall_s_implicit", im.solves_s);
     out.metric("thermal_wall_s_explicit", ex.thermal_s);
     out.metric("thermal_wall_s_implicit", im.thermal_s);
-    out.metric("one_way_wall_s", ow_s);
-    out.metric("one_way_explicit_wall_s", ow_ex_s);
-    out.metric("explicit_check_overhead", check_overhead);
-    out.metric("r_end_over_r0_explicit", r_end(&ex));
-    out.metric("r_end_over_r0_implicit", r_end(&im));
+    out.metric("one_way_wall_s", m.one_way.wall_s);
+    out.metric("one_way_explicit_wall_s", m.one_way_explicit_s);
+    out.metric("explicit_check_overhead", m.check_overhead());
+    out.metric("r_end_over_r0_explicit", ex.r_end / r0);
+    out.metric("r_end_over_r0_implicit", im.r_end / r0);
     out.metric("max_rel_error_packing_implicit", pk.err);
-    out.metric("temperature_spread_packing", pk_spread);
+    out.metric("temperature_spread_packing", pk.spread);
     out.metric("temperature_spread_lattice", ex.spread.max(im.spread));
     out.metric("resolves_packing", pk.solves);
-    out.metric(
-        "energy_balance_error_max",
-        ex.balance.max(im.balance).max(pk.balance),
-    );
+    out.metric("energy_balance_error_max", m.balance());
     out.reference(
         "theta",
         "exact: (sqrt(1 + 2 β P0 t / C) − 1)/β, R0 and C of the model",
@@ -377,89 +476,113 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     ));
     out.compare(Comparison::at_most(
         "energy balance of the coupled runs",
-        ex.balance.max(im.balance).max(pk.balance),
+        m.balance(),
         1e-8,
         "the ledger integrates the sources in force over each step",
     ));
-    let row = |name: &str, c: &Coupled| {
-        vec![
-            name.to_string(),
-            format!("{:.3e}", c.err),
-            format!("{:.3e}", c.bound),
-            c.steps.to_string(),
-            format!("{:.3e}", c.dt),
-            c.solves.to_string(),
-            format!("{:.3}", c.solves_s),
-            format!("{:.3}", c.thermal_s),
-            format!("{:.4}", c.r_end / if name.contains("packing") { pr0 } else { r0 }),
-        ]
-    };
-    out.tables.push(Table {
-        title: format!(
-            "Coupled transients against the exact θ(t): lattice {nx}×{nx}×{} = {n} particles; packing N = {pn}",
-            4 * nx
+}
+
+/// A line of the runs table.
+enum RunLine<'a> {
+    /// A coupled run: its name, measurements and the R0 of its sample (Ω).
+    Coupled(&'static str, &'a Coupled, f64),
+    /// The one-way lattice run and its time step (s).
+    OneWay(&'a OneWay, f64),
+}
+
+/// The runs table, the chart and the notes.
+fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let (nx, n, pn) = (m.nx, m.n, m.pn);
+    let (ex, im) = (&m.explicit, &m.implicit);
+    let lines = [
+        RunLine::Coupled("lattice, explicit, coupled", ex, m.lattice.r0),
+        RunLine::Coupled("lattice, implicit BE, coupled", im, m.lattice.r0),
+        RunLine::OneWay(&m.one_way, m.lattice.t_end / 400.0),
+        RunLine::Coupled(
+            "packing (Hubert cylinder), implicit BE, coupled",
+            &m.pk,
+            m.packing.r0,
         ),
-        header: [
-            "run",
-            "max rel. error",
-            "a priori bound",
-            "steps",
-            "Δt (s)",
-            "potential solves",
-            "their wall (s)",
-            "thermal wall incl. solves (s)",
-            "R_end / R0",
-        ]
-        .iter()
-        .map(|h| h.to_string())
-        .collect(),
-        rows: vec![
-            row("lattice, explicit, coupled", &ex),
-            row("lattice, implicit BE, coupled", &im),
-            vec![
-                "lattice, implicit BE, one-way (ρ_e at T0)".into(),
-                format!("{err_ow:.3e}"),
-                "—".into(),
-                ow.thermal.as_ref().map_or(0, |t| t.report.steps).to_string(),
-                format!("{:.3e}", t_end / 400.0),
-                "1".into(),
-                "—".into(),
-                format!("{ow_s:.3}"),
-                "1".into(),
-            ],
-            row("packing (Hubert cylinder), implicit BE, coupled", &pk),
-        ],
-    });
-    let mut series = vec![crate::chart::Series::line(
-        "exact θ(t)",
-        (0..=100)
-            .map(|k| {
-                let t = t_end * k as f64 / 100.0;
-                (t, exact(t))
-            })
-            .collect(),
-    )];
-    series.push(crate::chart::Series::markers("explicit, coupled", pts_ex));
-    series.push(crate::chart::Series::markers("implicit BE, coupled", pts_im));
-    series.push(crate::chart::Series::markers("one-way (ρ_e at T0)", pts_ow));
-    crate::chart::draw(
-        &crate::chart::Chart {
+    ];
+    let table = Columns::new()
+        .column("run", |l: &RunLine| match l {
+            RunLine::Coupled(name, ..) => name.to_string(),
+            RunLine::OneWay(..) => "lattice, implicit BE, one-way (ρ_e at T0)".into(),
+        })
+        .column("max rel. error", |l| match l {
+            RunLine::Coupled(_, c, _) => format!("{:.3e}", c.err),
+            RunLine::OneWay(o, _) => format!("{:.3e}", o.err),
+        })
+        .column("a priori bound", |l| match l {
+            RunLine::Coupled(_, c, _) => format!("{:.3e}", c.bound),
+            RunLine::OneWay(..) => "—".into(),
+        })
+        .column("steps", |l| match l {
+            RunLine::Coupled(_, c, _) => c.steps.to_string(),
+            RunLine::OneWay(o, _) => o.steps.to_string(),
+        })
+        .column("Δt (s)", |l| match l {
+            RunLine::Coupled(_, c, _) => format!("{:.3e}", c.dt),
+            RunLine::OneWay(_, dt) => format!("{dt:.3e}"),
+        })
+        .column("potential solves", |l| match l {
+            RunLine::Coupled(_, c, _) => c.solves.to_string(),
+            RunLine::OneWay(..) => "1".into(),
+        })
+        .column("their wall (s)", |l| match l {
+            RunLine::Coupled(_, c, _) => format!("{:.3}", c.solves_s),
+            RunLine::OneWay(..) => "—".into(),
+        })
+        .column("thermal wall incl. solves (s)", |l| match l {
+            RunLine::Coupled(_, c, _) => format!("{:.3}", c.thermal_s),
+            RunLine::OneWay(o, _) => format!("{:.3}", o.wall_s),
+        })
+        .column("R_end / R0", |l| match l {
+            RunLine::Coupled(_, c, r0) => format!("{:.4}", c.r_end / r0),
+            RunLine::OneWay(..) => "1".into(),
+        })
+        .table(
+            format!(
+                "Coupled transients against the exact θ(t): lattice {nx}×{nx}×{} = {n} particles; packing N = {pn}",
+                4 * nx
+            ),
+            &lines,
+        );
+    out.tables.push(table);
+    let t_end = m.lattice.t_end;
+    let series = vec![
+        Series::line(
+            "exact θ(t)",
+            (0..=100)
+                .map(|k| {
+                    let t = t_end * k as f64 / 100.0;
+                    (t, m.lattice.exact(t))
+                })
+                .collect(),
+        ),
+        Series::markers("explicit, coupled", ex.rises.clone()),
+        Series::markers("implicit BE, coupled", im.rises.clone()),
+        Series::markers("one-way (ρ_e at T0)", m.one_way.rises.clone()),
+    ];
+    draw(
+        &Chart {
             title: "Joule heating with ρ_e(T): mean temperature rise, lattice, adiabatic".into(),
             x_label: "t (s)".into(),
             y_label: "θ = T − T0 (K)".into(),
-            x_scale: crate::chart::Scale::Linear,
-            y_scale: crate::chart::Scale::Linear,
+            x_scale: Scale::Linear,
+            y_scale: Scale::Linear,
             series,
         },
         &ctx.out.join("joule-transient.png"),
     )?;
     out.charts.push("joule-transient.png".into());
+    let Ode { r0, c, p0, .. } = m.lattice;
     out.note(format!(
         "Mode {}: lattice {nx}×{nx}×{} of d = {D} m spheres (AISI 304L, β = {BETA} 1/K), V0 = {V0} V on face electrodes, \
          R0 = {:.5e} Ω, C = {c:.4e} J/K, P0 = {p0:.4e} W, t_end = {t_end:.4e} s (R doubles), tol = {TOL} K (β tol = {:.0e}). \
          The coupling re-solves about θ_end/tol = {:.0} times when steps are small; with fewer steps than that it re-solves \
          at most once per step. The check of max|ΔT| since the last solve is O(n) per step, beside the O(n Z) step itself: \
-         the coupled explicit run minus its potential solves took {:.3} s against {ow_ex_s:.3} s for the plain explicit run \
+         the coupled explicit run minus its potential solves took {:.3} s against {:.3} s for the plain explicit run \
          (overhead {:+.0} %, `explicit_check_overhead`). Whole case {:.1} s.",
         ctx.mode.name(),
         4 * nx,
@@ -467,17 +590,19 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         BETA * TOL,
         1.0 / (BETA * TOL),
         ex.thermal_s - ex.solves_s,
-        100.0 * check_overhead,
-        t_start.elapsed().as_secs_f64(),
+        m.one_way_explicit_s,
+        100.0 * m.check_overhead(),
+        m.t_start.elapsed().as_secs_f64(),
     ));
     out.note(format!(
         "Packing (information, no check): the Hubert cylinder with {pn} particles, Terreros surfaces, face electrodes, same \
          β, tol and V0, implicit BE with t_end/400. The Joule power per particle is not uniform there (surfaces and \
-         neighbour counts vary), so the temperature is not uniform (spread (T_max − T_min)/θ_end = {pk_spread:.3} over the particles in contact) and R(T) \
+         neighbour counts vary), so the temperature is not uniform (spread (T_max − T_min)/θ_end = {:.3} over the particles in contact) and R(T) \
          differs from R0 (1 + β θ̄) by the correlation of the local dissipation with the local rise: the capacity-weighted \
          mean rise follows the ODE only approximately (max relative error {:.2e}). The lattice isolates the coupling; the \
          packing shows what a user's scene does.",
-        pk.err
+        m.pk.spread,
+        m.pk.err
     ));
-    Ok(out)
+    Ok(())
 }

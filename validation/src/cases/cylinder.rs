@@ -241,7 +241,7 @@ pub enum Carving {
 /// Cuts `region` out of the uncarved `full` model and rebuilds contacts (target Z = 7.5)
 /// and network on what is kept; the domain volume becomes the region's.
 pub fn carved(full: &Model, region: &RegionConfig, how: Carving) -> anyhow::Result<Model> {
-    let region = demcon_scene::convert::region(region, "carve")?;
+    let region = scene_region(region, "carve")?;
     let p = &full.particles;
     let (kept, _) = match how {
         Carving::WholeSphere => demcon_packing::carve(p, &region),
@@ -278,7 +278,7 @@ mod tests {
     use demcon_core::Vec3;
 
     fn region() -> demcon_core::Region {
-        demcon_scene::convert::region(&grooved_region(), "carve").unwrap()
+        scene_region(&grooved_region(), "carve").unwrap()
     }
 
     #[test]
