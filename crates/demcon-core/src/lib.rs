@@ -18,6 +18,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod check;
 mod error;
 mod material;
 mod morton;

@@ -1,9 +1,10 @@
 //! The conductance network: nodes, edges, and the compressed-row structure of its weighted
 //! Laplacian, built once; conductance values are supplied per solve.
 
+use demcon_core::check::{check_finite, check_len};
 use rayon::prelude::*;
 
-use crate::error::{SolveError, check_finite, check_len};
+use crate::error::SolveError;
 use crate::par::CHUNK;
 
 /// A conductance network: `n_nodes` nodes joined by undirected edges.

@@ -1,6 +1,7 @@
 //! Steady and shifted solves of the network: parameters, reports, and the prepared
 //! linear system shared by the conjugate-gradient and Cholesky paths.
 
+use demcon_core::check::{check_finite, check_len};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -8,7 +9,7 @@ use rayon::prelude::*;
 use crate::amg::{self, Amg, AmgInfo};
 use crate::constraints::{Constraints, NodeKind};
 use crate::csr::Csr;
-use crate::error::{SolveError, check_finite, check_len};
+use crate::error::SolveError;
 use crate::ic::{self, Mic};
 use crate::network::Network;
 use crate::par::{CHUNK, chunks_map, chunks_map3, dot, ordered_sum};

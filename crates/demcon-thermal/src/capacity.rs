@@ -1,8 +1,9 @@
 //! Heat capacity of each particle's representative element, and the explicit step bounds.
 
+use demcon_core::check::{check_len, check_positive};
 use demcon_network::{Constraints, Network, NodeKind};
 
-use crate::error::{ThermalError, check_len, check_positive};
+use crate::error::ThermalError;
 
 /// Volume of the material a particle represents.
 #[derive(Debug, Clone, Copy, PartialEq)]

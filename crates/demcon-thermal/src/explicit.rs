@@ -2,13 +2,14 @@
 //! C_p (T_p' − T_p)/Δt = Σ_q H_pq (T_q − T_p) + Q_p, with its stability bound enforced and
 //! divergence detected.
 
+use demcon_core::check::{check_finite, check_len};
 use std::time::Instant;
 
 use demcon_network::{CHUNK, Constraints, MIN_TASK_CHUNKS, Network, NodeKind};
 use rayon::prelude::*;
 
 use crate::capacity::{DtBound, stable_dt_bound};
-use crate::error::{ThermalError, check_finite, check_len};
+use crate::error::ThermalError;
 use crate::transient::{
     Transient, TransientReport, boundary_edges, boundary_power, check_inputs, close_ledger, source_power,
     stops,

@@ -2,12 +2,13 @@
 //! linear solve per step through the network (CG warm-started, or a reused Cholesky
 //! factor), and the steady state solved directly.
 
+use demcon_core::check::{check_finite, check_len};
 use std::time::Instant;
 
 use demcon_network::{Constraints, LinearSystem, Network, NodeKind, Solution, SolveParams, solve_steady};
 
 use crate::capacity::stable_dt_bound;
-use crate::error::{ThermalError, check_finite, check_len};
+use crate::error::ThermalError;
 use crate::transient::{
     Transient, TransientReport, boundary_edges, boundary_power, check_inputs, close_ledger, source_power,
     stops,

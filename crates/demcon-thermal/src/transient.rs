@@ -1,8 +1,9 @@
 //! Pieces shared by the transient solvers: input checks, output times, the energy ledger.
 
+use demcon_core::check::{check_finite, check_len, check_positive};
 use demcon_network::{Constraints, Network, NodeKind};
 
-use crate::error::{ThermalError, check_finite, check_len, check_positive};
+use crate::error::ThermalError;
 
 /// Result of a transient run.
 #[derive(Debug, Clone, PartialEq)]
