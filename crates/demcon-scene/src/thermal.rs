@@ -11,8 +11,9 @@ use demcon_graph::{
 use demcon_network::{Constraints, FloatingPolicy, Method, SolveParams, SolveReport, resolve_fixed};
 use demcon_thermal::{
     ExplicitParams, ImplicitParams, RepresentativeVolume, Scheme, TimeStep, capacities, face_flux_sources,
-    paper_dt_estimate, run_explicit_with, run_implicit_with, solve_steady_temperature,
+    paper_dt_estimate, run_explicit, run_implicit, solve_steady_temperature,
 };
+use demcon_thermal::{ThermalSystem, TransientInput, source_update_fn};
 use serde::Serialize;
 
 use crate::config::*;
@@ -901,17 +902,14 @@ pub fn solve_thermal_with(
                 paper_dt: setup.paper_dt,
                 ..ExplicitParams::default()
             };
-            run_explicit_with(
-                net,
-                g,
-                caps,
-                &bcs.constraints,
-                &sources,
-                &t_init,
-                &params,
-                |t, v| snapshots.push((t, v[..n].to_vec())),
-                &mut hook,
-            )
+            ThermalSystem::new(net, g, caps, &bcs.constraints).and_then(|system| {
+                let input = TransientInput {
+                    temperatures: &t_init,
+                    sources: &sources,
+                };
+                let observer = |t, v: &[f64]| snapshots.push((t, v[..n].to_vec()));
+                run_explicit(&system, input, &params, observer, source_update_fn(&mut hook))
+            })
         }
         ThermalSolverConfig::Implicit { t_end, dt, scheme } => {
             let params = ImplicitParams {
@@ -924,17 +922,14 @@ pub fn solve_thermal_with(
                 output_times: output_times.to_vec(),
                 solve: default_solve_params(),
             };
-            run_implicit_with(
-                net,
-                g,
-                caps,
-                &bcs.constraints,
-                &sources,
-                &t_init,
-                &params,
-                |t, v| snapshots.push((t, v[..n].to_vec())),
-                &mut hook,
-            )
+            ThermalSystem::new(net, g, caps, &bcs.constraints).and_then(|system| {
+                let input = TransientInput {
+                    temperatures: &t_init,
+                    sources: &sources,
+                };
+                let observer = |t, v: &[f64]| snapshots.push((t, v[..n].to_vec()));
+                run_implicit(&system, input, &params, observer, source_update_fn(&mut hook))
+            })
         }
         ThermalSolverConfig::Steady => {
             let st = solve_steady_temperature(net, g, &bcs.constraints, &sources, &default_solve_params())?;
