@@ -21,7 +21,7 @@ use crate::convert;
 use crate::error::SceneError;
 use crate::model::Model;
 
-/// Default steady/implicit solver: Jacobi-PCG below 10⁴ unknowns, smoothed-aggregation
+/// Default steady/implicit solver: MIC-PCG below 10⁴ unknowns, smoothed-aggregation
 /// AMG-PCG above (`Method::Auto`), to a relative residual of 1e-10.
 pub fn default_solve_params() -> SolveParams {
     SolveParams {
