@@ -15,27 +15,9 @@
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use demcon_benches::SplitMix;
 use demcon_core::{Container, ParticleSet, Vec3};
 use demcon_graph::{ContactParams, NeighbourSearch, detect_contacts};
-
-/// SplitMix64: a small seeded generator, enough for jitter and radii.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e3779b97f4a7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn gauss(&mut self) -> f64 {
-        let u = self.next_f64().max(1e-300);
-        let v = self.next_f64();
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
 
 /// A jittered FCC lattice of about `n` particles and its walled box.
 fn jittered_fcc(n: usize, seed: u64) -> (ParticleSet, Container) {

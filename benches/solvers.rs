@@ -26,7 +26,7 @@ use demcon_graph::{ContactParams, SurfaceModel, conductances, contact_surfaces, 
 use demcon_network::{
     Constraints, FloatingPolicy, LinearSystem, Method, Network, SolveParams, resolve_fixed, solve_steady,
 };
-use demcon_thermal::{ExplicitStepper, stable_dt_bound};
+use demcon_thermal::{ExplicitStepper, ThermalSystem};
 use rand::seq::SliceRandom;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -174,12 +174,11 @@ fn triad(a: &mut [f64], b: &[f64], c: &[f64], s: f64) {
         });
 }
 
-fn stepper<'a>(case: &'a Case, bcs: &Constraints) -> ExplicitStepper<'a> {
-    let dt = stable_dt_bound(&case.net, &case.g, &case.caps, bcs)
-        .expect("valid inputs")
-        .dt_max;
+fn stepper<'a>(case: &'a Case, bcs: &'a Constraints) -> ExplicitStepper<'a> {
+    let system = ThermalSystem::new(&case.net, &case.g, &case.caps, bcs).expect("valid inputs");
+    let dt = system.stable_dt_bound().dt_max;
     let zeros = vec![0.0; case.net.n_nodes()];
-    ExplicitStepper::new(&case.net, &case.g, &case.caps, bcs, &zeros, 0.8 * dt).expect("valid inputs")
+    ExplicitStepper::new(&system, &zeros, 0.8 * dt).expect("valid inputs")
 }
 
 /// One-off: effective bandwidth of the explicit step vs the triad, printed.

@@ -4,9 +4,10 @@ use anyhow::Result;
 
 use crate::cargo;
 
-/// Format check, clippy with warnings as errors, workspace tests; `--quick-validate` also runs
-/// `cargo xtask validate --quick`.
+/// Tidy checks (layers, file headers), format check, clippy with warnings as errors,
+/// workspace tests; `--quick-validate` also runs `cargo xtask validate --quick`.
 pub fn run(rest: &[String]) -> Result<()> {
+    crate::tidy::run()?;
     crate::run(cargo().args(["fmt", "--all", "--", "--check"]))?;
     crate::run(cargo().args(["clippy", "--workspace", "--all-targets", "--", "-D", "warnings"]))?;
     crate::run(cargo().args(["test", "--workspace"]))?;

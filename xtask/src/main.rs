@@ -1,12 +1,15 @@
 //! `cargo xtask`: project automation in Rust (no loose shell scripts).
 //!
 //! - `cargo xtask ci` — exactly what `.ci/run` runs: format check, clippy with warnings as
-//!   errors, the workspace tests.
+//!   errors, the workspace tests (which include the tidy checks).
+//! - `cargo xtask tidy` — the architecture checks alone: the layer picture of the crate
+//!   graph, faer only in demcon-network, RON only in demcon-scene, `//!` file headers.
 //! - `cargo xtask validate [CASE…] [--quick | --full] [--out DIR]` — the papers' validation
 //!   cases in release mode; writes `<case>.json`, charts and `REPORT.md`.
 //! - `cargo xtask bench [NAME]` — the criterion benchmarks.
 
 mod ci;
+mod tidy;
 
 use std::process::Command;
 
@@ -20,11 +23,13 @@ fn main() -> Result<()> {
     };
     match cmd {
         "ci" => ci::run(&rest),
+        "tidy" => tidy::run(),
         "validate" => validate(&rest),
         "bench" => bench(&rest),
         "help" | "--help" | "-h" => {
             println!(
                 "usage: cargo xtask <command>\n\n  ci                         format check, clippy -D warnings, cargo test --workspace\n  \
+                 tidy                       layer rules of the crate graph, file headers\n  \
                  validate [CASE…] [--quick|--full] [--out DIR] [--list]\n                             run the validation cases (release build)\n  \
                  bench [NAME]               run the criterion benchmarks (all, or benches/NAME.rs)"
             );

@@ -18,6 +18,9 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod check;
+mod components;
+mod diagnostic;
 mod error;
 mod material;
 mod morton;
@@ -26,6 +29,8 @@ mod region;
 mod selector;
 mod shape;
 
+pub use components::Components;
+pub use diagnostic::Diagnostic;
 pub use error::CoreError;
 pub use material::{Material, MaterialTable};
 pub use morton::morton_order;

@@ -4,10 +4,9 @@
 use std::borrow::Cow;
 use std::time::Instant;
 
-use demcon_core::{Container, CoreError, ParticleSet, Vec3};
+use demcon_core::{Components, Container, CoreError, ParticleSet, Vec3};
 use rayon::prelude::*;
 
-use crate::components::Components;
 use crate::error::{GraphError, positive};
 use crate::search::{Candidate, NeighbourSearch, candidates, separation, wrap};
 
@@ -105,64 +104,9 @@ pub struct ContactGeometry {
     pub mean_radius: f64,
 }
 
-/// A non-fatal finding of contact detection, for the user to read.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Diagnostic {
-    /// Particles with no contact (rattlers); they make a network singular if not excluded.
-    Rattlers {
-        /// How many.
-        count: usize,
-    },
-    /// Particles with exactly one contact (dead ends of the network).
-    SingleContact {
-        /// How many.
-        count: usize,
-    },
-    /// Pairs whose spheres overlap (negative gap).
-    Overlaps {
-        /// How many pairs.
-        count: usize,
-        /// Largest overlap relative to R_p + R_q (dimensionless, > 0).
-        max_relative: f64,
-    },
-    /// The reached coordination exceeds the target by more than the tolerance, because
-    /// several pairs share the selected gap.
-    CoordinationOvershoot {
-        /// Requested Z (contacts per particle).
-        target: f64,
-        /// Reached Z (contacts per particle).
-        reached: f64,
-    },
-    /// The graph has more than one connected component (rattlers included).
-    Disconnected {
-        /// Number of components.
-        components: usize,
-        /// Particles in the largest component.
-        largest: usize,
-    },
-}
-
-impl std::fmt::Display for Diagnostic {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Diagnostic::Rattlers { count } => write!(f, "{count} rattlers (particles with no contact)"),
-            Diagnostic::SingleContact { count } => write!(f, "{count} particles with a single contact"),
-            Diagnostic::Overlaps { count, max_relative } => write!(
-                f,
-                "{count} overlapping pairs, largest overlap {:.3} % of R_p + R_q",
-                100.0 * max_relative
-            ),
-            Diagnostic::CoordinationOvershoot { target, reached } => write!(
-                f,
-                "coordination {reached:.4} overshoots the target {target} (pairs with equal gaps)"
-            ),
-            Diagnostic::Disconnected { components, largest } => write!(
-                f,
-                "{components} connected components; the largest holds {largest} particles"
-            ),
-        }
-    }
-}
+/// A non-fatal finding of contact detection (the variants `Rattlers`, `SingleContact`,
+/// `Overlaps`, `CoordinationOvershoot`, `Disconnected`), for the user to read.
+pub use demcon_core::Diagnostic;
 
 /// What contact detection did and found.
 #[derive(Debug, Clone, PartialEq)]

@@ -55,7 +55,6 @@
 #![warn(missing_docs)]
 
 mod calibrated;
-mod components;
 mod contact;
 mod error;
 mod interface;
@@ -67,11 +66,11 @@ mod terreros;
 mod wall;
 
 pub use calibrated::surface_calibrated;
-pub use components::Components;
 pub use contact::{
     ContactGeometry, ContactGraph, ContactParams, ContactReport, ContactTolerance, CoordinationPoint,
     Diagnostic, coordination_curve, detect_contacts,
 };
+pub use demcon_core::Components;
 pub use error::GraphError;
 pub use interface::{InterfaceRule, conductances, contact_property, interface_value};
 pub use laminate::{

@@ -9,8 +9,9 @@ use demcon_graph::{
 };
 use demcon_network::{Constraints, FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
 use demcon_thermal::{
-    ExplicitParams, ImplicitParams, RepresentativeVolume, Scheme, TimeStep, capacities, face_flux_sources,
-    paper_dt_estimate, run_explicit_with, run_implicit_with, solve_steady_temperature,
+    ExplicitParams, ImplicitParams, RepresentativeVolume, Scheme, ThermalSystem, TimeStep, TransientInput,
+    capacities, face_flux_sources, paper_dt_estimate, run_explicit, run_implicit, solve_steady_temperature,
+    source_update_fn,
 };
 use serde::Serialize;
 
@@ -634,7 +635,12 @@ pub fn solve_thermal_with(
     let mut snapshots = Vec::new();
     let excluded = bcs.constraints.excluded().len();
     let g = &setup.conductances;
-    let caps = &setup.capacities;
+    let system = ThermalSystem::new(net, g, &setup.capacities, &bcs.constraints)?;
+    let input = TransientInput {
+        temperatures: &t_init,
+        sources: &sources,
+    };
+    let observer = |t, v: &[f64]| snapshots.push((t, v[..n].to_vec()));
     let report_of = |r: &demcon_thermal::TransientReport| ThermalSolveReport {
         scheme: r.scheme.to_string(),
         steps: r.steps,
@@ -671,17 +677,7 @@ pub fn solve_thermal_with(
                 paper_dt: setup.paper_dt,
                 ..ExplicitParams::default()
             };
-            run_explicit_with(
-                net,
-                g,
-                caps,
-                &bcs.constraints,
-                &sources,
-                &t_init,
-                &params,
-                |t, v| snapshots.push((t, v[..n].to_vec())),
-                &mut hook,
-            )
+            run_explicit(&system, input, &params, observer, source_update_fn(&mut hook))
         }
         ThermalSolver::Implicit { t_end, dt, scheme } => {
             let params = ImplicitParams {
@@ -691,17 +687,7 @@ pub fn solve_thermal_with(
                 output_times: problem.output_times.clone(),
                 solve: default_solve_params(),
             };
-            run_implicit_with(
-                net,
-                g,
-                caps,
-                &bcs.constraints,
-                &sources,
-                &t_init,
-                &params,
-                |t, v| snapshots.push((t, v[..n].to_vec())),
-                &mut hook,
-            )
+            run_implicit(&system, input, &params, observer, source_update_fn(&mut hook))
         }
         ThermalSolver::Steady => {
             let st = solve_steady_temperature(net, g, &bcs.constraints, &sources, &default_solve_params())?;
@@ -710,7 +696,7 @@ pub fn solve_thermal_with(
                 temps[p as usize] = initial;
             }
             let r = &st.solution.report;
-            let bound = demcon_thermal::stable_dt_bound(net, g, caps, &bcs.constraints)?;
+            let bound = system.stable_dt_bound();
             let report = ThermalSolveReport {
                 scheme: "steady".into(),
                 steps: 0,

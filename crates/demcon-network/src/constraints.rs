@@ -1,8 +1,6 @@
 //! Resolved boundary conditions: which nodes carry a fixed value (Dirichlet), which are
 //! excluded because their cluster reaches no fixed value, and which are free unknowns.
 
-use std::fmt;
-
 use crate::error::SolveError;
 use crate::network::Network;
 
@@ -33,51 +31,9 @@ pub enum NodeKind {
     Excluded,
 }
 
-/// A non-fatal finding of the resolution, to be shown to the user.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Diagnostic {
-    /// Floating clusters were left out of the solve.
-    FloatingExcluded {
-        /// Number of clusters.
-        clusters: usize,
-        /// Number of nodes in them.
-        nodes: usize,
-        /// Size of the largest one.
-        largest: usize,
-    },
-    /// Floating clusters are kept as unknowns (transient solvers only).
-    FloatingKept {
-        /// Number of clusters.
-        clusters: usize,
-        /// Number of nodes in them.
-        nodes: usize,
-        /// Size of the largest one.
-        largest: usize,
-    },
-}
-
-impl fmt::Display for Diagnostic {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::FloatingExcluded {
-                clusters,
-                nodes,
-                largest,
-            } => write!(
-                f,
-                "{nodes} particle(s) in {clusters} floating cluster(s) (reaching no fixed value) excluded; largest has {largest}"
-            ),
-            Self::FloatingKept {
-                clusters,
-                nodes,
-                largest,
-            } => write!(
-                f,
-                "{nodes} particle(s) in {clusters} floating cluster(s) (reaching no fixed value) kept; largest has {largest}"
-            ),
-        }
-    }
-}
+/// A non-fatal finding of the resolution (the variants `FloatingExcluded`, `FloatingKept`),
+/// to be shown to the user.
+pub use demcon_core::Diagnostic;
 
 /// Resolved constraints of one network: the only form of boundary condition the solvers
 /// accept, so "fixed values are consistent and floating clusters are handled" is a
@@ -206,9 +162,9 @@ pub fn resolve_fixed(
     for (c, (&a, &size)) in anchored.iter().zip(&comps.sizes).enumerate() {
         if !a {
             clusters += 1;
-            floating_nodes += size as usize;
-            if size as usize > largest {
-                largest = size as usize;
+            floating_nodes += size;
+            if size > largest {
+                largest = size;
                 largest_label = c as u32;
             }
         }

@@ -1,5 +1,7 @@
 //! Errors of the network crate: bad input apart from numerical failure.
 
+use demcon_core::check::CheckError;
+
 /// Why a network could not be built or solved.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolveError {
@@ -120,27 +122,23 @@ impl SolveError {
     }
 }
 
-/// Checks a per-node or per-edge vector's length.
-pub(crate) fn check_len(what: &str, got: usize, expected: usize) -> Result<(), SolveError> {
-    if got == expected {
-        Ok(())
-    } else {
-        Err(SolveError::LengthMismatch {
-            what: what.to_string(),
-            expected,
-            got,
-        })
-    }
-}
-
-/// Checks that every entry is finite; names the first offending index.
-pub(crate) fn check_finite(what: &str, v: &[f64]) -> Result<(), SolveError> {
-    match v.iter().position(|x| !x.is_finite()) {
-        None => Ok(()),
-        Some(i) => Err(SolveError::invalid(
-            format!("{what}[{i}]"),
-            v[i],
-            "must be a finite number",
-        )),
+/// A failed shared input check ([`demcon_core::check`]): a wrong length is a
+/// [`SolveError::LengthMismatch`], a bad value a [`SolveError::InvalidParameter`] naming
+/// its index.
+impl From<CheckError> for SolveError {
+    fn from(e: CheckError) -> Self {
+        match e {
+            CheckError::Length { what, got, expected } => Self::LengthMismatch { what, expected, got },
+            CheckError::Value {
+                what,
+                index,
+                value,
+                rule,
+            } => Self::invalid(
+                format!("{what}[{index}]"),
+                value,
+                format!("must be {}", rule.describe()),
+            ),
+        }
     }
 }

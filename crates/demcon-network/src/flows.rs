@@ -1,8 +1,9 @@
 //! Flows through the network from a nodal solution: per edge, per node, across a boundary.
 
+use demcon_core::check::{check_finite, check_len};
 use rayon::prelude::*;
 
-use crate::error::{SolveError, check_finite, check_len};
+use crate::error::SolveError;
 use crate::network::Network;
 use crate::par::CHUNK;
 

@@ -46,9 +46,10 @@ mod solve;
 
 pub use amg::{AmgInfo, AmgLevel};
 pub use constraints::{Constraints, Diagnostic, FloatingPolicy, NodeKind, resolve_fixed};
+pub use demcon_core::Components;
 pub use error::SolveError;
 pub use flows::{boundary_flow, edge_flows};
-pub use network::{Components, Network};
+pub use network::Network;
 pub use par::{CHUNK, MIN_TASK_CHUNKS};
 pub use solve::{
     AUTO_AMG_MIN_UNKNOWNS, LinearSystem, Method, Solution, SolveParams, SolveReport, solve_shifted,

@@ -1,9 +1,11 @@
 //! The conductance network: nodes, edges, and the compressed-row structure of its weighted
 //! Laplacian, built once; conductance values are supplied per solve.
 
+use demcon_core::Components;
+use demcon_core::check::{check_finite, check_len};
 use rayon::prelude::*;
 
-use crate::error::{SolveError, check_finite, check_len};
+use crate::error::SolveError;
 use crate::par::CHUNK;
 
 /// A conductance network: `n_nodes` nodes joined by undirected edges.
@@ -20,22 +22,6 @@ pub struct Network {
     row_ptr: Vec<usize>,
     cols: Vec<u32>,
     entry_edge: Vec<u32>,
-}
-
-/// Connected components of a network (structural: every edge counts).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Components {
-    /// Component label of each node; labels are numbered in order of their smallest node.
-    pub labels: Vec<u32>,
-    /// Number of nodes in each component.
-    pub sizes: Vec<u32>,
-}
-
-impl Components {
-    /// Number of components.
-    pub fn count(&self) -> usize {
-        self.sizes.len()
-    }
 }
 
 impl Network {
@@ -210,34 +196,10 @@ impl Network {
             .collect())
     }
 
-    /// Connected components (breadth-first, in node order; deterministic).
+    /// Connected components (structural: every edge counts), labelled by decreasing size,
+    /// ties by smallest node ([`Components`]).
     pub fn components(&self) -> Components {
-        const UNSET: u32 = u32::MAX;
-        let mut labels = vec![UNSET; self.n_nodes];
-        let mut sizes = Vec::new();
-        let mut queue = Vec::new();
-        for start in 0..self.n_nodes {
-            if labels[start] != UNSET {
-                continue;
-            }
-            let label = sizes.len() as u32;
-            labels[start] = label;
-            queue.clear();
-            queue.push(start as u32);
-            let mut head = 0;
-            while head < queue.len() {
-                let p = queue[head] as usize;
-                head += 1;
-                for &q in &self.cols[self.row_ptr[p]..self.row_ptr[p + 1]] {
-                    if labels[q as usize] == UNSET {
-                        labels[q as usize] = label;
-                        queue.push(q);
-                    }
-                }
-            }
-            sizes.push(queue.len() as u32);
-        }
-        Components { labels, sizes }
+        Components::from_pairs(self.n_nodes, &self.edges)
     }
 }
 
@@ -304,11 +266,11 @@ mod tests {
     }
 
     #[test]
-    fn components_are_found_in_node_order() {
+    fn components_are_labelled_by_size_then_smallest_node() {
         let net = Network::new(6, &[[4, 5], [0, 2], [2, 3]]).unwrap();
         let c = net.components();
-        assert_eq!(c.labels, vec![0, 1, 0, 0, 2, 2]);
-        assert_eq!(c.sizes, vec![3, 1, 2]);
+        assert_eq!(c.labels, vec![0, 2, 0, 0, 1, 1]);
+        assert_eq!(c.sizes, vec![3, 2, 1]);
         assert_eq!(c.count(), 3);
     }
 }

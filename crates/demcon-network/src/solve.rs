@@ -3,12 +3,13 @@
 
 use std::time::Instant;
 
+use demcon_core::check::{check_finite, check_len};
 use rayon::prelude::*;
 
 use crate::amg::{self, Amg, AmgInfo};
 use crate::constraints::{Constraints, NodeKind};
 use crate::csr::Csr;
-use crate::error::{SolveError, check_finite, check_len};
+use crate::error::SolveError;
 use crate::ic::{self, Mic};
 use crate::network::Network;
 use crate::par::{CHUNK, chunks_map, chunks_map3, dot, ordered_sum};
@@ -619,7 +620,12 @@ impl<'a> LinearSystem<'a> {
                 "system prepared without a multigrid hierarchy".into(),
             ));
         };
-        self.compact_pcg(b, x, r, b_norm, rel_tol, max_iter, nodes, |rc, _, left| {
+        let stop = Stop {
+            b_norm,
+            rel_tol,
+            max_iter,
+        };
+        self.compact_pcg(b, x, r, stop, nodes, |rc, _, left| {
             amg::pcg(hierarchy, rc, rel_tol * b_norm, left)
         })
     }
@@ -643,7 +649,12 @@ impl<'a> LinearSystem<'a> {
             ));
         };
         let depth = std::cell::Cell::new(1.0);
-        self.compact_pcg(b, x, r, b_norm, rel_tol, max_iter, nodes, |rc, r_norm, left| {
+        let stop = Stop {
+            b_norm,
+            rel_tol,
+            max_iter,
+        };
+        self.compact_pcg(b, x, r, stop, nodes, |rc, r_norm, left| {
             let reduction = (depth.get() * rel_tol * b_norm / r_norm).min(0.5);
             depth.set(depth.get() * 0.1);
             ic::pcg(mic, rc, reduction, left)
@@ -651,19 +662,22 @@ impl<'a> LinearSystem<'a> {
     }
 
     /// Restart loop of the compact-block solvers: `inner(r_compact, ‖r‖, iterations left)`
-    /// returns a correction δ and its iterations; x += δ until ‖b − Ax‖ ≤ rel_tol ‖b‖.
-    #[allow(clippy::too_many_arguments)]
+    /// returns a correction δ and its iterations; x += δ until ‖b − Ax‖ ≤ rel_tol ‖b‖
+    /// (`stop`).
     fn compact_pcg(
         &self,
         b: &[f64],
         x: &mut [f64],
         r: &mut [f64],
-        b_norm: f64,
-        rel_tol: f64,
-        max_iter: usize,
+        stop: Stop,
         nodes: &[u32],
         inner: impl Fn(&[f64], f64, usize) -> Result<(Vec<f64>, usize), SolveError>,
     ) -> Result<(usize, f64), SolveError> {
+        let Stop {
+            b_norm,
+            rel_tol,
+            max_iter,
+        } = stop;
         let mut iterations = 0usize;
         let mut true_rel = dot(r, r).sqrt() / b_norm;
         while true_rel > rel_tol && iterations < max_iter {
@@ -727,6 +741,18 @@ impl<'a> LinearSystem<'a> {
         });
         partials.iter().fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d))
     }
+}
+
+/// When an iterative solve stops: ‖b − Ax‖ ≤ `rel_tol` · `b_norm`, within `max_iter`
+/// iterations.
+#[derive(Debug, Clone, Copy)]
+struct Stop {
+    /// ‖b_eff‖, the residual norm with the free unknowns at zero (W or A).
+    b_norm: f64,
+    /// Relative tolerance (dimensionless).
+    rel_tol: f64,
+    /// Iteration limit.
+    max_iter: usize,
 }
 
 /// Steady solve of K x = s on the free nodes with the fixed values of `constraints`.

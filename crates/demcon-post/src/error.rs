@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use demcon_core::CoreError;
+use demcon_core::check::{CheckError, Rule, check_positive};
 
 /// What can go wrong in post-processing.
 #[derive(Debug, thiserror::Error)]
@@ -72,40 +73,30 @@ impl PostError {
     }
 }
 
-/// Checks that an array has one entry per particle.
-pub(crate) fn check_len(field: &str, len: usize, expected: usize) -> Result<(), PostError> {
-    if len == expected {
-        Ok(())
-    } else {
-        Err(PostError::invalid(
-            field,
-            format!("{len} entries"),
-            format!("exactly {expected} entries"),
-        ))
-    }
-}
-
-/// Checks that every value is finite; the error names the first bad entry.
-pub(crate) fn check_finite(field: &str, values: &[f64]) -> Result<(), PostError> {
-    match values.iter().position(|v| !v.is_finite()) {
-        None => Ok(()),
-        Some(i) => Err(PostError::invalid(
-            format!("{field}[{i}]"),
-            values[i],
-            "must be finite",
-        )),
-    }
-}
-
-/// Checks that every value is finite and > 0; the error names the first bad entry.
-pub(crate) fn check_positive(field: &str, values: &[f64]) -> Result<(), PostError> {
-    match values.iter().position(|v| !(v.is_finite() && *v > 0.0)) {
-        None => Ok(()),
-        Some(i) => Err(PostError::invalid(
-            format!("{field}[{i}]"),
-            values[i],
-            "must be a finite number > 0",
-        )),
+/// A failed shared input check ([`demcon_core::check`]) as an input error naming the
+/// array (wrong length) or its first bad entry.
+impl From<CheckError> for PostError {
+    fn from(e: CheckError) -> Self {
+        match e {
+            CheckError::Length { what, got, expected } => Self::invalid(
+                what,
+                format!("{got} entries"),
+                format!("exactly {expected} entries"),
+            ),
+            CheckError::Value {
+                what,
+                index,
+                value,
+                rule,
+            } => Self::invalid(
+                format!("{what}[{index}]"),
+                value,
+                match rule {
+                    Rule::Finite => "must be finite",
+                    Rule::Positive => "must be a finite number > 0",
+                },
+            ),
+        }
     }
 }
 
@@ -151,5 +142,5 @@ pub(crate) fn check_particles(p: &demcon_core::ParticleSet) -> Result<(), PostEr
         ));
     }
     check_finite_vec("particles.centres", &p.centres)?;
-    check_positive("particles.radii", &p.radii)
+    Ok(check_positive("particles.radii", &p.radii)?)
 }

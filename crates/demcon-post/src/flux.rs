@@ -1,11 +1,12 @@
 //! Per-particle flux from contact data (Haddad 2021 eq. 20, with the physical sign) and the
 //! net flow through a plane, from plain arrays: contact pairs, branch vectors, conductances.
 
+use demcon_core::check::{check_finite, check_len, check_positive};
 use demcon_core::{ParticleSet, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::Plane;
-use crate::error::{PostError, check_finite, check_finite_vec, check_len, check_particles, check_positive};
+use crate::error::{PostError, check_finite_vec, check_particles};
 
 /// Checks the contact arrays against each other and against `n` particles.
 fn check_contacts(

@@ -31,6 +31,7 @@
 //! `locate_within_distance` took 6.8–7.1 s against 1.7 s for these columns (same sums to
 //! 4e-14). rstar serves the probes, where few queries are made.
 
+use demcon_core::check::{check_len, check_positive};
 use std::time::Instant;
 
 use demcon_core::{ParticleSet, Vec3};
@@ -38,7 +39,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::domain::Domain;
-use crate::error::{PostError, check_finite_vec, check_len, check_particles, check_positive};
+use crate::error::{PostError, check_finite_vec, check_particles};
 
 /// Which radius the Halo ratio multiplies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]

@@ -1,13 +1,14 @@
 //! Values at probe points and along lines: the nearest particle, or an average over a small
 //! ball weighted by representative volume. Neighbour queries use an R*-tree (rstar).
 
+use demcon_core::check::{check_len, check_positive};
 use demcon_core::{ParticleSet, Vec3};
 use rstar::RTree;
 use rstar::primitives::GeomWithData;
 use serde::{Deserialize, Serialize};
 
 use crate::domain::Domain;
-use crate::error::{PostError, check_len, check_particles, check_positive};
+use crate::error::{PostError, check_particles};
 
 /// How a probe turns particle values into a value at a point.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -186,7 +187,7 @@ impl<'a> ProbeIndex<'a> {
     }
 
     fn check_values(&self, len: usize) -> Result<(), PostError> {
-        check_len("values", len, self.particles.len())
+        Ok(check_len("values", len, self.particles.len())?)
     }
 
     /// Value of a scalar particle field at `point` (unit of `values`).

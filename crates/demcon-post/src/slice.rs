@@ -1,9 +1,10 @@
 //! Slices: a raster of the particles cut by an axis-aligned plane, for pictures made elsewhere.
 
+use demcon_core::check::{check_finite, check_len};
 use demcon_core::{Axis, ParticleSet, Vec3};
 
 use crate::domain::{Domain, Plane};
-use crate::error::{PostError, check_finite, check_len, check_particles};
+use crate::error::{PostError, check_particles};
 
 /// Inputs of [`slice_grid`].
 #[derive(Debug, Clone, Copy, PartialEq)]

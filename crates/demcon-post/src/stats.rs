@@ -1,9 +1,10 @@
 //! Field statistics: coefficient of variation, effective conductivity from a steady run, and
 //! small helpers to turn vector fields into scalars.
 
+use demcon_core::check::check_len;
 use demcon_core::{Axis, Vec3};
 
-use crate::error::{PostError, check_len};
+use crate::error::PostError;
 
 /// Coefficient of variation of `values` (fraction): population standard deviation divided by
 /// the absolute mean, over the entries where `mask` is true (all entries when `mask` is

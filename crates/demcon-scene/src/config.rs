@@ -1,5 +1,5 @@
 //! The RON scene schema (file-facing `…Config` types). Only this crate knows RON; the
-//! conversion to the lower crates' plain types lives in `build.rs`.
+//! conversion to the lower crates' plain types lives in `convert.rs`.
 //!
 //! Every struct denies unknown fields, so a misspelt field is an error with its line.
 

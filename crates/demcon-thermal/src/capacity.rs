@@ -1,8 +1,10 @@
 //! Heat capacity of each particle's representative element, and the explicit step bounds.
 
+use demcon_core::check::{check_len, check_positive};
 use demcon_network::{Constraints, Network, NodeKind};
 
-use crate::error::{ThermalError, check_len, check_positive};
+use crate::error::ThermalError;
+use crate::system::ThermalSystem;
 
 /// Volume of the material a particle represents.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -87,10 +89,16 @@ pub fn stable_dt_bound(
     capacities: &[f64],
     constraints: &Constraints,
 ) -> Result<DtBound, ThermalError> {
-    net.check_conductances(conductances)?;
-    check_len("capacities", capacities.len(), net.n_nodes())?;
-    check_positive("capacities", capacities)?;
-    check_len("constraints", constraints.kinds().len(), net.n_nodes())?;
+    Ok(ThermalSystem::new(net, conductances, capacities, constraints)?.stable_dt_bound())
+}
+
+/// [`stable_dt_bound`] on inputs already checked ([`ThermalSystem`]).
+pub(crate) fn dt_bound_of(
+    net: &Network,
+    conductances: &[f64],
+    capacities: &[f64],
+    constraints: &Constraints,
+) -> DtBound {
     let sums = net.row_sums(conductances);
     let mut best = DtBound {
         dt_max: f64::INFINITY,
@@ -104,7 +112,7 @@ pub fn stable_dt_bound(
             };
         }
     }
-    Ok(best)
+    best
 }
 
 /// The critical step estimate of Haddad et al. 2021, eq. 16 (s), reported beside the exact

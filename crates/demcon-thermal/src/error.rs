@@ -1,5 +1,6 @@
 //! Errors of the thermal solvers: bad input, refused unstable steps, detected divergence.
 
+use demcon_core::check::CheckError;
 use demcon_network::SolveError;
 
 /// Why a thermal computation failed.
@@ -66,39 +67,27 @@ impl ThermalError {
     }
 }
 
-/// Checks one value per node.
-pub(crate) fn check_len(what: &str, got: usize, expected: usize) -> Result<(), ThermalError> {
-    if got == expected {
-        Ok(())
-    } else {
-        Err(ThermalError::invalid(
-            format!("{what} (length)"),
-            got,
-            format!("must have one entry per particle ({expected})"),
-        ))
-    }
-}
-
-/// Checks finite values, naming the first bad index.
-pub(crate) fn check_finite(what: &str, v: &[f64]) -> Result<(), ThermalError> {
-    match v.iter().position(|x| !x.is_finite()) {
-        None => Ok(()),
-        Some(i) => Err(ThermalError::invalid(
-            format!("{what}[{i}]"),
-            v[i],
-            "must be a finite number",
-        )),
-    }
-}
-
-/// Checks finite, strictly positive values, naming the first bad index.
-pub(crate) fn check_positive(what: &str, v: &[f64]) -> Result<(), ThermalError> {
-    match v.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
-        None => Ok(()),
-        Some(i) => Err(ThermalError::invalid(
-            format!("{what}[{i}]"),
-            v[i],
-            "must be a finite number > 0",
-        )),
+/// A failed shared input check ([`demcon_core::check`]) as an
+/// [`ThermalError::InvalidParameter`]: `what (length)` for a wrong length, `what[i]` for the
+/// first bad value.
+impl From<CheckError> for ThermalError {
+    fn from(e: CheckError) -> Self {
+        match e {
+            CheckError::Length { what, got, expected } => Self::invalid(
+                format!("{what} (length)"),
+                got,
+                format!("must have one entry per particle ({expected})"),
+            ),
+            CheckError::Value {
+                what,
+                index,
+                value,
+                rule,
+            } => Self::invalid(
+                format!("{what}[{index}]"),
+                value,
+                format!("must be {}", rule.describe()),
+            ),
+        }
     }
 }

@@ -4,14 +4,15 @@
 
 use std::time::Instant;
 
-use demcon_network::{CHUNK, Constraints, MIN_TASK_CHUNKS, Network, NodeKind};
+use demcon_core::check::{check_finite, check_len};
+use demcon_network::{CHUNK, MIN_TASK_CHUNKS, Network, NodeKind};
 use rayon::prelude::*;
 
-use crate::capacity::{DtBound, stable_dt_bound};
-use crate::error::{ThermalError, check_finite, check_len};
+use crate::capacity::DtBound;
+use crate::error::ThermalError;
+use crate::system::{SourceUpdate, ThermalSystem, TransientInput};
 use crate::transient::{
-    Transient, TransientReport, boundary_edges, boundary_power, check_inputs, close_ledger, source_power,
-    stops,
+    Transient, TransientReport, boundary_edges, boundary_power, close_ledger, source_power, stops,
 };
 
 /// How the explicit step is chosen.
@@ -109,22 +110,22 @@ pub struct ExplicitStepper<'a> {
 }
 
 impl<'a> ExplicitStepper<'a> {
-    /// Precomputes the coefficients for step `dt` (s). Inputs are as in [`run_explicit`];
-    /// `dt` is not checked against the bound here.
+    /// Precomputes the coefficients for step `dt` (s) on a checked `system`, with the
+    /// sources Q_p (W per node; ignored at fixed and excluded nodes). `dt` is not checked
+    /// against the bound here.
     ///
     /// # Errors
-    /// Bad input (lengths, non-finite or non-positive values), or a network whose padded
-    /// entries exceed u32::MAX.
-    pub fn new(
-        net: &'a Network,
-        conductances: &[f64],
-        capacities: &[f64],
-        constraints: &Constraints,
-        sources: &[f64],
-        dt: f64,
-    ) -> Result<Self, ThermalError> {
-        let zeros = vec![0.0; net.n_nodes()];
-        check_inputs(net, conductances, capacities, constraints, sources, &zeros)?;
+    /// Bad sources (length, non-finite values) or step, or a network whose padded entries
+    /// exceed u32::MAX.
+    pub fn new(system: &ThermalSystem<'a>, sources: &[f64], dt: f64) -> Result<Self, ThermalError> {
+        let (net, conductances, capacities, constraints) = (
+            system.network(),
+            system.conductances(),
+            system.capacities(),
+            system.constraints(),
+        );
+        check_len("sources", sources.len(), net.n_nodes())?;
+        check_finite("sources", sources)?;
         if !(dt.is_finite() && dt > 0.0) {
             return Err(ThermalError::invalid("dt", dt, "must be a finite time > 0 (s)"));
         }
@@ -315,13 +316,16 @@ impl<'a> ExplicitStepper<'a> {
     }
 }
 
-/// Explicit (forward Euler) transient from `t_init` to `params.t_end`.
+/// Explicit (forward Euler) transient from `input.temperatures` to `params.t_end`.
 ///
-/// `conductances`: H_pq per edge (W/K); `capacities`: C_p (J/K, [`crate::capacities`]);
-/// `constraints`: fixed temperatures (K) and floating-cluster handling (use
-/// [`demcon_network::FloatingPolicy::Keep`] to let isolated clusters evolve on their own);
-/// `sources`: Q_p (W); `t_init`: initial temperatures (K; fixed nodes are overwritten by
-/// their value). `observer(t, T)` is called at each output time.
+/// `system`: the checked network, conductances H_pq (W/K), capacities C_p (J/K) and
+/// constraints (fixed temperatures, K; floating clusters kept with
+/// [`demcon_network::FloatingPolicy::Keep`] evolve on their own); `input`: initial
+/// temperatures (K; fixed nodes are overwritten by their value) and sources Q_p (W).
+/// `observer(t, T)` is called at each output time. `update` may replace the sources after
+/// every step ([`SourceUpdate`]; pass `()` to keep them): the energy ledger integrates the
+/// sources in force over each step, and the maximum-principle envelope grows with each new
+/// heating rate.
 ///
 /// The step is checked against the exact positivity bound min_p C_p/Σ_q H_pq; the report
 /// carries it beside the paper's estimate, the energy balance and the cost.
@@ -330,56 +334,29 @@ impl<'a> ExplicitStepper<'a> {
 /// Bad input; [`ThermalError::Unstable`] for a fixed step above the bound (unless
 /// `allow_unstable`); [`ThermalError::Diverged`] when the solution leaves the range allowed
 /// by the maximum principle (widened by its own width when the step is above the bound) or
-/// becomes non-finite.
-#[allow(clippy::too_many_arguments)]
-pub fn run_explicit(
-    net: &Network,
-    conductances: &[f64],
-    capacities: &[f64],
-    constraints: &Constraints,
-    sources: &[f64],
-    t_init: &[f64],
-    params: &ExplicitParams,
-    observer: impl FnMut(f64, &[f64]),
-) -> Result<Transient, ThermalError> {
-    run_explicit_with(
-        net,
-        conductances,
-        capacities,
-        constraints,
-        sources,
-        t_init,
-        params,
-        observer,
-        |_, _| Ok(None),
-    )
-}
-
-/// [`run_explicit`] with sources that may change during the run: `update(t, T)` is called
-/// once after every step (t in s, T in K, one value per node) and returns new sources
-/// (W per node) to use from the next step on, or `None` to keep the current ones;
-/// an `Err` stops the run and is returned. The energy ledger integrates the sources in force over each
-/// step, and the maximum-principle envelope grows with each new heating rate.
-///
-/// # Errors
-/// As [`run_explicit`]; an invalid source vector from `update`; an error returned by
+/// becomes non-finite; an invalid source vector from `update`; an error returned by
 /// `update` stops the run and is passed on.
-#[allow(clippy::too_many_arguments)]
-pub fn run_explicit_with(
-    net: &Network,
-    conductances: &[f64],
-    capacities: &[f64],
-    constraints: &Constraints,
-    sources: &[f64],
-    t_init: &[f64],
+pub fn run_explicit(
+    system: &ThermalSystem<'_>,
+    input: TransientInput<'_>,
     params: &ExplicitParams,
     mut observer: impl FnMut(f64, &[f64]),
-    mut update: impl FnMut(f64, &[f64]) -> Result<Option<Vec<f64>>, ThermalError>,
+    mut update: impl SourceUpdate,
 ) -> Result<Transient, ThermalError> {
     let start = Instant::now();
-    check_inputs(net, conductances, capacities, constraints, sources, t_init)?;
+    system.check_input(&input)?;
+    let (net, conductances, capacities, constraints) = (
+        system.network(),
+        system.conductances(),
+        system.capacities(),
+        system.constraints(),
+    );
+    let TransientInput {
+        temperatures: t_init,
+        sources,
+    } = input;
     let stops = stops(params.t_end, &params.output_times)?;
-    let bound: DtBound = stable_dt_bound(net, conductances, capacities, constraints)?;
+    let bound: DtBound = system.stable_dt_bound();
     let dt = match params.dt {
         TimeStep::Auto { safety } => {
             if !(safety > 0.0 && safety <= 1.0) {
@@ -412,7 +389,7 @@ pub fn run_explicit_with(
             ),
         ));
     }
-    let mut stepper = ExplicitStepper::new(net, conductances, capacities, constraints, sources, dt)?;
+    let mut stepper = ExplicitStepper::new(system, sources, dt)?;
     let kinds = constraints.kinds();
     let mut cur = t_init.to_vec();
     constraints.impose(&mut cur);
@@ -503,7 +480,7 @@ pub fn run_explicit_with(
                 });
             }
             std::mem::swap(&mut cur, &mut next);
-            if let Some(new) = update(t_now, &cur)? {
+            if let Some(new) = update.update(t_now, &cur)? {
                 stepper.set_sources(&new)?;
                 p_src = source_power(constraints, &new);
                 (heat_base, cool_base, t_change) = (heat, cool, t_now);
@@ -533,7 +510,7 @@ pub fn run_explicit_with(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use demcon_network::{FloatingPolicy, resolve_fixed};
+    use demcon_network::{Constraints, FloatingPolicy, resolve_fixed};
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -603,7 +580,8 @@ mod tests {
         let t: Vec<f64> = (0..n).map(|_| rng.random_range(0.0..4.0)).collect();
         let dt = 0.5;
         for sources in [q.clone(), vec![0.0; n]] {
-            let st = ExplicitStepper::new(&net, &g, &caps, &c, &sources, dt).unwrap();
+            let system = ThermalSystem::new(&net, &g, &caps, &c).unwrap();
+            let st = ExplicitStepper::new(&system, &sources, dt).unwrap();
             let want = reference(&net, &g, &caps, &c, &sources, dt, &t);
             for threads in [1, 3] {
                 let mut out = vec![0.0; n];
@@ -630,7 +608,8 @@ mod tests {
             );
         }
         // A non-finite temperature is flagged.
-        let st = ExplicitStepper::new(&net, &g, &caps, &c, &q, dt).unwrap();
+        let system = ThermalSystem::new(&net, &g, &caps, &c).unwrap();
+        let st = ExplicitStepper::new(&system, &q, dt).unwrap();
         let mut t_bad = t.clone();
         t_bad[n - 1] = f64::NAN;
         let mut out = vec![0.0; n];

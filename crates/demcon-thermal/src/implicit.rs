@@ -4,13 +4,13 @@
 
 use std::time::Instant;
 
+use demcon_core::check::{check_finite, check_len};
 use demcon_network::{Constraints, LinearSystem, Network, NodeKind, Solution, SolveParams, solve_steady};
 
-use crate::capacity::stable_dt_bound;
-use crate::error::{ThermalError, check_finite, check_len};
+use crate::error::ThermalError;
+use crate::system::{SourceUpdate, ThermalSystem, TransientInput};
 use crate::transient::{
-    Transient, TransientReport, boundary_edges, boundary_power, check_inputs, close_ledger, source_power,
-    stops,
+    Transient, TransientReport, boundary_edges, boundary_power, close_ledger, source_power, stops,
 };
 
 /// Implicit time discretisation.
@@ -60,59 +60,34 @@ impl Default for ImplicitParams {
     }
 }
 
-/// Implicit transient from `t_init` to `params.t_end`; inputs as in
-/// [`crate::run_explicit`]. Floating clusters may be kept
+/// Implicit transient from `input.temperatures` to `params.t_end`; `system`, `input`,
+/// `observer` and `update` as in [`crate::run_explicit`]. Floating clusters may be kept
 /// ([`demcon_network::FloatingPolicy::Keep`]): their heat capacity makes each step well
-/// posed.
+/// posed. Each step uses the sources in force at its start (for Crank–Nicolson, at both
+/// ends of the step); the energy ledger integrates them.
 ///
 /// # Errors
-/// Bad input; linear-solver failures ([`ThermalError::Network`]).
-#[allow(clippy::too_many_arguments)]
+/// Bad input; linear-solver failures ([`ThermalError::Network`]); an invalid source vector
+/// from `update`; an error returned by `update` stops the run and is passed on.
 pub fn run_implicit(
-    net: &Network,
-    conductances: &[f64],
-    capacities: &[f64],
-    constraints: &Constraints,
-    sources: &[f64],
-    t_init: &[f64],
-    params: &ImplicitParams,
-    observer: impl FnMut(f64, &[f64]),
-) -> Result<Transient, ThermalError> {
-    run_implicit_with(
-        net,
-        conductances,
-        capacities,
-        constraints,
-        sources,
-        t_init,
-        params,
-        observer,
-        |_, _| Ok(None),
-    )
-}
-
-/// [`run_implicit`] with sources that may change during the run: `update(t, T)` is called
-/// once after every step and returns new sources (W per node) for the following steps, or
-/// `None`; an `Err` stops the run and is returned. Each step uses the sources in force at its start (for
-/// Crank–Nicolson, at both ends of the step); the energy ledger integrates them.
-///
-/// # Errors
-/// As [`run_implicit`]; an invalid source vector from `update`; an error returned by
-/// `update` stops the run and is passed on.
-#[allow(clippy::too_many_arguments)]
-pub fn run_implicit_with(
-    net: &Network,
-    conductances: &[f64],
-    capacities: &[f64],
-    constraints: &Constraints,
-    sources: &[f64],
-    t_init: &[f64],
+    system: &ThermalSystem<'_>,
+    input: TransientInput<'_>,
     params: &ImplicitParams,
     mut observer: impl FnMut(f64, &[f64]),
-    mut update: impl FnMut(f64, &[f64]) -> Result<Option<Vec<f64>>, ThermalError>,
+    mut update: impl SourceUpdate,
 ) -> Result<Transient, ThermalError> {
     let start = Instant::now();
-    check_inputs(net, conductances, capacities, constraints, sources, t_init)?;
+    system.check_input(&input)?;
+    let (net, conductances, capacities, constraints) = (
+        system.network(),
+        system.conductances(),
+        system.capacities(),
+        system.constraints(),
+    );
+    let TransientInput {
+        temperatures: t_init,
+        sources,
+    } = input;
     let stops = stops(params.t_end, &params.output_times)?;
     if !(params.dt.is_finite() && params.dt > 0.0) {
         return Err(ThermalError::invalid(
@@ -121,7 +96,7 @@ pub fn run_implicit_with(
             "must be a finite time > 0 (s)",
         ));
     }
-    let bound = stable_dt_bound(net, conductances, capacities, constraints)?;
+    let bound = system.stable_dt_bound();
     let n = net.n_nodes();
     let cn = params.scheme == Scheme::CrankNicolson;
     let factor = if cn { 2.0 } else { 1.0 };
@@ -196,7 +171,7 @@ pub fn run_implicit_with(
                 } else {
                     (k + 1) as f64 * h
                 };
-            if let Some(new) = update(t_now, &cur)? {
+            if let Some(new) = update.update(t_now, &cur)? {
                 check_len("sources", new.len(), n)?;
                 check_finite("sources", &new)?;
                 p_src = source_power(constraints, &new);

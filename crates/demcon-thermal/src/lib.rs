@@ -11,7 +11,8 @@
 //! ```
 //! use demcon_network::{FloatingPolicy, Network, SolveParams, resolve_fixed};
 //! use demcon_thermal::{
-//!     ExplicitParams, TimeStep, run_explicit, solve_steady_temperature, stable_dt_bound,
+//!     ExplicitParams, ThermalSystem, TimeStep, TransientInput, run_explicit,
+//!     solve_steady_temperature, stable_dt_bound,
 //! };
 //!
 //! // A bar of 5 particles, 1 W/K contacts, 2 J/K each; 0 K at node 0, 10 K at node 4.
@@ -22,7 +23,9 @@
 //! // The exact explicit bound: min C_p / Σ_q H_pq = 2 / 2 = 1 s.
 //! assert_eq!(stable_dt_bound(&net, &h, &caps, &bcs).unwrap().dt_max, 1.0);
 //! let params = ExplicitParams { t_end: 200.0, dt: TimeStep::Auto { safety: 0.8 }, ..Default::default() };
-//! let run = run_explicit(&net, &h, &caps, &bcs, &[0.0; 5], &[0.0; 5], &params, |_, _| {}).unwrap();
+//! let system = ThermalSystem::new(&net, &h, &caps, &bcs).unwrap();
+//! let input = TransientInput { temperatures: &[0.0; 5], sources: &[0.0; 5] };
+//! let run = run_explicit(&system, input, &params, |_, _| {}, ()).unwrap();
 //! // Late enough, the transient reaches the linear steady profile 0, 2.5, 5, 7.5, 10 K.
 //! let steady = solve_steady_temperature(&net, &h, &bcs, &[0.0; 5], &SolveParams::default()).unwrap();
 //! assert!((steady.solution.values[2] - 5.0).abs() < 1e-9);
@@ -36,13 +39,13 @@ mod error;
 mod explicit;
 mod implicit;
 mod sources;
+mod system;
 mod transient;
 
 pub use capacity::{DtBound, RepresentativeVolume, capacities, paper_dt_estimate, stable_dt_bound};
 pub use error::ThermalError;
-pub use explicit::{ExplicitParams, ExplicitStepper, TimeStep, run_explicit, run_explicit_with};
-pub use implicit::{
-    ImplicitParams, Scheme, SteadyTemperature, run_implicit, run_implicit_with, solve_steady_temperature,
-};
+pub use explicit::{ExplicitParams, ExplicitStepper, TimeStep, run_explicit};
+pub use implicit::{ImplicitParams, Scheme, SteadyTemperature, run_implicit, solve_steady_temperature};
 pub use sources::{add_sources, face_flux_sources};
+pub use system::{NoUpdate, SourceUpdate, SourceUpdateFn, ThermalSystem, TransientInput, source_update_fn};
 pub use transient::{Transient, TransientReport};

@@ -1,8 +1,8 @@
-//! Pieces shared by the transient solvers: input checks, output times, the energy ledger.
+//! Pieces shared by the transient solvers: output times, the energy ledger.
 
 use demcon_network::{Constraints, Network, NodeKind};
 
-use crate::error::{ThermalError, check_finite, check_len, check_positive};
+use crate::error::ThermalError;
 
 /// Result of a transient run.
 #[derive(Debug, Clone, PartialEq)]
@@ -73,27 +73,6 @@ impl TransientReport {
             t_range: [0.0, 0.0],
         }
     }
-}
-
-/// Checks the common inputs of a transient solve.
-pub(crate) fn check_inputs(
-    net: &Network,
-    conductances: &[f64],
-    capacities: &[f64],
-    constraints: &Constraints,
-    sources: &[f64],
-    t_init: &[f64],
-) -> Result<(), ThermalError> {
-    let n = net.n_nodes();
-    net.check_conductances(conductances)?;
-    check_len("capacities", capacities.len(), n)?;
-    check_positive("capacities", capacities)?;
-    check_len("constraints", constraints.kinds().len(), n)?;
-    check_len("sources", sources.len(), n)?;
-    check_finite("sources", sources)?;
-    check_len("initial temperatures", t_init.len(), n)?;
-    check_finite("initial temperatures", t_init)?;
-    Ok(())
 }
 
 /// Checks `t_end` and the output times; returns the stops: the sorted output times in

@@ -4,8 +4,9 @@
 
 use demcon_network::{FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
 use demcon_thermal::{
-    ExplicitParams, ImplicitParams, Scheme, ThermalError, TimeStep, paper_dt_estimate, run_explicit,
-    run_implicit, solve_steady_temperature, stable_dt_bound,
+    ExplicitParams, ImplicitParams, Scheme, ThermalError, ThermalSystem, TimeStep, TransientInput,
+    paper_dt_estimate, run_explicit, run_implicit, solve_steady_temperature, source_update_fn,
+    stable_dt_bound,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -56,14 +57,14 @@ fn two_nodes_follow_the_discrete_forward_euler_solution() {
         ..Default::default()
     };
     let run = run_explicit(
-        &net,
-        &[1.0],
-        &[1.0, 1.0],
-        &free,
-        &[0.0; 2],
-        &[0.0, 1.0],
+        &ThermalSystem::new(&net, &[1.0], &[1.0, 1.0], &free).unwrap(),
+        TransientInput {
+            temperatures: &[0.0, 1.0],
+            sources: &[0.0; 2],
+        },
         &params,
         |_, _| {},
+        (),
     )
     .unwrap();
     // ΔT_n = (1 − 2Δt)^n, mean conserved.
@@ -84,6 +85,7 @@ fn explicit_conserves_energy_and_obeys_the_maximum_principle() {
         FloatingPolicy::Fail,
     )
     .unwrap();
+    let system = ThermalSystem::new(&net, &g, &c, &bcs).unwrap();
     let t0 = vec![300.0; net.n_nodes()];
     let params = ExplicitParams {
         t_end: 5.0,
@@ -92,18 +94,18 @@ fn explicit_conserves_energy_and_obeys_the_maximum_principle() {
     };
     let mut seen = Vec::new();
     let run = run_explicit(
-        &net,
-        &g,
-        &c,
-        &bcs,
-        &vec![0.0; net.n_nodes()],
-        &t0,
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &vec![0.0; net.n_nodes()],
+        },
         &params,
         |t, temps| {
             seen.push(t);
             // Maximum principle: every value within [300, 350] K.
             assert!(temps.iter().all(|&v| (300.0 - 1e-9..=350.0 + 1e-9).contains(&v)));
         },
+        (),
     )
     .unwrap();
     assert_eq!(seen, vec![0.0, 0.37, 2.0]);
@@ -116,7 +118,17 @@ fn explicit_conserves_energy_and_obeys_the_maximum_principle() {
     assert!(r.t_range[0] >= 300.0 && r.t_range[1] <= 350.0);
     // With sources: Σ C ΔT = ∫ Q + boundary inflow.
     let q: Vec<f64> = (0..net.n_nodes()).map(|p| ((p % 3) as f64 - 0.5) * 2.0).collect();
-    let run = run_explicit(&net, &g, &c, &bcs, &q, &t0, &params, |_, _| {}).unwrap();
+    let run = run_explicit(
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &q,
+        },
+        &params,
+        |_, _| {},
+        (),
+    )
+    .unwrap();
     assert!(run.report.energy_sources_j.abs() > 1.0);
     assert!(run.report.energy_balance_error < 1e-10, "{:?}", run.report);
 }
@@ -131,32 +143,32 @@ fn explicit_implicit_and_steady_agree() {
         FloatingPolicy::Fail,
     )
     .unwrap();
+    let system = ThermalSystem::new(&net, &g, &c, &bcs).unwrap();
     let q = vec![0.05; net.n_nodes()];
     let t0 = vec![0.0; net.n_nodes()];
     let t_mid = 3.0;
     let ex = run_explicit(
-        &net,
-        &g,
-        &c,
-        &bcs,
-        &q,
-        &t0,
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &q,
+        },
         &ExplicitParams {
             t_end: t_mid,
             dt: TimeStep::Auto { safety: 0.1 },
             ..Default::default()
         },
         |_, _| {},
+        (),
     )
     .unwrap();
     let implicit = |scheme, dt, method, t_end| {
         run_implicit(
-            &net,
-            &g,
-            &c,
-            &bcs,
-            &q,
-            &t0,
+            &system,
+            TransientInput {
+                temperatures: &t0,
+                sources: &q,
+            },
             &ImplicitParams {
                 t_end,
                 dt,
@@ -165,6 +177,7 @@ fn explicit_implicit_and_steady_agree() {
                 solve: SolveParams { method },
             },
             |_, _| {},
+            (),
         )
         .unwrap()
     };
@@ -206,6 +219,7 @@ fn a_step_above_the_bound_is_refused_and_divergence_is_detected() {
         FloatingPolicy::Fail,
     )
     .unwrap();
+    let system = ThermalSystem::new(&net, &g, &c, &bcs).unwrap();
     let b = stable_dt_bound(&net, &g, &c, &bcs).unwrap();
     assert_eq!(b.dt_max, 0.5);
     let t0: Vec<f64> = (0..m).map(|i| if i % 2 == 0 { 0.2 } else { 0.8 }).collect();
@@ -215,7 +229,18 @@ fn a_step_above_the_bound_is_refused_and_divergence_is_detected() {
         paper_dt: Some(paper_dt_estimate(1.0, 1.0, 2.0, 1.0)),
         ..Default::default()
     };
-    let run = |p: &ExplicitParams| run_explicit(&net, &g, &c, &bcs, &vec![0.0; m], &t0, p, |_, _| {});
+    let run = |p: &ExplicitParams| {
+        run_explicit(
+            &system,
+            TransientInput {
+                temperatures: &t0,
+                sources: &vec![0.0; m],
+            },
+            p,
+            |_, _| {},
+            (),
+        )
+    };
     match run(&fixed(0.75, false)) {
         Err(ThermalError::Unstable { dt, dt_max, .. }) => assert_eq!((dt, dt_max), (0.75, 0.5)),
         other => panic!("expected Unstable, got {other:?}"),
@@ -245,6 +270,7 @@ fn explicit_does_not_depend_on_thread_count() {
     let n = 34; // 39 304 nodes: ten chunks, more than one parallel task.
     let (net, g, c) = lattice(n, 9);
     let bcs = resolve_fixed(&net, &[(face(n, 0), 1.0)], FloatingPolicy::Fail).unwrap();
+    let system = ThermalSystem::new(&net, &g, &c, &bcs).unwrap();
     let params = ExplicitParams {
         t_end: 0.3,
         ..Default::default()
@@ -256,14 +282,14 @@ fn explicit_does_not_depend_on_thread_count() {
             .unwrap()
             .install(|| {
                 run_explicit(
-                    &net,
-                    &g,
-                    &c,
-                    &bcs,
-                    &vec![0.01; net.n_nodes()],
-                    &vec![0.0; net.n_nodes()],
+                    &system,
+                    TransientInput {
+                        temperatures: &vec![0.0; net.n_nodes()],
+                        sources: &vec![0.01; net.n_nodes()],
+                    },
                     &params,
                     |_, _| {},
+                    (),
                 )
                 .unwrap()
             })
@@ -280,33 +306,34 @@ fn floating_clusters_evolve_alone_when_kept() {
     let t0 = [0.0, 0.0, 0.0, 0.0, 4.0];
     let c = [1.0, 1.0, 4.0, 1.0, 1.0];
     let g = [1.0, 1.0];
+    let system = ThermalSystem::new(&net, &g, &c, &bcs).unwrap();
     let ex = run_explicit(
-        &net,
-        &g,
-        &c,
-        &bcs,
-        &q,
-        &t0,
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &q,
+        },
         &ExplicitParams {
             t_end: 40.0,
             ..Default::default()
         },
         |_, _| {},
+        (),
     )
     .unwrap();
     let im = run_implicit(
-        &net,
-        &g,
-        &c,
-        &bcs,
-        &q,
-        &t0,
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &q,
+        },
         &ImplicitParams {
             t_end: 40.0,
             dt: 0.5,
             ..Default::default()
         },
         |_, _| {},
+        (),
     )
     .unwrap();
     for t in [&ex.temperatures, &im.temperatures] {
@@ -327,8 +354,15 @@ fn floating_clusters_evolve_alone_when_kept() {
 fn bad_input_is_named() {
     let net = Network::new(2, &[[0, 1]]).unwrap();
     let free = resolve_fixed(&net, &[], FloatingPolicy::Keep).unwrap();
+    // A bad part of the system is refused when the system is built, before any run.
     let go = |t0: &[f64], c: &[f64], p: &ExplicitParams| {
-        run_explicit(&net, &[1.0], c, &free, &[0.0; 2], t0, p, |_, _| {})
+        ThermalSystem::new(&net, &[1.0], c, &free).and_then(|system| {
+            let input = TransientInput {
+                temperatures: t0,
+                sources: &[0.0; 2],
+            };
+            run_explicit(&system, input, p, |_, _| {}, ())
+        })
     };
     let d = ExplicitParams::default();
     assert!(matches!(go(&[0.0, f64::NAN], &[1.0; 2], &d),
@@ -362,17 +396,18 @@ fn bad_input_is_named() {
         Err(ThermalError::InvalidParameter { ref field, .. }) if field == "dt"));
 }
 
-/// Sources updated during a run (the hook of `run_explicit_with` / `run_implicit_with`):
+/// Sources updated during a run (the `SourceUpdate` of `run_explicit` / `run_implicit`):
 /// a lattice heated by Q_p = q_p / (1 + T_p) (a resistance rising with temperature), the
 /// hook re-evaluating Q every step. The explicit run equals a hand-written loop over the
 /// stepper with `set_sources`; both ledgers close; a hook error stops the run.
 #[test]
 fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
-    use demcon_thermal::{ExplicitStepper, run_explicit_with, run_implicit_with};
+    use demcon_thermal::ExplicitStepper;
     let n = 5;
     let (net, g, c) = lattice(n, 11);
     let m = n * n * n;
     let bcs = resolve_fixed(&net, &[(face(n, 0), 0.0)], FloatingPolicy::Fail).unwrap();
+    let system = ThermalSystem::new(&net, &g, &c, &bcs).unwrap();
     let q0: Vec<f64> = (0..m).map(|p| 0.5 + (p % 7) as f64 * 0.1).collect();
     let src = |t: &[f64]| -> Vec<f64> { q0.iter().zip(t).map(|(q, t)| q / (1.0 + t.abs())).collect() };
     let t0 = vec![0.0; m];
@@ -387,24 +422,23 @@ fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
         ..Default::default()
     };
     let mut calls = 0;
-    let run = run_explicit_with(
-        &net,
-        &g,
-        &c,
-        &bcs,
-        &src(&t0),
-        &t0,
+    let run = run_explicit(
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &src(&t0),
+        },
         &params,
         |_, _| {},
-        |_, t| {
+        source_update_fn(|_, t| {
             calls += 1;
             Ok(Some(src(t)))
-        },
+        }),
     )
     .unwrap();
     assert_eq!(calls, steps);
     // The same by hand.
-    let mut st = ExplicitStepper::new(&net, &g, &c, &bcs, &src(&t0), dt).unwrap();
+    let mut st = ExplicitStepper::new(&system, &src(&t0), dt).unwrap();
     let (mut cur, mut next) = (t0.clone(), t0.clone());
     for _ in 0..steps {
         st.step(&cur, &mut next);
@@ -438,19 +472,18 @@ fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
             ..Default::default()
         };
         let mut calls = 0;
-        let im = run_implicit_with(
-            &net,
-            &g,
-            &c,
-            &bcs,
-            &src(&t0),
-            &t0,
+        let im = run_implicit(
+            &system,
+            TransientInput {
+                temperatures: &t0,
+                sources: &src(&t0),
+            },
             &p,
             |_, _| {},
-            |_, t| {
+            source_update_fn(|_, t| {
                 calls += 1;
                 Ok(Some(src(t)))
-            },
+            }),
         )
         .unwrap();
         assert_eq!(calls, 10);
@@ -461,46 +494,43 @@ fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
         );
     }
     // Bad sources from the hook and a hook error are reported, not panics.
-    let bad = run_explicit_with(
-        &net,
-        &g,
-        &c,
-        &bcs,
-        &q0,
-        &t0,
+    let bad = run_explicit(
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &q0,
+        },
         &params,
         |_, _| {},
-        |_, _| Ok(Some(vec![f64::NAN; m])),
+        source_update_fn(|_, _| Ok(Some(vec![f64::NAN; m]))),
     );
     assert!(
         matches!(bad, Err(ThermalError::InvalidParameter { .. })),
         "{bad:?}"
     );
-    let short = run_explicit_with(
-        &net,
-        &g,
-        &c,
-        &bcs,
-        &q0,
-        &t0,
+    let short = run_explicit(
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &q0,
+        },
         &params,
         |_, _| {},
-        |_, _| Ok(Some(vec![0.0; 3])),
+        source_update_fn(|_, _| Ok(Some(vec![0.0; 3]))),
     );
     assert!(
         matches!(short, Err(ThermalError::InvalidParameter { .. })),
         "{short:?}"
     );
-    let stop = run_explicit_with(
-        &net,
-        &g,
-        &c,
-        &bcs,
-        &q0,
-        &t0,
+    let stop = run_explicit(
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &q0,
+        },
         &params,
         |_, _| {},
-        |t, _| Err(ThermalError::invalid("hook", t, "stopped")),
+        source_update_fn(|t, _| Err(ThermalError::invalid("hook", t, "stopped"))),
     );
     assert!(matches!(stop, Err(ThermalError::InvalidParameter { ref field, .. }) if field == "hook"));
 }

@@ -1,15 +1,18 @@
-//! Connected components of the contact graph (union–find), labelled deterministically.
+//! Connected components of a graph (union–find), labelled deterministically: the one
+//! labelling used for contact graphs (demcon-graph) and conductance networks
+//! (demcon-network).
 
-/// The connected components of a graph: one label per particle.
+/// The connected components of a graph: one label per vertex (particle or network node).
 ///
-/// Labels are ordered by decreasing size, ties broken by the smallest particle id in the
-/// component, so label 0 is the largest component and the result does not depend on how
-/// the graph was built. A particle without contact is a component of size 1.
+/// Labelling order: labels are ordered by decreasing size, ties broken by the smallest
+/// vertex id in the component, so label 0 is the largest component and the result does not
+/// depend on how the graph was built (edge order, parallel edges). A vertex without edges
+/// is a component of size 1.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Components {
-    /// Component label of each particle.
+    /// Component label of each vertex.
     pub labels: Vec<u32>,
-    /// Number of particles in each component, indexed by label (non-increasing).
+    /// Number of vertices in each component, indexed by label (non-increasing).
     pub sizes: Vec<usize>,
 }
 
@@ -62,7 +65,7 @@ impl Components {
         self.sizes.first().copied().unwrap_or(0)
     }
 
-    /// Ids of the particles in component `label`, ascending (empty for an unknown label).
+    /// Ids of the vertices in component `label`, ascending (empty for an unknown label).
     pub fn members(&self, label: u32) -> Vec<u32> {
         (0..self.labels.len() as u32)
             .filter(|&i| self.labels[i as usize] == label)
