@@ -236,6 +236,7 @@ pub fn build_model(packed: Packed, params: &ModelParams) -> Result<Model, ModelE
     let t1 = Instant::now();
     let graph = detect_contacts(&particles, &container, &params.contacts)?;
     let contacts_s = t1.elapsed().as_secs_f64();
+    check_connected(&graph, particles.len())?;
     let t2 = Instant::now();
     let network = Network::new(particles.len(), &graph.pairs)?;
     let network_s = t2.elapsed().as_secs_f64();
@@ -267,6 +268,31 @@ pub fn build_model(packed: Packed, params: &ModelParams) -> Result<Model, ModelE
         graph,
         network,
     })
+}
+
+/// Smallest share of the particles the largest connected cluster must hold: below it the
+/// contacts describe a dust of clusters, not a solid, and every result would be meaningless.
+pub const MIN_CONNECTED_FRACTION: f64 = 0.5;
+
+/// Fails when the largest connected cluster holds less than [`MIN_CONNECTED_FRACTION`] of the
+/// particles.
+fn check_connected(graph: &ContactGraph, n: usize) -> Result<(), ModelError> {
+    let largest = graph.report.largest_component;
+    if n > 1 && (largest as f64) < MIN_CONNECTED_FRACTION * n as f64 {
+        return Err(ModelError::invalid(
+            "contacts",
+            format!(
+                "Z = {:.3e}, ε = {:.3e}",
+                graph.report.coordination, graph.report.epsilon
+            ),
+            format!(
+                "the largest connected cluster holds {largest} of {n} particles (less than {:.0} %): the \
+                 contacts do not make a solid; raise `coordination` or `tolerance`",
+                100.0 * MIN_CONNECTED_FRACTION
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Places monodisperse, non-overlapping inclusion spheres in the container's bounding box

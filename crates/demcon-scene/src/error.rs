@@ -68,10 +68,11 @@ pub enum SceneError {
 
 impl SceneError {
     /// An invalid value at `field`.
+    /// A number that would print with many digits (`1e-300` as 0.000…) is written in `{:e}` form.
     pub fn invalid(field: &str, value: impl std::fmt::Display, allowed: impl Into<String>) -> Self {
         Self::Invalid {
             field: field.into(),
-            value: value.to_string(),
+            value: short_number(value.to_string()),
             allowed: allowed.into(),
         }
     }
@@ -107,5 +108,14 @@ impl From<demcon_model::ModelError> for SceneError {
             M::Thermal(e) => SceneError::Thermal(e),
             M::Electric(e) => SceneError::Electric(e),
         }
+    }
+}
+
+/// `text` in `{:e}` form when it is a number longer than 16 characters (e.g. `1e-300` rather
+/// than 0.000…0001), else unchanged.
+fn short_number(text: String) -> String {
+    match text.parse::<f64>() {
+        Ok(x) if text.len() > 16 => format!("{x:e}"),
+        _ => text,
     }
 }

@@ -1,6 +1,7 @@
 //! Files of a run: `summary.json`, `probes.csv`, `profiles.csv`, `particles.csv` and
-//! `particles.vtu` (ParaView), each written atomically. Values that are not results
-//! (particles excluded from a solve) are never written as NaN: a `solved` column flags them.
+//! `particles.vtu` (ParaView), written as one folder that replaces the previous run's whole.
+//! Values that are not results (particles excluded from a solve) are never written as NaN: a
+//! `solved` column flags them.
 
 use std::path::Path;
 
@@ -58,14 +59,106 @@ pub fn summary_json(name: &str, r: &RunResult) -> serde_json::Value {
     })
 }
 
-/// Writes every output the scene asks for into `dir` (created if needed); returns the files.
+/// The file that marks a folder as a demcon run's output folder (which a new run may replace).
+pub const RUN_MARKER: &str = ".demcon-run";
+
+/// The parent folder and the name of an output folder.
+fn split_dir(dir: &Path) -> Result<(&Path, &std::ffi::OsStr), SceneError> {
+    let invalid = || {
+        SceneError::invalid(
+            "--out",
+            dir.display(),
+            "give a named output folder (e.g. out/slab), not `.`, `..` or a root",
+        )
+    };
+    let name = dir.file_name().ok_or_else(invalid)?;
+    let parent = dir.parent().map_or(Path::new("."), |p| {
+        if p.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            p
+        }
+    });
+    Ok((parent, name))
+}
+
+/// Checks, before any work, that `dir` can receive a run's outputs: it is new, empty, or the
+/// output folder of an earlier run (it holds [`RUN_MARKER`] or `summary.json`, and will be
+/// replaced whole); and its parent folder exists (or can be created) and is writable.
+pub fn check_output_dir(dir: &Path) -> Result<(), SceneError> {
+    let (parent, _) = split_dir(dir)?;
+    if dir.exists() {
+        if !dir.is_dir() {
+            return Err(SceneError::invalid(
+                "--out",
+                dir.display(),
+                "exists and is not a folder: give a folder for the outputs",
+            ));
+        }
+        let mut entries = std::fs::read_dir(dir).map_err(io(dir))?;
+        let is_run = dir.join(RUN_MARKER).exists() || dir.join("summary.json").exists();
+        if !is_run && entries.next().is_some() {
+            return Err(SceneError::invalid(
+                "--out",
+                dir.display(),
+                "is a folder with other files in it: give a new or empty folder, or an earlier run's \
+                 output folder (which is replaced whole)",
+            ));
+        }
+    }
+    std::fs::create_dir_all(parent).map_err(io(parent))?;
+    let probe = parent.join(format!(".demcon-write-test-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(io(parent))?;
+    std::fs::remove_file(&probe).map_err(io(&probe))?;
+    Ok(())
+}
+
+/// Writes every output the scene asks for into the folder `dir`, as a whole: the files are
+/// written into a temporary sibling folder which then replaces `dir` (an earlier run's folder
+/// is removed), so a folder never mixes two runs and a killed run leaves the old one or the
+/// new one. Returns the files written. `dir` must pass [`check_output_dir`].
 pub fn write_outputs(
     name: &str,
     outputs: &crate::config::OutputsConfig,
     r: &RunResult,
     dir: &Path,
 ) -> Result<Vec<String>, SceneError> {
-    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    check_output_dir(dir)?;
+    let (parent, base) = split_dir(dir)?;
+    let tag = |what: &str| {
+        let mut n = std::ffi::OsString::from(".");
+        n.push(base);
+        n.push(format!(".{what}-{}", std::process::id()));
+        parent.join(n)
+    };
+    let (tmp, old) = (tag("partial"), tag("old"));
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).map_err(io(&tmp))?;
+    let written = match write_files(name, outputs, r, &tmp) {
+        Ok(w) => w,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&tmp);
+            return Err(e);
+        }
+    };
+    write_atomic(&tmp.join(RUN_MARKER), name.as_bytes())?;
+    if dir.exists() {
+        std::fs::rename(dir, &old).map_err(io(dir))?;
+    }
+    std::fs::rename(&tmp, dir).map_err(io(dir))?;
+    if old.exists() {
+        std::fs::remove_dir_all(&old).map_err(io(&old))?;
+    }
+    Ok(written)
+}
+
+/// Writes the output files into the (new, empty) folder `dir`.
+fn write_files(
+    name: &str,
+    outputs: &crate::config::OutputsConfig,
+    r: &RunResult,
+    dir: &Path,
+) -> Result<Vec<String>, SceneError> {
     let mut written = Vec::new();
     let m = &r.model;
     let n = m.particles.len();

@@ -31,25 +31,44 @@ pub struct Scene {
 
 impl Scene {
     /// Reads and parses a RON scene file; errors carry the line and column.
+    /// The file must be UTF-8 (an error names the line and column of the first invalid byte).
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
             path: path.into(),
             source,
+        })?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+            let line = 1 + good.iter().filter(|&&b| b == b'\n').count();
+            let col = 1 + good.iter().rev().take_while(|&&b| b != b'\n').count();
+            SceneError::Parse {
+                path: path.into(),
+                line,
+                col,
+                message: "the file is not UTF-8 text (save the scene as UTF-8)".into(),
+            }
         })?;
         let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Scene::parse(&text, path, base_dir)
     }
 
-    /// Parses RON text (`path` is only used in messages) and validates it.
+    /// Parses RON text (`path` is only used in messages) and validates it. A UTF-8 byte-order
+    /// mark is skipped; CR-LF and CR-only line endings count as line breaks.
     pub fn parse(text: &str, path: &Path, base_dir: PathBuf) -> Result<Scene, SceneError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let text = if text.contains('\r') {
+            std::borrow::Cow::Owned(text.replace("\r\n", "\n").replace('\r', "\n"))
+        } else {
+            std::borrow::Cow::Borrowed(text)
+        };
         let config: SceneConfig = ron::Options::default()
             .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-            .from_str(text)
+            .from_str(&text)
             .map_err(|e| SceneError::Parse {
                 path: path.into(),
                 line: e.span.start.line,
                 col: e.span.start.col,
-                message: e.code.to_string(),
+                message: parse_message(&e.code),
             })?;
         Scene::from_config(config, base_dir)
     }
@@ -64,6 +83,16 @@ impl Scene {
     /// Checks every value before any heavy work (`validate.rs`).
     pub fn validate(&self) -> Result<(), SceneError> {
         crate::validate::validate(&self.config, &self.base_dir)
+    }
+}
+
+/// The RON parser's message in the user's terms (no internal option names).
+fn parse_message(code: &ron::error::Error) -> String {
+    match code {
+        ron::error::Error::ExceededRecursionLimit => {
+            "the scene is nested too deeply (regions within regions, more than the parser's limit)".into()
+        }
+        other => other.to_string(),
     }
 }
 
@@ -294,6 +323,18 @@ fn solve(
     };
     if let Some(el) = &el {
         diagnostics.extend(el.diagnostics.iter().cloned());
+    }
+    if let Some(r) = th.as_ref().map(|t| &t.report)
+        && r.scheme == "forward-euler"
+        && r.dt > r.dt_bound
+    {
+        diagnostics.push(format!(
+            "thermal: the explicit step dt = {:.3e} s is {:.2}× the stability bound {:.3e} s (allow_unstable): \
+             the run was watched for divergence, but its accuracy is not guaranteed",
+            r.dt,
+            r.dt / r.dt_bound,
+            r.dt_bound
+        ));
     }
     Ok((th, el))
 }

@@ -16,6 +16,7 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
     // Materials, contacts, carving, phases, selectors, electrodes' select/face: by conversion.
     convert::problem(c)?;
     let container = known_container(c, base_dir)?;
+    check_contacts(&c.contacts)?;
     check_probes(c)?;
     if c.thermal.is_none() && c.electric.is_none() {
         return Err(SceneError::invalid(
@@ -53,6 +54,40 @@ fn known_container(c: &SceneConfig, base_dir: &Path) -> Result<Option<Container>
             .ok()
             .flatten(),
     })
+}
+
+/// Largest target coordination accepted: a random packing of spheres has at most ~14
+/// neighbours within a few percent of a gap, and the contact search's largest relative gap
+/// (1) is reached long before a mean of 20.
+pub const MAX_COORDINATION: f64 = 20.0;
+/// Smallest target coordination accepted: below 2 most particles have at most one contact,
+/// the network falls apart into a dust of pairs and rattlers.
+pub const MIN_COORDINATION: f64 = 2.0;
+
+/// Contact parameters: a target coordination in [2, 20], or a relative gap in (0, 1].
+fn check_contacts(c: &ContactsConfig) -> Result<(), SceneError> {
+    if let Some(z) = c.coordination
+        && !(MIN_COORDINATION..=MAX_COORDINATION).contains(&z)
+    {
+        return Err(SceneError::invalid(
+            "contacts.coordination",
+            z,
+            format!(
+                "the target mean coordination must lie in [{MIN_COORDINATION}, {MAX_COORDINATION}] (the papers use 7.5)"
+            ),
+        ));
+    }
+    if let Some(t) = c.tolerance
+        && !(1e-9..=1.0).contains(&t)
+    {
+        return Err(SceneError::invalid(
+            "contacts.tolerance",
+            t,
+            "the relative gap tolerance must lie in [1e-9, 1] (a gap up to t·(R_p + R_q); below 1e-9 it is \
+             round-off)",
+        ));
+    }
+    Ok(())
 }
 
 /// Probes must lie in the domain; with a generated packing it is known before packing.
@@ -254,6 +289,25 @@ fn check_electric(
         if let Some(f) = el.face {
             check_face(&format!("electric.electrodes[{i}].face"), f, container)?;
         }
+        // One electrode per face: a face electrode and another electrode on the same face
+        // (a face electrode or the particles touching it) would short the face.
+        let face_of = |el: &ElectrodeConfig| match (&el.face, &el.select) {
+            (Some(f), _) | (None, Some(SelectorConfig::Face(f))) => Some(convert::face(*f)),
+            _ => None,
+        };
+        if let Some(f) = face_of(el)
+            && let Some(j) = e.electrodes[..i].iter().position(|o| face_of(o) == Some(f))
+            && (el.face.is_some() || e.electrodes[j].face.is_some())
+        {
+            return Err(SceneError::invalid(
+                &format!("electric.electrodes[{i}]"),
+                f.name(),
+                format!(
+                    "electric.electrodes[{j}] already holds face {}: give each face one electrode",
+                    f.name()
+                ),
+            ));
+        }
         finite(&format!("electric.electrodes[{i}].potential"), el.potential, "V")?;
     }
     Ok(())
@@ -296,6 +350,16 @@ fn check_outputs(c: &SceneConfig, container: Option<&Container>) -> Result<(), S
         }
     }
     if let Some(ax) = o.etc_axis {
+        if let Some(t) = &c.thermal
+            && !matches!(t.solver, ThermalSolverConfig::Steady)
+        {
+            return Err(SceneError::invalid(
+                "outputs.etc_axis",
+                format!("{ax:?}"),
+                "the effective conductivity needs a steady state: use `solver: Steady` (a transient's \
+                 boundary flow is not λ_e ΔT A / L until it has settled)",
+            ));
+        }
         let fixed = c.thermal.as_ref().map_or(0, |t| {
             t.bcs
                 .iter()

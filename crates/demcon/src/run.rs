@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use demcon_scene::output::check_output_dir;
 use demcon_scene::{RunOptions, Scene, run as run_scene, write_outputs};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -42,6 +43,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         scene.config.name.clone()
     };
     let out = args.out.unwrap_or_else(|| PathBuf::from("out").join(&stem));
+    check_output_dir(&out).with_context(|| format!("output folder {}", out.display()))?;
     let bar = (!args.quiet).then(|| {
         let b = ProgressBar::new(1000);
         b.set_style(
