@@ -50,21 +50,62 @@ pub enum SceneError {
     #[error("packing: {0}")]
     Packing(String),
     /// Contact detection or surfaces failed.
-    #[error("contacts: {0}")]
-    Graph(#[from] demcon_graph::GraphError),
+    #[error("contacts: {}", scene_terms(.0))]
+    Graph(demcon_graph::GraphError),
     /// A linear solve or boundary-condition resolution failed.
-    #[error("network: {0}")]
-    Solve(#[from] demcon_network::SolveError),
+    #[error("network: {}", scene_terms(.0))]
+    Solve(demcon_network::SolveError),
     /// The thermal solver failed (instability, divergence…).
-    #[error("thermal: {0}")]
-    Thermal(#[from] demcon_thermal::ThermalError),
+    #[error("thermal: {}", scene_terms(.0))]
+    Thermal(demcon_thermal::ThermalError),
     /// The electric solver failed.
-    #[error("electric: {0}")]
-    Electric(#[from] demcon_electric::ElectricError),
+    #[error("electric: {}", scene_terms(.0))]
+    Electric(demcon_electric::ElectricError),
     /// Post-processing failed (probe outside, bad Halo ratio…).
-    #[error("post-processing: {0}")]
-    Post(#[from] demcon_post::PostError),
+    #[error("post-processing: {}", scene_terms(.0))]
+    Post(demcon_post::PostError),
 }
+
+/// A lower crate's message in the scene's terms: the library names of what a scene sets are
+/// replaced by the scene fields that set them. (The lower crate's error is kept as the
+/// variant's value, not as a `source`, so the message is printed once.)
+fn scene_terms(e: &impl std::fmt::Display) -> String {
+    const TERMS: &[(&str, &str)] = &[
+        ("(FloatingPolicy::Exclude)", "(`floating: Exclude`)"),
+        ("FloatingPolicy::Exclude", "`floating: Exclude`"),
+        ("FloatingPolicy::Fail", "`floating: Fail`"),
+        ("use TimeStep::Auto", "use `dt: Auto(safety: ..)`"),
+        ("TimeStep::Auto", "`dt: Auto(safety: ..)`"),
+        ("raise max_epsilon, or", "give `contacts.tolerance` instead, or"),
+        ("tolerance.target_coordination", "contacts.coordination"),
+        ("tolerance.relative", "contacts.tolerance"),
+    ];
+    let mut text = e.to_string();
+    for (from, to) in TERMS {
+        if text.contains(from) {
+            text = text.replace(from, to);
+        }
+    }
+    text
+}
+
+macro_rules! from_lower {
+    ($($variant:ident($t:ty)),*) => {$(
+        impl From<$t> for SceneError {
+            fn from(e: $t) -> Self {
+                SceneError::$variant(e)
+            }
+        }
+    )*};
+}
+
+from_lower!(
+    Graph(demcon_graph::GraphError),
+    Solve(demcon_network::SolveError),
+    Thermal(demcon_thermal::ThermalError),
+    Electric(demcon_electric::ElectricError),
+    Post(demcon_post::PostError)
+);
 
 impl SceneError {
     /// An invalid value at `field`.

@@ -203,3 +203,27 @@ fn allow_unstable_above_the_bound_adds_a_diagnostic() {
         r.diagnostics
     );
 }
+
+#[test]
+fn lower_crate_messages_name_scene_fields() {
+    use demcon_scene::SceneError;
+    let e = SceneError::from(demcon_network::SolveError::FloatingCluster {
+        clusters: 1,
+        nodes: 2,
+        largest: 2,
+        example: 7,
+    });
+    let text = e.to_string();
+    assert!(
+        text.contains("`floating: Exclude`") && !text.contains("FloatingPolicy"),
+        "{text}"
+    );
+    // The lower error is not also a `source`, so a chain printer shows it once.
+    assert!(std::error::Error::source(&e).is_none());
+    let e = SceneError::from(demcon_thermal::ThermalError::Unstable {
+        dt: 1.0,
+        dt_max: 0.5,
+        node: 3,
+    });
+    assert!(e.to_string().contains("`dt: Auto(safety: ..)`"), "{e}");
+}
