@@ -7,8 +7,12 @@
 //! - `cargo xtask validate [CASE…] [--quick | --full] [--out DIR]` — the papers' validation
 //!   cases in release mode; writes `<case>.json`, charts and `REPORT.md`.
 //! - `cargo xtask bench [NAME]` — the criterion benchmarks.
+//! - `cargo xtask fuzz [--runs N] [--seed S] [--timeout SECS]` — a fuzz campaign of the
+//!   binary on mutated scenes, packing files and `pack` flags (counts panics, hangs,
+//!   non-finite outputs, outputs left by failed runs).
 
 mod ci;
+mod fuzz;
 mod tidy;
 
 use std::process::Command;
@@ -24,6 +28,7 @@ fn main() -> Result<()> {
     match cmd {
         "ci" => ci::run(&rest),
         "tidy" => tidy::run(),
+        "fuzz" => fuzz::run(&rest),
         "validate" => validate(&rest),
         "bench" => bench(&rest),
         "help" | "--help" | "-h" => {
@@ -31,7 +36,8 @@ fn main() -> Result<()> {
                 "usage: cargo xtask <command>\n\n  ci                         format check, clippy -D warnings, cargo test --workspace\n  \
                  tidy                       layer rules of the crate graph, file headers\n  \
                  validate [CASE…] [--quick|--full] [--out DIR] [--list]\n                             run the validation cases (release build)\n  \
-                 bench [NAME]               run the criterion benchmarks (all, or benches/NAME.rs)"
+                 bench [NAME]               run the criterion benchmarks (all, or benches/NAME.rs)\n  \
+                 fuzz [--runs N] [--seed S] [--timeout SECS] [--out DIR]\n                             fuzz the binary (mutated scenes, packings, pack flags)"
             );
             Ok(())
         }
