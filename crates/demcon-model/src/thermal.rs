@@ -174,7 +174,7 @@ pub struct ThermalProblem {
     pub initial_temperature: f64,
     /// Times (s) at which a transient's temperatures are kept.
     pub output_times: Vec<f64>,
-    /// Floating clusters: excluded or refused.
+    /// Floating clusters of a steady solve: excluded or refused (a transient keeps them).
     pub floating: FloatingPolicy,
 }
 
@@ -468,8 +468,9 @@ pub fn thermal_bcs(
             "a steady thermal solve needs at least one fixed temperature",
         ));
     }
-    // A transient run is well posed without fixed values: heat capacity holds each cluster.
-    let policy = if transient && fixed_sets.is_empty() {
+    // A transient is well posed on every cluster, fixed values or not: its heat capacity holds
+    // it, and its sources heat it. Only a steady solve needs the floating policy.
+    let policy = if transient {
         FloatingPolicy::Keep
     } else {
         problem.floating

@@ -278,18 +278,33 @@ fn write_files(
         written.push("particles.csv".into());
     }
     if !r.probes.is_empty() {
-        let mut s = String::from("probe,field,t_s,value\n");
+        let mut s = String::from("probe,field,t_s,value,solved\n");
         for p in &r.probes {
-            s.push_str(&format!("{},{},{},{:.10e}\n", p.name, p.field, p.t, p.value));
+            s.push_str(&format!(
+                "{},{},{},{:.10e},{}\n",
+                p.name,
+                p.field,
+                p.t,
+                p.value,
+                u8::from(p.solved)
+            ));
         }
         write_atomic(&dir.join("probes.csv"), s.as_bytes())?;
         written.push("probes.csv".into());
     }
     if !r.profiles.is_empty() {
-        let mut s = String::from("profile,field,t_s,distance_m,value\n");
+        let mut s = String::from("profile,field,t_s,distance_m,value,solved\n");
         for p in &r.profiles {
-            for (d, v) in &p.points {
-                s.push_str(&format!("{},{},{},{:.10e},{:.10e}\n", p.name, p.field, p.t, d, v));
+            for ((d, v), ok) in p.points.iter().zip(&p.solved) {
+                s.push_str(&format!(
+                    "{},{},{},{:.10e},{:.10e},{}\n",
+                    p.name,
+                    p.field,
+                    p.t,
+                    d,
+                    v,
+                    u8::from(*ok)
+                ));
             }
         }
         write_atomic(&dir.join("profiles.csv"), s.as_bytes())?;

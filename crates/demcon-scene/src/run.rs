@@ -138,6 +138,10 @@ pub struct ProbeValue {
     pub t: f64,
     /// Value.
     pub value: f64,
+    /// Whether every particle the value is read from was solved for (false: the reading
+    /// includes particles excluded from the solve, e.g. a floating cluster of a steady run,
+    /// whose values are not results).
+    pub solved: bool,
 }
 
 /// A profile along a line.
@@ -151,6 +155,8 @@ pub struct ProfileValues {
     pub t: f64,
     /// (distance from the start (m), value).
     pub points: Vec<(f64, f64)>,
+    /// Per point: read from solved particles only (see [`ProbeValue::solved`]).
+    pub solved: Vec<bool>,
 }
 
 /// Effective conductivity of a steady run.
@@ -349,8 +355,17 @@ struct Post {
     domain: Domain,
 }
 
-/// A field sampled by probes and profiles: (name, time (s), value per particle).
-type SampledField = (String, f64, Vec<f64>);
+/// A field sampled by probes and profiles.
+struct SampledField {
+    /// `temperature`, `potential`, `flux_magnitude`, `halo_flux_magnitude`.
+    name: &'static str,
+    /// Time (s).
+    t: f64,
+    /// Value per particle.
+    values: Vec<f64>,
+    /// 1 where the particle was solved for, 0 where it was excluded.
+    solved: std::rc::Rc<Vec<f64>>,
+}
 
 /// Flux, Halo, ETC, probes and profiles: only what the outputs ask for.
 fn post_process(
@@ -386,31 +401,48 @@ fn post_process(
         _ => None,
     };
     let final_time = problem.thermal.as_ref().map_or(0.0, |t| t.solver.final_time());
+    let n = model.particles.len();
+    let mask = |excluded: &mut dyn Iterator<Item = u32>| {
+        let mut m = vec![1.0; n];
+        excluded
+            .filter(|&p| (p as usize) < n)
+            .for_each(|p| m[p as usize] = 0.0);
+        std::rc::Rc::new(m)
+    };
+    let thermal_solved = mask(&mut bcs.iter().flat_map(|b| b.constraints.excluded().iter().copied()));
+    let electric_solved = mask(&mut el.iter().flat_map(|e| e.excluded.iter().copied()));
     let mut fields: Vec<SampledField> = Vec::new();
+    let mut field = |name, t, values, solved: &std::rc::Rc<Vec<f64>>| {
+        fields.push(SampledField {
+            name,
+            t,
+            values,
+            solved: solved.clone(),
+        })
+    };
     if let Some(th) = th {
         for (t, v) in &th.snapshots {
-            fields.push(("temperature".into(), *t, v.clone()));
+            field("temperature", *t, v.clone(), &thermal_solved);
         }
         if th.snapshots.last().map(|s| s.0) != Some(final_time) {
-            fields.push(("temperature".into(), final_time, th.temperatures.clone()));
+            field(
+                "temperature",
+                final_time,
+                th.temperatures.clone(),
+                &thermal_solved,
+            );
         }
     }
     if let Some(el) = el {
-        fields.push(("potential".into(), 0.0, el.potentials.clone()));
+        field("potential", 0.0, el.potentials.clone(), &electric_solved);
     }
     if let Some(f) = &flux {
-        fields.push((
-            "flux_magnitude".into(),
-            final_time,
-            f.iter().map(|v| v.norm()).collect(),
-        ));
+        let v = f.iter().map(|v| v.norm()).collect();
+        field("flux_magnitude", final_time, v, &thermal_solved);
     }
     if let Some((h, _, _)) = &halo {
-        fields.push((
-            "halo_flux_magnitude".into(),
-            final_time,
-            h.iter().map(|v| v.norm()).collect(),
-        ));
+        let v = h.iter().map(|v| v.norm()).collect();
+        field("halo_flux_magnitude", final_time, v, &thermal_solved);
     }
     let rep = setup.map(|s| s.rep_volumes.clone()).unwrap_or_else(|| {
         (0..model.particles.len())
@@ -438,37 +470,45 @@ fn sample(
 ) -> Result<(Vec<ProbeValue>, Vec<ProfileValues>), SceneError> {
     let mut probes = Vec::new();
     let mut profiles = Vec::new();
+    // A reading is solved when the solved mask (1 or 0 per particle) reads exactly 1 there.
+    let all_solved = |x: f64| x >= 1.0 - 1e-12;
     for (i, p) in plan.probes.iter().enumerate() {
-        for (field, t, values) in fields {
-            let value = index.probe(values, &p.point, &p.method).map_err(|e| {
-                SceneError::invalid(
-                    &format!("outputs.probes[{i}] ({})", p.name),
-                    format!("{:?}", cfg.outputs.probes[i].point),
-                    e.to_string(),
-                )
-            })?;
+        let err = |e: demcon_post::PostError| {
+            SceneError::invalid(
+                &format!("outputs.probes[{i}] ({})", p.name),
+                format!("{:?}", cfg.outputs.probes[i].point),
+                e.to_string(),
+            )
+        };
+        for f in fields {
+            let value = index.probe(&f.values, &p.point, &p.method).map_err(err)?;
+            let solved = all_solved(index.probe(&f.solved, &p.point, &p.method).map_err(err)?);
             probes.push(ProbeValue {
                 name: p.name.clone(),
-                field: field.clone(),
-                t: *t,
+                field: f.name.into(),
+                t: f.t,
                 value,
+                solved,
             });
         }
     }
     for (i, p) in plan.profiles.iter().enumerate() {
-        for (field, t, values) in fields {
-            let points = index.profile(values, &p.line, &p.method).map_err(|e| {
-                SceneError::invalid(
-                    &format!("outputs.profiles[{i}] ({})", p.name),
-                    "line",
-                    e.to_string(),
-                )
-            })?;
+        let err = |e: demcon_post::PostError| {
+            SceneError::invalid(
+                &format!("outputs.profiles[{i}] ({})", p.name),
+                "line",
+                e.to_string(),
+            )
+        };
+        for f in fields {
+            let points = index.profile(&f.values, &p.line, &p.method).map_err(err)?;
+            let mask = index.profile(&f.solved, &p.line, &p.method).map_err(err)?;
             profiles.push(ProfileValues {
                 name: p.name.clone(),
-                field: field.clone(),
-                t: *t,
+                field: f.name.into(),
+                t: f.t,
                 points,
+                solved: mask.iter().map(|&(_, m)| all_solved(m)).collect(),
             });
         }
     }

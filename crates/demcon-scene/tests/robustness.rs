@@ -227,3 +227,52 @@ fn lower_crate_messages_name_scene_fields() {
     });
     assert!(e.to_string().contains("`dt: Auto(safety: ..)`"), "{e}");
 }
+
+/// A chain of four unit spheres touching the XMin wall and, apart, a pair of spheres that
+/// touches nothing else: a floating cluster.
+fn chain_and_pair(solver: &str, extra: &str) -> Scene {
+    let dir = std::env::temp_dir().join(format!("demcon-floating-{}-{}", std::process::id(), solver.len()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut f = String::from("# container box 8 1 1\n");
+    for x in [0.5, 1.5, 2.5, 3.5, 5.5, 6.5] {
+        f.push_str(&format!("{x} 0.5 0.5 0.5\n"));
+    }
+    std::fs::write(dir.join("p.xyzr"), f).unwrap();
+    let text = format!(
+        r#"(
+            packing: File(path: "p.xyzr"),
+            contacts: (tolerance: Some(0.01)),
+            surface: Calibrated(c_t: Value(1.0)),
+            materials: [(name: "m", conductivity: 1.0, density: 2.0, specific_heat: 3.0)],
+            thermal: Some((initial_temperature: 25.0,
+                bcs: [WallTemperature(face: XMin, value: 25.0)],
+                sources: [(select: Particles([4, 5]), power_density: 6.0)],
+                solver: {solver})),
+            outputs: (vtk: false, probes: [(name: "pair", point: (6.0, 0.5, 0.5), method: Ball(1.0))]),
+            {extra}
+        )"#
+    );
+    Scene::parse(&text, Path::new("floating.ron"), dir).unwrap()
+}
+
+#[test]
+fn a_transient_keeps_the_sources_of_a_floating_cluster() {
+    // Adiabatic pair under q = 6 W/m³ with ρc = 6 J/(m³·K): +1 K per second, exactly.
+    let s = chain_and_pair("Implicit(t_end: 2.0, dt: 0.5)", "");
+    let r = run(&s, &RunOptions::default()).unwrap();
+    let p = r.probes.iter().find(|p| p.name == "pair").unwrap();
+    assert!((p.value - 27.0).abs() < 1e-9, "T(pair) = {}", p.value);
+    assert!(p.solved);
+}
+
+#[test]
+fn probes_over_excluded_particles_are_flagged() {
+    let s = chain_and_pair("Steady", "floating: Exclude,");
+    let r = run(&s, &RunOptions::default()).unwrap();
+    let p = r.probes.iter().find(|p| p.name == "pair").unwrap();
+    assert!(
+        !p.solved,
+        "a probe over an excluded cluster reads {} as if solved",
+        p.value
+    );
+}
