@@ -160,106 +160,172 @@ fn write_files(
     dir: &Path,
 ) -> Result<Vec<String>, SceneError> {
     let mut written = Vec::new();
-    let m = &r.model;
-    let n = m.particles.len();
-    let mut solved = vec![1i32; n];
-    let mut excluded: Vec<u32> = Vec::new();
-    if let Some(e) = &r.electric {
-        excluded.extend(&e.excluded);
-    }
-    if let (Some(b), Some(s)) = (&r.thermal_bcs, &r.thermal_setup) {
-        excluded.extend(
-            b.constraints
-                .excluded()
-                .iter()
-                .filter(|&&p| s.walls.is_particle(p)),
-        );
-    }
-    for &p in &excluded {
-        solved[p as usize] = 0;
-    }
-    // Scalar and vector fields.
-    let radius = m.particles.radii.clone();
-    let phase: Vec<f64> = m.particles.phases.iter().map(|&p| p as f64).collect();
-    let degree: Vec<i32> = m.graph.degrees().iter().map(|&d| d as i32).collect();
-    let mut scalars: Vec<(&str, Vec<f64>)> = Vec::new();
-    // Laminate rule: the fraction of each particle's volume in its own phase (1 unless an
-    // interface cuts it) and the phase on the other side (its own phase if none).
-    let lam = m.laminates();
-    scalars.push((
-        "phase_fraction",
-        (0..n)
-            .map(|p| lam.get(p).map_or(1.0, |x| 1.0 - x.other_fraction))
-            .collect(),
-    ));
-    scalars.push((
-        "other_phase",
-        (0..n)
-            .map(|p| lam.get(p).map_or(m.particles.phases[p], |x| x.other_phase) as f64)
-            .collect(),
-    ));
-    if let Some(t) = &r.thermal {
-        scalars.push(("temperature", t.temperatures.clone()));
-    }
-    if let Some(e) = &r.electric {
-        scalars.push(("potential", e.potentials.clone()));
-        scalars.push(("joule_power", e.joule.clone()));
-        // Current density magnitude from the branch currents, as the flux of eq. 20:
-        // j_p = (1/(2 V_rep)) |Σ_q I_pq ℓ_pq|.
-        let mut d = vec![demcon_core::Vec3::zeros(); n];
-        for (k, &[p, q]) in m.graph.pairs.iter().enumerate() {
-            let l = m.graph.branch(k) * e.branch_currents[k];
-            d[p as usize] += l;
-            d[q as usize] += l;
-        }
-        let vrep: Vec<f64> = (0..n).map(|p| m.particles.volume(p) / m.phi).collect();
-        scalars.push((
-            "current_density",
-            d.iter().zip(&vrep).map(|(v, w)| v.norm() / (2.0 * w)).collect(),
-        ));
-    }
-    let mut vectors: Vec<(&str, &[demcon_core::Vec3])> = Vec::new();
-    if let Some(f) = &r.flux {
-        vectors.push(("heat_flux", f));
-    }
-    if let Some((h, _, _)) = &r.halo {
-        vectors.push(("halo_flux", h));
-    }
-    let halo_cut: Option<Vec<i32>> = r
-        .halo
-        .as_ref()
-        .map(|h| h.1.iter().map(|&b| i32::from(b)).collect());
+    let fields = ParticleFields::of(r);
     if outputs.vtk {
-        let path = dir.join("particles.vtu");
-        let mut fields = vec![
-            Field::ints("coordination", &degree),
-            Field::ints("solved", &solved),
-        ];
-        for (name, v) in &scalars {
-            fields.push(Field::scalars(name, v));
-        }
-        for (name, v) in &vectors {
-            fields.push(Field::vectors(name, v));
-        }
-        if let Some(c) = &halo_cut {
-            fields.push(Field::ints("halo_truncated", c));
-        }
-        write_vtu(&path, &m.particles, &fields)?;
+        write_vtu(&dir.join("particles.vtu"), &r.model.particles, &fields.vtk())?;
         written.push("particles.vtu".into());
     }
     if outputs.particles_csv {
-        let path = dir.join("particles.csv");
-        let x: Vec<f64> = m.particles.centres.iter().map(|c| c.x).collect();
-        let y: Vec<f64> = m.particles.centres.iter().map(|c| c.y).collect();
-        let z: Vec<f64> = m.particles.centres.iter().map(|c| c.z).collect();
-        let solved_f: Vec<f64> = solved.iter().map(|&s| s as f64).collect();
+        fields.write_csv(r, &dir.join("particles.csv"))?;
+        written.push("particles.csv".into());
+    }
+    if !r.probes.is_empty() {
+        let mut s = String::from("probe,field,t_s,value,solved\n");
+        for p in &r.probes {
+            let solved = u8::from(p.solved);
+            s.push_str(&format!(
+                "{},{},{},{:.10e},{solved}\n",
+                p.name, p.field, p.t, p.value
+            ));
+        }
+        write_atomic(&dir.join("probes.csv"), s.as_bytes())?;
+        written.push("probes.csv".into());
+    }
+    if !r.profiles.is_empty() {
+        let mut s = String::from("profile,field,t_s,distance_m,value,solved\n");
+        for p in &r.profiles {
+            for ((d, v), ok) in p.points.iter().zip(&p.solved) {
+                let solved = u8::from(*ok);
+                s.push_str(&format!(
+                    "{},{},{},{d:.10e},{v:.10e},{solved}\n",
+                    p.name, p.field, p.t
+                ));
+            }
+        }
+        write_atomic(&dir.join("profiles.csv"), s.as_bytes())?;
+        written.push("profiles.csv".into());
+    }
+    let summary = serde_json::to_vec_pretty(&summary_json(name, r)).expect("summary serialises");
+    write_atomic(&dir.join("summary.json"), &summary)?;
+    written.push("summary.json".into());
+    Ok(written)
+}
+
+/// The per-particle fields of a run, as the VTU and the CSV write them.
+struct ParticleFields<'a> {
+    /// 1 where the particle was solved for, 0 where a solve excluded it.
+    solved: Vec<i32>,
+    /// Contacts per particle.
+    degree: Vec<i32>,
+    /// Scalar fields (name, value per particle).
+    scalars: Vec<(&'static str, Vec<f64>)>,
+    /// Vector fields (name, value per particle).
+    vectors: Vec<(&'static str, &'a [demcon_core::Vec3])>,
+    /// 1 where the particle's Halo is cut by the boundary.
+    halo_cut: Option<Vec<i32>>,
+}
+
+impl<'a> ParticleFields<'a> {
+    fn of(r: &'a RunResult) -> Self {
+        let m = &r.model;
+        let n = m.particles.len();
+        let mut solved = vec![1i32; n];
+        let mut excluded: Vec<u32> = Vec::new();
+        if let Some(e) = &r.electric {
+            excluded.extend(&e.excluded);
+        }
+        if let (Some(b), Some(s)) = (&r.thermal_bcs, &r.thermal_setup) {
+            excluded.extend(
+                b.constraints
+                    .excluded()
+                    .iter()
+                    .filter(|&&p| s.walls.is_particle(p)),
+            );
+        }
+        for &p in &excluded {
+            solved[p as usize] = 0;
+        }
+        let degree: Vec<i32> = m.graph.degrees().iter().map(|&d| d as i32).collect();
+        let mut scalars: Vec<(&str, Vec<f64>)> = Vec::new();
+        // Laminate rule: the fraction of each particle's volume in its own phase (1 unless an
+        // interface cuts it) and the phase on the other side (its own phase if none).
+        let lam = m.laminates();
+        scalars.push((
+            "phase_fraction",
+            (0..n)
+                .map(|p| lam.get(p).map_or(1.0, |x| 1.0 - x.other_fraction))
+                .collect(),
+        ));
+        scalars.push((
+            "other_phase",
+            (0..n)
+                .map(|p| lam.get(p).map_or(m.particles.phases[p], |x| x.other_phase) as f64)
+                .collect(),
+        ));
+        if let Some(t) = &r.thermal {
+            scalars.push(("temperature", t.temperatures.clone()));
+        }
+        if let Some(e) = &r.electric {
+            scalars.push(("potential", e.potentials.clone()));
+            scalars.push(("joule_power", e.joule.clone()));
+            // Current density magnitude from the branch currents, as the flux of eq. 20:
+            // j_p = (1/(2 V_rep)) |Σ_q I_pq ℓ_pq|.
+            let mut d = vec![demcon_core::Vec3::zeros(); n];
+            for (k, &[p, q]) in m.graph.pairs.iter().enumerate() {
+                let l = m.graph.branch(k) * e.branch_currents[k];
+                d[p as usize] += l;
+                d[q as usize] += l;
+            }
+            let vrep: Vec<f64> = (0..n).map(|p| m.particles.volume(p) / m.phi).collect();
+            scalars.push((
+                "current_density",
+                d.iter().zip(&vrep).map(|(v, w)| v.norm() / (2.0 * w)).collect(),
+            ));
+        }
+        let mut vectors: Vec<(&str, &[demcon_core::Vec3])> = Vec::new();
+        if let Some(f) = &r.flux {
+            vectors.push(("heat_flux", f));
+        }
+        if let Some((h, _, _)) = &r.halo {
+            vectors.push(("halo_flux", h));
+        }
+        let halo_cut = r
+            .halo
+            .as_ref()
+            .map(|h| h.1.iter().map(|&b| i32::from(b)).collect());
+        Self {
+            solved,
+            degree,
+            scalars,
+            vectors,
+            halo_cut,
+        }
+    }
+
+    /// The fields of `particles.vtu`.
+    fn vtk(&self) -> Vec<Field<'_>> {
+        let mut fields = vec![
+            Field::ints("coordination", &self.degree),
+            Field::ints("solved", &self.solved),
+        ];
+        for (name, v) in &self.scalars {
+            fields.push(Field::scalars(name, v));
+        }
+        for (name, v) in &self.vectors {
+            fields.push(Field::vectors(name, v));
+        }
+        if let Some(c) = &self.halo_cut {
+            fields.push(Field::ints("halo_truncated", c));
+        }
+        fields
+    }
+
+    /// Writes `particles.csv`: position, radius, phase, solved, every scalar, every vector
+    /// component.
+    fn write_csv(&self, r: &RunResult, path: &Path) -> Result<(), SceneError> {
+        let p = &r.model.particles;
+        let coord = |k: usize| -> Vec<f64> { p.centres.iter().map(|c| c[k]).collect() };
+        let (x, y, z) = (coord(0), coord(1), coord(2));
+        let phase: Vec<f64> = p.phases.iter().map(|&q| q as f64).collect();
+        let solved: Vec<f64> = self.solved.iter().map(|&s| s as f64).collect();
         let mut header = vec!["x", "y", "z", "radius", "phase", "solved"];
-        let mut cols: Vec<&[f64]> = vec![&x, &y, &z, &radius, &phase, &solved_f];
-        for (name, v) in &scalars {
+        let mut cols: Vec<&[f64]> = vec![&x, &y, &z, &p.radii, &phase, &solved];
+        for (name, v) in &self.scalars {
             header.push(name);
             cols.push(v);
         }
-        let comps: Vec<(String, Vec<f64>)> = vectors
+        let comps: Vec<(String, Vec<f64>)> = self
+            .vectors
             .iter()
             .flat_map(|(name, v)| {
                 (0..3).map(move |k| {
@@ -274,44 +340,7 @@ fn write_files(
             header.push(name);
             cols.push(v);
         }
-        write_csv(&path, &header, &cols)?;
-        written.push("particles.csv".into());
+        write_csv(path, &header, &cols)?;
+        Ok(())
     }
-    if !r.probes.is_empty() {
-        let mut s = String::from("probe,field,t_s,value,solved\n");
-        for p in &r.probes {
-            s.push_str(&format!(
-                "{},{},{},{:.10e},{}\n",
-                p.name,
-                p.field,
-                p.t,
-                p.value,
-                u8::from(p.solved)
-            ));
-        }
-        write_atomic(&dir.join("probes.csv"), s.as_bytes())?;
-        written.push("probes.csv".into());
-    }
-    if !r.profiles.is_empty() {
-        let mut s = String::from("profile,field,t_s,distance_m,value,solved\n");
-        for p in &r.profiles {
-            for ((d, v), ok) in p.points.iter().zip(&p.solved) {
-                s.push_str(&format!(
-                    "{},{},{},{:.10e},{:.10e},{}\n",
-                    p.name,
-                    p.field,
-                    p.t,
-                    d,
-                    v,
-                    u8::from(*ok)
-                ));
-            }
-        }
-        write_atomic(&dir.join("profiles.csv"), s.as_bytes())?;
-        written.push("profiles.csv".into());
-    }
-    let summary = serde_json::to_vec_pretty(&summary_json(name, r)).expect("summary serialises");
-    write_atomic(&dir.join("summary.json"), &summary)?;
-    written.push("summary.json".into());
-    Ok(written)
 }
