@@ -162,7 +162,7 @@ fn write_files(
     let mut written = Vec::new();
     let fields = ParticleFields::of(r);
     if outputs.vtk {
-        write_vtu(&dir.join("particles.vtu"), &r.model.particles, &fields.vtk())?;
+        write_vtu(dir.join("particles.vtu"), &r.model.particles, &fields.vtk())?;
         written.push("particles.vtu".into());
     }
     if outputs.particles_csv {
