@@ -12,7 +12,8 @@ use crate::capacity::DtBound;
 use crate::error::ThermalError;
 use crate::system::{SourceUpdate, ThermalSystem, TransientInput};
 use crate::transient::{
-    Transient, TransientReport, boundary_edges, boundary_power, close_ledger, source_power, stops,
+    Transient, TransientReport, Turnover, boundary_edges, boundary_gross, boundary_power, close_ledger,
+    source_gross, source_power, stops,
 };
 
 /// How the explicit step is chosen.
@@ -418,6 +419,8 @@ pub fn run_explicit(
 
     let edges_b = boundary_edges(net, conductances, constraints);
     let mut p_src = source_power(constraints, sources);
+    let mut p_src_gross = source_gross(constraints, sources);
+    let mut turnover = Turnover::default();
     let mut report = TransientReport::new("forward-euler", dt, bound, params.paper_dt);
     if params.output_times.first() == Some(&0.0) {
         observer(0.0, &cur);
@@ -438,6 +441,8 @@ pub fn run_explicit(
             let h = if k < n_full { dt } else { rem };
             report.energy_boundary_j += h * boundary_power(&edges_b, &cur);
             report.energy_sources_j += h * p_src;
+            turnover.boundary_j += h * boundary_gross(&edges_b, &cur);
+            turnover.sources_j += h * p_src_gross;
             let (mut lo, mut hi, bad) = stepper.step(&cur, &mut next);
             if k >= n_full {
                 // Shortened step: T + θ (T_full − T) is forward Euler with step θ Δt.
@@ -483,6 +488,7 @@ pub fn run_explicit(
             if let Some(new) = update.update(t_now, &cur)? {
                 stepper.set_sources(&new)?;
                 p_src = source_power(constraints, &new);
+                p_src_gross = source_gross(constraints, &new);
                 (heat_base, cool_base, t_change) = (heat, cool, t_now);
                 (heat_rate, cool_rate) = rates(&new);
             }
@@ -500,7 +506,7 @@ pub fn run_explicit(
     } else {
         0.0
     };
-    close_ledger(&mut report, constraints, capacities, &t0, &cur);
+    close_ledger(&mut report, constraints, capacities, &t0, &cur, turnover);
     Ok(Transient {
         temperatures: cur,
         report,

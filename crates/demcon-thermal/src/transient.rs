@@ -45,7 +45,10 @@ pub struct TransientReport {
     pub energy_sources_j: f64,
     /// Heat received from fixed-temperature nodes, ∫ Σ H_pq (T_fixed − T_p) dt (J).
     pub energy_boundary_j: f64,
-    /// |stored − sources − boundary| / max(|stored|, |sources| + |boundary|) (0 if all 0).
+    /// |stored − sources − boundary| / scale, the scale being the gross energy turnover:
+    /// Σ_p C_p |T_end − T_0| + ∫ Σ_p |Q_p| dt + ∫ Σ_boundary edges |H_pq (T_q − T_p)| dt
+    /// (0 if the scale is 0). Not the net flow, which is ≈ 0 on a correct run between two
+    /// fixed sets or with no boundary at all: a correct run gives round-off (~1e-12).
     pub energy_balance_error: f64,
     /// Smallest and largest temperature at the end (K).
     pub t_range: [f64; 2],
@@ -139,6 +142,36 @@ pub(crate) fn boundary_power(edges: &[(u32, u32, f64)], t: &[f64]) -> f64 {
         .sum()
 }
 
+/// Gross heat flow through the boundary, Σ over boundary edges of |H (T_fixed − T_free)|
+/// (W): the scale of the energy balance.
+pub(crate) fn boundary_gross(edges: &[(u32, u32, f64)], t: &[f64]) -> f64 {
+    edges
+        .iter()
+        .map(|&(free, fixed, g)| (g * (t[fixed as usize] - t[free as usize])).abs())
+        .sum()
+}
+
+/// Σ over free nodes of |Q_p| (W).
+pub(crate) fn source_gross(constraints: &Constraints, sources: &[f64]) -> f64 {
+    constraints
+        .kinds()
+        .iter()
+        .zip(sources)
+        .filter(|(k, _)| **k == NodeKind::Free)
+        .map(|(_, q)| q.abs())
+        .sum()
+}
+
+/// Gross energy turnover of a run (J), accumulated beside the ledger: the denominator of
+/// [`TransientReport::energy_balance_error`].
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Turnover {
+    /// ∫ Σ |H ΔT| over boundary edges dt (J).
+    pub(crate) boundary_j: f64,
+    /// ∫ Σ |Q_p| dt (J).
+    pub(crate) sources_j: f64,
+}
+
 /// Σ over free nodes of Q_p (W).
 pub(crate) fn source_power(constraints: &Constraints, sources: &[f64]) -> f64 {
     constraints
@@ -157,18 +190,17 @@ pub(crate) fn close_ledger(
     capacities: &[f64],
     t0: &[f64],
     t1: &[f64],
+    turnover: Turnover,
 ) {
-    let stored: f64 = constraints
+    let (stored, stored_gross) = constraints
         .kinds()
         .iter()
         .enumerate()
         .filter(|(_, k)| **k == NodeKind::Free)
         .map(|(p, _)| capacities[p] * (t1[p] - t0[p]))
-        .sum();
+        .fold((0.0, 0.0), |(s, g), v| (s + v, g + v.abs()));
     report.energy_stored_j = stored;
-    let scale = stored
-        .abs()
-        .max(report.energy_sources_j.abs() + report.energy_boundary_j.abs());
+    let scale = stored_gross + turnover.sources_j + turnover.boundary_j;
     report.energy_balance_error = if scale > 0.0 {
         (stored - report.energy_sources_j - report.energy_boundary_j).abs() / scale
     } else {
