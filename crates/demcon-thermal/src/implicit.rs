@@ -166,7 +166,7 @@ pub fn run_implicit(
             };
             report.energy_sources_j += h * p_src;
             turnover.boundary_j += if cn {
-                0.5 * h * (boundary_gross(&edges_b, &prev) + boundary_gross(&edges_b, &next))
+                0.5 * h * (boundary_gross(&edges_b, prev) + boundary_gross(&edges_b, &next))
             } else {
                 h * boundary_gross(&edges_b, &next)
             };
