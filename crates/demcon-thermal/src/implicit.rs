@@ -10,8 +10,8 @@ use demcon_network::{Constraints, LinearSystem, Network, NodeKind, Solution, Sol
 use crate::error::ThermalError;
 use crate::system::{SourceUpdate, ThermalSystem, TransientInput};
 use crate::transient::{
-    Transient, TransientReport, Turnover, boundary_edges, boundary_gross, boundary_power, close_ledger,
-    source_gross, source_power, stops,
+    DEFAULT_MAX_STEPS, ProgressFn, Ticker, Transient, TransientReport, Turnover, boundary_edges,
+    boundary_gross, boundary_power, check_max_steps, close_ledger, source_gross, source_power, stops,
 };
 
 /// Implicit time discretisation.
@@ -47,6 +47,13 @@ pub struct ImplicitParams {
     pub output_times: Vec<f64>,
     /// Linear solver of each step.
     pub solve: SolveParams,
+    /// Refuse runs needing more steps than this (checked before the first step, with the
+    /// same rule and message as [`crate::ExplicitParams::max_steps`]; default
+    /// [`crate::DEFAULT_MAX_STEPS`] = 10⁸).
+    pub max_steps: u64,
+    /// Optional progress callback ([`ProgressFn`]: steps done, steps total), called at most
+    /// ~100 times per run.
+    pub progress: Option<ProgressFn>,
 }
 
 impl Default for ImplicitParams {
@@ -57,6 +64,8 @@ impl Default for ImplicitParams {
             scheme: Scheme::default(),
             output_times: Vec::new(),
             solve: SolveParams::default(),
+            max_steps: DEFAULT_MAX_STEPS,
+            progress: None,
         }
     }
 }
@@ -97,6 +106,23 @@ pub fn run_implicit(
             "must be a finite time > 0 (s)",
         ));
     }
+    // Steps of each segment between stops (output times), counted before the first step.
+    let mut seg_steps = Vec::with_capacity(stops.len());
+    let mut t_prev = 0.0;
+    for &stop in &stops {
+        // `as` saturates: an absurd count stays huge and is refused below.
+        seg_steps.push(((stop - t_prev) / params.dt * (1.0 - 1e-12)).ceil().max(1.0) as u64);
+        t_prev = stop;
+    }
+    let total = seg_steps.iter().fold(0u64, |a, &b| a.saturating_add(b));
+    check_max_steps(
+        params.dt,
+        total as f64,
+        params.t_end,
+        params.max_steps,
+        "use a larger dt or the steady solver",
+    )?;
+    let mut ticker = Ticker::new(params.progress.as_ref(), total);
     let bound = system.stable_dt_bound();
     let n = net.n_nodes();
     let cn = params.scheme == Scheme::CrankNicolson;
@@ -119,9 +145,8 @@ pub fn run_implicit(
     let mut rhs = vec![0.0; n];
     let mut system: Option<(f64, LinearSystem<'_>)> = None;
     let mut t_start = 0.0;
-    for &stop in &stops {
+    for (&stop, &n_steps) in stops.iter().zip(&seg_steps) {
         let span = stop - t_start;
-        let n_steps = (span / params.dt * (1.0 - 1e-12)).ceil().max(1.0) as u64;
         let h = span / n_steps as f64;
         let reuse = matches!(&system, Some((dt, _)) if (dt - h).abs() <= 1e-12 * h);
         if !reuse {
@@ -174,6 +199,7 @@ pub fn run_implicit(
             report.solver_iterations += r.iterations as u64;
             report.max_relative_residual = report.max_relative_residual.max(r.relative_residual);
             report.steps += 1;
+            ticker.tick(report.steps);
             cur = next;
             let t_now = t_start
                 + if k + 1 == n_steps {

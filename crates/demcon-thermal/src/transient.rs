@@ -1,5 +1,7 @@
 //! Pieces shared by the transient solvers: output times, the energy ledger.
 
+use std::sync::Arc;
+
 use demcon_network::{Constraints, Network, NodeKind};
 
 use crate::error::ThermalError;
@@ -76,6 +78,101 @@ impl TransientReport {
             t_range: [0.0, 0.0],
         }
     }
+}
+
+/// Default step cap of both transient solvers ([`crate::ExplicitParams::max_steps`],
+/// [`crate::ImplicitParams::max_steps`]): 10⁸ steps.
+pub const DEFAULT_MAX_STEPS: u64 = 100_000_000;
+
+/// Most calls of a [`ProgressFn`] per run (plus one at the end).
+pub const PROGRESS_CALLS: u64 = 100;
+
+/// Progress callback of a transient run: `f(steps_done, steps_total)`, called after a step
+/// at most [`PROGRESS_CALLS`] times per run (every ⌈total/100⌉ steps) and once after the
+/// last step (`steps_done == steps_total`). `steps_total` is known before the first step.
+/// Meant for a progress bar on long runs; it must be cheap and must not panic.
+///
+/// ```
+/// use demcon_thermal::ProgressFn;
+/// let p = ProgressFn::new(|done, total| eprintln!("{done}/{total}"));
+/// # let _ = p;
+/// ```
+#[derive(Clone)]
+pub struct ProgressFn(pub Arc<dyn Fn(u64, u64) + Send + Sync>);
+
+impl ProgressFn {
+    /// Wraps a closure `f(steps_done, steps_total)`.
+    pub fn new(f: impl Fn(u64, u64) + Send + Sync + 'static) -> Self {
+        Self(Arc::new(f))
+    }
+}
+
+impl std::fmt::Debug for ProgressFn {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ProgressFn(..)")
+    }
+}
+
+/// Two callbacks are equal when they are the same closure (pointer equality).
+impl PartialEq for ProgressFn {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+/// Calls a [`ProgressFn`] at most [`PROGRESS_CALLS`] times over `total` steps.
+pub(crate) struct Ticker<'p> {
+    f: Option<&'p ProgressFn>,
+    total: u64,
+    every: u64,
+    next: u64,
+}
+
+impl<'p> Ticker<'p> {
+    pub(crate) fn new(f: Option<&'p ProgressFn>, total: u64) -> Self {
+        let every = total.div_ceil(PROGRESS_CALLS).max(1);
+        Self {
+            f,
+            total,
+            every,
+            next: every,
+        }
+    }
+
+    /// After step `done` (1-based).
+    #[inline]
+    pub(crate) fn tick(&mut self, done: u64) {
+        if let Some(f) = self.f
+            && (done >= self.next || done == self.total)
+        {
+            (f.0)(done, self.total);
+            self.next = done.saturating_add(self.every);
+        }
+    }
+}
+
+/// Refuses a run of `needed` steps above `max_steps` (the same rule and message for both
+/// transient solvers), before the first step.
+pub(crate) fn check_max_steps(
+    dt: f64,
+    needed: f64,
+    t_end: f64,
+    max_steps: u64,
+    hint: &str,
+) -> Result<(), ThermalError> {
+    if max_steps == 0 {
+        return Err(ThermalError::invalid("max_steps", 0, "must be ≥ 1"));
+    }
+    if needed > max_steps as f64 {
+        return Err(ThermalError::invalid(
+            "dt",
+            format!("{dt:e}"),
+            format!(
+                "needs about {needed:.3e} steps to reach t_end = {t_end:e} s, more than max_steps = {max_steps} ({hint})"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Checks `t_end` and the output times; returns the stops: the sorted output times in

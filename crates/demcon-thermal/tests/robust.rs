@@ -3,9 +3,11 @@
 //! high conductivity contrast.
 
 use demcon_network::{FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
+use std::sync::{Arc, Mutex};
+
 use demcon_thermal::{
-    ExplicitParams, ImplicitParams, ThermalSystem, TimeStep, TransientInput, run_explicit, run_implicit,
-    solve_steady_temperature,
+    DEFAULT_MAX_STEPS, ExplicitParams, ImplicitParams, ProgressFn, ThermalSystem, TimeStep, TransientInput,
+    run_explicit, run_implicit, solve_steady_temperature,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -120,4 +122,127 @@ fn energy_balance_is_not_one_on_an_implicit_run_between_two_fixed_sets() {
         "balance error {:e}",
         run.report.energy_balance_error
     );
+}
+
+#[test]
+fn implicit_solver_has_no_step_cap_t_end_1e12_with_dt_1_is_refused_before_the_first_step() {
+    let n = 4;
+    let (net, g, caps) = lattice(n, 5);
+    let c = resolve_fixed(&net, &faces(n, 300.0, 400.0), FloatingPolicy::Fail).unwrap();
+    let system = ThermalSystem::new(&net, &g, &caps, &c).unwrap();
+    let t0 = vec![350.0; net.n_nodes()];
+    let q = vec![0.0; net.n_nodes()];
+    let input = || TransientInput {
+        temperatures: &t0,
+        sources: &q,
+    };
+    let started = std::time::Instant::now();
+    let e = run_implicit(
+        &system,
+        input(),
+        &ImplicitParams {
+            t_end: 1e12,
+            dt: 1.0,
+            ..Default::default()
+        },
+        |_, _| panic!("no output expected"),
+        (),
+    )
+    .unwrap_err();
+    assert!(started.elapsed().as_secs_f64() < 1.0);
+    let msg = e.to_string();
+    assert!(
+        msg.contains("max_steps = 100000000") && msg.contains("1e0"),
+        "{msg}"
+    );
+    assert_eq!(ImplicitParams::default().max_steps, DEFAULT_MAX_STEPS);
+    assert_eq!(ExplicitParams::default().max_steps, DEFAULT_MAX_STEPS);
+    // The explicit solver says the same for the same step count.
+    let e = run_explicit(
+        &system,
+        input(),
+        &ExplicitParams {
+            t_end: 1e12,
+            dt: TimeStep::Fixed {
+                dt: 1e-3,
+                allow_unstable: false,
+            },
+            ..Default::default()
+        },
+        |_, _| {},
+        (),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("more than max_steps = 100000000"), "{e}");
+    // A smaller cap applies to the implicit solver too.
+    let e = run_implicit(
+        &system,
+        input(),
+        &ImplicitParams {
+            t_end: 10.0,
+            dt: 1.0,
+            max_steps: 5,
+            ..Default::default()
+        },
+        |_, _| {},
+        (),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("max_steps = 5"), "{e}");
+}
+
+#[test]
+fn implicit_solver_has_no_step_cap_progress_is_reported_at_most_100_times() {
+    let n = 4;
+    let (net, g, caps) = lattice(n, 6);
+    let c = resolve_fixed(&net, &faces(n, 300.0, 400.0), FloatingPolicy::Fail).unwrap();
+    let system = ThermalSystem::new(&net, &g, &caps, &c).unwrap();
+    let t0 = vec![350.0; net.n_nodes()];
+    let q = vec![0.0; net.n_nodes()];
+    let calls = Arc::new(Mutex::new(Vec::new()));
+    let sink = calls.clone();
+    let progress = Some(ProgressFn::new(move |done, total| {
+        sink.lock().unwrap().push((done, total))
+    }));
+    let run = run_implicit(
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &q,
+        },
+        &ImplicitParams {
+            t_end: 1.0,
+            dt: 1e-3,
+            output_times: vec![0.25, 0.5],
+            progress: progress.clone(),
+            ..Default::default()
+        },
+        |_, _| {},
+        (),
+    )
+    .unwrap();
+    let seen = std::mem::take(&mut *calls.lock().unwrap());
+    assert!(seen.len() <= 101 && seen.len() >= 50, "{} calls", seen.len());
+    assert_eq!(*seen.last().unwrap(), (run.report.steps, run.report.steps));
+    assert!(seen.windows(2).all(|w| w[0].0 < w[1].0));
+    let run = run_explicit(
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &q,
+        },
+        &ExplicitParams {
+            t_end: 20.0,
+            output_times: vec![3.0],
+            progress,
+            ..Default::default()
+        },
+        |_, _| {},
+        (),
+    )
+    .unwrap();
+    let seen = calls.lock().unwrap();
+    assert!(run.report.steps > 200, "{}", run.report.steps);
+    assert!(seen.len() <= 101, "{} calls", seen.len());
+    assert_eq!(*seen.last().unwrap(), (run.report.steps, run.report.steps));
 }
