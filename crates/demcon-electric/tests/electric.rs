@@ -178,10 +178,13 @@ fn bad_electrodes_and_eta_are_clear_errors() {
     ));
 }
 
+/// Fixed sets: (nodes, value).
+type FixedSets = Vec<(Vec<u32>, f64)>;
+
 /// An n×n×n lattice (unit spacing, conductance 1 with ±30 % noise) whose edges inside a
 /// centred sphere of radius 0.3 n have conductance × `ratio`; faces i = 0 and i = n − 1 at
 /// 0 and 1. Returns the network, the conductances and the fixed sets.
-fn inclusion(n: usize, ratio: f64) -> (Network, Vec<f64>, Vec<(Vec<u32>, f64)>) {
+fn inclusion(n: usize, ratio: f64) -> (Network, Vec<f64>, FixedSets) {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let id = |i: usize, j: usize, k: usize| (i * n * n + j * n + k) as u32;
     let c = (n as f64 - 1.0) / 2.0;

@@ -115,10 +115,13 @@ fn cg_treats_nan_residual_as_converged_error_message_names_value() {
     assert!(msg.contains("e300") && msg.contains("1e150"), "{msg}");
 }
 
+/// Fixed sets: (nodes, value).
+type FixedSets = Vec<(Vec<u32>, f64)>;
+
 /// An n×n×n lattice (unit spacing, conductance 1 with ±30 % noise) whose edges inside a
 /// centred sphere of radius 0.3 n have conductance × `ratio`; faces i = 0 and i = n − 1 at
 /// 0 and 1. Returns the network, the conductances and the fixed sets.
-fn inclusion(n: usize, ratio: f64) -> (demcon_network::Network, Vec<f64>, Vec<(Vec<u32>, f64)>) {
+fn inclusion(n: usize, ratio: f64) -> (demcon_network::Network, Vec<f64>, FixedSets) {
     use rand::{RngExt, SeedableRng};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
     let id = |i: usize, j: usize, k: usize| (i * n * n + j * n + k) as u32;
