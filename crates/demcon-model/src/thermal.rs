@@ -687,6 +687,7 @@ pub fn solve_thermal_with(
                 scheme,
                 output_times: problem.output_times.clone(),
                 solve: default_solve_params(),
+                ..ImplicitParams::default()
             };
             run_implicit(&system, input, &params, observer, source_update_fn(&mut hook))
         }

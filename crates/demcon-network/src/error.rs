@@ -96,6 +96,42 @@ pub enum SolveError {
         /// Requested tolerance.
         tolerance: f64,
     },
+    /// A non-finite number (NaN or ±∞) appeared during an iterative solve, or the residual
+    /// norm overflowed: the inputs are too large (or too small) for f64 arithmetic.
+    #[error(
+        "{method} produced a non-finite {what} = {value:e} at iteration {iteration} (inputs too large for f64 arithmetic? keep |b_i| ≤ {max_rhs:e})",
+        max_rhs = crate::solve::MAX_RHS_ENTRY
+    )]
+    NonFinite {
+        /// Method name.
+        method: &'static str,
+        /// Iteration at which it was seen (0: before the first).
+        iteration: usize,
+        /// Which quantity (e.g. `relative residual`, `p·Ap`).
+        what: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// The residual stopped decreasing above the tolerance and above what the arithmetic
+    /// can reach (a stagnating solve is stopped instead of running to `max_iter`).
+    #[error(
+        "{method} stagnated: relative residual {residual:.3e} > tolerance {tolerance:.1e} after {iterations} iterations, with no decrease over the last {window} restarts (attainable in f64 ≈ {attainable:.1e}; a looser tolerance or Method::Cholesky may help)"
+    )]
+    Stagnated {
+        /// Method name.
+        method: &'static str,
+        /// Iterations done.
+        iterations: usize,
+        /// Best true relative residual reached, ‖b − Ax‖/‖b‖.
+        residual: f64,
+        /// Requested tolerance.
+        tolerance: f64,
+        /// Estimate of the smallest relative residual f64 arithmetic can resolve for this
+        /// system and solution, ε·‖|b| + |A||x|‖/‖b‖ (see [`crate::SolveReport::attainable`]).
+        attainable: f64,
+        /// Restarts without decrease that triggered the stop.
+        window: usize,
+    },
     /// The operator was found not positive definite (a numerical breakdown).
     #[error("{method} broke down at iteration {iteration}: the system is not positive definite ({detail})")]
     Breakdown {

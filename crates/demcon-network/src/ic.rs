@@ -242,15 +242,30 @@ pub(crate) fn pcg(
     let mut p = r.clone();
     let mut q = vec![0.0; n];
     let mut iterations = 0;
-    while iterations < max_iter && rr > stop {
-        let pq = m.apply(&p, &mut q, &mut y, &mut t, &mut w);
-        iterations += 1;
-        if !(pq > 0.0 && pq.is_finite()) {
-            return Err(SolveError::Breakdown {
+    // NaN-safe: a NaN ‖r̂‖² does not count as converged (it is reported below).
+    while iterations < max_iter && (rr.is_nan() || rr > stop) {
+        if !rr.is_finite() {
+            return Err(SolveError::NonFinite {
                 method: NAME,
                 iteration: iterations,
-                detail: format!("p·Âp = {pq:e}"),
+                what: "preconditioned residual ‖r̂‖²",
+                value: rr,
             });
+        }
+        let pq = m.apply(&p, &mut q, &mut y, &mut t, &mut w);
+        iterations += 1;
+        if !pq.is_finite() {
+            return Err(SolveError::NonFinite {
+                method: NAME,
+                iteration: iterations,
+                what: "p·Âp",
+                value: pq,
+            });
+        }
+        if pq <= 0.0 {
+            // Â is positive definite by construction: p·Âp ≤ 0 is round-off at the floor.
+            // Return the correction so far; the caller judges the true residual.
+            break;
         }
         let alpha = rr / pq;
         let mut rr_new = 0.0;

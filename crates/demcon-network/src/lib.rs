@@ -52,6 +52,6 @@ pub use flows::{boundary_flow, edge_flows};
 pub use network::Network;
 pub use par::{CHUNK, MIN_TASK_CHUNKS};
 pub use solve::{
-    AUTO_AMG_MIN_UNKNOWNS, LinearSystem, Method, Solution, SolveParams, SolveReport, solve_shifted,
-    solve_steady,
+    AUTO_AMG_MIN_UNKNOWNS, LinearSystem, MAX_RHS_ENTRY, Method, STAGNATION_DECREASE, STAGNATION_WINDOW,
+    Solution, SolveParams, SolveReport, solve_shifted, solve_steady,
 };

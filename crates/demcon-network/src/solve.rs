@@ -84,6 +84,26 @@ const MIC_RELAXATION: f64 = 0.8;
 /// `docs/performance.md`).
 pub const AUTO_AMG_MIN_UNKNOWNS: usize = 10_000;
 
+/// Largest |b_i| (W or A) a solve accepts, b being the right-hand side with the fixed values
+/// moved to it (sources + Σ conductance × fixed value). Above it, ‖b‖² and the products of
+/// conjugate gradient may overflow f64 (‖b‖² ≤ n·10³⁰⁰ stays finite to n = 10⁸): such inputs
+/// are refused with [`SolveError::InvalidParameter`] rather than rescaled — rescale the
+/// units instead (e.g. mW, kK).
+pub const MAX_RHS_ENTRY: f64 = 1e150;
+
+/// Restarts without a decrease of the best true residual (by at least
+/// [`STAGNATION_DECREASE`]) after which an iterative solve stops as stagnated.
+pub const STAGNATION_WINDOW: usize = 5;
+
+/// A restart counts as progress when it brings the best true relative residual below this
+/// fraction of its previous value.
+pub const STAGNATION_DECREASE: f64 = 0.9;
+
+/// Safety factor of the round-off floor [`SolveReport::attainable`]: the computed residual
+/// of a row of k entries carries an error of up to k·ε·(|b_i| + Σ_j |a_ij x_j|), about
+/// √k·ε· that on average; packings have k ≈ 7–14.
+const ATTAINABLE_FACTOR: f64 = 8.0;
+
 /// [`Method::Auto`] to a relative residual of 1e-8 (at most 20 000 iterations).
 impl Default for Method {
     fn default() -> Self {
@@ -169,6 +189,12 @@ pub struct SolveReport {
     pub n_unknowns: usize,
     /// Number of excluded (floating) nodes.
     pub n_excluded: usize,
+    /// `Some(floor)` when the tolerance was not met but the iteration stopped (stagnated or
+    /// ran out of iterations) at a relative residual within the round-off floor
+    /// `floor` ≈ 8 ε ‖|b| + |A||x|‖/‖b‖ (dimensionless) that f64 arithmetic can resolve for
+    /// this system and solution (high conductivity contrast raises it): the result is
+    /// accepted as accurate to the arithmetic. `None` when the tolerance was met.
+    pub attainable: Option<f64>,
 }
 
 /// A nodal solution.
@@ -409,9 +435,15 @@ impl<'a> LinearSystem<'a> {
     /// Entries at fixed and excluded nodes are ignored. `x0`: optional initial guess (warm
     /// start for CG; ignored by Cholesky except at excluded nodes).
     ///
+    /// Iterative methods stop when ‖b − Ax‖ ≤ rel_tol ‖b‖ on the true residual. A solve
+    /// whose true residual stops decreasing ([`STAGNATION_WINDOW`] restarts without
+    /// progress) or that runs out of iterations is accepted when its residual is within the
+    /// round-off floor ([`SolveReport::attainable`] says so), and fails otherwise.
+    ///
     /// # Errors
-    /// Bad input; [`SolveError::NotConverged`] and [`SolveError::Breakdown`] for iterative
-    /// failure; a non-finite result is reported as [`SolveError::Breakdown`].
+    /// Bad input, including |b_i| > [`MAX_RHS_ENTRY`] (b with the fixed values moved to it);
+    /// [`SolveError::NotConverged`] (out of iterations) and [`SolveError::Stagnated`] above
+    /// the round-off floor; [`SolveError::NonFinite`] when NaN or ∞ appears.
     pub fn solve(&self, rhs: &[f64], x0: Option<&[f64]>) -> Result<Solution, SolveError> {
         let start = Instant::now();
         let n = self.net.n_nodes();
@@ -432,16 +464,17 @@ impl<'a> LinearSystem<'a> {
         let mut r = vec![0.0; n];
         self.residual(rhs, &lift, &mut r);
         let b_norm = dot(&r, &r).sqrt();
+        self.check_rhs(&r, b_norm)?;
         if x0.is_some() {
             // Residual at the initial guess.
             self.residual(rhs, &x, &mut r);
         }
-        let (iterations, rel) = if b_norm == 0.0 {
+        let (iterations, rel, attainable) = if b_norm == 0.0 {
             x.iter_mut()
                 .zip(&self.free)
                 .filter(|(_, f)| **f)
                 .for_each(|(v, _)| *v = 0.0);
-            (0, 0.0)
+            (0, 0.0, None)
         } else {
             match self.method {
                 // `Auto` was resolved in `new`; were it not, Jacobi-PCG is always valid.
@@ -463,15 +496,20 @@ impl<'a> LinearSystem<'a> {
                     })?;
                     factor.solve(self, &r, &mut x);
                     self.residual(rhs, &x, &mut r);
-                    (0, dot(&r, &r).sqrt() / b_norm)
+                    (0, dot(&r, &r).sqrt() / b_norm, None)
                 }
             }
         };
         if let Some(p) = x.iter().position(|v| !v.is_finite()) {
-            return Err(SolveError::Breakdown {
+            return Err(SolveError::NonFinite {
                 method: self.method.name(),
                 iteration: iterations,
-                detail: format!("non-finite value at node {p}"),
+                what: if self.free[p] {
+                    "solution value"
+                } else {
+                    "fixed value"
+                },
+                value: x[p],
             });
         }
         Ok(Solution {
@@ -485,8 +523,48 @@ impl<'a> LinearSystem<'a> {
                 setup_s: self.setup_s,
                 n_unknowns: self.n_unknowns(),
                 n_excluded: self.constraints.excluded().len(),
+                attainable,
             },
         })
+    }
+
+    /// Refuses a right-hand side b_eff (in `r`, norm `b_norm`) that f64 cannot carry through
+    /// CG: an entry above [`MAX_RHS_ENTRY`] or a non-finite norm.
+    fn check_rhs(&self, r: &[f64], b_norm: f64) -> Result<(), SolveError> {
+        let (p, big) =
+            r.iter().enumerate().fold(
+                (0, 0.0f64),
+                |(p, m), (i, v)| if v.abs() > m { (i, v.abs()) } else { (p, m) },
+            );
+        if big > MAX_RHS_ENTRY || !b_norm.is_finite() {
+            return Err(SolveError::invalid(
+                format!("right-hand side at node {p} (source + Σ conductance × fixed value)"),
+                format!("{:e}", r[p]),
+                format!(
+                    "|b| must be ≤ {MAX_RHS_ENTRY:e} (W or A) so that ‖b‖² stays finite; rescale the units of the sources, fixed values or conductances"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Round-off floor of the true relative residual at `x`: 8 ε ‖|b| + |A||x|‖₂/‖b‖ over
+    /// the free rows (dimensionless).
+    pub(crate) fn attainable(&self, b: &[f64], x: &[f64], b_norm: f64) -> f64 {
+        let sq: f64 = (0..x.len())
+            .filter(|&i| self.free[i])
+            .map(|i| {
+                let (lo, hi) = (self.net.row_ptr()[i], self.net.row_ptr()[i + 1]);
+                let off: f64 = self.net.cols()[lo..hi]
+                    .iter()
+                    .zip(&self.vals[lo..hi])
+                    .map(|(&q, g)| (g * x[q as usize]).abs())
+                    .sum();
+                let t = b[i].abs() + (self.diag[i] * x[i]).abs() + off;
+                t * t
+            })
+            .sum();
+        ATTAINABLE_FACTOR * f64::EPSILON * sq.sqrt() / b_norm
     }
 
     /// r = b − A x on free rows (x holds fixed values at fixed nodes), 0 elsewhere.
@@ -554,30 +632,44 @@ impl<'a> LinearSystem<'a> {
         b_norm: f64,
         rel_tol: f64,
         max_iter: usize,
-    ) -> Result<(usize, f64), SolveError> {
+    ) -> Result<(usize, f64, Option<f64>), SolveError> {
         let n = x.len();
         let name = self.method.name();
         let mut z = vec![0.0; n];
         let mut p = vec![0.0; n];
         let mut q = vec![0.0; n];
         let mut iterations = 0usize;
-        let mut true_rel = dot(r, r).sqrt() / b_norm;
+        let mut progress = Progress::new(name, dot(r, r).sqrt() / b_norm)?;
         // Outer loop: restart from the true residual if the recursive one drifted.
-        while true_rel > rel_tol && iterations < max_iter {
+        while progress.go_on(rel_tol, iterations, max_iter) {
             let mut rz = self.precondition(r, &mut z).0;
             p.copy_from_slice(&z);
             loop {
                 let pq = self.apply_dot(&p, &mut q);
                 iterations += 1;
-                if !(pq > 0.0 && pq.is_finite()) {
-                    return Err(SolveError::Breakdown {
+                if !pq.is_finite() {
+                    return Err(SolveError::NonFinite {
                         method: name,
                         iteration: iterations,
-                        detail: format!("p·Ap = {pq:e}"),
+                        what: "p·Ap",
+                        value: pq,
                     });
+                }
+                if pq <= 0.0 {
+                    // The system is positive definite by construction (conductances > 0,
+                    // every free cluster anchored): p·Ap ≤ 0 is round-off at the floor.
+                    break;
                 }
                 let alpha = rz / pq;
                 let (rz_new, rr) = self.update(alpha, &p, &q, x, r, &mut z);
+                if !rr.is_finite() {
+                    return Err(SolveError::NonFinite {
+                        method: name,
+                        iteration: iterations,
+                        what: "recursive residual ‖r‖²",
+                        value: rr,
+                    });
+                }
                 if rr.sqrt() <= rel_tol * b_norm || iterations >= max_iter {
                     break;
                 }
@@ -591,17 +683,9 @@ impl<'a> LinearSystem<'a> {
                 });
             }
             self.residual(b, x, r);
-            true_rel = dot(r, r).sqrt() / b_norm;
+            progress.restarted(dot(r, r).sqrt() / b_norm, x, iterations)?;
         }
-        if true_rel > rel_tol {
-            return Err(SolveError::NotConverged {
-                method: name,
-                iterations,
-                relative_residual: true_rel,
-                tolerance: rel_tol,
-            });
-        }
-        Ok((iterations, true_rel))
+        progress.finish(self, b, x, r, b_norm, rel_tol, iterations)
     }
 
     /// Multigrid-preconditioned CG on the compact free block for the correction, restarted
@@ -614,7 +698,7 @@ impl<'a> LinearSystem<'a> {
         b_norm: f64,
         rel_tol: f64,
         max_iter: usize,
-    ) -> Result<(usize, f64), SolveError> {
+    ) -> Result<(usize, f64, Option<f64>), SolveError> {
         let Some((hierarchy, nodes)) = &self.amg else {
             return Err(SolveError::Factorization(
                 "system prepared without a multigrid hierarchy".into(),
@@ -642,7 +726,7 @@ impl<'a> LinearSystem<'a> {
         b_norm: f64,
         rel_tol: f64,
         max_iter: usize,
-    ) -> Result<(usize, f64), SolveError> {
+    ) -> Result<(usize, f64, Option<f64>), SolveError> {
         let Some((mic, nodes)) = &self.mic else {
             return Err(SolveError::Factorization(
                 "system prepared without an incomplete factor".into(),
@@ -672,33 +756,25 @@ impl<'a> LinearSystem<'a> {
         stop: Stop,
         nodes: &[u32],
         inner: impl Fn(&[f64], f64, usize) -> Result<(Vec<f64>, usize), SolveError>,
-    ) -> Result<(usize, f64), SolveError> {
+    ) -> Result<(usize, f64, Option<f64>), SolveError> {
         let Stop {
             b_norm,
             rel_tol,
             max_iter,
         } = stop;
         let mut iterations = 0usize;
-        let mut true_rel = dot(r, r).sqrt() / b_norm;
-        while true_rel > rel_tol && iterations < max_iter {
+        let mut progress = Progress::new(self.method.name(), dot(r, r).sqrt() / b_norm)?;
+        while progress.go_on(rel_tol, iterations, max_iter) {
             let rc: Vec<f64> = nodes.iter().map(|&p| r[p as usize]).collect();
-            let (delta, its) = inner(&rc, true_rel * b_norm, max_iter - iterations)?;
+            let (delta, its) = inner(&rc, progress.current() * b_norm, max_iter - iterations)?;
             iterations += its.max(1);
             for (&p, d) in nodes.iter().zip(&delta) {
                 x[p as usize] += d;
             }
             self.residual(b, x, r);
-            true_rel = dot(r, r).sqrt() / b_norm;
+            progress.restarted(dot(r, r).sqrt() / b_norm, x, iterations)?;
         }
-        if true_rel > rel_tol {
-            return Err(SolveError::NotConverged {
-                method: self.method.name(),
-                iterations,
-                relative_residual: true_rel,
-                tolerance: rel_tol,
-            });
-        }
-        Ok((iterations, true_rel))
+        progress.finish(self, b, x, r, b_norm, rel_tol, iterations)
     }
 
     /// z = D⁻¹ r on free nodes; returns (r·z, r·r).
@@ -740,6 +816,129 @@ impl<'a> LinearSystem<'a> {
             (rz, rr)
         });
         partials.iter().fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d))
+    }
+}
+
+/// The restart loop's bookkeeping, shared by every iterative method: the best true
+/// relative residual and its iterate, restarts without progress, non-finite checks.
+#[derive(Debug)]
+pub(crate) struct Progress {
+    method: &'static str,
+    /// Current true relative residual.
+    current: f64,
+    /// Best true relative residual so far.
+    best: f64,
+    /// Copy of the iterate with `best` (taken when a restart improves on it).
+    best_x: Option<Vec<f64>>,
+    /// Level `best` must go below for a restart to count as progress.
+    target: f64,
+    /// Consecutive restarts without progress.
+    stalled: usize,
+}
+
+impl Progress {
+    /// Starts from the true relative residual at the initial guess.
+    pub(crate) fn new(method: &'static str, rel: f64) -> Result<Self, SolveError> {
+        if !rel.is_finite() {
+            return Err(SolveError::NonFinite {
+                method,
+                iteration: 0,
+                what: "initial relative residual",
+                value: rel,
+            });
+        }
+        Ok(Self {
+            method,
+            current: rel,
+            best: rel,
+            best_x: None,
+            target: STAGNATION_DECREASE * rel,
+            stalled: 0,
+        })
+    }
+
+    /// The current true relative residual.
+    pub(crate) fn current(&self) -> f64 {
+        self.current
+    }
+
+    /// Whether to run another restart: tolerance not met (NaN-safe), iterations left, not
+    /// stagnated.
+    pub(crate) fn go_on(&self, rel_tol: f64, iterations: usize, max_iter: usize) -> bool {
+        (self.current.is_nan() || self.current > rel_tol)
+            && iterations < max_iter
+            && self.stalled < STAGNATION_WINDOW
+    }
+
+    /// Records the true relative residual `rel` at iterate `x` after a restart.
+    pub(crate) fn restarted(&mut self, rel: f64, x: &[f64], iterations: usize) -> Result<(), SolveError> {
+        if !rel.is_finite() {
+            return Err(SolveError::NonFinite {
+                method: self.method,
+                iteration: iterations,
+                what: "true relative residual",
+                value: rel,
+            });
+        }
+        self.current = rel;
+        if rel < self.best {
+            // One copy per improving restart (one or two in a normal solve).
+            self.best = rel;
+            match &mut self.best_x {
+                Some(v) => v.copy_from_slice(x),
+                None => self.best_x = Some(x.to_vec()),
+            }
+        }
+        if rel < self.target {
+            self.target = STAGNATION_DECREASE * rel;
+            self.stalled = 0;
+        } else {
+            self.stalled += 1;
+        }
+        Ok(())
+    }
+
+    /// Ends the loop: Ok when the tolerance is met, or when the best residual is within the
+    /// round-off floor (then the floor is returned); else the error that says why.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn finish(
+        self,
+        sys: &LinearSystem<'_>,
+        b: &[f64],
+        x: &mut [f64],
+        r: &mut [f64],
+        b_norm: f64,
+        rel_tol: f64,
+        iterations: usize,
+    ) -> Result<(usize, f64, Option<f64>), SolveError> {
+        if self.current <= rel_tol {
+            return Ok((iterations, self.current, None));
+        }
+        if let (Some(best), true) = (&self.best_x, self.current > self.best) {
+            x.copy_from_slice(best);
+            sys.residual(b, x, r);
+        }
+        let rel = dot(r, r).sqrt() / b_norm;
+        let floor = sys.attainable(b, x, b_norm);
+        if rel <= floor {
+            return Ok((iterations, rel, Some(floor)));
+        }
+        if self.stalled >= STAGNATION_WINDOW {
+            return Err(SolveError::Stagnated {
+                method: self.method,
+                iterations,
+                residual: rel,
+                tolerance: rel_tol,
+                attainable: floor,
+                window: STAGNATION_WINDOW,
+            });
+        }
+        Err(SolveError::NotConverged {
+            method: self.method,
+            iterations,
+            relative_residual: rel,
+            tolerance: rel_tol,
+        })
     }
 }
 

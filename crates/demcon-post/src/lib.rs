@@ -57,7 +57,7 @@ pub use domain::{Domain, Plane};
 pub use error::PostError;
 pub use flux::{PlaneFlow, flow_across_plane, particle_dipoles, particle_flux};
 pub use halo::{HaloField, HaloParams, HaloPhases, HaloReport, HaloScale, halo_flux};
-pub use probe::{Line, ProbeIndex, ProbeMethod, line_points, probe, profile};
+pub use probe::{Line, MAX_PROFILE_POINTS, ProbeIndex, ProbeMethod, line_points, probe, profile};
 pub use slice::{Grid, SliceParams, slice_grid};
 pub use stats::{coefficient_of_variation, components, effective_conductivity, magnitudes};
 pub use vtk::{Field, FieldData, write_vtu};

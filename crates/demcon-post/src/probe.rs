@@ -32,7 +32,7 @@ pub struct Line {
     pub from: Vec3,
     /// Last point (m).
     pub to: Vec3,
-    /// Number of points, ≥ 2.
+    /// Number of points, in 2..=[`MAX_PROFILE_POINTS`] (10⁶).
     pub n_points: usize,
 }
 
@@ -246,15 +246,19 @@ fn dist2(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     (0..3).map(|k| (a[k] - b[k]).powi(2)).sum()
 }
 
+/// Most sample points of a profile line ([`Line::n_points`]): 10⁶ (a few tens of MB of
+/// output; finer than any particle field needs). More is refused, not allocated.
+pub const MAX_PROFILE_POINTS: usize = 1_000_000;
+
 /// The sample points of a line and their distance from its start (m).
 pub fn line_points(line: &Line) -> Result<Vec<(f64, Vec3)>, PostError> {
     crate::error::check_point("line.from", &line.from)?;
     crate::error::check_point("line.to", &line.to)?;
-    if line.n_points < 2 {
+    if !(2..=MAX_PROFILE_POINTS).contains(&line.n_points) {
         return Err(PostError::invalid(
             "line.n_points",
             line.n_points,
-            "at least 2 points (both ends are sampled)",
+            format!("from 2 (both ends are sampled) to {MAX_PROFILE_POINTS} points"),
         ));
     }
     let len = (line.to - line.from).norm();
@@ -291,4 +295,30 @@ pub fn profile(
     domain: &Domain,
 ) -> Result<Vec<(f64, f64)>, PostError> {
     ProbeIndex::new(particles, rep_volumes, domain)?.profile(values, line, method)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(n_points: usize) -> Line {
+        Line {
+            from: Vec3::new(0.0, 0.0, 0.0),
+            to: Vec3::new(1.0, 0.0, 0.0),
+            n_points,
+        }
+    }
+
+    #[test]
+    fn profiles_with_a_huge_points_are_refused_naming_points() {
+        for n in [usize::MAX, 1usize << 32, MAX_PROFILE_POINTS + 1, 1] {
+            let e = line_points(&line(n)).unwrap_err().to_string();
+            assert!(e.contains("n_points") && e.contains(&n.to_string()), "{e}");
+            assert!(e.contains("1000000"), "{e}");
+        }
+        assert_eq!(
+            line_points(&line(MAX_PROFILE_POINTS)).unwrap().len(),
+            MAX_PROFILE_POINTS
+        );
+    }
 }

@@ -12,7 +12,8 @@ use crate::capacity::DtBound;
 use crate::error::ThermalError;
 use crate::system::{SourceUpdate, ThermalSystem, TransientInput};
 use crate::transient::{
-    Transient, TransientReport, boundary_edges, boundary_power, close_ledger, source_power, stops,
+    DEFAULT_MAX_STEPS, ProgressFn, Ticker, Transient, TransientReport, Turnover, boundary_edges,
+    boundary_gross, boundary_power, check_max_steps, close_ledger, source_gross, source_power, stops,
 };
 
 /// How the explicit step is chosen.
@@ -51,8 +52,12 @@ pub struct ExplicitParams {
     pub output_times: Vec<f64>,
     /// The paper's eq. 16 estimate ([`crate::paper_dt_estimate`]), only reported (s).
     pub paper_dt: Option<f64>,
-    /// Refuse runs needing more steps than this.
+    /// Refuse runs needing more steps than this (checked before the first step; default
+    /// [`crate::DEFAULT_MAX_STEPS`] = 10⁸).
     pub max_steps: u64,
+    /// Optional progress callback ([`ProgressFn`]: steps done, steps total), called at most
+    /// ~100 times per run.
+    pub progress: Option<ProgressFn>,
 }
 
 impl Default for ExplicitParams {
@@ -62,7 +67,8 @@ impl Default for ExplicitParams {
             dt: TimeStep::default(),
             output_times: Vec::new(),
             paper_dt: None,
-            max_steps: 100_000_000,
+            max_steps: DEFAULT_MAX_STEPS,
+            progress: None,
         }
     }
 }
@@ -316,6 +322,18 @@ impl<'a> ExplicitStepper<'a> {
     }
 }
 
+/// Full steps of `dt` in a segment of length `span` (s), and whether a shortened last step
+/// is needed.
+fn segment_steps(span: f64, dt: f64) -> (u64, bool) {
+    let mut n_full = (span / dt * (1.0 + 1e-12)).floor() as u64;
+    let mut rem = span - n_full as f64 * dt;
+    if rem < 0.0 {
+        n_full = n_full.saturating_sub(1);
+        rem = span - n_full as f64 * dt;
+    }
+    (n_full, rem > 1e-12 * dt)
+}
+
 /// Explicit (forward Euler) transient from `input.temperatures` to `params.t_end`.
 ///
 /// `system`: the checked network, conductances H_pq (W/K), capacities C_p (J/K) and
@@ -379,16 +397,25 @@ pub fn run_explicit(
         }
     };
     let needed = (params.t_end / dt).ceil() + stops.len() as f64;
-    if needed > params.max_steps as f64 {
-        return Err(ThermalError::invalid(
-            "dt",
-            dt,
-            format!(
-                "needs about {needed:.3e} steps to reach t_end = {} s, more than max_steps = {} (use the implicit or steady solver)",
-                params.t_end, params.max_steps
-            ),
-        ));
-    }
+    check_max_steps(
+        dt,
+        needed,
+        params.t_end,
+        params.max_steps,
+        "use the implicit or steady solver",
+    )?;
+    let total: u64 = {
+        let mut t_start = 0.0;
+        stops
+            .iter()
+            .map(|&stop| {
+                let (n_full, has_partial) = segment_steps(stop - t_start, dt);
+                t_start = stop;
+                n_full + u64::from(has_partial)
+            })
+            .sum()
+    };
+    let mut ticker = Ticker::new(params.progress.as_ref(), total);
     let mut stepper = ExplicitStepper::new(system, sources, dt)?;
     let kinds = constraints.kinds();
     let mut cur = t_init.to_vec();
@@ -418,6 +445,8 @@ pub fn run_explicit(
 
     let edges_b = boundary_edges(net, conductances, constraints);
     let mut p_src = source_power(constraints, sources);
+    let mut p_src_gross = source_gross(constraints, sources);
+    let mut turnover = Turnover::default();
     let mut report = TransientReport::new("forward-euler", dt, bound, params.paper_dt);
     if params.output_times.first() == Some(&0.0) {
         observer(0.0, &cur);
@@ -426,18 +455,15 @@ pub fn run_explicit(
     let mut steps: u64 = 0;
     for &stop in &stops {
         let span = stop - t_start;
-        let mut n_full = (span / dt * (1.0 + 1e-12)).floor() as u64;
-        let mut rem = span - n_full as f64 * dt;
-        if rem < 0.0 {
-            n_full = n_full.saturating_sub(1);
-            rem = span - n_full as f64 * dt;
-        }
-        let has_partial = rem > 1e-12 * dt;
+        let (n_full, has_partial) = segment_steps(span, dt);
+        let rem = span - n_full as f64 * dt;
         let n_steps = n_full + u64::from(has_partial);
         for k in 0..n_steps {
             let h = if k < n_full { dt } else { rem };
             report.energy_boundary_j += h * boundary_power(&edges_b, &cur);
             report.energy_sources_j += h * p_src;
+            turnover.boundary_j += h * boundary_gross(&edges_b, &cur);
+            turnover.sources_j += h * p_src_gross;
             let (mut lo, mut hi, bad) = stepper.step(&cur, &mut next);
             if k >= n_full {
                 // Shortened step: T + θ (T_full − T) is forward Euler with step θ Δt.
@@ -457,6 +483,7 @@ pub fn run_explicit(
                 (lo, hi) = r;
             }
             steps += 1;
+            ticker.tick(steps);
             let t_now = t_start + if k < n_full { (k + 1) as f64 * dt } else { span };
             let heat = heat_base + (t_now - t_change) * heat_rate;
             let cool = cool_base + (t_now - t_change) * cool_rate;
@@ -483,6 +510,7 @@ pub fn run_explicit(
             if let Some(new) = update.update(t_now, &cur)? {
                 stepper.set_sources(&new)?;
                 p_src = source_power(constraints, &new);
+                p_src_gross = source_gross(constraints, &new);
                 (heat_base, cool_base, t_change) = (heat, cool, t_now);
                 (heat_rate, cool_rate) = rates(&new);
             }
@@ -500,7 +528,7 @@ pub fn run_explicit(
     } else {
         0.0
     };
-    close_ledger(&mut report, constraints, capacities, &t0, &cur);
+    close_ledger(&mut report, constraints, capacities, &t0, &cur, turnover);
     Ok(Transient {
         temperatures: cur,
         report,

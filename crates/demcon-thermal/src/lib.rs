@@ -48,4 +48,4 @@ pub use explicit::{ExplicitParams, ExplicitStepper, TimeStep, run_explicit};
 pub use implicit::{ImplicitParams, Scheme, SteadyTemperature, run_implicit, solve_steady_temperature};
 pub use sources::{add_sources, face_flux_sources};
 pub use system::{NoUpdate, SourceUpdate, SourceUpdateFn, ThermalSystem, TransientInput, source_update_fn};
-pub use transient::{Transient, TransientReport};
+pub use transient::{DEFAULT_MAX_STEPS, PROGRESS_CALLS, ProgressFn, Transient, TransientReport};

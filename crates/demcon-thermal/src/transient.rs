@@ -1,5 +1,7 @@
 //! Pieces shared by the transient solvers: output times, the energy ledger.
 
+use std::sync::Arc;
+
 use demcon_network::{Constraints, Network, NodeKind};
 
 use crate::error::ThermalError;
@@ -45,7 +47,10 @@ pub struct TransientReport {
     pub energy_sources_j: f64,
     /// Heat received from fixed-temperature nodes, ∫ Σ H_pq (T_fixed − T_p) dt (J).
     pub energy_boundary_j: f64,
-    /// |stored − sources − boundary| / max(|stored|, |sources| + |boundary|) (0 if all 0).
+    /// |stored − sources − boundary| / scale, the scale being the gross energy turnover:
+    /// Σ_p C_p |T_end − T_0| + ∫ Σ_p |Q_p| dt + ∫ Σ_boundary edges |H_pq (T_q − T_p)| dt
+    /// (0 if the scale is 0). Not the net flow, which is ≈ 0 on a correct run between two
+    /// fixed sets or with no boundary at all: a correct run gives round-off (~1e-12).
     pub energy_balance_error: f64,
     /// Smallest and largest temperature at the end (K).
     pub t_range: [f64; 2],
@@ -73,6 +78,101 @@ impl TransientReport {
             t_range: [0.0, 0.0],
         }
     }
+}
+
+/// Default step cap of both transient solvers ([`crate::ExplicitParams::max_steps`],
+/// [`crate::ImplicitParams::max_steps`]): 10⁸ steps.
+pub const DEFAULT_MAX_STEPS: u64 = 100_000_000;
+
+/// Most calls of a [`ProgressFn`] per run (plus one at the end).
+pub const PROGRESS_CALLS: u64 = 100;
+
+/// Progress callback of a transient run: `f(steps_done, steps_total)`, called after a step
+/// at most [`PROGRESS_CALLS`] times per run (every ⌈total/100⌉ steps) and once after the
+/// last step (`steps_done == steps_total`). `steps_total` is known before the first step.
+/// Meant for a progress bar on long runs; it must be cheap and must not panic.
+///
+/// ```
+/// use demcon_thermal::ProgressFn;
+/// let p = ProgressFn::new(|done, total| eprintln!("{done}/{total}"));
+/// # let _ = p;
+/// ```
+#[derive(Clone)]
+pub struct ProgressFn(pub Arc<dyn Fn(u64, u64) + Send + Sync>);
+
+impl ProgressFn {
+    /// Wraps a closure `f(steps_done, steps_total)`.
+    pub fn new(f: impl Fn(u64, u64) + Send + Sync + 'static) -> Self {
+        Self(Arc::new(f))
+    }
+}
+
+impl std::fmt::Debug for ProgressFn {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ProgressFn(..)")
+    }
+}
+
+/// Two callbacks are equal when they are the same closure (pointer equality).
+impl PartialEq for ProgressFn {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+/// Calls a [`ProgressFn`] at most [`PROGRESS_CALLS`] times over `total` steps.
+pub(crate) struct Ticker<'p> {
+    f: Option<&'p ProgressFn>,
+    total: u64,
+    every: u64,
+    next: u64,
+}
+
+impl<'p> Ticker<'p> {
+    pub(crate) fn new(f: Option<&'p ProgressFn>, total: u64) -> Self {
+        let every = total.div_ceil(PROGRESS_CALLS).max(1);
+        Self {
+            f,
+            total,
+            every,
+            next: every,
+        }
+    }
+
+    /// After step `done` (1-based).
+    #[inline]
+    pub(crate) fn tick(&mut self, done: u64) {
+        if let Some(f) = self.f
+            && (done >= self.next || done == self.total)
+        {
+            (f.0)(done, self.total);
+            self.next = done.saturating_add(self.every);
+        }
+    }
+}
+
+/// Refuses a run of `needed` steps above `max_steps` (the same rule and message for both
+/// transient solvers), before the first step.
+pub(crate) fn check_max_steps(
+    dt: f64,
+    needed: f64,
+    t_end: f64,
+    max_steps: u64,
+    hint: &str,
+) -> Result<(), ThermalError> {
+    if max_steps == 0 {
+        return Err(ThermalError::invalid("max_steps", 0, "must be ≥ 1"));
+    }
+    if needed > max_steps as f64 {
+        return Err(ThermalError::invalid(
+            "dt",
+            format!("{dt:e}"),
+            format!(
+                "needs about {needed:.3e} steps to reach t_end = {t_end:e} s, more than max_steps = {max_steps} ({hint})"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Checks `t_end` and the output times; returns the stops: the sorted output times in
@@ -139,6 +239,36 @@ pub(crate) fn boundary_power(edges: &[(u32, u32, f64)], t: &[f64]) -> f64 {
         .sum()
 }
 
+/// Gross heat flow through the boundary, Σ over boundary edges of |H (T_fixed − T_free)|
+/// (W): the scale of the energy balance.
+pub(crate) fn boundary_gross(edges: &[(u32, u32, f64)], t: &[f64]) -> f64 {
+    edges
+        .iter()
+        .map(|&(free, fixed, g)| (g * (t[fixed as usize] - t[free as usize])).abs())
+        .sum()
+}
+
+/// Σ over free nodes of |Q_p| (W).
+pub(crate) fn source_gross(constraints: &Constraints, sources: &[f64]) -> f64 {
+    constraints
+        .kinds()
+        .iter()
+        .zip(sources)
+        .filter(|(k, _)| **k == NodeKind::Free)
+        .map(|(_, q)| q.abs())
+        .sum()
+}
+
+/// Gross energy turnover of a run (J), accumulated beside the ledger: the denominator of
+/// [`TransientReport::energy_balance_error`].
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Turnover {
+    /// ∫ Σ |H ΔT| over boundary edges dt (J).
+    pub(crate) boundary_j: f64,
+    /// ∫ Σ |Q_p| dt (J).
+    pub(crate) sources_j: f64,
+}
+
 /// Σ over free nodes of Q_p (W).
 pub(crate) fn source_power(constraints: &Constraints, sources: &[f64]) -> f64 {
     constraints
@@ -157,18 +287,17 @@ pub(crate) fn close_ledger(
     capacities: &[f64],
     t0: &[f64],
     t1: &[f64],
+    turnover: Turnover,
 ) {
-    let stored: f64 = constraints
+    let (stored, stored_gross) = constraints
         .kinds()
         .iter()
         .enumerate()
         .filter(|(_, k)| **k == NodeKind::Free)
         .map(|(p, _)| capacities[p] * (t1[p] - t0[p]))
-        .sum();
+        .fold((0.0, 0.0), |(s, g), v| (s + v, g + v.abs()));
     report.energy_stored_j = stored;
-    let scale = stored
-        .abs()
-        .max(report.energy_sources_j.abs() + report.energy_boundary_j.abs());
+    let scale = stored_gross + turnover.sources_j + turnover.boundary_j;
     report.energy_balance_error = if scale > 0.0 {
         (stored - report.energy_sources_j - report.energy_boundary_j).abs() / scale
     } else {

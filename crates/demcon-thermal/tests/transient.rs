@@ -175,6 +175,7 @@ fn explicit_implicit_and_steady_agree() {
                 scheme,
                 output_times: vec![],
                 solve: SolveParams { method },
+                ..Default::default()
             },
             |_, _| {},
             (),
