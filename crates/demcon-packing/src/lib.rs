@@ -28,6 +28,7 @@ mod lsa;
 mod params;
 mod radius;
 mod report;
+mod stress;
 mod xyzr;
 
 pub use carve::carve;
@@ -36,6 +37,7 @@ pub use lsa::{MAX_OVERLAP, pack, predict};
 pub use params::{MAX_PHI_ABOVE_JAMMING, PackProgress, PackingParams, StopReason};
 pub use radius::{DEFAULT_TRUNCATION_SIGMAS, MIN_RATIO_FLOOR, RadiusDistribution, jamming_estimate};
 pub use report::{PackingReport, PackingSummary, RadiusSummary, bulk_phi, max_overlap, summarize};
+pub use stress::{STRESS_GROWTH_RATES, StressFailure, StressReport, stress_packings};
 pub use xyzr::{
     XyzrFile, parse_xyzr, read_xyzr, read_xyzr_container, read_xyzr_file, write_atomic, write_xyzr,
     write_xyzr_with_notes,
