@@ -22,6 +22,18 @@ use demcon_core::{Container, ParticleSet, Vec3};
 
 use crate::error::PackingError;
 
+/// `x` in a short form that reads back bit for bit: Rust's shortest round-trip `{}` for
+/// 0 and 10⁻⁷ ≤ |x| < 10¹⁶ (so ordinary coordinates keep their usual look), else `{:e}`
+/// (`1e-106`, not 105 zeros).
+pub(crate) fn short(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || (1e-7..1e16).contains(&a) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// A packing file's content.
 #[derive(Debug, Clone, PartialEq)]
 pub struct XyzrFile {
@@ -46,15 +58,34 @@ pub fn write_xyzr_with_notes(
     container: &Container,
     notes: &[String],
 ) -> Result<(), PackingError> {
+    write_atomic(path, format_xyzr(particles, container, notes).as_bytes())
+}
+
+/// The text of a packing file (header, notes, one `x y z r` line per sphere, m), as
+/// [`write_xyzr_with_notes`] writes it. Numbers are in a short form that reads back bit
+/// for bit: `{}` for 0 and 10⁻⁷ ≤ |x| < 10¹⁶, `{:e}` otherwise (`1e-106`, not 105 zeros).
+pub fn format_xyzr(particles: &ParticleSet, container: &Container, notes: &[String]) -> String {
     let mut s = String::with_capacity(80 * particles.len() + 256);
     s.push_str("# demcon packing: one sphere per line, x y z r (m)\n");
     let _ = match *container {
-        Container::Box { size } => writeln!(s, "# container box {} {} {}", size[0], size[1], size[2]),
-        Container::Periodic { size } => {
-            writeln!(s, "# container periodic {} {} {}", size[0], size[1], size[2])
+        Container::Box { size } => writeln!(
+            s,
+            "# container box {} {} {}",
+            short(size[0]),
+            short(size[1]),
+            short(size[2])
+        ),
+        Container::Periodic { size } => writeln!(
+            s,
+            "# container periodic {} {} {}",
+            short(size[0]),
+            short(size[1]),
+            short(size[2])
+        ),
+        Container::Cylinder { radius, length } => {
+            writeln!(s, "# container cylinder {} {}", short(radius), short(length))
         }
-        Container::Cylinder { radius, length } => writeln!(s, "# container cylinder {radius} {length}"),
-        Container::Sphere { radius } => writeln!(s, "# container sphere {radius}"),
+        Container::Sphere { radius } => writeln!(s, "# container sphere {}", short(radius)),
     };
     let _ = writeln!(s, "# count {}", particles.len());
     for note in notes {
@@ -63,38 +94,102 @@ pub fn write_xyzr_with_notes(
         }
     }
     for (c, r) in particles.centres.iter().zip(&particles.radii) {
-        let _ = writeln!(s, "{} {} {} {}", c.x, c.y, c.z, r);
+        let _ = writeln!(s, "{} {} {} {}", short(c.x), short(c.y), short(c.z), short(*r));
     }
-    write_atomic(path, s.as_bytes())
+    s
 }
 
-/// Writes `bytes` to a temporary file next to `path`, flushes it, and renames it over `path`.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PackingError> {
-    let io = |source| PackingError::Io {
-        path: path.to_path_buf(),
-        source,
+/// Writes several files all or none: each to a temporary file next to it (flushed), then,
+/// only if every temporary was written, renames them into place in order. On a failure the
+/// temporaries are removed and no target is touched (a failed rename, e.g. a folder removed
+/// meanwhile, can still leave the earlier files renamed).
+pub fn write_atomic_all(files: &[(&Path, &[u8])]) -> Result<(), PackingError> {
+    let mut temps: Vec<(PathBuf, &Path)> = Vec::new();
+    let cleanup = |temps: &[(PathBuf, &Path)]| {
+        for (t, _) in temps {
+            let _ = std::fs::remove_file(t);
+        }
     };
-    let name = path.file_name().ok_or_else(|| {
-        io(std::io::Error::new(
+    for (path, bytes) in files {
+        let tmp = temp_path(path).inspect_err(|_| cleanup(&temps))?;
+        let written = (|| {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(bytes)?;
+            f.sync_all()
+        })();
+        if let Err(source) = written {
+            let _ = std::fs::remove_file(&tmp);
+            cleanup(&temps);
+            return Err(PackingError::Io {
+                path: path.to_path_buf(),
+                source,
+            });
+        }
+        temps.push((tmp, path));
+    }
+    for (k, (tmp, path)) in temps.iter().enumerate() {
+        if let Err(source) = std::fs::rename(tmp, path) {
+            cleanup(&temps[k..]);
+            return Err(PackingError::Io {
+                path: path.to_path_buf(),
+                source,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Checks, before any heavy work, that `path` can be written: its folder exists and
+/// accepts a new file (a probe file is created and removed), and it is not a folder.
+pub fn check_writable(path: &Path) -> Result<(), PackingError> {
+    let io = |kind: std::io::ErrorKind, msg: String| PackingError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(kind, msg),
+    };
+    if path.is_dir() {
+        return Err(io(
             std::io::ErrorKind::InvalidInput,
-            "not a file name",
-        ))
+            "is a folder, not a file name".into(),
+        ));
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(io(
+            std::io::ErrorKind::NotFound,
+            format!("the folder {} does not exist", dir.display()),
+        ));
+    }
+    let probe = temp_path(path)?;
+    match std::fs::File::create(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(io(
+            e.kind(),
+            format!("the folder {} is not writable: {e}", dir.display()),
+        )),
+    }
+}
+
+/// The temporary file next to `path` used by the atomic writers.
+fn temp_path(path: &Path) -> Result<PathBuf, PackingError> {
+    let name = path.file_name().ok_or_else(|| PackingError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name"),
     })?;
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(name);
     tmp_name.push(format!(".tmp{}", std::process::id()));
-    let tmp: PathBuf = path.with_file_name(tmp_name);
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io(e));
-    }
-    Ok(())
+    Ok(path.with_file_name(tmp_name))
+}
+
+/// Writes `bytes` to a temporary file next to `path`, flushes it, and renames it over `path`.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PackingError> {
+    write_atomic_all(&[(path, bytes)])
 }
 
 /// Reads a packing file: the spheres and the container (if the header names one).
