@@ -43,6 +43,7 @@ pub use radius::{DEFAULT_TRUNCATION_SIGMAS, MIN_RATIO_FLOOR, RadiusDistribution,
 pub use report::{PackingReport, PackingSummary, RadiusSummary, bulk_phi, max_overlap, summarize};
 pub use stress::{STRESS_GROWTH_RATES, StressFailure, StressReport, stress_packings};
 pub use xyzr::{
-    XyzrFile, check_writable, format_xyzr, parse_xyzr, read_xyzr, read_xyzr_container, read_xyzr_file,
-    write_atomic, write_atomic_all, write_xyzr, write_xyzr_with_notes,
+    INSIDE_TOLERANCE, MAX_FILE_PHI, XyzrFile, check_inside, check_writable, format_xyzr, parse_xyzr,
+    read_xyzr, read_xyzr_container, read_xyzr_file, write_atomic, write_atomic_all, write_xyzr,
+    write_xyzr_with_notes,
 };

@@ -160,3 +160,36 @@ fn output_paths_are_checked_before_packing() {
     assert_eq!(names.len(), 2, "temporaries left: {names:?}");
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+#[test]
+fn calibrate_refuses_zero_realisations() {
+    let o = demcon(&["calibrate", "--packing", "x.xyzr", "--realisations", "0"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("--realisations 0"), "{}", text(&o));
+}
+
+#[test]
+fn info_refuses_truncated_outside_and_impossible_files() {
+    let d = scratch("info");
+    let f = d.join("p.xyzr");
+    for (body, want) in [
+        (
+            "# container box 0.01 0.01 0.01\n# count 3\n0.005 0.005 0.005 0.001\n",
+            "`# count 3` but the file has 1 particle lines",
+        ),
+        (
+            "# container box 0.01 0.01 0.01\n1 0.005 0.005 0.001\n",
+            "p.xyzr:2: particle 0 (centre (1, 0.005, 0.005) m",
+        ),
+        (
+            "# container periodic 0.001 0.001 0.001\n0.0005 0.0005 0.0005 0.0009\n",
+            "volume fraction 3.05",
+        ),
+    ] {
+        std::fs::write(&f, body).unwrap();
+        let o = demcon(&["info", f.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        assert!(text(&o).contains(want), "{}", text(&o));
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
