@@ -245,7 +245,7 @@ impl PackingParams {
 }
 
 /// Refuses container lengths outside [`LENGTH_RANGE`] (the error names the field).
-fn check_lengths(c: &Container) -> Result<(), CoreError> {
+pub(crate) fn check_lengths(c: &Container) -> Result<(), CoreError> {
     let lengths: Vec<(&str, f64)> = match *c {
         Container::Box { size } | Container::Periodic { size } => {
             vec![("size.x", size[0]), ("size.y", size[1]), ("size.z", size[2])]

@@ -86,6 +86,14 @@ fn container_header(c: &Container) -> String {
     }
 }
 
+/// `s` cut to 40 characters (with `…`), for echoing file text in messages.
+fn clip(s: &str) -> String {
+    match s.char_indices().nth(40) {
+        Some((i, _)) => format!("{}…", &s[..i]),
+        None => s.to_string(),
+    }
+}
+
 /// A packing file's content.
 #[derive(Debug, Clone, PartialEq)]
 pub struct XyzrFile {
@@ -306,7 +314,10 @@ pub fn parse_xyzr(text: &str) -> Result<XyzrFile, (usize, String)> {
                 let n = rest.trim().parse::<usize>().map_err(|_| {
                     (
                         line,
-                        format!("`# count {}`: expected the number of particle lines", rest.trim()),
+                        format!(
+                            "`# count {}`: expected the number of particle lines",
+                            clip(rest.trim())
+                        ),
                     )
                 })?;
                 count = Some((n, line));
@@ -331,7 +342,7 @@ pub fn parse_xyzr(text: &str) -> Result<XyzrFile, (usize, String)> {
                 .parse::<f64>()
                 .ok()
                 .filter(|x| x.is_finite())
-                .ok_or_else(|| (line, format!("`{f}` is not a finite number")))?;
+                .ok_or_else(|| (line, format!("`{}` is not a finite number", clip(f))))?;
         }
         if v[3] <= 0.0 {
             return Err((line, format!("radius {} must be > 0", short(v[3]))));
@@ -394,12 +405,15 @@ fn parse_container(rest: &str) -> Result<Container, String> {
         if words.len() != n + 1 {
             return Err(format!(
                 "`# container {}` needs {n} numbers after the kind",
-                words.first().unwrap_or(&"")
+                clip(words.first().unwrap_or(&""))
             ));
         }
         words[1..]
             .iter()
-            .map(|w| w.parse::<f64>().map_err(|_| format!("`{w}` is not a number")))
+            .map(|w| {
+                w.parse::<f64>()
+                    .map_err(|_| format!("`{}` is not a number", clip(w)))
+            })
             .collect()
     };
     let c = match words.first().copied() {
@@ -429,10 +443,11 @@ fn parse_container(rest: &str) -> Result<Container, String> {
         other => {
             return Err(format!(
                 "unknown container `{}`: expected box, cylinder, sphere or periodic",
-                other.unwrap_or("")
+                clip(other.unwrap_or(""))
             ));
         }
     };
+    crate::params::check_lengths(&c).map_err(|e| e.to_string())?;
     c.validate().map_err(|e| e.to_string())?;
     Ok(c)
 }
