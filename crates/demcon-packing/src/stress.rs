@@ -49,7 +49,7 @@ pub struct StressReport {
 /// Runs `cases` small packings (20–120 particles, φ 0.45–0.62, Gaussian or monodisperse
 /// radii) cycling through the four container kinds and [`STRESS_GROWTH_RATES`], seed =
 /// case number. Every packing must finish without error (target reached or jammed) and
-/// with overlaps ≤ [`MAX_OVERLAP`]. Deterministic; about 1 ms per case in release builds.
+/// with overlaps ≤ [`MAX_OVERLAP`]. Deterministic; about 15 ms per case in release builds.
 pub fn stress_packings(cases: usize) -> StressReport {
     let mut rep = StressReport {
         cases,
