@@ -417,7 +417,7 @@ pub fn coordination_curve(
         )
         .into());
     }
-    let cands = candidates(search, &prepared.pos, &particles.radii, prepared.period, emax);
+    let cands = candidates(search, &prepared.pos, &particles.radii, prepared.period, emax)?;
     let n = particles.len();
     Ok(epsilons
         .iter()
@@ -484,7 +484,7 @@ pub fn detect_contacts(
                     )
                     .into());
                 }
-                (search(eps), eps, 1, None, false)
+                (search(eps)?, eps, 1, None, false)
             }
             ContactTolerance::TargetCoordination(z) => {
                 let need = (z * n as f64 / 2.0).ceil();
@@ -494,7 +494,7 @@ pub fn detect_contacts(
                 let mut rounds = 0;
                 let cands = loop {
                     rounds += 1;
-                    let c = search(eps_s);
+                    let c = search(eps_s)?;
                     if c.len() as f64 >= need {
                         break c;
                     }

@@ -5,10 +5,12 @@
 //! because it is faster on packings (uniform density, bounded radius ratio): see the
 //! `contacts` criterion benchmark and the crate documentation for the measured figures.
 
-use demcon_core::Vec3;
+use demcon_core::{CoreError, Vec3};
 use rayon::prelude::*;
 use rstar::RTree;
 use rstar::primitives::{GeomWithData, Rectangle};
+
+use crate::error::GraphError;
 
 /// How candidate contact pairs are found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -86,19 +88,43 @@ impl Candidate {
 /// Margin on the prefilter distance so that rounding never drops a pair with rel ≤ ε.
 const MARGIN: f64 = 1.0 + 1e-9;
 
+/// Largest particle span and radius the search accepts (m): beyond, squared distances
+/// overflow f64 and cell indices lose meaning.
+pub(crate) const MAX_SPAN: f64 = 1e150;
+
 /// Pairs with relative gap ≤ `eps`, sorted by key. `pos` must be wrapped into the period
 /// when `period` is given, and every contact distance must stay under half the period.
+///
+/// Errors: a non-finite position or radius, or particles spanning more than [`MAX_SPAN`]
+/// (named, with the value), instead of a panic or a meaningless grid.
 pub(crate) fn candidates(
     method: NeighbourSearch,
     pos: &[Vec3],
     radii: &[f64],
     period: Option<[f64; 3]>,
     eps: f64,
-) -> Vec<Candidate> {
-    match method {
+) -> Result<Vec<Candidate>, GraphError> {
+    check_span(pos, radii)?;
+    Ok(match method {
         NeighbourSearch::CellGrid => grid_candidates(pos, radii, period, eps),
         NeighbourSearch::RTree => rtree_candidates(pos, radii, period, eps),
+    })
+}
+
+/// Refuses non-finite centres or radii and spans above [`MAX_SPAN`].
+fn check_span(pos: &[Vec3], radii: &[f64]) -> Result<(), GraphError> {
+    for (i, (c, &r)) in pos.iter().zip(radii).enumerate() {
+        // Written so that NaN fails too.
+        if !(c.iter().all(|x| x.abs() <= MAX_SPAN) && r.abs() <= MAX_SPAN) {
+            return Err(CoreError::invalid(
+                format!("particles[{i}]"),
+                format!("centre ({:e}, {:e}, {:e}) m, radius {r:e} m", c.x, c.y, c.z),
+                format!("coordinates and radii must be finite and at most {MAX_SPAN:e} m in magnitude"),
+            )
+            .into());
+        }
     }
+    Ok(())
 }
 
 /// The cell grid: dimensions, cell widths, origin.
@@ -123,17 +149,34 @@ impl Grid {
                 (min, max - min)
             }
         };
-        // Never more than ~2 cells per particle: sparse sets get wider cells.
+        // Never more than ~2 cells per particle: sparse sets get wider cells. Cell counts are
+        // clamped before the cast (a tiny reach or a huge span once overflowed the index), the
+        // width starts at span / max_cells and widens at most 200 times; a degenerate span
+        // falls back to a single cell (slow, still exact).
         let max_cells = 2.0 * pos.len() as f64 + 64.0;
-        let mut h = reach;
-        loop {
-            let dims: [usize; 3] = std::array::from_fn(|k| {
+        let e_max = extent.max();
+        let mut h = if reach.is_finite() && reach > 0.0 {
+            reach
+        } else {
+            e_max
+        };
+        h = h.max(e_max / max_cells);
+        let dims_for = |h: f64| -> [usize; 3] {
+            std::array::from_fn(|k| {
                 let cells = (extent[k] / h).floor();
+                let cells = if cells.is_nan() {
+                    0.0
+                } else {
+                    cells.clamp(0.0, max_cells)
+                } as usize;
                 match period {
-                    Some(_) => (cells as usize).max(1),
-                    None => cells as usize + 1,
+                    Some(_) => cells.max(1),
+                    None => cells + 1,
                 }
-            });
+            })
+        };
+        for _ in 0..200 {
+            let dims = dims_for(h);
             let total = dims.iter().map(|&d| d as f64).product::<f64>();
             if total <= max_cells {
                 let inv_width = std::array::from_fn(|k| match period {
@@ -148,6 +191,12 @@ impl Grid {
                 };
             }
             h *= 1.25;
+        }
+        Self {
+            dims: [1, 1, 1],
+            inv_width: [0.0; 3],
+            origin,
+            periodic: period.is_some(),
         }
     }
 
@@ -348,4 +397,40 @@ fn rtree_candidates(pos: &[Vec3], radii: &[f64], period: Option<[f64; 3]>, eps: 
     out.sort_unstable_by_key(|c| c.key);
     out.dedup_by_key(|c| c.key);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Fuzz findings: φ ≤ ~1e-70 in a scene (tiny radii in a normal box) and coordinates
+    /// ≥ ~1e297 overflowed the cell index (index out of bounds).
+    #[test]
+    fn cell_search_survives_tiny_radii_and_huge_coordinates() {
+        let pos = vec![
+            Vec3::zeros(),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(2e-70, 0.0, 0.0),
+        ];
+        let radii = vec![1e-70; 3];
+        for method in [NeighbourSearch::CellGrid, NeighbourSearch::RTree] {
+            let c = candidates(method, &pos, &radii, None, 0.1).unwrap();
+            assert_eq!(c.len(), 1);
+            assert_eq!((c[0].p(), c[0].q()), (0, 2));
+            let c = candidates(method, &pos, &radii, Some([3.0; 3]), 0.1).unwrap();
+            assert_eq!(c.len(), 1);
+        }
+        let far = vec![
+            Vec3::zeros(),
+            Vec3::new(1e140, 0.0, 0.0),
+            Vec3::new(1e140, 1.0, 0.0),
+        ];
+        let c = candidates(NeighbourSearch::CellGrid, &far, &[0.6; 3], None, 0.1).unwrap();
+        assert_eq!(c.len(), 1);
+        for bad in [1e297, f64::INFINITY, f64::NAN] {
+            let p = vec![Vec3::zeros(), Vec3::new(bad, 0.0, 0.0)];
+            let e = candidates(NeighbourSearch::CellGrid, &p, &[0.5; 2], None, 0.1).unwrap_err();
+            assert!(e.to_string().contains("particles[1]"), "{e}");
+        }
+    }
 }

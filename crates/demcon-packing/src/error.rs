@@ -35,6 +35,30 @@ pub enum PackingError {
         /// The largest overlap accepted.
         allowed: f64,
     },
+    /// A sphere lies outside its container (beyond [`crate::INSIDE_TOLERANCE`]).
+    #[error(
+        "particle {particle} (centre ({x}, {y}, {z}) m, radius {radius} m) lies outside the {container}: \
+         it crosses the boundary by {protrusion} m, {relative} of its radius (allowed {allowed})",
+        x = crate::xyzr::short(centre[0]),
+        y = crate::xyzr::short(centre[1]),
+        z = crate::xyzr::short(centre[2]),
+        radius = crate::xyzr::short(*radius),
+        protrusion = crate::xyzr::short(*protrusion),
+        relative = crate::xyzr::short(protrusion / radius),
+        allowed = crate::INSIDE_TOLERANCE
+    )]
+    Outside {
+        /// Particle index (from 0).
+        particle: usize,
+        /// Its centre (m).
+        centre: [f64; 3],
+        /// Its radius (m).
+        radius: f64,
+        /// How far it crosses the boundary (m).
+        protrusion: f64,
+        /// Container kind and size, as in a file header.
+        container: String,
+    },
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {

@@ -28,15 +28,22 @@ mod lsa;
 mod params;
 mod radius;
 mod report;
+mod stress;
 mod xyzr;
 
 pub use carve::carve;
 pub use error::PackingError;
 pub use lsa::{MAX_OVERLAP, pack, predict};
-pub use params::{MAX_PHI_ABOVE_JAMMING, PackProgress, PackingParams, StopReason};
+pub use params::{
+    BYTES_PER_PARTICLE, DEFAULT_MEMORY_LIMIT, GROWTH_RATE_RANGE, LENGTH_RANGE, MAX_COUNT, MAX_JAM_PRESSURE,
+    MAX_PHI_ABOVE_JAMMING, MIN_PHI, MemoryLimit, NEIGHBOUR_SKIN_RANGE, PackProgress, PackingParams,
+    StopReason, THERMOSTAT_TOLERANCE_RANGE,
+};
 pub use radius::{DEFAULT_TRUNCATION_SIGMAS, MIN_RATIO_FLOOR, RadiusDistribution, jamming_estimate};
 pub use report::{PackingReport, PackingSummary, RadiusSummary, bulk_phi, max_overlap, summarize};
+pub use stress::{STRESS_GROWTH_RATES, StressFailure, StressReport, stress_packings};
 pub use xyzr::{
-    XyzrFile, parse_xyzr, read_xyzr, read_xyzr_container, read_xyzr_file, write_atomic, write_xyzr,
+    INSIDE_TOLERANCE, MAX_FILE_PHI, XyzrFile, check_inside, check_writable, format_xyzr, parse_xyzr,
+    read_xyzr, read_xyzr_container, read_xyzr_file, write_atomic, write_atomic_all, write_xyzr,
     write_xyzr_with_notes,
 };

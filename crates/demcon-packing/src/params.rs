@@ -4,11 +4,59 @@ use demcon_core::{Container, CoreError};
 use serde::Serialize;
 
 use crate::radius::{RadiusDistribution, jamming_estimate};
+use crate::xyzr::short;
 
 /// How far above [`jamming_estimate`] a target volume fraction may lie before it is
 /// rejected as unreachable (dimensionless). Slow growth packs a little beyond random close
 /// packing (and monodisperse spheres start to crystallise); more than this is not promised.
 pub const MAX_PHI_ABOVE_JAMMING: f64 = 0.04;
+
+/// Allowed container lengths (edges, radii, cylinder length), m: volumes (L³) and the sums
+/// of R³ over up to 10⁹ spheres then stay ~10²⁰⁰ away from f64 underflow and overflow.
+pub const LENGTH_RANGE: (f64, f64) = (1e-30, 1e30);
+
+/// Smallest target volume fraction (dimensionless): below it the spheres are a dilute gas,
+/// not a packing, and their radii head for underflow.
+pub const MIN_PHI: f64 = 1e-6;
+
+/// Allowed growth rates (dimensionless). The number of events grows as 1/g (10⁴ spheres
+/// need ~2.5·10⁷ events at 0.005), so 10⁻⁴ already costs ~10⁹ events; 1 is the largest
+/// rate the stress sweep ([`crate::stress_packings`]) covers.
+pub const GROWTH_RATE_RANGE: (f64, f64) = (1e-4, 1.0);
+
+/// Allowed neighbour-list skins (fraction of the mean radius). List rebuilds happen every
+/// ~skin radii of travel, so 0.01 costs ~40× the rebuilds of the default 0.4 (and a skin
+/// near 0 would rebuild without end); above 2 the lists hold most of the box.
+pub const NEIGHBOUR_SKIN_RANGE: (f64, f64) = (0.01, 2.0);
+
+/// Allowed thermostat tolerances (fraction): every rescale costs N predictions, so tiny
+/// tolerances rescale after nearly every event.
+pub const THERMOSTAT_TOLERANCE_RANGE: (f64, f64) = (1e-3, 10.0);
+
+/// Largest jamming pressure `PV/(NkT)` (dimensionless): p* ≈ 3/(1 − φ/φ_J) near jamming,
+/// so 10¹² asks φ to within ~10⁻¹² of φ_J, the resolution of the positions.
+pub const MAX_JAM_PRESSURE: f64 = 1e12;
+
+/// Memory used by the packer per particle (bytes): particle state (64), events and heap
+/// (~30), neighbour lists (~100–200), bounding spheres and their grid (~100), placement
+/// grid, output and renumbering (~100). Measured 440 B at φ = 0.35 (maximum resident set
+/// of 2·10⁴ and 2·10⁵ particles), rounded up for the longer lists of dense packings.
+pub const BYTES_PER_PARTICLE: u64 = 600;
+
+/// Memory limit assumed when the available memory is not known (bytes): 64 GiB.
+pub const DEFAULT_MEMORY_LIMIT: u64 = 64 << 30;
+
+/// Largest particle count (ids are `u32`).
+pub const MAX_COUNT: usize = u32::MAX as usize - 1;
+
+/// Where a memory limit comes from, for the message of [`PackingParams::check_memory`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MemoryLimit {
+    /// Available memory as measured (e.g. `MemAvailable` of `/proc/meminfo`), bytes.
+    Available(u64),
+    /// The fixed [`DEFAULT_MEMORY_LIMIT`], when nothing was measured.
+    Fixed,
+}
 
 /// Parameters of a Lubachevsky–Stillinger packing. Build with [`PackingParams::new`] and
 /// change the fields you need.
@@ -73,72 +121,117 @@ impl PackingParams {
         }
     }
 
-    /// Checks every field; the error names the field, the value and what is allowed.
-    pub fn validate(&self) -> Result<(), CoreError> {
-        self.container.validate()?;
-        self.radii.validate()?;
-        if self.count == 0 || self.count >= u32::MAX as usize {
+    /// Estimated peak memory of the packer for `count` particles (bytes):
+    /// `count` × [`BYTES_PER_PARTICLE`].
+    pub fn memory_estimate(&self) -> u64 {
+        (self.count as u64).saturating_mul(BYTES_PER_PARTICLE)
+    }
+
+    /// Refuses a `count` whose [`memory_estimate`](Self::memory_estimate) exceeds `limit`;
+    /// the message gives both and says where the limit comes from.
+    pub fn check_memory(&self, limit: MemoryLimit) -> Result<(), CoreError> {
+        let (bytes, source) = match limit {
+            MemoryLimit::Available(b) => (b, "available memory (MemAvailable in /proc/meminfo)"),
+            MemoryLimit::Fixed => (
+                DEFAULT_MEMORY_LIMIT,
+                "fixed limit (the available memory is not known)",
+            ),
+        };
+        let need = self.memory_estimate();
+        if need > bytes {
             return Err(CoreError::invalid(
                 "count",
                 self.count,
-                "must be between 1 and 4 294 967 294",
+                format!(
+                    "the packer needs ~{BYTES_PER_PARTICLE} bytes per particle, {:.3e} bytes for {} \
+                     particles, above the {source} of {:.3e} bytes: at most {} particles",
+                    need as f64,
+                    self.count,
+                    bytes as f64,
+                    bytes / BYTES_PER_PARTICLE
+                ),
             ));
         }
+        Ok(())
+    }
+
+    /// Checks every field, before any heavy work; the error names the field, the value and
+    /// what is allowed. The count is checked against [`DEFAULT_MEMORY_LIMIT`]; callers that
+    /// know the available memory also call [`check_memory`](Self::check_memory).
+    pub fn validate(&self) -> Result<(), CoreError> {
+        check_lengths(&self.container)?;
+        self.container.validate()?;
+        self.radii.validate()?;
+        if self.count == 0 || self.count > MAX_COUNT {
+            return Err(CoreError::invalid(
+                "count",
+                self.count,
+                format!("must be between 1 and {MAX_COUNT}"),
+            ));
+        }
+        self.check_memory(MemoryLimit::Fixed)?;
         let phi_max = jamming_estimate(&self.radii) + MAX_PHI_ABOVE_JAMMING;
-        if !(self.target_phi.is_finite() && self.target_phi > 0.0 && self.target_phi <= phi_max) {
+        if !(self.target_phi.is_finite() && self.target_phi >= MIN_PHI && self.target_phi <= phi_max) {
             return Err(CoreError::invalid(
                 "phi",
-                self.target_phi,
+                short(self.target_phi),
                 format!(
-                    "must be in (0, {phi_max:.3}]: this radius distribution jams near φ ≈ {:.3} \
+                    "must be in [{MIN_PHI:e}, {phi_max:.3}]: this radius distribution jams near φ ≈ {:.3} \
                      (Desmond & Weeks 2014 estimate) and slow growth gains at most ~{MAX_PHI_ABOVE_JAMMING}",
                     jamming_estimate(&self.radii)
                 ),
             ));
         }
-        let pos = |field: &str, v: f64, allowed: &str| {
-            if v.is_finite() && v > 0.0 {
+        let range = |field: &str, v: f64, (lo, hi): (f64, f64), why: &str| {
+            if v >= lo && v <= hi {
                 Ok(())
             } else {
-                Err(CoreError::invalid(field, v, allowed))
+                Err(CoreError::invalid(
+                    field,
+                    short(v),
+                    format!("must be in [{lo:e}, {hi:e}] ({why})"),
+                ))
             }
         };
-        pos("growth-rate", self.growth_rate, "must be a finite number > 0")?;
+        range(
+            "growth-rate",
+            self.growth_rate,
+            GROWTH_RATE_RANGE,
+            "events grow as 1/growth rate; 1 is the largest tested",
+        )?;
         if self.max_events == 0 {
             return Err(CoreError::invalid("max-events", 0, "must be ≥ 1"));
         }
         if self.max_wall_s.is_nan() || self.max_wall_s <= 0.0 {
             return Err(CoreError::invalid(
                 "max-time",
-                self.max_wall_s,
+                short(self.max_wall_s),
                 "must be > 0 s (or infinite)",
             ));
         }
-        if !(self.jam_pressure.is_finite() && self.jam_pressure > 1.0) {
-            return Err(CoreError::invalid(
-                "jam-pressure",
-                self.jam_pressure,
-                "the reduced pressure PV/(NkT) must be a finite number > 1",
-            ));
-        }
-        if !(self.initial_phi > 0.0 && self.initial_phi <= 0.35) {
-            return Err(CoreError::invalid(
-                "initial-phi",
-                self.initial_phi,
-                "must be in (0, 0.35]",
-            ));
-        }
-        if !(self.neighbour_skin > 0.0 && self.neighbour_skin <= 2.0) {
-            return Err(CoreError::invalid(
-                "neighbour-skin",
-                self.neighbour_skin,
-                "must be in (0, 2] (fraction of the mean radius)",
-            ));
-        }
-        pos(
+        range(
+            "jam-pressure",
+            self.jam_pressure,
+            (1.0 + f64::EPSILON, MAX_JAM_PRESSURE),
+            "the reduced pressure PV/(NkT) must exceed 1; 1e12 already asks φ to within 1e-12 of jamming",
+        )?;
+        range(
+            "initial-phi",
+            self.initial_phi,
+            (1e-3, 0.35),
+            "random placement gives up below 1e-3 and fails above ~0.35",
+        )?;
+        range(
+            "neighbour-skin",
+            self.neighbour_skin,
+            NEIGHBOUR_SKIN_RANGE,
+            "fraction of the mean radius; rebuilds grow as 1/skin",
+        )?;
+        range(
             "thermostat-tolerance",
             self.thermostat_tolerance,
-            "must be a finite number > 0",
+            THERMOSTAT_TOLERANCE_RANGE,
+            "fraction of kinetic-energy rise; each rescale costs N predictions",
         )?;
         if !(self.bulk_margin_diameters.is_finite() && self.bulk_margin_diameters >= 0.0) {
             return Err(CoreError::invalid(
@@ -149,6 +242,30 @@ impl PackingParams {
         }
         Ok(())
     }
+}
+
+/// Refuses container lengths outside [`LENGTH_RANGE`] (the error names the field).
+pub(crate) fn check_lengths(c: &Container) -> Result<(), CoreError> {
+    let lengths: Vec<(&str, f64)> = match *c {
+        Container::Box { size } | Container::Periodic { size } => {
+            vec![("size.x", size[0]), ("size.y", size[1]), ("size.z", size[2])]
+        }
+        Container::Cylinder { radius, length } => vec![("radius", radius), ("length", length)],
+        Container::Sphere { radius } => vec![("radius", radius)],
+    };
+    let (lo, hi) = LENGTH_RANGE;
+    for (field, v) in lengths {
+        if !(v >= lo && v <= hi) {
+            return Err(CoreError::invalid(
+                format!("container.{field}"),
+                format!("{} m", short(v)),
+                format!(
+                    "must be in [{lo:e}, {hi:e}] m (volumes must stay far from f64 underflow and overflow)"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Why a packing run stopped.

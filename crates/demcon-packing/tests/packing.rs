@@ -272,3 +272,139 @@ fn bad_input_is_named() {
     });
     assert!(e.contains("growth-rate"), "{e}");
 }
+
+/// Regression for the overlaps seen at budget stops and growth rates 0.5 and 1: the
+/// neighbour lists were one-sided until each particle's first rebuild, so collisions were
+/// missed (an overlap of 0.31 R after 1024 events in a 500-sphere box).
+#[test]
+fn budget_stops_and_fast_growth_leave_no_overlap() {
+    let c = Container::Box { size: [0.01; 3] };
+    for (max_events, g) in [(100, 0.02), (u64::MAX, 0.5), (u64::MAX, 1.0)] {
+        let mut params = PackingParams::new(c, 500, 0.6, RadiusDistribution::Monodisperse);
+        params.max_events = max_events;
+        params.growth_rate = g;
+        let (p, rep) = pack(&params, 1, None).unwrap();
+        assert!(brute_overlap(&p, &c) < 1e-9, "{max_events} {g}: {rep}");
+    }
+}
+
+/// Many small packings (seeds × containers × growth rates): no error, no overlap.
+#[test]
+fn stress_small_packings_have_no_overlap() {
+    let rep = demcon_packing::stress_packings(40);
+    assert!(rep.failures.is_empty(), "{:#?}", rep.failures);
+    assert!(rep.worst_overlap <= 1e-9, "{}", rep.worst_overlap);
+    assert!(rep.reached + rep.jammed >= 30, "{rep:?}");
+}
+
+/// Fuzz findings: φ = 4.9e-324, a 1e-308 m sphere and 1e-300 m boxes hung the cell grid;
+/// they are refused up front, with the value in short form.
+#[test]
+fn packing_params_refuse_underflowing_sizes() {
+    let ok = PackingParams::new(
+        Container::Box { size: [1.0; 3] },
+        100,
+        0.5,
+        RadiusDistribution::Monodisperse,
+    );
+    let err = |p: PackingParams| pack(&p, 1, None).unwrap_err().to_string();
+    let e = err(PackingParams {
+        target_phi: 4.9e-324,
+        ..ok.clone()
+    });
+    assert!(e.contains("phi = 5e-324") && e.contains("[1e-6"), "{e}");
+    let e = err(PackingParams {
+        container: Container::Sphere { radius: 1e-308 },
+        ..ok.clone()
+    });
+    assert!(
+        e.contains("container.radius = 1e-308 m") && e.contains("1e-30"),
+        "{e}"
+    );
+    let e = err(PackingParams {
+        container: Container::Box { size: [1e-300; 3] },
+        ..ok.clone()
+    });
+    assert!(e.contains("container.size.x = 1e-300 m"), "{e}");
+    assert!(e.len() < 300, "{e}");
+    let e = err(PackingParams {
+        initial_phi: 4.9e-324,
+        ..ok
+    });
+    assert!(e.contains("initial-phi"), "{e}");
+}
+
+/// Fuzz findings: growth rates 1e308 and 1e-308 and a skin of 1e-308 never finished.
+#[test]
+fn packing_params_refuse_growth_rates_and_skins_that_never_finish() {
+    let ok = PackingParams::new(
+        Container::Box { size: [1.0; 3] },
+        100,
+        0.5,
+        RadiusDistribution::Monodisperse,
+    );
+    let err = |p: PackingParams| p.validate().unwrap_err().to_string();
+    for g in [1e308, 1e-308, 2.0, 0.0, f64::NAN] {
+        let e = err(PackingParams {
+            growth_rate: g,
+            ..ok.clone()
+        });
+        assert!(e.contains("growth-rate") && e.contains("[1e-4, 1e0]"), "{e}");
+    }
+    let e = err(PackingParams {
+        neighbour_skin: 1e-308,
+        ..ok.clone()
+    });
+    assert!(
+        e.contains("neighbour-skin = 1e-308") && e.contains("[1e-2, 2e0]"),
+        "{e}"
+    );
+    for (tol, p) in [(1e-308, 1e6), (0.5, 1e300)] {
+        let e = err(PackingParams {
+            thermostat_tolerance: tol,
+            jam_pressure: p,
+            ..ok.clone()
+        });
+        assert!(
+            e.contains("thermostat-tolerance") || e.contains("jam-pressure"),
+            "{e}"
+        );
+    }
+    for g in [1e-4, 1.0] {
+        PackingParams {
+            growth_rate: g,
+            ..ok.clone()
+        }
+        .validate()
+        .unwrap();
+    }
+}
+
+/// Fuzz finding: a count of 4·10⁹ was accepted and aborted on allocation.
+#[test]
+fn count_is_bounded_by_the_memory_estimate() {
+    let p = PackingParams::new(
+        Container::Periodic { size: [1.0; 3] },
+        4_000_000_000,
+        0.5,
+        RadiusDistribution::Monodisperse,
+    );
+    let e = p.validate().unwrap_err().to_string();
+    assert!(
+        e.contains("count = 4000000000") && e.contains("600 bytes per particle"),
+        "{e}"
+    );
+    assert!(e.contains("fixed limit"), "{e}");
+    let small = PackingParams { count: 1000, ..p };
+    let e = small
+        .check_memory(demcon_packing::MemoryLimit::Available(100_000))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("MemAvailable") && e.contains("at most 166 particles"),
+        "{e}"
+    );
+    small
+        .check_memory(demcon_packing::MemoryLimit::Available(1 << 30))
+        .unwrap();
+}

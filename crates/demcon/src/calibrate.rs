@@ -32,6 +32,9 @@ pub struct CalibrateArgs {
 
 /// Runs the subcommand.
 pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
+    if args.realisations == 0 {
+        bail!("invalid --realisations 0: give at least 1 (seeds seed, seed+1, …)");
+    }
     crate::set_threads(args.threads)?;
     let (mut scene, realisations) = match (&args.scene, &args.packing) {
         (Some(path), None) => {
@@ -39,7 +42,7 @@ pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
             let k = if matches!(s.config.packing, PackingConfig::File { .. }) {
                 1
             } else {
-                args.realisations.max(1)
+                args.realisations
             };
             (s, k)
         }

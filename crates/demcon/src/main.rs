@@ -32,8 +32,13 @@ enum Command {
 /// Sets the size of the global worker pool (default: all cores).
 pub(crate) fn set_threads(threads: Option<usize>) -> anyhow::Result<()> {
     if let Some(n) = threads {
-        if n == 0 {
-            anyhow::bail!("invalid --threads 0: give at least 1");
+        // Bounded: --threads 10000 would spawn 10 000 threads.
+        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        if n == 0 || n > 4 * cores.max(2) {
+            anyhow::bail!(
+                "invalid --threads {n}: must be between 1 and {} (4 × the {cores} cores of this machine)",
+                4 * cores.max(2)
+            );
         }
         rayon::ThreadPoolBuilder::new().num_threads(n).build_global()?;
     }

@@ -7,7 +7,8 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use demcon_core::Container;
 use demcon_packing::{
-    PackProgress, PackingParams, RadiusDistribution, pack, write_atomic, write_xyzr_with_notes,
+    MemoryLimit, PackProgress, PackingParams, RadiusDistribution, check_writable, format_xyzr, pack,
+    write_atomic_all,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -114,8 +115,22 @@ fn container(a: &PackArgs) -> anyhow::Result<Container> {
             radius: need(a.radius, "--radius R (m)")?,
         },
     };
-    c.validate()?;
     Ok(c)
+}
+
+/// The memory available to a new process: `MemAvailable` of `/proc/meminfo` when it can be
+/// read, else the packing crate's fixed limit.
+fn memory_limit() -> MemoryLimit {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find_map(|l| l.strip_prefix("MemAvailable:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        })
+        .map_or(MemoryLimit::Fixed, |kb| {
+            MemoryLimit::Available(kb.saturating_mul(1024))
+        })
 }
 
 /// Runs `demcon pack`.
@@ -154,6 +169,15 @@ pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
         params.thermostat_tolerance = t;
     }
     params.validate()?;
+    params.check_memory(memory_limit())?;
+    // Every output can be written: checked before the packing, not after it.
+    check_writable(&a.out).context("--out")?;
+    if let Some(path) = &a.report_json {
+        if path == &a.out {
+            bail!("--report-json and --out name the same file {}", path.display());
+        }
+        check_writable(path).context("--report-json")?;
+    }
 
     let bar = if a.quiet {
         ProgressBar::hidden()
@@ -192,12 +216,17 @@ pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
             params.target_phi, report.packing.phi, report.stop
         ),
     ];
-    write_xyzr_with_notes(&a.out, &particles, &container, &notes)
-        .with_context(|| format!("writing packing {}", a.out.display()))?;
+    // All outputs or none: the packing and the report are written to temporaries first.
+    let text = format_xyzr(&particles, &container, &notes);
+    let json = match &a.report_json {
+        Some(_) => serde_json::to_string_pretty(&report)?,
+        None => String::new(),
+    };
+    let mut files: Vec<(&std::path::Path, &[u8])> = vec![(a.out.as_path(), text.as_bytes())];
     if let Some(path) = &a.report_json {
-        let json = serde_json::to_string_pretty(&report)?;
-        write_atomic(path, json.as_bytes()).with_context(|| format!("writing report {}", path.display()))?;
+        files.push((path.as_path(), json.as_bytes()));
     }
+    write_atomic_all(&files).context("writing the packing and its report")?;
     println!("{report}");
     println!("written            {}", a.out.display());
     if report.reached_target() {

@@ -176,12 +176,16 @@ pub fn fixed_mask(model: &Model, fixed_sets: &[FixedSet]) -> Vec<bool> {
     m
 }
 
-/// Mask of the particles that are not results of a thermal run: fixed-temperature particles
-/// and particles excluded as floating.
+/// Mask of the particles that are not the continuum's answer in a thermal run:
+/// fixed-temperature particles and floating clusters (reached by no fixed value) — excluded
+/// from a steady solve, or kept by a transient, where they evolve on their own.
 pub fn unsolved_mask(model: &Model, bcs: &ThermalBcs) -> Vec<bool> {
     let mut m = fixed_mask(model, &bcs.fixed_sets);
-    for &i in bcs.constraints.excluded() {
-        m[i as usize] = true;
+    let c = &bcs.constraints;
+    for &i in c.excluded().iter().chain(c.floating_kept()) {
+        if let Some(x) = m.get_mut(i as usize) {
+            *x = true;
+        }
     }
     m
 }

@@ -21,14 +21,41 @@ pub struct CellGrid {
 impl CellGrid {
     /// A grid over `bounds` whose cells are at least `min_cell` (m) wide along every axis,
     /// for `n_particles` particles (none inserted yet). `max_cells` caps the total count.
+    ///
+    /// Never loops for ever and never allocates more than `max_cells` cells, whatever the
+    /// sizes: at most 2²⁰ cells per axis, at most 200 widenings by 1.25, and a single cell
+    /// when the sizes are degenerate (zero, subnormal, not finite), which is slow but correct.
     pub fn new(bounds: &Aabb, min_cell: f64, periodic: bool, n_particles: usize, max_cells: usize) -> Self {
+        const PER_AXIS: f64 = (1u64 << 20) as f64;
         let ext = bounds.extent();
-        let mut cell = min_cell;
-        let dims = |cell: f64| [0, 1, 2].map(|k| ((ext[k] / cell).floor() as usize).clamp(1, 1 << 20));
+        let max_cells = max_cells.max(1);
+        let dims = |cell: f64| {
+            [0, 1, 2].map(|k| {
+                let q = (ext[k] / cell).floor();
+                if q.is_nan() {
+                    1
+                } else {
+                    q.clamp(1.0, PER_AXIS) as usize
+                }
+            })
+        };
+        let e_max = ext.max();
+        let mut cell = if min_cell.is_finite() && min_cell > 0.0 {
+            min_cell
+        } else {
+            e_max
+        };
+        // Below e_max / 2²⁰ the per-axis cap decides anyway; starting there bounds the loop.
+        cell = cell.max(e_max / PER_AXIS);
         let mut n = dims(cell);
-        while n[0] * n[1] * n[2] > max_cells.max(1) {
+        let mut rounds = 0;
+        while n[0] * n[1] * n[2] > max_cells && rounds < 200 {
             cell *= 1.25;
             n = dims(cell);
+            rounds += 1;
+        }
+        if n[0] * n[1] * n[2] > max_cells {
+            n = [1, 1, 1];
         }
         Self {
             min: bounds.min,
@@ -186,6 +213,41 @@ mod tests {
             .collect();
         v.sort();
         v
+    }
+
+    /// Fuzz finding: φ = 4.9e-324, a 1e-308 m sphere or 1e-300 m boxes made the cell
+    /// size underflow and `new` widen it for ever.
+    #[test]
+    fn cell_grid_terminates_on_underflowing_sizes() {
+        let cases = [
+            (1.0, 0.0),
+            (1.0, 4.9e-324),
+            (1.0, f64::NAN),
+            (1e-300, 1e-310),
+            (1e-308, 1e-308),
+            (0.0, 0.0),
+            (1e300, 1e-300),
+            (f64::INFINITY, 1.0),
+        ];
+        for (len, cell) in cases {
+            let b = Aabb {
+                min: Vec3::zeros(),
+                max: Vec3::repeat(len),
+            };
+            for periodic in [false, true] {
+                let mut g = CellGrid::new(&b, cell, periodic, 3, 64);
+                assert!(g.head.len() <= 64, "{len} {cell}");
+                for (i, p) in [Vec3::zeros(), Vec3::repeat(len * 0.5), Vec3::repeat(len)]
+                    .iter()
+                    .enumerate()
+                {
+                    g.insert(i, p);
+                }
+                let mut found = 0;
+                g.for_each_near(&Vec3::zeros(), |_| found += 1);
+                assert!(found >= 1);
+            }
+        }
     }
 
     #[test]

@@ -328,14 +328,18 @@ impl Engine {
             eng.brad[i] = (eng.p[i].a + skin * a_mean) * s0;
             eng.grid.insert(i, eng.bc[i], eng.brad[i]);
         }
+        // Symmetric lists: `nb[i]` already holds the neighbours k < i (pushed while k was
+        // processed); add those above i to both sides. (Taking `nb[i]` as the scratch list,
+        // as an earlier version did, dropped the k < i entries: the lists were one-sided
+        // until each particle's first rebuild, and collisions were missed.)
+        let mut list = Vec::new();
         for i in 0..n {
-            let mut list = std::mem::take(&mut eng.nb[i]);
             eng.find_neighbours(i, &mut list);
             list.retain(|&j| j as usize > i);
             for &j in &list {
                 eng.nb[j as usize].push(i as u32);
             }
-            eng.nb[i].extend(list);
+            eng.nb[i].extend_from_slice(&list);
         }
         eng.predict_all(0.0);
         Ok(eng)
@@ -659,4 +663,41 @@ fn min_image(period: Option<Vec3>, mut d: Vec3) -> Vec3 {
         }
     }
     d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::radius::RadiusDistribution;
+
+    /// The root cause of the overlaps at budget stops: every neighbour list must hold both
+    /// sides of each pair from the start.
+    #[test]
+    fn neighbour_lists_are_symmetric_from_the_start() {
+        let params = PackingParams::new(
+            Container::Box { size: [0.01; 3] },
+            400,
+            0.6,
+            RadiusDistribution::gaussian(0.3),
+        );
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let a = params.radii.sample(400, &mut rng);
+        let scale = (0.6 * params.container.volume()
+            / (a.iter().map(|r| r.powi(3)).sum::<f64>() * 4.0 / 3.0 * std::f64::consts::PI))
+            .cbrt();
+        let a: Vec<f64> = a.iter().map(|r| r * scale).collect();
+        let a_mean = a.iter().sum::<f64>() / 400.0;
+        let eng = Engine::start(&params, a, a_mean, &mut rng).unwrap();
+        let mut pairs = 0;
+        for i in 0..400 {
+            for &j in &eng.nb[i] {
+                assert!(
+                    eng.nb[j as usize].contains(&(i as u32)),
+                    "{i} lists {j}, not the reverse"
+                );
+                pairs += 1;
+            }
+        }
+        assert!(pairs > 400);
+    }
 }

@@ -1,0 +1,195 @@
+//! End-to-end robustness tests of `demcon pack`, `info` and `calibrate` (fuzz findings):
+//! bad input is refused up front with the flag, the value and what is allowed; budget stops
+//! exit with status 3; outputs are checked before packing and written all or none.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn demcon(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_demcon"))
+        .args(args)
+        .output()
+        .expect("run demcon")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("demcon-clipack-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// `pack` into `out` with a small valid setup, `extra` flags replacing or adding to it.
+fn pack(out: &str, extra: &[&str]) -> Output {
+    let base = [
+        ("--container", "box"),
+        ("--size", "0.01,0.01,0.01"),
+        ("--count", "300"),
+        ("--phi", "0.55"),
+        ("--out", out),
+    ];
+    let mut args = vec!["pack", "--quiet"];
+    for (flag, value) in base {
+        if !extra.contains(&flag) {
+            args.extend([flag, value]);
+        }
+    }
+    args.extend_from_slice(extra);
+    demcon(&args)
+}
+
+#[test]
+fn pack_refuses_underflowing_sizes() {
+    let d = scratch("underflow");
+    let out = d.join("p.xyzr");
+    let o_s = out.to_str().unwrap();
+    for (flags, want) in [
+        (
+            vec!["--size", "1e-300,1e-300,1e-300"],
+            "container.size.x = 1e-300 m",
+        ),
+        (vec!["--phi", "4.9e-324"], "phi = 5e-324"),
+    ] {
+        let o = pack(o_s, &flags);
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        assert!(text(&o).contains(want), "{}", text(&o));
+        assert!(text(&o).len() < 600, "{}", text(&o));
+        assert!(!out.exists());
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn pack_refuses_growth_rates_and_skins_that_never_finish() {
+    let d = scratch("growth");
+    let out = d.join("p.xyzr");
+    let o_s = out.to_str().unwrap();
+    for (flags, want) in [
+        (["--growth-rate", "1e308"], "growth-rate = 1e308"),
+        (["--growth-rate", "1e-308"], "growth-rate = 1e-308"),
+        (["--neighbour-skin", "1e-308"], "neighbour-skin = 1e-308"),
+    ] {
+        let o = pack(o_s, &flags);
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        assert!(
+            text(&o).contains(want) && text(&o).contains("must be in ["),
+            "{}",
+            text(&o)
+        );
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn threads_and_count_are_bounded() {
+    let d = scratch("bounds");
+    let out = d.join("p.xyzr");
+    let o = pack(out.to_str().unwrap(), &["--count", "4000000000"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("bytes per particle"), "{}", text(&o));
+    let o = demcon(&["calibrate", "--packing", "x.xyzr", "--threads", "10000"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(
+        text(&o).contains("--threads 10000: must be between 1 and"),
+        "{}",
+        text(&o)
+    );
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn budget_stops_exit_3_and_say_which_budget() {
+    let d = scratch("budget");
+    let out = d.join("p.xyzr");
+    let o_s = out.to_str().unwrap();
+    for (flags, want) in [
+        (["--max-events", "100"], "event budget"),
+        (["--max-time", "1e-9"], "time budget"),
+    ] {
+        let o = pack(o_s, &flags);
+        assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+        assert!(text(&o).contains(want), "{}", text(&o));
+        assert!(!text(&o).contains("overlap by"), "{}", text(&o));
+    }
+    for g in ["0.5", "1"] {
+        let o = pack(o_s, &["--growth-rate", g, "--allow-short"]);
+        assert!(o.status.success(), "{}", text(&o));
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn output_paths_are_checked_before_packing() {
+    let d = scratch("outputs");
+    let out = d.join("p.xyzr");
+    let o = pack("/nonexistent/x", &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(
+        text(&o).contains("--out") && text(&o).contains("does not exist"),
+        "{}",
+        text(&o)
+    );
+    assert!(
+        !text(&o).contains("phi (overall)"),
+        "packed before failing: {}",
+        text(&o)
+    );
+    let o = pack(out.to_str().unwrap(), &["--report-json", "/nonexistent/r.json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("--report-json"), "{}", text(&o));
+    assert!(!out.exists(), "a partial set of outputs was left");
+    let report = d.join("r.json");
+    let o = pack(
+        out.to_str().unwrap(),
+        &["--report-json", report.to_str().unwrap()],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(out.exists() && report.exists());
+    let names: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "temporaries left: {names:?}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn calibrate_refuses_zero_realisations() {
+    let o = demcon(&["calibrate", "--packing", "x.xyzr", "--realisations", "0"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("--realisations 0"), "{}", text(&o));
+}
+
+#[test]
+fn info_refuses_truncated_outside_and_impossible_files() {
+    let d = scratch("info");
+    let f = d.join("p.xyzr");
+    for (body, want) in [
+        (
+            "# container box 0.01 0.01 0.01\n# count 3\n0.005 0.005 0.005 0.001\n",
+            "`# count 3` but the file has 1 particle lines",
+        ),
+        (
+            "# container box 0.01 0.01 0.01\n1 0.005 0.005 0.001\n",
+            "p.xyzr:2: particle 0 (centre (1, 0.005, 0.005) m",
+        ),
+        (
+            "# container periodic 0.001 0.001 0.001\n0.0005 0.0005 0.0005 0.0009\n",
+            "volume fraction 3.05",
+        ),
+    ] {
+        std::fs::write(&f, body).unwrap();
+        let o = demcon(&["info", f.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        assert!(text(&o).contains(want), "{}", text(&o));
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
