@@ -9,9 +9,9 @@ use demcon_graph::{
 };
 use demcon_network::{Constraints, FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
 use demcon_thermal::{
-    ExplicitParams, ImplicitParams, RepresentativeVolume, Scheme, ThermalSystem, TimeStep, TransientInput,
-    capacities, face_flux_sources, paper_dt_estimate, run_explicit, run_implicit, solve_steady_temperature,
-    source_update_fn,
+    ExplicitParams, ImplicitParams, ProgressFn, RepresentativeVolume, Scheme, ThermalSystem, TimeStep,
+    TransientInput, capacities, face_flux_sources, paper_dt_estimate, run_explicit, run_implicit,
+    solve_steady_temperature, source_update_fn,
 };
 use serde::Serialize;
 
@@ -176,6 +176,8 @@ pub struct ThermalProblem {
     pub output_times: Vec<f64>,
     /// Floating clusters of a steady solve: excluded or refused (a transient keeps them).
     pub floating: FloatingPolicy,
+    /// Called with (steps done, steps total) during a transient, at most ~100 times.
+    pub progress: Option<ProgressFn>,
 }
 
 impl ThermalProblem {
@@ -676,6 +678,7 @@ pub fn solve_thermal_with(
                 dt: step,
                 output_times: problem.output_times.clone(),
                 paper_dt: setup.paper_dt,
+                progress: problem.progress.clone(),
                 ..ExplicitParams::default()
             };
             run_explicit(&system, input, &params, observer, source_update_fn(&mut hook))
@@ -687,6 +690,7 @@ pub fn solve_thermal_with(
                 scheme,
                 output_times: problem.output_times.clone(),
                 solve: default_solve_params(),
+                progress: problem.progress.clone(),
                 ..ImplicitParams::default()
             };
             run_implicit(&system, input, &params, observer, source_update_fn(&mut hook))

@@ -59,6 +59,7 @@ fn steady(bcs: Vec<ThermalBc>) -> ThermalProblem {
         initial_temperature: 0.0,
         output_times: Vec::new(),
         floating: FloatingPolicy::Fail,
+        progress: None,
     }
 }
 

@@ -326,6 +326,7 @@ pub fn thermal_problem(
         initial_temperature: t.initial_temperature,
         output_times: cfg.outputs.times.clone(),
         floating: floating(cfg.floating),
+        progress: None,
     })
 }
 

@@ -44,6 +44,7 @@ pub use build::build_model;
 pub use config::SceneConfig;
 pub use convert::Problem;
 pub use demcon_model::Model;
+pub use demcon_thermal::ProgressFn;
 pub use error::SceneError;
 pub use output::{summary_json, write_outputs};
 pub use run::{RunOptions, RunResult, Scene, Stages, run, run_on_model};

@@ -216,6 +216,8 @@ pub struct RunResult {
 pub struct RunOptions<'a> {
     /// Packing progress callback.
     pub progress: Option<&'a dyn Fn(&demcon_packing::PackProgress)>,
+    /// Transient progress callback: (steps done, steps total), at most ~100 calls per run.
+    pub transient_progress: Option<demcon_thermal::ProgressFn>,
 }
 
 /// Runs a scene end to end (in memory; see [`crate::write_outputs`] for files).
@@ -224,7 +226,7 @@ pub fn run(scene: &Scene, opts: &RunOptions<'_>) -> Result<RunResult, SceneError
     let cfg = &scene.config;
     let mut stages = Stages::default();
     let model = stages.time("build", || build_model(cfg, &scene.base_dir, opts.progress))?;
-    let mut result = run_stages(cfg, model, stages)?;
+    let mut result = run_stages(cfg, model, stages, opts.transient_progress.clone())?;
     result.wall_s = t0.elapsed().as_secs_f64();
     Ok(result)
 }
@@ -232,13 +234,21 @@ pub fn run(scene: &Scene, opts: &RunOptions<'_>) -> Result<RunResult, SceneError
 /// Runs the physics and post-processing of `cfg` on an already built model (so one packing
 /// can serve several solvers).
 pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneError> {
-    run_stages(cfg, model, Stages::default())
+    run_stages(cfg, model, Stages::default(), None)
 }
 
 /// The stages after the build.
-fn run_stages(cfg: &SceneConfig, model: Model, mut stages: Stages) -> Result<RunResult, SceneError> {
+fn run_stages(
+    cfg: &SceneConfig,
+    model: Model,
+    mut stages: Stages,
+    progress: Option<demcon_thermal::ProgressFn>,
+) -> Result<RunResult, SceneError> {
     let t0 = Instant::now();
-    let problem = convert::problem(cfg)?;
+    let mut problem = convert::problem(cfg)?;
+    if let Some(t) = problem.thermal.as_mut() {
+        t.progress = progress;
+    }
     let mut diagnostics = model_diagnostics(&model);
     let thermal = match &problem.thermal {
         Some(tp) => Some(stages.time("thermal setup", || setup_thermal(&model, tp, &mut diagnostics))?),

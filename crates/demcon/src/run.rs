@@ -60,11 +60,40 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             b.set_message(format!("{:.4}", p.phi));
         }
     };
+    // The transient's own bar, started at its first report (after packing and setup).
+    let steps_bar = (!args.quiet).then(|| {
+        let b = ProgressBar::hidden();
+        b.set_style(
+            ProgressStyle::with_template(
+                "{spinner} transient {bar:30} {pos}/{len} steps [{elapsed}, ETA {eta}]",
+            )
+            .expect("static template")
+            .progress_chars("=> "),
+        );
+        b
+    });
+    let packing_bar = bar.clone();
+    let transient_progress = steps_bar.clone().map(|b| {
+        demcon_scene::ProgressFn::new(move |done, total| {
+            if b.is_hidden() {
+                if let Some(p) = &packing_bar {
+                    p.finish_and_clear();
+                }
+                b.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            }
+            b.set_length(total);
+            b.set_position(done);
+        })
+    });
     let opts = RunOptions {
         progress: Some(&progress),
+        transient_progress,
     };
     let result = run_scene(&scene, &opts).with_context(|| format!("running scene {}", args.scene.display()));
     if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    if let Some(b) = &steps_bar {
         b.finish_and_clear();
     }
     let result = result?;
