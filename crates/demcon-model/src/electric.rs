@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::calibrate::calibrate_ct;
 use crate::error::ModelError;
 use crate::model::Model;
-use crate::thermal::{CtSpec, SurfaceSpec, default_solve_params, network_with_walls};
+use crate::thermal::{CtSpec, SurfaceSpec, network_with_walls};
 
 /// Where an electrode holds its potential.
 #[derive(Debug, Clone, PartialEq)]
@@ -46,6 +46,8 @@ pub struct ElectricProblem {
     pub floating: FloatingPolicy,
     /// Re-solve with ρ_e(T) when a temperature moved more than this (K); `None`: one-way.
     pub recouple_tolerance: Option<f64>,
+    /// The linear solver ([`crate::default_solve_params`] by default).
+    pub solve: demcon_network::SolveParams,
 }
 
 impl ElectricProblem {
@@ -276,7 +278,7 @@ pub fn solve_electric(
     }
     let params = ElectricParams {
         floating: problem.floating,
-        solve: default_solve_params(),
+        solve: problem.solve.clone(),
     };
     let sol = solve_potential(net, &g, &electrodes, &params)?;
     let mut joule = joule_power(net, &g, &sol.potentials, problem.eta)?;

@@ -176,6 +176,8 @@ pub struct ThermalProblem {
     pub output_times: Vec<f64>,
     /// Floating clusters of a steady solve: excluded or refused (a transient keeps them).
     pub floating: FloatingPolicy,
+    /// The linear solver of steady and implicit solves ([`default_solve_params`] by default).
+    pub solve: SolveParams,
     /// Called with (steps done, steps total) during a transient, at most ~100 times.
     pub progress: Option<ProgressFn>,
 }
@@ -689,14 +691,14 @@ pub fn solve_thermal_with(
                 dt,
                 scheme,
                 output_times: problem.output_times.clone(),
-                solve: default_solve_params(),
+                solve: problem.solve.clone(),
                 progress: problem.progress.clone(),
                 ..ImplicitParams::default()
             };
             run_implicit(&system, input, &params, observer, source_update_fn(&mut hook))
         }
         ThermalSolver::Steady => {
-            let st = solve_steady_temperature(net, g, &bcs.constraints, &sources, &default_solve_params())?;
+            let st = solve_steady_temperature(net, g, &bcs.constraints, &sources, &problem.solve)?;
             let mut temps = st.solution.values;
             for &p in bcs.constraints.excluded() {
                 temps[p as usize] = initial;

@@ -59,6 +59,7 @@ fn steady(bcs: Vec<ThermalBc>) -> ThermalProblem {
         initial_temperature: 0.0,
         output_times: Vec::new(),
         floating: FloatingPolicy::Fail,
+        solve: default_solve_params(),
         progress: None,
     }
 }
@@ -141,6 +142,7 @@ fn face_electrodes_give_rho_l_over_a_and_one_way_joule_heat() {
         eta: 1.0,
         floating: FloatingPolicy::Fail,
         recouple_tolerance: None,
+        solve: default_solve_params(),
     };
     let el = solve_electric(&model, &electric, None).unwrap();
     let r_exact = 2.0e-7 * 8.0 / 4.0;

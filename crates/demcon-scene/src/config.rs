@@ -44,6 +44,9 @@ pub struct SceneConfig {
     /// What to do with particle clusters connected to no fixed value.
     #[serde(default)]
     pub floating: FloatingConfig,
+    /// The linear solver of every steady, implicit and electric solve.
+    #[serde(default)]
+    pub linear_solver: LinearSolverConfig,
     /// Heat conduction (omit for a pure electric scene).
     #[serde(default)]
     pub thermal: Option<ThermalConfig>,
@@ -57,6 +60,57 @@ pub struct SceneConfig {
 
 fn default_seed() -> u64 {
     1
+}
+
+/// The linear solver (`linear_solver: (method: Auto, rel_tol: 1e-10)`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearSolverConfig {
+    /// Method.
+    #[serde(default)]
+    pub method: LinearMethodConfig,
+    /// Relative residual ‖b − Ax‖/‖b‖ to reach, in [1e-15, 1e-2] (iterative methods). A
+    /// solve that stagnates at round-off above it is accepted and reported when the residual
+    /// is within what the arithmetic can reach (`attainable` in the solver report).
+    #[serde(default = "default_rel_tol")]
+    pub rel_tol: f64,
+    /// Most iterations, in [1, 10⁷].
+    #[serde(default = "default_max_iter")]
+    pub max_iter: usize,
+}
+
+impl Default for LinearSolverConfig {
+    fn default() -> Self {
+        Self {
+            method: LinearMethodConfig::Auto,
+            rel_tol: default_rel_tol(),
+            max_iter: default_max_iter(),
+        }
+    }
+}
+
+fn default_rel_tol() -> f64 {
+    1e-10
+}
+
+fn default_max_iter() -> usize {
+    200_000
+}
+
+/// Linear-solver method.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+pub enum LinearMethodConfig {
+    /// MIC-preconditioned CG below 10⁴ unknowns, multigrid-preconditioned CG above.
+    #[default]
+    Auto,
+    /// Multigrid-preconditioned CG.
+    Multigrid,
+    /// MIC (modified incomplete Cholesky) preconditioned CG.
+    Mic,
+    /// Jacobi-preconditioned CG.
+    Jacobi,
+    /// Direct sparse Cholesky (to ~10⁵ unknowns).
+    Cholesky,
 }
 
 /// Where the particles come from.

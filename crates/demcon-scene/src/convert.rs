@@ -9,7 +9,7 @@ use demcon_model::{
     CarveRule, CtSpec, ElectricProblem, Electrode, ElectrodeAt, ModelParams, PhaseRule, PhaseSpec,
     SurfaceSpec, ThermalBc, ThermalProblem, ThermalSolver, TimeStepSpec, VolumeSource,
 };
-use demcon_network::FloatingPolicy;
+use demcon_network::{FloatingPolicy, Method, SolveParams};
 use demcon_post::{HaloParams, HaloPhases, Line, ProbeMethod};
 use demcon_thermal::Scheme;
 
@@ -326,6 +326,7 @@ pub fn thermal_problem(
         initial_temperature: t.initial_temperature,
         output_times: cfg.outputs.times.clone(),
         floating: floating(cfg.floating),
+        solve: solve_params(&cfg.linear_solver),
         progress: None,
     })
 }
@@ -369,7 +370,22 @@ pub fn electric_problem(
         eta: e.eta,
         floating: floating(cfg.floating),
         recouple_tolerance: e.recouple_tolerance,
+        solve: solve_params(&cfg.linear_solver),
     })
+}
+
+/// The linear solver's parameters.
+pub fn solve_params(l: &LinearSolverConfig) -> SolveParams {
+    let (rel_tol, max_iter) = (l.rel_tol, l.max_iter);
+    SolveParams {
+        method: match l.method {
+            LinearMethodConfig::Auto => Method::Auto { rel_tol, max_iter },
+            LinearMethodConfig::Multigrid => Method::AmgCg { rel_tol, max_iter },
+            LinearMethodConfig::Mic => Method::IcCg { rel_tol, max_iter },
+            LinearMethodConfig::Jacobi => Method::Cg { rel_tol, max_iter },
+            LinearMethodConfig::Cholesky => Method::Cholesky,
+        },
+    }
 }
 
 /// How a probe reads a field.

@@ -17,6 +17,7 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
     convert::problem(c)?;
     let container = known_container(c, base_dir)?;
     check_contacts(&c.contacts)?;
+    check_linear_solver(&c.linear_solver)?;
     check_probes(c)?;
     if c.thermal.is_none() && c.electric.is_none() {
         return Err(SceneError::invalid(
@@ -85,6 +86,25 @@ fn check_contacts(c: &ContactsConfig) -> Result<(), SceneError> {
             t,
             "the relative gap tolerance must lie in [1e-9, 1] (a gap up to t·(R_p + R_q); below 1e-9 it is \
              round-off)",
+        ));
+    }
+    Ok(())
+}
+
+/// Linear solver: a tolerance the arithmetic can honour and a finite iteration budget.
+fn check_linear_solver(l: &LinearSolverConfig) -> Result<(), SceneError> {
+    if !(1e-15..=1e-2).contains(&l.rel_tol) {
+        return Err(SceneError::invalid(
+            "linear_solver.rel_tol",
+            l.rel_tol,
+            "the relative residual must lie in [1e-15, 1e-2] (below 1e-15 is under round-off)",
+        ));
+    }
+    if !(1..=10_000_000).contains(&l.max_iter) {
+        return Err(SceneError::invalid(
+            "linear_solver.max_iter",
+            l.max_iter,
+            "must lie in [1, 10⁷]",
         ));
     }
     Ok(())

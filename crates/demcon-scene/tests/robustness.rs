@@ -276,3 +276,61 @@ fn probes_over_excluded_particles_are_flagged() {
         p.value
     );
 }
+
+/// A 1500-particle cube with a central sphere of conductivity `contrast` (matrix 1 W/(m·K)).
+fn contrast_scene(contrast: f64, solver: &str, linear: &str) -> Scene {
+    let text = format!(
+        r#"(
+            packing: Generate(container: Box(size: (1.0, 1.0, 1.0)), count: 1500, phi: 0.6, radius_cov: 0.3, allow_short: true),
+            surface: TerrerosAlpha,
+            materials: [(name: "matrix", conductivity: 1.0, density: 1.0, specific_heat: 1.0),
+                        (name: "inclusion", conductivity: {contrast:e}, density: 1.0, specific_heat: 1.0)],
+            phases: [Region(material: "inclusion", region: Sphere(centre: (0.5, 0.5, 0.5), radius: 0.3))],
+            thermal: (bcs: [WallTemperature(face: YMin, value: 0.0), WallTemperature(face: YMax, value: 1.0)],
+                      solver: {solver}),
+            {linear}
+            outputs: (vtk: false),
+        )"#
+    );
+    Scene::parse(&text, Path::new("contrast.ron"), PathBuf::new()).unwrap()
+}
+
+#[test]
+fn contrast_1e6_converges_for_steady_and_implicit_scenes() {
+    for contrast in [1e6, 1e-6] {
+        for solver in ["Steady", "Implicit(t_end: 1.0, dt: 0.25)"] {
+            let r = run(&contrast_scene(contrast, solver, ""), &RunOptions::default())
+                .unwrap_or_else(|e| panic!("contrast {contrast:e}, {solver}: {e}"));
+            let rep = &r.thermal.as_ref().unwrap().report;
+            assert!(
+                rep.iterations > 0 && rep.residual <= 1e-8,
+                "{contrast:e} {solver}: {rep:?}"
+            );
+        }
+    }
+    // The scene chooses the method and tolerance: Cholesky agrees with the default.
+    let a = run(&contrast_scene(1e6, "Steady", ""), &RunOptions::default()).unwrap();
+    let b = run(
+        &contrast_scene(1e6, "Steady", "linear_solver: (method: Cholesky),"),
+        &RunOptions::default(),
+    )
+    .unwrap();
+    let (ta, tb) = (
+        &a.thermal.as_ref().unwrap().temperatures,
+        &b.thermal.as_ref().unwrap().temperatures,
+    );
+    let diff = ta.iter().zip(tb).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    assert!(diff < 1e-6, "CG and Cholesky differ by {diff:e} K");
+}
+
+#[test]
+fn linear_solver_values_are_checked() {
+    for (linear, field) in [
+        ("linear_solver: (rel_tol: 0.0),", "linear_solver.rel_tol"),
+        ("linear_solver: (rel_tol: 0.5),", "linear_solver.rel_tol"),
+        ("linear_solver: (max_iter: 0),", "linear_solver.max_iter"),
+    ] {
+        let err = parse(&slab(linear, "Steady", "")).unwrap_err();
+        assert!(err.contains(field), "{linear}: {err}");
+    }
+}

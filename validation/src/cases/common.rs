@@ -112,6 +112,7 @@ pub fn thermal_scene(
         phase_rule: PhaseRuleConfig::Centre,
         interface: InterfaceConfig::Harmonic,
         floating: FloatingConfig::Exclude,
+        linear_solver: Default::default(),
         thermal: Some(thermal),
         electric: None,
         outputs: OutputsConfig {

@@ -167,6 +167,7 @@ pub fn electric_scene(
         phase_rule: PhaseRuleConfig::Centre,
         interface: InterfaceConfig::Harmonic,
         floating: FloatingConfig::Exclude,
+        linear_solver: Default::default(),
         thermal: None,
         electric: Some(ElectricConfig {
             electrodes: end_electrodes(v0),

@@ -118,6 +118,7 @@ fn lattice_scene(
         phases: Vec::new(),
         interface: InterfaceConfig::Harmonic,
         floating: FloatingConfig::Fail,
+        linear_solver: Default::default(),
         thermal: Some(ThermalConfig {
             initial_temperature: T0,
             bcs: Vec::new(),
