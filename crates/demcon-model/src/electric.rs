@@ -278,7 +278,7 @@ pub fn solve_electric(
     }
     let params = ElectricParams {
         floating: problem.floating,
-        solve: problem.solve.clone(),
+        solve: problem.solve,
     };
     let sol = solve_potential(net, &g, &electrodes, &params)?;
     let mut joule = joule_power(net, &g, &sol.potentials, problem.eta)?;

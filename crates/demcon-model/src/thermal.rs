@@ -691,7 +691,7 @@ pub fn solve_thermal_with(
                 dt,
                 scheme,
                 output_times: problem.output_times.clone(),
-                solve: problem.solve.clone(),
+                solve: problem.solve,
                 progress: problem.progress.clone(),
                 ..ImplicitParams::default()
             };
