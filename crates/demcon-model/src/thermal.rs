@@ -174,7 +174,7 @@ pub struct ThermalProblem {
     pub initial_temperature: f64,
     /// Times (s) at which a transient's temperatures are kept.
     pub output_times: Vec<f64>,
-    /// Floating clusters of a steady solve: excluded or refused (a transient keeps them).
+    /// Floating clusters: excluded or refused (a transient keeps them when one has a source).
     pub floating: FloatingPolicy,
     /// The linear solver of steady and implicit solves ([`default_solve_params`] by default).
     pub solve: SolveParams,
@@ -472,18 +472,20 @@ pub fn thermal_bcs(
             "a steady thermal solve needs at least one fixed temperature",
         ));
     }
-    // A transient is well posed on every cluster, fixed values or not: its heat capacity holds
-    // it, and its sources heat it. Only a steady solve needs the floating policy.
-    let policy = if transient {
-        FloatingPolicy::Keep
-    } else {
-        problem.floating
-    };
     let sets: Vec<(Vec<u32>, f64)> = fixed_sets
         .iter()
         .map(|s| (s.nodes(&setup.walls), s.value))
         .collect();
-    let constraints = resolve_fixed(net, &sets, policy)?;
+    // A transient is well posed on every cluster, fixed values or not: its heat capacity holds
+    // it, and its sources heat it, so floating clusters are kept when one of them has a
+    // source. Without sources they keep their initial temperature exactly, as excluded
+    // clusters report it, so the floating policy applies (an isolated small cluster would
+    // otherwise only shorten the explicit step). A steady solve always applies the policy.
+    let mut constraints = resolve_fixed(net, &sets, FloatingPolicy::Keep)?;
+    let heated = constraints.floating_kept().iter().any(|&p| sources[p as usize] != 0.0);
+    if !(transient && (heated || fixed_sets.is_empty())) {
+        constraints = resolve_fixed(net, &sets, problem.floating)?;
+    }
     Ok(ThermalBcs {
         constraints,
         sources,
