@@ -26,9 +26,18 @@ impl CoreError {
     pub fn invalid(field: impl Into<String>, value: impl ToString, allowed: impl Into<String>) -> Self {
         Self::InvalidParameter {
             field: field.into(),
-            value: value.to_string(),
+            value: short_number(value.to_string()),
             allowed: allowed.into(),
         }
+    }
+}
+
+/// A value as messages show it: a number longer than 16 characters in `{:e}` form (`1e-300`,
+/// not 0.000…0001); anything else unchanged.
+pub fn short_number(text: String) -> String {
+    match text.parse::<f64>() {
+        Ok(x) if text.len() > 16 => format!("{x:e}"),
+        _ => text,
     }
 }
 

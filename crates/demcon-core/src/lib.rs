@@ -31,7 +31,7 @@ mod shape;
 
 pub use components::Components;
 pub use diagnostic::Diagnostic;
-pub use error::CoreError;
+pub use error::{CoreError, short_number};
 pub use material::{Material, MaterialTable};
 pub use morton::morton_order;
 pub use particles::{ParticleSet, RadiusStats};

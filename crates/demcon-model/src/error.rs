@@ -47,7 +47,7 @@ impl ModelError {
     pub fn invalid(field: &str, value: impl std::fmt::Display, allowed: impl Into<String>) -> Self {
         Self::Invalid {
             field: field.into(),
-            value: short_number(value.to_string()),
+            value: demcon_core::short_number(value.to_string()),
             allowed: allowed.into(),
         }
     }
@@ -58,14 +58,5 @@ impl ModelError {
             field: field.into(),
             source,
         }
-    }
-}
-
-/// `text` in `{:e}` form when it is a number longer than 16 characters (e.g. `1e-300` rather
-/// than 0.000…0001), else unchanged.
-fn short_number(text: String) -> String {
-    match text.parse::<f64>() {
-        Ok(x) if text.len() > 16 => format!("{x:e}"),
-        _ => text,
     }
 }

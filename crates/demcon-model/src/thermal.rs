@@ -482,7 +482,10 @@ pub fn thermal_bcs(
     // clusters report it, so the floating policy applies (an isolated small cluster would
     // otherwise only shorten the explicit step). A steady solve always applies the policy.
     let mut constraints = resolve_fixed(net, &sets, FloatingPolicy::Keep)?;
-    let heated = constraints.floating_kept().iter().any(|&p| sources[p as usize] != 0.0);
+    let heated = constraints
+        .floating_kept()
+        .iter()
+        .any(|&p| sources[p as usize] != 0.0);
     if !(transient && (heated || fixed_sets.is_empty())) {
         constraints = resolve_fixed(net, &sets, problem.floating)?;
     }

@@ -113,7 +113,7 @@ impl SceneError {
     pub fn invalid(field: &str, value: impl std::fmt::Display, allowed: impl Into<String>) -> Self {
         Self::Invalid {
             field: field.into(),
-            value: short_number(value.to_string()),
+            value: demcon_core::short_number(value.to_string()),
             allowed: allowed.into(),
         }
     }
@@ -149,14 +149,5 @@ impl From<demcon_model::ModelError> for SceneError {
             M::Thermal(e) => SceneError::Thermal(e),
             M::Electric(e) => SceneError::Electric(e),
         }
-    }
-}
-
-/// `text` in `{:e}` form when it is a number longer than 16 characters (e.g. `1e-300` rather
-/// than 0.000…0001), else unchanged.
-fn short_number(text: String) -> String {
-    match text.parse::<f64>() {
-        Ok(x) if text.len() > 16 => format!("{x:e}"),
-        _ => text,
     }
 }

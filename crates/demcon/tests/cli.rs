@@ -1,34 +1,13 @@
 //! End-to-end tests of the `demcon` binary: `pack` and `info`, determinism of the written
 //! file, and bad input (non-zero exit, a clear message, no output file left behind).
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn demcon(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_demcon"))
-        .args(args)
-        .output()
-        .expect("run demcon")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("demcon-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+use common::{demcon, text};
 
 #[test]
 fn pack_then_info() {
-    let d = scratch("pack");
+    let d = common::scratch("cli", "pack");
     let out = d.join("p.xyzr");
     let o = demcon(&[
         "pack",
@@ -107,7 +86,7 @@ fn pack_then_info() {
 
 #[test]
 fn short_of_target_writes_the_file_and_fails_unless_allowed() {
-    let d = scratch("short");
+    let d = common::scratch("cli", "short");
     let out = d.join("p.xyzr");
     let args = [
         "pack",
@@ -139,7 +118,7 @@ fn short_of_target_writes_the_file_and_fails_unless_allowed() {
 
 #[test]
 fn bad_input_fails_clearly_and_leaves_no_file() {
-    let d = scratch("bad");
+    let d = common::scratch("cli", "bad");
     let out = d.join("p.xyzr");
     let o_s = out.to_str().unwrap();
     let base = |extra: &[&'static str]| {

@@ -2,30 +2,11 @@
 //! bad input is refused up front with the flag, the value and what is allowed; budget stops
 //! exit with status 3; outputs are checked before packing and written all or none.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn demcon(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_demcon"))
-        .args(args)
-        .output()
-        .expect("run demcon")
-}
+use std::process::Output;
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("demcon-clipack-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+use common::{demcon, text};
 
 /// `pack` into `out` with a small valid setup, `extra` flags replacing or adding to it.
 fn pack(out: &str, extra: &[&str]) -> Output {
@@ -48,7 +29,7 @@ fn pack(out: &str, extra: &[&str]) -> Output {
 
 #[test]
 fn pack_refuses_underflowing_sizes() {
-    let d = scratch("underflow");
+    let d = common::scratch("clipack", "underflow");
     let out = d.join("p.xyzr");
     let o_s = out.to_str().unwrap();
     for (flags, want) in [
@@ -69,7 +50,7 @@ fn pack_refuses_underflowing_sizes() {
 
 #[test]
 fn pack_refuses_growth_rates_and_skins_that_never_finish() {
-    let d = scratch("growth");
+    let d = common::scratch("clipack", "growth");
     let out = d.join("p.xyzr");
     let o_s = out.to_str().unwrap();
     for (flags, want) in [
@@ -90,7 +71,7 @@ fn pack_refuses_growth_rates_and_skins_that_never_finish() {
 
 #[test]
 fn threads_and_count_are_bounded() {
-    let d = scratch("bounds");
+    let d = common::scratch("clipack", "bounds");
     let out = d.join("p.xyzr");
     let o = pack(out.to_str().unwrap(), &["--count", "4000000000"]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
@@ -107,7 +88,7 @@ fn threads_and_count_are_bounded() {
 
 #[test]
 fn budget_stops_exit_3_and_say_which_budget() {
-    let d = scratch("budget");
+    let d = common::scratch("clipack", "budget");
     let out = d.join("p.xyzr");
     let o_s = out.to_str().unwrap();
     for (flags, want) in [
@@ -128,7 +109,7 @@ fn budget_stops_exit_3_and_say_which_budget() {
 
 #[test]
 fn output_paths_are_checked_before_packing() {
-    let d = scratch("outputs");
+    let d = common::scratch("clipack", "outputs");
     let out = d.join("p.xyzr");
     let o = pack("/nonexistent/x", &[]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
@@ -170,7 +151,7 @@ fn calibrate_refuses_zero_realisations() {
 
 #[test]
 fn info_refuses_truncated_outside_and_impossible_files() {
-    let d = scratch("info");
+    let d = common::scratch("clipack", "info");
     let f = d.join("p.xyzr");
     for (body, want) in [
         (

@@ -1,22 +1,9 @@
 //! End-to-end tests of `demcon run` on bad input: each error once, before any work, with no
 //! output left behind.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn demcon(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_demcon"))
-        .args(args)
-        .output()
-        .expect("run demcon")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("demcon-cli-run-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::demcon;
 
 const SCENE: &str = r#"(
     packing: Generate(container: Box(size: (1.0, 1.0, 1.0)), count: 200, phi: 0.5, radius_cov: 0.0),
@@ -29,7 +16,7 @@ const SCENE: &str = r#"(
 
 #[test]
 fn no_message_repeats_itself() {
-    let d = scratch("repeat");
+    let d = common::scratch("cli-run", "repeat");
     let scene = d.join("bad.ron");
     std::fs::write(&scene, SCENE.replace("DENSITY", "0.0")).unwrap();
     let o = demcon(&[
@@ -55,7 +42,7 @@ fn no_message_repeats_itself() {
 
 #[test]
 fn run_out_is_checked_before_the_run() {
-    let d = scratch("out");
+    let d = common::scratch("cli-run", "out");
     let scene = d.join("ok.ron");
     std::fs::write(&scene, SCENE.replace("DENSITY", "7800.0")).unwrap();
     // A file where the output folder should be: refused at once, the file untouched.
