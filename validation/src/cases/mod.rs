@@ -22,12 +22,18 @@ pub mod hubert2017_cylinder_resistance;
 pub mod hubert2017_notch_joule;
 pub mod hubert2017_solver_timing;
 pub mod joule_transient;
+pub mod packing_stress;
 
 use crate::Case;
 
 /// Every case, in the order of the report.
 pub fn registry() -> Vec<Case> {
     vec![
+        Case {
+            id: "packing-stress",
+            about: "the packer on 200 (full: 1000) small packings: no overlap above 1e-9 R, every run finishes",
+            run: packing_stress::run,
+        },
         Case {
             id: "ct-calibration",
             about: "Haddad 2021 §2.1: C_t on our packings against N, 4 realisations",
