@@ -32,11 +32,12 @@ impl CoreError {
     }
 }
 
-/// A value as messages show it: a number longer than 16 characters in `{:e}` form (`1e-300`,
-/// not 0.000…0001); anything else unchanged.
+/// A value as messages show it: a decimal number longer than 16 characters in `{:e}` form
+/// (`1e-300`, not 0.000…0001); integers (shown exactly) and anything else unchanged.
 pub fn short_number(text: String) -> String {
+    let integer = text.trim_start_matches('-').bytes().all(|b| b.is_ascii_digit());
     match text.parse::<f64>() {
-        Ok(x) if text.len() > 16 => format!("{x:e}"),
+        Ok(x) if text.len() > 16 && !integer => format!("{x:e}"),
         _ => text,
     }
 }
