@@ -38,6 +38,7 @@ mod constraints;
 mod csr;
 mod error;
 mod faer_cg;
+pub mod fixtures;
 mod flows;
 mod ic;
 mod network;

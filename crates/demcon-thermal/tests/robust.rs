@@ -247,48 +247,11 @@ fn implicit_solver_has_no_step_cap_progress_is_reported_at_most_100_times() {
     assert_eq!(*seen.last().unwrap(), (run.report.steps, run.report.steps));
 }
 
-/// Fixed sets: (nodes, value).
-type FixedSets = Vec<(Vec<u32>, f64)>;
-
-/// An n×n×n lattice (unit spacing, conductance 1 with ±30 % noise) whose edges inside a
-/// centred sphere of radius 0.3 n have conductance × `ratio`; faces i = 0 and i = n − 1 at
-/// 0 and 1. Returns the network, the conductances and the fixed sets.
-fn inclusion(n: usize, ratio: f64) -> (Network, Vec<f64>, FixedSets) {
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let id = |i: usize, j: usize, k: usize| (i * n * n + j * n + k) as u32;
-    let c = (n as f64 - 1.0) / 2.0;
-    let inside = |i: usize, j: usize, k: usize| {
-        let d2 = (i as f64 - c).powi(2) + (j as f64 - c).powi(2) + (k as f64 - c).powi(2);
-        d2 < (0.3 * n as f64).powi(2)
-    };
-    let (mut edges, mut g) = (Vec::new(), Vec::new());
-    for i in 0..n {
-        for j in 0..n {
-            for k in 0..n {
-                for (a, b, e) in [(i + 1, j, k), (i, j + 1, k), (i, j, k + 1)] {
-                    if a < n && b < n && e < n {
-                        edges.push([id(i, j, k), id(a, b, e)]);
-                        let base = rng.random_range(0.7..1.3);
-                        g.push(if inside(i, j, k) && inside(a, b, e) {
-                            base * ratio
-                        } else {
-                            base
-                        });
-                    }
-                }
-            }
-        }
-    }
-    let face = |i: usize| -> Vec<u32> { (0..n * n).map(|r| (i * n * n + r) as u32).collect() };
-    let net = Network::new(n * n * n, &edges).unwrap();
-    (net, g, vec![(face(0), 0.0), (face(n - 1), 1.0)])
-}
-
 #[test]
 fn contrast_cliff_implicit_steps_converge_at_contrast_1e6_and_1e_minus_6() {
     let n = 14;
     for ratio in [1e6, 1e-6] {
-        let (net, g, sets) = inclusion(n, ratio);
+        let (net, g, sets) = demcon_network::fixtures::inclusion_lattice(n, ratio);
         let c = resolve_fixed(&net, &sets, FloatingPolicy::Fail).unwrap();
         let caps = vec![1.0; net.n_nodes()];
         let system = ThermalSystem::new(&net, &g, &caps, &c).unwrap();
