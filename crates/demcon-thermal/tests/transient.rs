@@ -2,47 +2,15 @@
 //! exchange, energy balance, maximum principle, explicit/implicit/steady agreement,
 //! stability refusal and divergence detection, determinism, bad input.
 
+mod common;
+
+use common::{face, lattice};
 use demcon_network::{FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
 use demcon_thermal::{
     ExplicitParams, ImplicitParams, Scheme, ThermalError, ThermalSystem, TimeStep, TransientInput,
     paper_dt_estimate, run_explicit, run_implicit, solve_steady_temperature, source_update_fn,
     stable_dt_bound,
 };
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-
-/// An n×n×n lattice with random extra diagonals, conductances in [0.5, 2] W/K and
-/// capacities in [0.2, 3] J/K (a polydisperse-like spread of C/ΣH).
-fn lattice(n: usize, seed: u64) -> (Network, Vec<f64>, Vec<f64>) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let id = |i: usize, j: usize, k: usize| (i * n * n + j * n + k) as u32;
-    let mut edges = Vec::new();
-    for i in 0..n {
-        for j in 0..n {
-            for k in 0..n {
-                if i + 1 < n {
-                    edges.push([id(i, j, k), id(i + 1, j, k)]);
-                }
-                if j + 1 < n {
-                    edges.push([id(i, j, k), id(i, j + 1, k)]);
-                }
-                if k + 1 < n {
-                    edges.push([id(i, j, k), id(i, j, k + 1)]);
-                }
-                if j + 1 < n && k + 1 < n && rng.random::<f64>() < 0.3 {
-                    edges.push([id(i, j, k), id(i, j + 1, k + 1)]);
-                }
-            }
-        }
-    }
-    let g = (0..edges.len()).map(|_| rng.random_range(0.5..2.0)).collect();
-    let c = (0..n * n * n).map(|_| rng.random_range(0.2..3.0)).collect();
-    (Network::new(n * n * n, &edges).unwrap(), g, c)
-}
-
-fn face(n: usize, i: usize) -> Vec<u32> {
-    (0..n * n).map(|r| (i * n * n + r) as u32).collect()
-}
 
 #[test]
 fn two_nodes_follow_the_discrete_forward_euler_solution() {
@@ -78,7 +46,7 @@ fn two_nodes_follow_the_discrete_forward_euler_solution() {
 #[test]
 fn explicit_conserves_energy_and_obeys_the_maximum_principle() {
     let n = 8;
-    let (net, g, c) = lattice(n, 2);
+    let (net, g, c) = lattice(n, 2, true);
     let bcs = resolve_fixed(
         &net,
         &[(face(n, 0), 300.0), (face(n, n - 1), 350.0)],
@@ -136,7 +104,7 @@ fn explicit_conserves_energy_and_obeys_the_maximum_principle() {
 #[test]
 fn explicit_implicit_and_steady_agree() {
     let n = 6;
-    let (net, g, c) = lattice(n, 4);
+    let (net, g, c) = lattice(n, 4, true);
     let bcs = resolve_fixed(
         &net,
         &[(face(n, 0), 0.0), (face(n, n - 1), 1.0)],
@@ -269,7 +237,7 @@ fn a_step_above_the_bound_is_refused_and_divergence_is_detected() {
 #[test]
 fn explicit_does_not_depend_on_thread_count() {
     let n = 34; // 39 304 nodes: ten chunks, more than one parallel task.
-    let (net, g, c) = lattice(n, 9);
+    let (net, g, c) = lattice(n, 9, true);
     let bcs = resolve_fixed(&net, &[(face(n, 0), 1.0)], FloatingPolicy::Fail).unwrap();
     let system = ThermalSystem::new(&net, &g, &c, &bcs).unwrap();
     let params = ExplicitParams {
@@ -405,7 +373,7 @@ fn bad_input_is_named() {
 fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
     use demcon_thermal::ExplicitStepper;
     let n = 5;
-    let (net, g, c) = lattice(n, 11);
+    let (net, g, c) = lattice(n, 11, true);
     let m = n * n * n;
     let bcs = resolve_fixed(&net, &[(face(n, 0), 0.0)], FloatingPolicy::Fail).unwrap();
     let system = ThermalSystem::new(&net, &g, &c, &bcs).unwrap();
