@@ -8,6 +8,7 @@ use demcon_core::{Components, Container, CoreError, ParticleSet, Vec3};
 use rayon::prelude::*;
 
 use crate::error::{GraphError, positive};
+use crate::laguerre::Cells;
 use crate::search::{Candidate, NeighbourSearch, candidates, separation, wrap};
 
 /// Which pairs count as contacts.
@@ -155,6 +156,9 @@ pub struct ContactGraph {
     pub geometry: Vec<ContactGeometry>,
     /// What detection did and found.
     pub report: ContactReport,
+    /// The cells, when the graph is the facet graph of a Laguerre tessellation
+    /// ([`crate::tessellate`]); `None` for contacts found by a gap tolerance.
+    pub cells: Option<Box<Cells>>,
 }
 
 impl ContactGraph {
@@ -234,11 +238,16 @@ impl ContactGraph {
                 geometry.push(*g);
             }
         }
+        let cells = self
+            .cells
+            .as_ref()
+            .map(|c| Box::new(c.induced(&self.pairs, keep, &new_id)));
         let mut graph = ContactGraph {
             n_particles: keep.len(),
             pairs,
             geometry,
             report: self.report.clone(),
+            cells,
         };
         summarise(&mut graph);
         Ok(graph)
@@ -246,7 +255,7 @@ impl ContactGraph {
 }
 
 /// Fills the report's counts and diagnostics from the graph (all but the search fields).
-fn summarise(graph: &mut ContactGraph) {
+pub(crate) fn summarise(graph: &mut ContactGraph) {
     let degrees = graph.degrees();
     let comps = graph.components();
     let r = &mut graph.report;
@@ -331,13 +340,16 @@ fn validate_particles(particles: &ParticleSet) -> Result<(), GraphError> {
 
 /// Validated inputs of a search: positions (wrapped into a periodic box), the period, and
 /// the largest relative tolerance the period allows.
-struct Prepared<'a> {
-    pos: Cow<'a, [Vec3]>,
+pub(crate) struct Prepared<'a> {
+    pub pos: Cow<'a, [Vec3]>,
     period: Option<[f64; 3]>,
     eps_limit: f64,
 }
 
-fn prepare<'a>(particles: &'a ParticleSet, container: &Container) -> Result<Prepared<'a>, GraphError> {
+pub(crate) fn prepare<'a>(
+    particles: &'a ParticleSet,
+    container: &Container,
+) -> Result<Prepared<'a>, GraphError> {
     container.validate()?;
     validate_particles(particles)?;
     let rmax = particles.radii.iter().copied().fold(0.0, f64::max);
@@ -570,6 +582,7 @@ pub fn detect_contacts(
             wall_time_s: 0.0,
             diagnostics: Vec::new(),
         },
+        cells: None,
     };
     if overshoot {
         diagnostics.push(Diagnostic::CoordinationOvershoot {

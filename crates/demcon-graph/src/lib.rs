@@ -58,6 +58,7 @@ mod calibrated;
 mod contact;
 mod error;
 mod interface;
+mod laguerre;
 mod laminate;
 mod phase;
 mod search;
@@ -73,6 +74,7 @@ pub use contact::{
 pub use demcon_core::Components;
 pub use error::GraphError;
 pub use interface::{InterfaceRule, conductances, contact_property, interface_value};
+pub use laguerre::{CellWall, Cells, LaguerreParams, TessellationReport, WallFacet, tessellate};
 pub use laminate::{
     HalfBond, Laminates, Mix, assign_phase_laminate, contact_property_laminate, inside_fraction,
     interface_normal, laminate_value, plane_cut_fraction, sphere_cut_fraction,

@@ -1,0 +1,918 @@
+//! The Laguerre (power, radical Voronoi) tessellation of the spheres, clipped by the
+//! container and an optional carving region: the network of the third surface model.
+//!
+//! The cell of sphere p is {x : |x − x_p|² − R_p² ≤ |x − x_q|² − R_q² for every q}. Two
+//! particles are neighbours when their cells share a facet; the facet's area is the
+//! transmission surface S_pq and its plane splits the centre distance d into
+//! h_p = (d² + R_p² − R_q²)/(2d) and h_q = d − h_p. Facets are perpendicular to the centre
+//! line and every closed cell has Σ S n = 0, so a linear field solves the network exactly.
+//!
+//! Each cell is built on its own: the container's bounding box (walled containers) or a
+//! box around the site (periodic), cut by the power planes of the neighbours found in a
+//! uniform grid, nearest planes first, layer of grid cells after layer until no unseen
+//! sphere can reach the cell (certified by a bound on the plane distance of any sphere
+//! farther than the layers searched). Curved walls (cylinder mantle, sphere) and a carving
+//! region are approximated by planes tangent at the nearest surface point of the vertex
+//! farthest outside, repeated until every vertex lies within `curved_tolerance` of the
+//! surface; the volume this leaves is reported. Cells run in parallel; each depends only on
+//! its own inputs, so the result does not depend on the thread count.
+
+mod cell;
+
+use std::time::Instant;
+
+use demcon_core::{Container, CoreError, Face, ParticleSet, Region, Vec3};
+use rayon::prelude::*;
+
+use self::cell::{BOUND, Cell, ClipError, Tag, WALL_BASE};
+use crate::contact::{ContactGeometry, ContactGraph, ContactReport, prepare, summarise};
+use crate::error::{GraphError, positive};
+
+/// Parameters of [`tessellate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LaguerreParams {
+    /// Facets smaller than this times R̄² (R̄ the mean radius) are dropped as negligible
+    /// (dimensionless). Default 1e-12: dropping them changes no conductance sum by more
+    /// than that relative amount.
+    pub negligible_area: f64,
+    /// Curved walls and carving surfaces are followed by tangent planes until every vertex
+    /// of the cell lies within this fraction of the particle's radius outside the surface
+    /// (dimensionless). Default 1e-3.
+    pub curved_tolerance: f64,
+    /// Most tangent planes one cell may receive from curved surfaces. Default 64.
+    pub max_curved_planes: usize,
+    /// Largest overlap of two spheres accepted, as a fraction of the smaller radius
+    /// (dimensionless): beyond it a centre can fall outside its own cell. Default 0.1.
+    pub max_overlap: f64,
+}
+
+impl Default for LaguerreParams {
+    fn default() -> Self {
+        Self {
+            negligible_area: 1e-12,
+            curved_tolerance: 1e-3,
+            max_curved_planes: 64,
+            max_overlap: 0.1,
+        }
+    }
+}
+
+impl LaguerreParams {
+    /// Checks every field; the error names it.
+    pub fn validate(&self) -> Result<(), GraphError> {
+        positive("laguerre.negligible_area", self.negligible_area)?;
+        positive("laguerre.curved_tolerance", self.curved_tolerance)?;
+        positive("laguerre.max_overlap", self.max_overlap)?;
+        if self.max_curved_planes == 0 {
+            return Err(CoreError::invalid("laguerre.max_curved_planes", 0, "must be ≥ 1").into());
+        }
+        Ok(())
+    }
+}
+
+/// What bounds a wall facet of a cell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CellWall {
+    /// A face of the container.
+    Face(Face),
+    /// The surface of the carving region.
+    Carved,
+}
+
+/// The part of a particle's cell on one wall.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WallFacet {
+    /// The particle.
+    pub particle: u32,
+    /// The wall.
+    pub wall: CellWall,
+    /// Area (m²), summed over the planes that approximate a curved wall.
+    pub area: f64,
+    /// Distance from the centre to the facet, area-weighted over its planes (m).
+    pub distance: f64,
+    /// Outward unit normal (of the summed vector area).
+    pub normal: Vec3,
+}
+
+/// The cells of a Laguerre tessellation, beside the graph of their shared facets.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cells {
+    /// Area of the facet of each contact (m²), same order as the graph's pairs: the mean of
+    /// the two cells' values (equal to round-off).
+    pub facet_area: Vec<f64>,
+    /// h_p / d_pq per contact: where the facet plane splits the centre line, from p.
+    pub split: Vec<f64>,
+    /// Volume of each cell (m³).
+    pub volume: Vec<f64>,
+    /// Wall facets, sorted by particle then wall.
+    pub walls: Vec<WallFacet>,
+    /// What the tessellation did.
+    pub report: TessellationReport,
+}
+
+impl Cells {
+    /// The cells of the particles `keep` (ascending), renumbered by `new_id` (`u32::MAX` for
+    /// removed particles); `pairs` are the full graph's. The removed cells leave holes: the
+    /// facets they shared become free surface (adiabatic).
+    pub(crate) fn induced(&self, pairs: &[[u32; 2]], keep: &[u32], new_id: &[u32]) -> Cells {
+        let kept = |&[p, q]: &[u32; 2]| new_id[p as usize] != u32::MAX && new_id[q as usize] != u32::MAX;
+        let mut facet_area = Vec::new();
+        let mut split = Vec::new();
+        for (k, pq) in pairs.iter().enumerate() {
+            if kept(pq) {
+                facet_area.push(self.facet_area[k]);
+                split.push(self.split[k]);
+            }
+        }
+        Cells {
+            facet_area,
+            split,
+            volume: keep.iter().map(|&i| self.volume[i as usize]).collect(),
+            walls: self
+                .walls
+                .iter()
+                .filter(|w| new_id[w.particle as usize] != u32::MAX)
+                .map(|w| WallFacet {
+                    particle: new_id[w.particle as usize],
+                    ..*w
+                })
+                .collect(),
+            report: self.report.clone(),
+        }
+    }
+
+    /// The wall facets of `wall`, in particle order.
+    pub fn on_wall(&self, wall: CellWall) -> impl Iterator<Item = &WallFacet> + '_ {
+        self.walls.iter().filter(move |w| w.wall == wall)
+    }
+}
+
+/// What the tessellation did, found and cost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TessellationReport {
+    /// Facets dropped as negligible (counted once per pair).
+    pub dropped_facets: usize,
+    /// The area below which a facet is dropped (m²).
+    pub negligible_area_m2: f64,
+    /// Facets found by one cell only (after dropping negligible ones): should be 0.
+    pub one_sided_facets: usize,
+    /// Largest |S_p − S_q| / S of a facet seen from its two cells.
+    pub max_area_mismatch: f64,
+    /// Σ cell volumes (m³).
+    pub cells_volume: f64,
+    /// The domain's volume (m³): the container's, or the carving region's (estimated on a
+    /// 256³ grid).
+    pub domain_volume: f64,
+    /// Σ cell volumes / domain volume − 1: the volume curved walls leave outside the domain
+    /// (tangent planes never cut the inside of a convex wall).
+    pub volume_error: f64,
+    /// Cells that touch a curved surface, and the tangent planes they received.
+    pub curved_cells: usize,
+    /// Tangent planes added for curved surfaces.
+    pub curved_planes: usize,
+    /// Largest grid layer searched for a cell's neighbours.
+    pub max_layers: usize,
+    /// Power planes tried, and those that cut a cell.
+    pub planes_tried: u64,
+    /// Power planes that cut a cell.
+    pub planes_cut: u64,
+    /// Wall time (s).
+    pub wall_s: f64,
+}
+
+/// Wall tag codes: 0..6 are the container's faces (`Face` order below), 7 the carving region.
+const FACES: [Face; 7] = [
+    Face::XMin,
+    Face::XMax,
+    Face::YMin,
+    Face::YMax,
+    Face::ZMin,
+    Face::ZMax,
+    Face::Outer,
+];
+const CARVED: u32 = 7;
+
+fn wall_tag(code: u32) -> Tag {
+    WALL_BASE + code
+}
+
+fn wall_of(tag: Tag) -> CellWall {
+    match tag - WALL_BASE {
+        CARVED => CellWall::Carved,
+        c => CellWall::Face(FACES[c as usize]),
+    }
+}
+
+/// A uniform grid of the sites.
+struct Grid {
+    dims: [usize; 3],
+    width: f64,
+    origin: Vec3,
+    period: Option<[f64; 3]>,
+    /// Sites of cell c are `items[start[c]..start[c + 1]]`.
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl Grid {
+    fn new(pos: &[Vec3], lo: Vec3, hi: Vec3, period: Option<[f64; 3]>) -> Self {
+        let extent = hi - lo;
+        let volume = extent.x.max(f64::MIN_POSITIVE)
+            * extent.y.max(f64::MIN_POSITIVE)
+            * extent.z.max(f64::MIN_POSITIVE);
+        // About one site per grid cell.
+        let width = (volume / pos.len() as f64).cbrt();
+        let dims: [usize; 3] = std::array::from_fn(|k| {
+            let n = (extent[k] / width).floor();
+            (if n.is_finite() { n.clamp(1.0, 1e6) } else { 1.0 }) as usize
+        });
+        let grid_width = match period {
+            // Periodic: cells tile the period exactly (widths may differ per axis slightly;
+            // use the largest for the distance bound).
+            Some(l) => (0..3).map(|k| l[k] / dims[k] as f64).fold(0.0, f64::max),
+            None => (0..3)
+                .map(|k| extent[k] / dims[k] as f64)
+                .fold(0.0, f64::max)
+                .max(width),
+        };
+        let mut g = Grid {
+            dims,
+            width: grid_width,
+            origin: lo,
+            period,
+            start: Vec::new(),
+            items: Vec::new(),
+        };
+        let ncell = dims[0] * dims[1] * dims[2];
+        let cell_of: Vec<usize> = pos.iter().map(|p| g.flat(g.index(p))).collect();
+        let mut count = vec![0u32; ncell + 1];
+        for &c in &cell_of {
+            count[c + 1] += 1;
+        }
+        for c in 0..ncell {
+            count[c + 1] += count[c];
+        }
+        let mut fill = count.clone();
+        let mut items = vec![0u32; pos.len()];
+        for (i, &c) in cell_of.iter().enumerate() {
+            items[fill[c] as usize] = i as u32;
+            fill[c] += 1;
+        }
+        g.start = count;
+        g.items = items;
+        g
+    }
+
+    fn index(&self, p: &Vec3) -> [i64; 3] {
+        std::array::from_fn(|k| {
+            let w = match self.period {
+                Some(l) => l[k] / self.dims[k] as f64,
+                None => self.width,
+            };
+            let i = ((p[k] - self.origin[k]) / w).floor();
+            (if i.is_finite() { i } else { 0.0 }).clamp(0.0, (self.dims[k] - 1) as f64) as i64
+        })
+    }
+
+    fn flat(&self, i: [i64; 3]) -> usize {
+        (i[0] as usize) + self.dims[0] * ((i[1] as usize) + self.dims[1] * (i[2] as usize))
+    }
+
+    /// The sites of the grid cells at Chebyshev distance exactly `layer` from `at`, with the
+    /// shift (m) to add to their positions (periodic images). Cells outside a walled grid
+    /// are skipped.
+    fn layer(&self, at: [i64; 3], layer: i64, mut visit: impl FnMut(u32, Vec3)) {
+        for dz in -layer..=layer {
+            for dy in -layer..=layer {
+                for dx in -layer..=layer {
+                    if dx.abs().max(dy.abs()).max(dz.abs()) != layer {
+                        continue;
+                    }
+                    let mut idx = [0i64; 3];
+                    let mut shift = Vec3::zeros();
+                    let mut inside = true;
+                    for (k, d) in [dx, dy, dz].into_iter().enumerate() {
+                        let i = at[k] + d;
+                        let n = self.dims[k] as i64;
+                        match self.period {
+                            Some(l) => {
+                                idx[k] = i.rem_euclid(n);
+                                shift[k] = i.div_euclid(n) as f64 * l[k];
+                            }
+                            None => {
+                                inside &= (0..n).contains(&i);
+                                idx[k] = i;
+                            }
+                        }
+                    }
+                    if !inside {
+                        continue;
+                    }
+                    let c = self.flat(idx);
+                    for &q in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+                        visit(q, shift);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The largest layer that still covers new grid cells (walled grids), or that keeps
+    /// every image distinct (periodic grids: 2·layer + 1 ≤ dims).
+    fn max_layer(&self) -> i64 {
+        let m = *self.dims.iter().max().expect("3 dims") as i64;
+        match self.period {
+            Some(_) => (*self.dims.iter().min().expect("3 dims") as i64 - 1) / 2,
+            None => m,
+        }
+    }
+}
+
+/// A neighbour of a site: its id, its displacement from the site (m), the plane offset c
+/// (the cell keeps n·x ≤ c, n the unit displacement).
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    q: u32,
+    disp: Vec3,
+    dist: f64,
+    c: f64,
+}
+
+/// One cell's result.
+#[derive(Debug, Default)]
+struct CellOut {
+    volume: f64,
+    /// (q, area, displacement) per neighbour facet.
+    facets: Vec<(u32, f64, Vec3)>,
+    /// (wall tag, vector area Σ A n, Σ A h, Σ A) per wall.
+    walls: Vec<(Tag, Vec3, f64, f64)>,
+    curved_planes: usize,
+    layers: usize,
+    tried: u64,
+    cut: u64,
+}
+
+/// Why one cell failed.
+#[derive(Debug)]
+enum CellFail {
+    Overlap { q: u32, distance: f64 },
+    Coincident { q: u32, distance: f64 },
+    Empty,
+    Degenerate,
+    TooSmallPeriod { layers: i64 },
+}
+
+/// Inputs shared by every cell.
+struct Setup<'a> {
+    pos: &'a [Vec3],
+    radii: &'a [f64],
+    container: &'a Container,
+    carve: Option<&'a Region>,
+    grid: Grid,
+    r_max: f64,
+    params: LaguerreParams,
+}
+
+impl Setup<'_> {
+    /// Builds the cell of site `p` into `cell`.
+    fn cell(&self, p: usize, cell: &mut Cell, cands: &mut Vec<Candidate>) -> Result<CellOut, CellFail> {
+        let x = self.pos[p];
+        let rp = self.radii[p];
+        let tol = 1e-12 * rp.max(self.grid.width);
+        let mut out = CellOut::default();
+        // The starting box.
+        match (self.container, self.container.period()) {
+            (_, Some(l)) => {
+                // Large enough for any cell the search can certify; BOUND faces that survive
+                // mean the cell was not closed by its neighbours.
+                let h = Vec3::new(l[0], l[1], l[2]) * 0.5;
+                cell.reset_box(-h, h, [BOUND; 6]);
+            }
+            (c, None) => {
+                let b = c.bounds();
+                let tags: [Tag; 6] = match c {
+                    Container::Box { .. } => std::array::from_fn(|k| wall_tag(k as u32)),
+                    Container::Cylinder { .. } => {
+                        let o = wall_tag(6);
+                        [o, o, o, o, wall_tag(4), wall_tag(5)]
+                    }
+                    _ => [wall_tag(6); 6],
+                };
+                cell.reset_box(b.min - x, b.max - x, tags);
+            }
+        }
+        // Curved container walls and the carving surface: the tangent plane nearest the site
+        // first, so that the neighbour search starts from a small cell.
+        self.curve_clip(x, rp, cell, &mut out, true)?;
+        // Neighbours, layer after layer.
+        let at = self.grid.index(&x);
+        let max_layer = self.grid.max_layer();
+        cands.clear();
+        let (mut layer, mut next) = (0i64, 0usize);
+        loop {
+            self.grid.layer(at, layer, |q, shift| {
+                if q as usize == p && shift == Vec3::zeros() {
+                    return;
+                }
+                let disp = self.pos[q as usize] + shift - x;
+                let dist = disp.norm();
+                let rq = self.radii[q as usize];
+                let c = if dist > 0.0 {
+                    (dist * dist + rp * rp - rq * rq) / (2.0 * dist)
+                } else {
+                    f64::NEG_INFINITY
+                };
+                cands.push(Candidate { q, disp, dist, c });
+            });
+            // The first layers together (they hold most of the cutting planes), then one at a time.
+            if layer < 2 && layer < max_layer {
+                layer += 1;
+                continue;
+            }
+            let fresh = &mut cands[next..];
+            fresh.sort_unstable_by(|a, b| a.c.total_cmp(&b.c).then(a.q.cmp(&b.q)));
+            for k in next..cands.len() {
+                let cd = cands[k];
+                let rq = self.radii[cd.q as usize];
+                if cd.dist <= 1e-12 * (rp + rq) {
+                    return Err(CellFail::Coincident {
+                        q: cd.q,
+                        distance: cd.dist,
+                    });
+                }
+                if rp + rq - cd.dist > self.params.max_overlap * rp.min(rq) {
+                    return Err(CellFail::Overlap {
+                        q: cd.q,
+                        distance: cd.dist,
+                    });
+                }
+                if cd.c > 0.0 && cd.c * cd.c > cell.max_radius_sq() {
+                    // Sorted by c: no later candidate of this batch can cut.
+                    break;
+                }
+                out.tried += 1;
+                let n = cd.disp / cd.dist;
+                match cell.clip(&n, cd.c, k as Tag, tol) {
+                    Ok(true) => out.cut += 1,
+                    Ok(false) => {}
+                    Err(e) => return Err(fail(e)),
+                }
+            }
+            next = cands.len();
+            // Certified when no sphere beyond the searched layers can reach the cell: such a
+            // sphere lies at d ≥ D = layer·width, where its plane offset is at least
+            // (D² + R_p² − R_max²)/(2D).
+            let d = layer as f64 * self.grid.width;
+            let bound = (d * d + rp * rp - self.r_max * self.r_max) / (2.0 * d);
+            if bound > 0.0 && bound * bound > cell.max_radius_sq() && !cell.tags.contains(&BOUND) {
+                break;
+            }
+            if layer >= max_layer {
+                if self.grid.period.is_some() {
+                    return Err(CellFail::TooSmallPeriod { layers: layer + 1 });
+                }
+                // A walled grid is exhausted: every site has been seen.
+                break;
+            }
+            layer += 1;
+        }
+        out.layers = layer as usize;
+        self.curve_clip(x, rp, cell, &mut out, false)?;
+        // Faces.
+        out.volume = cell.volume();
+        for f in 0..cell.n_faces() {
+            let tag = cell.tags[f];
+            let a = cell.vector_area(f);
+            let area = a.norm();
+            if tag >= WALL_BASE {
+                let h = a.dot(&cell.verts[cell.face(f)[0] as usize]);
+                match out.walls.iter_mut().find(|w| w.0 == tag) {
+                    Some(w) => {
+                        w.1 += a;
+                        w.2 += h;
+                        w.3 += area;
+                    }
+                    None => out.walls.push((tag, a, h, area)),
+                }
+            } else if tag == BOUND {
+                return Err(CellFail::TooSmallPeriod { layers: layer });
+            } else {
+                let cd = cands[tag as usize];
+                out.facets.push((cd.q, area, cd.disp));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Clips by planes tangent to the curved container walls and the carving surface: only
+    /// at the point nearest the site when `first`, else at the vertex farthest outside
+    /// until all are within tolerance.
+    fn curve_clip(
+        &self,
+        x: Vec3,
+        rp: f64,
+        cell: &mut Cell,
+        out: &mut CellOut,
+        first: bool,
+    ) -> Result<(), CellFail> {
+        let tol = 1e-12 * rp.max(self.grid.width);
+        let limit = self.params.curved_tolerance * rp;
+        let surfaces: [(Option<Surface>, u32); 2] = [
+            (
+                match *self.container {
+                    Container::Cylinder { radius, .. } => Some(Surface::Cylinder(radius)),
+                    Container::Sphere { radius } => Some(Surface::Sphere(radius)),
+                    _ => None,
+                },
+                6,
+            ),
+            (self.carve.map(Surface::Region), CARVED),
+        ];
+        for (surface, code) in surfaces {
+            let Some(surface) = surface else { continue };
+            if first {
+                // The site is inside: the plane tangent at its nearest surface point.
+                if let Some((n, c)) = surface.tangent(&x, rp) {
+                    if cell.clip(&n, c - n.dot(&x), wall_tag(code), tol).map_err(fail)? {
+                        out.curved_planes += 1;
+                    }
+                }
+                continue;
+            }
+            // Only cells that can reach the surface (signed distance is 1-Lipschitz).
+            let reach = cell.max_radius_sq().sqrt();
+            if surface.distance(&x) + reach <= limit {
+                continue;
+            }
+            for _ in 0..self.params.max_curved_planes {
+                let (mut worst, mut at) = (limit, None);
+                for v in &cell.verts {
+                    let s = surface.distance(&(x + v));
+                    if s > worst {
+                        worst = s;
+                        at = Some(x + v);
+                    }
+                }
+                let Some(y) = at else { break };
+                let Some((n, c)) = surface.tangent(&y, rp) else {
+                    break;
+                };
+                if cell.clip(&n, c - n.dot(&x), wall_tag(code), tol).map_err(fail)? {
+                    out.curved_planes += 1;
+                } else {
+                    break;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn fail(e: ClipError) -> CellFail {
+    match e {
+        ClipError::Empty => CellFail::Empty,
+        ClipError::Degenerate => CellFail::Degenerate,
+    }
+}
+
+/// A curved surface bounding the cells.
+#[derive(Clone, Copy)]
+enum Surface<'a> {
+    /// A cylinder's mantle about the z axis (radius, m).
+    Cylinder(f64),
+    /// A sphere about the origin (radius, m).
+    Sphere(f64),
+    /// A region's boundary (cells stay inside).
+    Region(&'a Region),
+}
+
+impl Surface<'_> {
+    /// Signed distance (m), positive outside the domain.
+    fn distance(&self, y: &Vec3) -> f64 {
+        match *self {
+            Surface::Cylinder(r) => (y.x * y.x + y.y * y.y).sqrt() - r,
+            Surface::Sphere(r) => y.norm() - r,
+            Surface::Region(region) => region.signed_distance(y),
+        }
+    }
+
+    /// The plane tangent at the surface point nearest `y`: (unit outward normal n, offset c)
+    /// with the domain side n·z ≤ c (absolute coordinates). `None` where the normal is
+    /// undefined (on the axis or centre).
+    fn tangent(&self, y: &Vec3, scale: f64) -> Option<(Vec3, f64)> {
+        match *self {
+            Surface::Cylinder(r) => {
+                let u = Vec3::new(y.x, y.y, 0.0);
+                let l = u.norm();
+                (l > 0.0).then(|| (u / l, r))
+            }
+            Surface::Sphere(r) => {
+                let l = y.norm();
+                (l > 0.0).then(|| (y / l, r))
+            }
+            Surface::Region(region) => {
+                let h = 1e-6 * scale;
+                let g = Vec3::new(
+                    region.signed_distance(&(y + Vec3::x() * h))
+                        - region.signed_distance(&(y - Vec3::x() * h)),
+                    region.signed_distance(&(y + Vec3::y() * h))
+                        - region.signed_distance(&(y - Vec3::y() * h)),
+                    region.signed_distance(&(y + Vec3::z() * h))
+                        - region.signed_distance(&(y - Vec3::z() * h)),
+                );
+                let l = g.norm();
+                if !(l > 0.0 && l.is_finite()) {
+                    return None;
+                }
+                let n = g / l;
+                let foot = y - region.signed_distance(y) * n;
+                Some((n, n.dot(&foot)))
+            }
+        }
+    }
+}
+
+/// The Laguerre tessellation of `particles` in `container`, clipped by `carve` when given:
+/// a [`ContactGraph`] of the cells sharing a facet, with [`Cells`] (facet areas, splits,
+/// cell volumes, wall facets) and a report.
+///
+/// Errors (naming the particle and the value): invalid parameters or particles, coincident
+/// centres, an overlap above `max_overlap`, a particle outside the container, an empty or
+/// degenerate cell, a periodic box too small for the search.
+pub fn tessellate(
+    particles: &ParticleSet,
+    container: &Container,
+    carve: Option<&Region>,
+    params: &LaguerreParams,
+) -> Result<ContactGraph, GraphError> {
+    let start = Instant::now();
+    params.validate()?;
+    let prepared = prepare(particles, container)?;
+    let pos: &[Vec3] = &prepared.pos;
+    let n = particles.len();
+    let radii = &particles.radii;
+    if container.period().is_none() {
+        let b = container.bounds();
+        if let Some(i) = (0..n).find(|&i| {
+            let c = pos[i];
+            container.wall_distance(&c) < 0.0 || !(b.contains(&c))
+        }) {
+            return Err(CoreError::invalid(
+                format!("particles[{i}]"),
+                format!("centre ({:e}, {:e}, {:e}) m", pos[i].x, pos[i].y, pos[i].z),
+                format!("centres must lie inside the {} container", container.kind()),
+            )
+            .into());
+        }
+    }
+    if let Some(region) = carve
+        && let Some(i) = (0..n).find(|&i| region.signed_distance(&pos[i]) > 0.0)
+    {
+        return Err(CoreError::invalid(
+            format!("particles[{i}]"),
+            format!("centre ({:e}, {:e}, {:e}) m", pos[i].x, pos[i].y, pos[i].z),
+            "centres must lie inside the carving region",
+        )
+        .into());
+    }
+    let (lo, hi) = match container.period() {
+        Some(l) => (Vec3::zeros(), Vec3::new(l[0], l[1], l[2])),
+        None => {
+            let b = container.bounds();
+            (b.min, b.max)
+        }
+    };
+    let r_max = radii.iter().copied().fold(0.0, f64::max);
+    let r_mean = radii.iter().sum::<f64>() / n as f64;
+    let setup = Setup {
+        pos,
+        radii,
+        container,
+        carve,
+        grid: Grid::new(pos, lo, hi, container.period()),
+        r_max,
+        params: *params,
+    };
+    let results: Vec<Result<CellOut, CellFail>> = (0..n)
+        .into_par_iter()
+        .map_init(
+            || (Cell::default(), Vec::new()),
+            |(cell, cands), p| setup.cell(p, cell, cands),
+        )
+        .collect();
+    let mut cells = Vec::with_capacity(n);
+    for (p, r) in results.into_iter().enumerate() {
+        cells.push(r.map_err(|e| cell_error(p, e, pos, radii, container))?);
+    }
+    assemble(particles, container, carve, cells, params, r_mean, start)
+}
+
+/// The error of a failed cell, naming the particle.
+fn cell_error(p: usize, e: CellFail, pos: &[Vec3], radii: &[f64], container: &Container) -> GraphError {
+    let at = |i: usize| {
+        format!(
+            "centre ({:e}, {:e}, {:e}) m, radius {:e} m",
+            pos[i].x, pos[i].y, pos[i].z, radii[i]
+        )
+    };
+    match e {
+        CellFail::Coincident { q, distance } => GraphError::CoincidentCentres {
+            p: (p as u32).min(q),
+            q: (p as u32).max(q),
+            distance,
+        },
+        CellFail::Overlap { q, distance } => CoreError::invalid(
+            format!("particles[{p}] and particles[{q}]"),
+            format!(
+                "distance {distance:e} m, radii {:e} m and {:e} m",
+                radii[p], radii[q as usize]
+            ),
+            "the Laguerre cells need spheres that overlap by at most laguerre.max_overlap × the smaller radius",
+        )
+        .into(),
+        CellFail::Empty => CoreError::invalid(
+            format!("particles[{p}]"),
+            at(p),
+            "its Laguerre cell is empty (the sphere lies inside the power planes of its neighbours)",
+        )
+        .into(),
+        CellFail::Degenerate => CoreError::invalid(
+            format!("particles[{p}]"),
+            at(p),
+            "its Laguerre cell is numerically degenerate (planes meeting within round-off)",
+        )
+        .into(),
+        CellFail::TooSmallPeriod { layers } => CoreError::invalid(
+            "container.size",
+            format!("{:?} m", container.period().unwrap_or([0.0; 3])),
+            format!(
+                "the periodic box is too small for the tessellation: the cell of particles[{p}] needs neighbours \
+                 {layers} grid layers away, which would meet their own images"
+            ),
+        )
+        .into(),
+    }
+}
+
+/// Pairs the two sides of every facet into the graph, and reports.
+fn assemble(
+    particles: &ParticleSet,
+    container: &Container,
+    carve: Option<&Region>,
+    cells: Vec<CellOut>,
+    params: &LaguerreParams,
+    r_mean: f64,
+    start: Instant,
+) -> Result<ContactGraph, GraphError> {
+    let n = particles.len();
+    let radii = &particles.radii;
+    let threshold = params.negligible_area * r_mean * r_mean;
+    // One entry per (cell, facet): (p, q, area, disp), then merged by (min, max).
+    let mut half: Vec<(u32, u32, f64, Vec3)> = Vec::new();
+    let mut dropped_sides = 0usize;
+    for (p, c) in cells.iter().enumerate() {
+        for &(q, area, disp) in &c.facets {
+            if area < threshold {
+                dropped_sides += 1;
+                continue;
+            }
+            let (a, b, d) = if (p as u32) < q {
+                (p as u32, q, disp)
+            } else {
+                (q, p as u32, -disp)
+            };
+            half.push((a, b, area, d));
+        }
+    }
+    half.sort_unstable_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+    let mut pairs = Vec::new();
+    let mut geometry = Vec::new();
+    let mut facet_area = Vec::new();
+    let mut split = Vec::new();
+    let (mut one_sided, mut mismatch) = (0usize, 0.0f64);
+    let period = container.period();
+    let mut k = 0;
+    while k < half.len() {
+        let (p, q, a1, disp) = half[k];
+        let two = k + 1 < half.len() && (half[k + 1].0, half[k + 1].1) == (p, q);
+        let area = if two {
+            let a2 = half[k + 1].2;
+            mismatch = mismatch.max((a1 - a2).abs() / a1.max(a2));
+            0.5 * (a1 + a2)
+        } else {
+            one_sided += 1;
+            a1
+        };
+        k += if two { 2 } else { 1 };
+        if let Some(l) = period
+            && (0..3).any(|i| disp[i].abs() > 0.5 * l[i])
+        {
+            return Err(CoreError::invalid(
+                "container.size",
+                format!("{l:?} m"),
+                format!(
+                    "the periodic box is too small for the tessellation: particles {p} and {q} share a facet \
+                     across more than half a period"
+                ),
+            )
+            .into());
+        }
+        let d = disp.norm();
+        let (rp, rq) = (radii[p as usize], radii[q as usize]);
+        pairs.push([p, q]);
+        geometry.push(ContactGeometry {
+            distance: d,
+            normal: disp / d,
+            gap: d - rp - rq,
+            mean_radius: 0.5 * (rp + rq),
+        });
+        facet_area.push(area);
+        split.push((d * d + rp * rp - rq * rq) / (2.0 * d * d));
+    }
+    let mut walls = Vec::new();
+    let (mut curved_cells, mut curved_planes, mut max_layers) = (0, 0, 0);
+    let (mut tried, mut cut) = (0u64, 0u64);
+    for (p, c) in cells.iter().enumerate() {
+        if c.curved_planes > 0 {
+            curved_cells += 1;
+        }
+        curved_planes += c.curved_planes;
+        max_layers = max_layers.max(c.layers);
+        tried += c.tried;
+        cut += c.cut;
+        let mut w: Vec<WallFacet> = c
+            .walls
+            .iter()
+            .filter(|w| w.3 >= threshold)
+            .map(|&(tag, a, h, area)| WallFacet {
+                particle: p as u32,
+                wall: wall_of(tag),
+                area,
+                distance: h / area,
+                normal: a.normalize(),
+            })
+            .collect();
+        w.sort_by_key(|f| match f.wall {
+            CellWall::Face(face) => FACES.iter().position(|&x| x == face).unwrap_or(0),
+            CellWall::Carved => 7,
+        });
+        walls.extend(w);
+    }
+    let volume: Vec<f64> = cells.iter().map(|c| c.volume).collect();
+    let cells_volume: f64 = volume.iter().sum();
+    let domain_volume = match carve {
+        Some(r) => r.volume(256),
+        None => container.volume(),
+    };
+    let n_pairs = pairs.len();
+    let mut graph = ContactGraph {
+        n_particles: n,
+        pairs,
+        geometry,
+        report: ContactReport {
+            epsilon: 0.0,
+            target_coordination: None,
+            coordination: 0.0,
+            n_contacts: 0,
+            rattlers: Vec::new(),
+            under_two_contacts: 0,
+            overlaps: 0,
+            n_components: 0,
+            largest_component: 0,
+            search: crate::NeighbourSearch::CellGrid,
+            search_rounds: 1,
+            candidates: tried as usize,
+            wall_time_s: 0.0,
+            diagnostics: Vec::new(),
+        },
+        cells: Some(Box::new(Cells {
+            facet_area,
+            split,
+            volume,
+            walls,
+            report: TessellationReport {
+                dropped_facets: dropped_sides.div_ceil(2),
+                negligible_area_m2: threshold,
+                one_sided_facets: one_sided,
+                max_area_mismatch: mismatch,
+                cells_volume,
+                domain_volume,
+                volume_error: cells_volume / domain_volume - 1.0,
+                curved_cells,
+                curved_planes,
+                max_layers,
+                planes_tried: tried,
+                planes_cut: cut,
+                wall_s: 0.0,
+            },
+        })),
+    };
+    debug_assert_eq!(graph.pairs.len(), n_pairs);
+    summarise(&mut graph);
+    let wall_s = start.elapsed().as_secs_f64();
+    graph.report.wall_time_s = wall_s;
+    if let Some(c) = graph.cells.as_mut() {
+        c.report.wall_s = wall_s;
+    }
+    Ok(graph)
+}
