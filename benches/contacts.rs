@@ -15,44 +15,9 @@
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use demcon_benches::SplitMix;
-use demcon_core::{Container, ParticleSet, Vec3};
+use demcon_benches::{SplitMix, jittered_fcc};
+use demcon_core::ParticleSet;
 use demcon_graph::{ContactParams, NeighbourSearch, detect_contacts};
-
-/// A jittered FCC lattice of about `n` particles and its walled box.
-fn jittered_fcc(n: usize, seed: u64) -> (ParticleSet, Container) {
-    let m = ((n as f64 / 4.0).cbrt().round() as usize).max(1);
-    let a = std::f64::consts::SQRT_2;
-    let jitter = 0.01;
-    let rmax = 0.5 - 3f64.sqrt() * jitter;
-    let mut rng = SplitMix(seed);
-    let basis = [[0.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5]];
-    let mut centres = Vec::with_capacity(4 * m * m * m);
-    let mut radii = Vec::with_capacity(4 * m * m * m);
-    for i in 0..m {
-        for j in 0..m {
-            for k in 0..m {
-                for b in basis {
-                    let mut c = Vec3::new(
-                        i as f64 + b[0] + 0.25,
-                        j as f64 + b[1] + 0.25,
-                        k as f64 + b[2] + 0.25,
-                    ) * a;
-                    for x in c.iter_mut() {
-                        *x += jitter * (2.0 * rng.next_f64() - 1.0);
-                    }
-                    centres.push(c);
-                    radii.push((0.47 + 0.015 * rng.gauss()).clamp(0.4, rmax));
-                }
-            }
-        }
-    }
-    let size = m as f64 * a;
-    (
-        ParticleSet::new(centres, radii).unwrap(),
-        Container::Box { size: [size; 3] },
-    )
-}
 
 /// The same set with ids in a pseudo-random order (a fixed permutation).
 fn shuffled(p: &ParticleSet, seed: u64) -> ParticleSet {

@@ -9,9 +9,11 @@
 //!
 //! Each cell is built on its own: the container's bounding box (walled containers) or a
 //! box around the site (periodic), cut by the power planes of the neighbours found in a
-//! uniform grid, nearest planes first, layer of grid cells after layer until no unseen
-//! sphere can reach the cell (certified by a bound on the plane distance of any sphere
-//! farther than the layers searched). Curved walls (cylinder mantle, sphere) and a carving
+//! uniform grid (about one site per grid cell): the 27 adjacent grid cells first, nearest
+//! plane first, then the other grid cells in order of distance until no unseen sphere can
+//! reach the cell (certified by a lower bound on the plane offset of any sphere farther than
+//! the next grid cell). A plane is clipped only when it can reach the cell's farthest
+//! vertex; on a jittered FCC lattice every plane clipped ends as a facet. Curved walls (cylinder mantle, sphere) and a carving
 //! region are approximated by planes tangent at the nearest surface point of the vertex
 //! farthest outside, repeated until every vertex lies within `curved_tolerance` of the
 //! surface; the volume this leaves is reported. Cells run in parallel; each depends only on
@@ -203,6 +205,10 @@ fn wall_of(tag: Tag) -> CellWall {
     }
 }
 
+/// Grid layers (Chebyshev) searched around a site in cell order; beyond, a walled grid is
+/// searched whole (sparse sets) and a periodic one is refused (its images could repeat).
+const MAX_SEARCH_LAYERS: i64 = 10;
+
 /// A uniform grid of the sites.
 struct Grid {
     dims: [usize; 3],
@@ -278,64 +284,61 @@ impl Grid {
         (i[0] as usize) + self.dims[0] * ((i[1] as usize) + self.dims[1] * (i[2] as usize))
     }
 
-    /// The sites of the grid cells at Chebyshev distance exactly `layer` from `at`, with the
-    /// shift (m) to add to their positions (periodic images). Cells outside a walled grid
-    /// are skipped.
-    fn layer(&self, at: [i64; 3], layer: i64, mut visit: impl FnMut(u32, Vec3)) {
+    /// The sites of grid cell `at + offset` with the shift (m) to add to their positions
+    /// (periodic images); nothing for a cell outside a walled grid.
+    fn block(&self, at: [i64; 3], offset: [i64; 3], mut visit: impl FnMut(u32, Vec3)) {
+        let mut idx = [0i64; 3];
+        let mut shift = Vec3::zeros();
+        for k in 0..3 {
+            let i = at[k] + offset[k];
+            let n = self.dims[k] as i64;
+            match self.period {
+                Some(l) => {
+                    idx[k] = i.rem_euclid(n);
+                    shift[k] = i.div_euclid(n) as f64 * l[k];
+                }
+                None if (0..n).contains(&i) => idx[k] = i,
+                None => return,
+            }
+        }
+        let c = self.flat(idx);
+        for &q in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+            visit(q, shift);
+        }
+    }
+
+    /// The largest Chebyshev offset searched: every grid cell of a walled grid, or as far as
+    /// every image stays distinct in a periodic grid (2·layer + 1 ≤ dims).
+    fn max_layer(&self) -> i64 {
+        match self.period {
+            Some(_) => (*self.dims.iter().min().expect("3 dims") as i64 - 1) / 2,
+            None => *self.dims.iter().max().expect("3 dims") as i64 - 1,
+        }
+    }
+
+    /// Offsets of the grid cells up to `layer` (Chebyshev), sorted by the smallest distance
+    /// (m) from any point of the centre cell to any point of the offset cell.
+    fn offsets(&self, layer: i64) -> Vec<([i64; 3], f64)> {
+        let mut v = Vec::with_capacity(((2 * layer + 1) as usize).pow(3));
         for dz in -layer..=layer {
             for dy in -layer..=layer {
                 for dx in -layer..=layer {
-                    if dx.abs().max(dy.abs()).max(dz.abs()) != layer {
-                        continue;
-                    }
-                    let mut idx = [0i64; 3];
-                    let mut shift = Vec3::zeros();
-                    let mut inside = true;
-                    for (k, d) in [dx, dy, dz].into_iter().enumerate() {
-                        let i = at[k] + d;
-                        let n = self.dims[k] as i64;
-                        match self.period {
-                            Some(l) => {
-                                idx[k] = i.rem_euclid(n);
-                                shift[k] = i.div_euclid(n) as f64 * l[k];
-                            }
-                            None => {
-                                inside &= (0..n).contains(&i);
-                                idx[k] = i;
-                            }
-                        }
-                    }
-                    if !inside {
-                        continue;
-                    }
-                    let c = self.flat(idx);
-                    for &q in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
-                        visit(q, shift);
-                    }
+                    let gap = |d: i64| (d.abs() - 1).max(0) as f64;
+                    let m = self.width * (gap(dx).powi(2) + gap(dy).powi(2) + gap(dz).powi(2)).sqrt();
+                    v.push(([dx, dy, dz], m));
                 }
             }
         }
-    }
-
-    /// The largest layer that still covers new grid cells (walled grids), or that keeps
-    /// every image distinct (periodic grids: 2·layer + 1 ≤ dims).
-    fn max_layer(&self) -> i64 {
-        let m = *self.dims.iter().max().expect("3 dims") as i64;
-        match self.period {
-            Some(_) => (*self.dims.iter().min().expect("3 dims") as i64 - 1) / 2,
-            None => m,
-        }
+        v.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+        v
     }
 }
 
-/// A neighbour of a site: its id, its displacement from the site (m), the plane offset c
-/// (the cell keeps n·x ≤ c, n the unit displacement).
+/// A neighbour whose power plane cut the cell: its id and displacement from the site (m).
 #[derive(Debug, Clone, Copy)]
 struct Candidate {
     q: u32,
     disp: Vec3,
-    dist: f64,
-    c: f64,
 }
 
 /// One cell's result.
@@ -350,6 +353,20 @@ struct CellOut {
     layers: usize,
     tried: u64,
     cut: u64,
+}
+
+/// The state of one cell's neighbour search.
+struct Search {
+    /// The site (m).
+    x: Vec3,
+    /// Its radius (m).
+    rp: f64,
+    /// Clipping tolerance (m).
+    tol: f64,
+    /// Squared largest vertex distance of the cell so far (m²).
+    rho2: f64,
+    /// The first failure.
+    failed: Option<CellFail>,
 }
 
 /// Why one cell failed.
@@ -369,13 +386,23 @@ struct Setup<'a> {
     container: &'a Container,
     carve: Option<&'a Region>,
     grid: Grid,
+    /// Grid offsets in order of distance.
+    offsets: &'a [([i64; 3], f64)],
+    /// Whether the offsets reach every grid cell from every other (walled grids).
+    offsets_cover_grid: bool,
     r_max: f64,
     params: LaguerreParams,
 }
 
 impl Setup<'_> {
     /// Builds the cell of site `p` into `cell`.
-    fn cell(&self, p: usize, cell: &mut Cell, cands: &mut Vec<Candidate>) -> Result<CellOut, CellFail> {
+    fn cell(
+        &self,
+        p: usize,
+        cell: &mut Cell,
+        cands: &mut Vec<Candidate>,
+        near: &mut Vec<(f64, u32, Vec3)>,
+    ) -> Result<CellOut, CellFail> {
         let x = self.pos[p];
         let rp = self.radii[p];
         let tol = 1e-12 * rp.max(self.grid.width);
@@ -404,79 +431,81 @@ impl Setup<'_> {
         // Curved container walls and the carving surface: the tangent plane nearest the site
         // first, so that the neighbour search starts from a small cell.
         self.curve_clip(x, rp, cell, &mut out, true)?;
-        // Neighbours, layer after layer.
+        // Neighbours, grid cells in order of distance: each power plane that can reach the
+        // cell clips it at once (nearest first, roughly). Certified when no sphere at a
+        // distance d ≥ D (the next grid cell's) can reach it: its plane offset is at least
+        // (D² + R_p² − R_max²)/(2D).
         let at = self.grid.index(&x);
-        let max_layer = self.grid.max_layer();
         cands.clear();
-        let (mut layer, mut next) = (0i64, 0usize);
-        loop {
-            self.grid.layer(at, layer, |q, shift| {
-                if q as usize == p && shift == Vec3::zeros() {
-                    return;
+        let mut st = Search {
+            x,
+            rp,
+            tol,
+            rho2: cell.max_radius_sq(),
+            failed: None,
+        };
+        // The adjacent grid cells first, nearest power plane first: they make the cell nearly
+        // final, so that most later planes are rejected without clipping.
+        let adjacent = self.offsets.iter().take_while(|o| o.1 == 0.0).count();
+        near.clear();
+        for &(offset, _) in &self.offsets[..adjacent] {
+            self.grid.block(at, offset, |q, shift| {
+                if !(q as usize == p && offset == [0, 0, 0]) {
+                    let disp = self.pos[q as usize] + shift - x;
+                    let rq = self.radii[q as usize];
+                    let d2 = disp.norm_squared();
+                    let c = (d2 + rp * rp - rq * rq) / d2.sqrt().max(f64::MIN_POSITIVE);
+                    near.push((c, q, shift));
                 }
-                let disp = self.pos[q as usize] + shift - x;
-                let dist = disp.norm();
-                let rq = self.radii[q as usize];
-                let c = if dist > 0.0 {
-                    (dist * dist + rp * rp - rq * rq) / (2.0 * dist)
-                } else {
-                    f64::NEG_INFINITY
-                };
-                cands.push(Candidate { q, disp, dist, c });
             });
-            // The first layers together (they hold most of the cutting planes), then one at a time.
-            if layer < 2 && layer < max_layer {
-                layer += 1;
-                continue;
-            }
-            let fresh = &mut cands[next..];
-            fresh.sort_unstable_by(|a, b| a.c.total_cmp(&b.c).then(a.q.cmp(&b.q)));
-            for k in next..cands.len() {
-                let cd = cands[k];
-                let rq = self.radii[cd.q as usize];
-                if cd.dist <= 1e-12 * (rp + rq) {
-                    return Err(CellFail::Coincident {
-                        q: cd.q,
-                        distance: cd.dist,
-                    });
-                }
-                if rp + rq - cd.dist > self.params.max_overlap * rp.min(rq) {
-                    return Err(CellFail::Overlap {
-                        q: cd.q,
-                        distance: cd.dist,
-                    });
-                }
-                if cd.c > 0.0 && cd.c * cd.c > cell.max_radius_sq() {
-                    // Sorted by c: no later candidate of this batch can cut.
-                    break;
-                }
-                out.tried += 1;
-                let n = cd.disp / cd.dist;
-                match cell.clip(&n, cd.c, k as Tag, tol) {
-                    Ok(true) => out.cut += 1,
-                    Ok(false) => {}
-                    Err(e) => return Err(fail(e)),
-                }
-            }
-            next = cands.len();
-            // Certified when no sphere beyond the searched layers can reach the cell: such a
-            // sphere lies at d ≥ D = layer·width, where its plane offset is at least
-            // (D² + R_p² − R_max²)/(2D).
-            let d = layer as f64 * self.grid.width;
-            let bound = (d * d + rp * rp - self.r_max * self.r_max) / (2.0 * d);
-            if bound > 0.0 && bound * bound > cell.max_radius_sq() && !cell.tags.contains(&BOUND) {
-                break;
-            }
-            if layer >= max_layer {
-                if self.grid.period.is_some() {
-                    return Err(CellFail::TooSmallPeriod { layers: layer + 1 });
-                }
-                // A walled grid is exhausted: every site has been seen.
-                break;
-            }
-            layer += 1;
         }
-        out.layers = layer as usize;
+        near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for &(_, q, shift) in near.iter() {
+            self.consider(&mut st, q, shift, cell, cands, &mut out);
+        }
+        out.layers = 1;
+        let mut certified = false;
+        for &(offset, dmin) in &self.offsets[adjacent..] {
+            let bound = (dmin * dmin + rp * rp - self.r_max * self.r_max) / (2.0 * dmin);
+            if bound > 0.0 && bound * bound > st.rho2 && !cell.tags.contains(&BOUND) {
+                certified = true;
+                break;
+            }
+            out.layers = out.layers.max(
+                offset
+                    .iter()
+                    .map(|o| o.unsigned_abs() as usize)
+                    .max()
+                    .unwrap_or(0),
+            );
+            self.grid.block(at, offset, |q, shift| {
+                self.consider(&mut st, q, shift, cell, cands, &mut out)
+            });
+        }
+        if !certified && st.failed.is_none() {
+            match self.grid.period {
+                // Past the offsets searched, images could repeat.
+                Some(_) => {
+                    return Err(CellFail::TooSmallPeriod {
+                        layers: out.layers as i64 + 1,
+                    });
+                }
+                // A sparse or irregular set: every other site, beyond the grid cells seen.
+                None if self.offsets_cover_grid => {}
+                None => {
+                    let layers = out.layers as i64;
+                    for q in 0..self.pos.len() as u32 {
+                        let i = self.grid.index(&self.pos[q as usize]);
+                        if (0..3).any(|k| (i[k] - at[k]).abs() > layers) {
+                            self.consider(&mut st, q, Vec3::zeros(), cell, cands, &mut out);
+                        }
+                    }
+                }
+            }
+        }
+        if let Some(f) = st.failed {
+            return Err(f);
+        }
         self.curve_clip(x, rp, cell, &mut out, false)?;
         // Faces.
         out.volume = cell.volume();
@@ -495,13 +524,65 @@ impl Setup<'_> {
                     None => out.walls.push((tag, a, h, area)),
                 }
             } else if tag == BOUND {
-                return Err(CellFail::TooSmallPeriod { layers: layer });
+                return Err(CellFail::TooSmallPeriod {
+                    layers: self.grid.max_layer() + 1,
+                });
             } else {
                 let cd = cands[tag as usize];
                 out.facets.push((cd.q, area, cd.disp));
             }
         }
+        out.facets.sort_unstable_by_key(|f| f.0);
+        if out.facets.windows(2).any(|w| w[0].0 == w[1].0) {
+            // Two facets with one neighbour: two of its images (refused in periodic boxes).
+            return Err(CellFail::TooSmallPeriod {
+                layers: out.layers as i64,
+            });
+        }
         Ok(out)
+    }
+
+    /// Clips the cell by the power plane of site `q` (displaced by `shift`) when it can reach
+    /// the cell; a neighbour that cuts is appended to `cands` (its index is the face tag).
+    fn consider(
+        &self,
+        st: &mut Search,
+        q: u32,
+        shift: Vec3,
+        cell: &mut Cell,
+        cands: &mut Vec<Candidate>,
+        out: &mut CellOut,
+    ) {
+        if st.failed.is_some() {
+            return;
+        }
+        let disp = self.pos[q as usize] + shift - st.x;
+        let d2 = disp.norm_squared();
+        let (rp, rq) = (st.rp, self.radii[q as usize]);
+        // The plane offset c = (d² + R_p² − R_q²)/(2d) can cut only if c² < ρ² (or c ≤ 0).
+        let num = d2 + rp * rp - rq * rq;
+        if num > 0.0 && num * num >= 4.0 * d2 * st.rho2 {
+            return;
+        }
+        let dist = d2.sqrt();
+        if dist <= 1e-12 * (rp + rq) {
+            st.failed = Some(CellFail::Coincident { q, distance: dist });
+            return;
+        }
+        if rp + rq - dist > self.params.max_overlap * rp.min(rq) {
+            st.failed = Some(CellFail::Overlap { q, distance: dist });
+            return;
+        }
+        out.tried += 1;
+        match cell.clip(&(disp / dist), num / (2.0 * dist), cands.len() as Tag, st.tol) {
+            Ok(true) => {
+                out.cut += 1;
+                cands.push(Candidate { q, disp });
+                st.rho2 = cell.max_radius_sq();
+            }
+            Ok(false) => {}
+            Err(e) => st.failed = Some(fail(e)),
+        }
     }
 
     /// Clips by planes tangent to the curved container walls and the carving surface: only
@@ -532,10 +613,10 @@ impl Setup<'_> {
             let Some(surface) = surface else { continue };
             if first {
                 // The site is inside: the plane tangent at its nearest surface point.
-                if let Some((n, c)) = surface.tangent(&x, rp) {
-                    if cell.clip(&n, c - n.dot(&x), wall_tag(code), tol).map_err(fail)? {
-                        out.curved_planes += 1;
-                    }
+                if let Some((n, c)) = surface.tangent(&x, rp)
+                    && cell.clip(&n, c - n.dot(&x), wall_tag(code), tol).map_err(fail)?
+                {
+                    out.curved_planes += 1;
                 }
                 continue;
             }
@@ -684,20 +765,26 @@ pub fn tessellate(
     };
     let r_max = radii.iter().copied().fold(0.0, f64::max);
     let r_mean = radii.iter().sum::<f64>() / n as f64;
+    let grid = Grid::new(pos, lo, hi, container.period());
+    let layers = grid.max_layer().min(MAX_SEARCH_LAYERS);
+    let offsets = grid.offsets(layers);
+    let offsets_cover_grid = layers == grid.max_layer();
     let setup = Setup {
         pos,
         radii,
         container,
         carve,
-        grid: Grid::new(pos, lo, hi, container.period()),
+        grid,
+        offsets: &offsets,
+        offsets_cover_grid,
         r_max,
         params: *params,
     };
     let results: Vec<Result<CellOut, CellFail>> = (0..n)
         .into_par_iter()
         .map_init(
-            || (Cell::default(), Vec::new()),
-            |(cell, cands), p| setup.cell(p, cell, cands),
+            || (Cell::default(), Vec::new(), Vec::new()),
+            |(cell, cands, near), p| setup.cell(p, cell, cands, near),
         )
         .collect();
     let mut cells = Vec::with_capacity(n);
@@ -767,67 +854,105 @@ fn assemble(
     let n = particles.len();
     let radii = &particles.radii;
     let threshold = params.negligible_area * r_mean * r_mean;
-    // One entry per (cell, facet): (p, q, area, disp), then merged by (min, max).
-    let mut half: Vec<(u32, u32, f64, Vec3)> = Vec::new();
-    let mut dropped_sides = 0usize;
-    for (p, c) in cells.iter().enumerate() {
-        for &(q, area, disp) in &c.facets {
-            if area < threshold {
-                dropped_sides += 1;
-                continue;
-            }
-            let (a, b, d) = if (p as u32) < q {
-                (p as u32, q, disp)
-            } else {
-                (q, p as u32, -disp)
-            };
-            half.push((a, b, area, d));
-        }
+    // Each facet seen from its smaller id p, matched with q's side (cells' facets are
+    // sorted by neighbour, so a binary search finds it). Facets below the threshold drop.
+    let side = |p: usize, q: u32| -> Option<f64> {
+        let f = &cells[q as usize].facets;
+        f.binary_search_by_key(&(p as u32), |e| e.0)
+            .ok()
+            .map(|i| f[i].1)
+            .filter(|&a| a >= threshold)
+    };
+    struct Half {
+        q: u32,
+        area: f64,
+        disp: Vec3,
+        mismatch: f64,
+        one_sided: bool,
     }
-    half.sort_unstable_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+    let per_cell: Vec<(Vec<Half>, usize, usize)> = cells
+        .par_iter()
+        .enumerate()
+        .map(|(p, c)| {
+            let (mut dropped, mut orphans) = (0, 0);
+            let mut out = Vec::new();
+            for &(q, a1, disp) in &c.facets {
+                let mine = (a1 >= threshold).then_some(a1);
+                if (q as usize) < p {
+                    // Counted from q's side, unless q does not list p at all (then it is lost:
+                    // reported as one-sided).
+                    let listed = cells[q as usize]
+                        .facets
+                        .binary_search_by_key(&(p as u32), |e| e.0)
+                        .is_ok();
+                    if mine.is_some() && !listed {
+                        orphans += 1;
+                    }
+                    continue;
+                }
+                let theirs = side(p, q);
+                match (mine, theirs) {
+                    (None, None) => dropped += 1,
+                    (Some(a), Some(b)) => out.push(Half {
+                        q,
+                        area: 0.5 * (a + b),
+                        disp,
+                        mismatch: (a - b).abs() / a.max(b),
+                        one_sided: false,
+                    }),
+                    (Some(a), None) | (None, Some(a)) => out.push(Half {
+                        q,
+                        area: a,
+                        disp,
+                        mismatch: 1.0,
+                        one_sided: true,
+                    }),
+                }
+            }
+            (out, dropped, orphans)
+        })
+        .collect();
     let mut pairs = Vec::new();
     let mut geometry = Vec::new();
     let mut facet_area = Vec::new();
     let mut split = Vec::new();
-    let (mut one_sided, mut mismatch) = (0usize, 0.0f64);
+    let (mut one_sided, mut mismatch, mut dropped_facets) = (0usize, 0.0f64, 0usize);
     let period = container.period();
-    let mut k = 0;
-    while k < half.len() {
-        let (p, q, a1, disp) = half[k];
-        let two = k + 1 < half.len() && (half[k + 1].0, half[k + 1].1) == (p, q);
-        let area = if two {
-            let a2 = half[k + 1].2;
-            mismatch = mismatch.max((a1 - a2).abs() / a1.max(a2));
-            0.5 * (a1 + a2)
-        } else {
-            one_sided += 1;
-            a1
-        };
-        k += if two { 2 } else { 1 };
-        if let Some(l) = period
-            && (0..3).any(|i| disp[i].abs() > 0.5 * l[i])
-        {
-            return Err(CoreError::invalid(
-                "container.size",
-                format!("{l:?} m"),
-                format!(
-                    "the periodic box is too small for the tessellation: particles {p} and {q} share a facet \
-                     across more than half a period"
-                ),
-            )
-            .into());
+    for (p, (halves, dropped, orphans)) in per_cell.into_iter().enumerate() {
+        dropped_facets += dropped;
+        one_sided += orphans;
+        for h in halves {
+            let (p, q, disp) = (p as u32, h.q, h.disp);
+            if h.one_sided {
+                one_sided += 1;
+            } else {
+                mismatch = mismatch.max(h.mismatch);
+            }
+            if let Some(l) = period
+                && (0..3).any(|i| disp[i].abs() > 0.5 * l[i])
+            {
+                return Err(CoreError::invalid(
+                    "container.size",
+                    format!("{l:?} m"),
+                    format!(
+                        "the periodic box is too small for the tessellation: particles {p} and {q} share a facet \
+                         across more than half a period"
+                    ),
+                )
+                .into());
+            }
+            let d = disp.norm();
+            let (rp, rq) = (radii[p as usize], radii[q as usize]);
+            pairs.push([p, q]);
+            geometry.push(ContactGeometry {
+                distance: d,
+                normal: disp / d,
+                gap: d - rp - rq,
+                mean_radius: 0.5 * (rp + rq),
+            });
+            facet_area.push(h.area);
+            split.push((d * d + rp * rp - rq * rq) / (2.0 * d * d));
         }
-        let d = disp.norm();
-        let (rp, rq) = (radii[p as usize], radii[q as usize]);
-        pairs.push([p, q]);
-        geometry.push(ContactGeometry {
-            distance: d,
-            normal: disp / d,
-            gap: d - rp - rq,
-            mean_radius: 0.5 * (rp + rq),
-        });
-        facet_area.push(area);
-        split.push((d * d + rp * rp - rq * rq) / (2.0 * d * d));
     }
     let mut walls = Vec::new();
     let (mut curved_cells, mut curved_planes, mut max_layers) = (0, 0, 0);
@@ -891,7 +1016,7 @@ fn assemble(
             volume,
             walls,
             report: TessellationReport {
-                dropped_facets: dropped_sides.div_ceil(2),
+                dropped_facets,
                 negligible_area_m2: threshold,
                 one_sided_facets: one_sided,
                 max_area_mismatch: mismatch,

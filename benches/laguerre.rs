@@ -1,0 +1,40 @@
+//! The Laguerre tessellation (`demcon_graph::tessellate`) at 10⁵ and 10⁶ particles, in a
+//! walled box and in a periodic box: the target is 10⁶ particles in under 10 s on this
+//! 2-core machine.
+//!
+//! Test set: the jittered FCC lattice of the `contacts` benchmark (`demcon_benches::jittered_fcc`),
+//! whose cells are all alike; an LSA packing's cells vary more (Gaussian radii), see
+//! `docs/laguerre.md` for the figures measured on those.
+//!
+//! Run: `cargo bench -p demcon-benches --bench laguerre`.
+
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use demcon_benches::jittered_fcc;
+use demcon_core::Container;
+use demcon_graph::{LaguerreParams, tessellate};
+
+fn laguerre(c: &mut Criterion) {
+    let mut group = c.benchmark_group("laguerre");
+    group.sample_size(10);
+    for n in [100_000usize, 1_000_000] {
+        let (p, container) = jittered_fcc(n, 42);
+        let Container::Box { size } = container else {
+            unreachable!("jittered_fcc builds a box")
+        };
+        let cases = [("box", container), ("periodic", Container::Periodic { size })];
+        for (name, cont) in cases {
+            if n == 1_000_000 && name == "periodic" {
+                continue;
+            }
+            group.bench_with_input(BenchmarkId::new(name, p.len()), &p, |b, p| {
+                b.iter(|| black_box(tessellate(p, &cont, None, &LaguerreParams::default()).unwrap()))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, laguerre);
+criterion_main!(benches);
