@@ -192,6 +192,12 @@ impl ContactGraph {
         g.normal * g.distance
     }
 
+    /// Where contact `k`'s branch is split between its two particles: h_p/d_pq from p (the
+    /// Laguerre facet's position), or 0.5 for contacts without cells.
+    pub fn split(&self, k: usize) -> f64 {
+        self.cells.as_ref().map_or(0.5, |c| c.split[k])
+    }
+
     /// Number of contacts.
     pub fn len(&self) -> usize {
         self.pairs.len()

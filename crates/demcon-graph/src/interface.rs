@@ -28,9 +28,23 @@ pub fn interface_value(a: f64, b: f64, rule: InterfaceRule) -> f64 {
     }
 }
 
+/// The combined property of two half-bonds in series when the contact is split at `w` (the
+/// share of the branch on `a`'s side, in (0, 1)): 1/(w/a + (1 − w)/b) for the harmonic rule,
+/// w a + (1 − w) b for the arithmetic one. `w = 0.5` is [`interface_value`] exactly.
+pub fn interface_value_split(a: f64, b: f64, w: f64, rule: InterfaceRule) -> f64 {
+    if a == b || w == 0.5 {
+        return interface_value(a, b, rule);
+    }
+    match rule {
+        InterfaceRule::HarmonicMean => 1.0 / (w / a + (1.0 - w) / b),
+        InterfaceRule::ArithmeticMean => w * a + (1.0 - w) * b,
+    }
+}
+
 /// A material property per contact (e.g. λ in W/(m·K), or 1/ρ_e in S/m): the phase's value
-/// when both particles share a phase, the `rule` across phases. `phases` holds one phase per
-/// particle, `per_phase` one value (> 0) per phase.
+/// when both particles share a phase, the `rule` across phases — over the two half-bonds of a
+/// Laguerre facet (split at h_p/d, [`ContactGraph::split`]) or two equal halves otherwise.
+/// `phases` holds one phase per particle, `per_phase` one value (> 0) per phase.
 ///
 /// Errors: lengths that do not match, a phase without a value, a non-positive value.
 pub fn contact_property(
@@ -59,10 +73,11 @@ pub fn contact_property(
     Ok(graph
         .pairs
         .iter()
-        .map(|&[p, q]| {
+        .enumerate()
+        .map(|(k, &[p, q])| {
             let a = per_phase[phases[p as usize] as usize];
             let b = per_phase[phases[q as usize] as usize];
-            interface_value(a, b, rule)
+            interface_value_split(a, b, graph.split(k), rule)
         })
         .collect())
 }

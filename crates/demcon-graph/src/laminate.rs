@@ -24,7 +24,7 @@
 use demcon_core::{CoreError, ParticleSet, Region, Vec3};
 
 use crate::error::{GraphError, same_len};
-use crate::{ContactGraph, InterfaceRule, interface_value};
+use crate::{ContactGraph, InterfaceRule, interface_value_split};
 
 /// A particle cut by a phase interface.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -344,7 +344,8 @@ impl<'a> Laminates<'a> {
 }
 
 /// Like [`crate::contact_property`], with particles cut by interfaces: each contact combines
-/// the half-bond values λ_p(e) and λ_q(−e) over half its branch by `rule`.
+/// the half-bond values λ_p(e) and λ_q(−e) over its two half-bonds (halves, or split at the
+/// Laguerre facet) by `rule`.
 ///
 /// Errors: as [`crate::contact_property`], and a mix whose other phase has no value.
 pub fn contact_property_laminate(
@@ -380,15 +381,16 @@ pub fn contact_property_laminate(
         .iter()
         .zip(&graph.geometry)
         .zip(base)
-        .map(|((&[p, q], g), b)| {
+        .enumerate()
+        .map(|(k, ((&[p, q], g), b))| {
             let (p, q) = (p as usize, q as usize);
             if lam.get(p).is_none() && lam.get(q).is_none() {
                 return b;
             }
-            let half = 0.5 * g.distance;
-            let a = lam.half_bond(p, phases, per_phase, &g.normal, half);
-            let c = lam.half_bond(q, phases, per_phase, &(-g.normal), half);
-            interface_value(a, c, rule)
+            let w = graph.split(k);
+            let a = lam.half_bond(p, phases, per_phase, &g.normal, w * g.distance);
+            let c = lam.half_bond(q, phases, per_phase, &(-g.normal), (1.0 - w) * g.distance);
+            interface_value_split(a, c, w, rule)
         })
         .collect())
 }

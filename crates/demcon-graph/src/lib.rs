@@ -73,7 +73,7 @@ pub use contact::{
 };
 pub use demcon_core::Components;
 pub use error::GraphError;
-pub use interface::{InterfaceRule, conductances, contact_property, interface_value};
+pub use interface::{InterfaceRule, conductances, contact_property, interface_value, interface_value_split};
 pub use laguerre::{CellWall, Cells, LaguerreParams, TessellationReport, WallFacet, tessellate};
 pub use laminate::{
     HalfBond, Laminates, Mix, assign_phase_laminate, contact_property_laminate, inside_fraction,

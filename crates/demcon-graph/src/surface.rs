@@ -1,10 +1,10 @@
 //! Transmission-surface models (one enum, one `match`) and the representative volume of
 //! each particle that goes with them.
 
-use demcon_core::ParticleSet;
+use demcon_core::{CoreError, ParticleSet};
 
 use crate::error::{GraphError, positive, same_len};
-use crate::{ContactGraph, surface_calibrated, terreros_alpha};
+use crate::{Cells, ContactGraph, surface_calibrated, terreros_alpha};
 
 /// How the transmission surface S_pq of a contact is computed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -16,6 +16,9 @@ pub enum SurfaceModel {
     },
     /// S_pq = √(α(n_p) R_p² · α(n_q) R_q²) (Terreros 2013, Hubert 2017), n = neighbour count.
     TerrerosAlpha,
+    /// S_pq = the area of the facet the Laguerre cells of p and q share; the graph must come
+    /// from [`crate::tessellate`]. Representative volume: the cell's.
+    Laguerre,
 }
 
 impl SurfaceModel {
@@ -45,6 +48,18 @@ fn check_graph(graph: &ContactGraph, particles: &ParticleSet) -> Result<(), Grap
         graph.n_particles,
         "graph particle",
     )
+}
+
+/// The cells of a tessellated graph, or an error saying the Laguerre model needs them.
+pub(crate) fn cells_of(graph: &ContactGraph) -> Result<&Cells, GraphError> {
+    graph.cells.as_deref().ok_or_else(|| {
+        CoreError::invalid(
+            "surface",
+            "Laguerre",
+            "the Laguerre surface model needs the graph of a Laguerre tessellation (tessellate), not contacts found by a gap tolerance",
+        )
+        .into()
+    })
 }
 
 /// The transmission surface of every contact (m²) under `model`.
@@ -81,11 +96,16 @@ pub fn contact_surfaces(
                 .collect();
             Surfaces { area, clamped }
         }
+        SurfaceModel::Laguerre => Surfaces {
+            area: cells_of(graph)?.facet_area.clone(),
+            clamped: 0,
+        },
     })
 }
 
 /// The volume each particle stands for (m³): V_p/φ with the calibrated model (φ the packing's
-/// solid fraction, in (0, 1]), V_p/f_v(n_p) with the Terreros model (φ is then not used).
+/// solid fraction, in (0, 1]), V_p/f_v(n_p) with the Terreros model, the cell's volume with the
+/// Laguerre model (φ is then not used).
 /// Heat capacity is ρ_c·c times this volume.
 ///
 /// Errors: φ outside (0, 1] (calibrated model), a particle set that does not match the graph.
@@ -116,5 +136,6 @@ pub fn representative_volumes(
             .enumerate()
             .map(|(i, &d)| particles.volume(i) / terreros_alpha(d).volume_fraction)
             .collect(),
+        SurfaceModel::Laguerre => cells_of(graph)?.volume.clone(),
     })
 }

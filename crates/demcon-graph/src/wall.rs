@@ -8,6 +8,10 @@
 //! is g = k_p(n_p, h_p) S_p / h_p, with k_p the particle's conductivity along n_p
 //! ([`WallContacts::conductances`]).
 //!
+//! With the Laguerre model the links are the cells' facets on the face instead
+//! ([`WallContacts::for_graph`]): h_p is the distance from the centre to the facet, n_p its
+//! normal and S_p its area.
+//!
 //! Wall nodes come after the particles: wall w is node `n_particles + w`. Only this module
 //! knows that numbering; everyone else asks [`WallContacts::node`], [`WallContacts::edges`]
 //! or [`WallContacts::split`].
@@ -16,7 +20,7 @@ use std::ops::Range;
 
 use demcon_core::{Container, CoreError, Face, ParticleSet, Selector, Vec3};
 
-use crate::{SurfaceModel, surface_calibrated, terreros_alpha};
+use crate::{CellWall, ContactGraph, SurfaceModel, surface_calibrated, terreros_alpha};
 
 /// The links between particles and the container faces held at a value.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -33,6 +37,9 @@ pub struct WallContacts {
     pub half_length: Vec<f64>,
     /// Per link: outward unit normal of the face at the particle.
     pub normal: Vec<Vec3>,
+    /// Per link: the area of the cell's facet on the face (m²), when built from Laguerre cells
+    /// (empty otherwise).
+    pub facet_area: Vec<f64>,
 }
 
 impl WallContacts {
@@ -66,6 +73,57 @@ impl WallContacts {
                 w.particle.push(p);
                 w.half_length.push(h);
                 w.normal.push(n);
+            }
+            w.starts.push(w.particle.len());
+        }
+        Ok(w)
+    }
+
+    /// The links of `faces` for a graph: the cells' wall facets when the graph is a Laguerre
+    /// tessellation, else the particles touching each face ([`WallContacts::build`]).
+    ///
+    /// Errors: a face the container does not have, or one no particle (cell) touches.
+    pub fn for_graph(
+        graph: &ContactGraph,
+        particles: &ParticleSet,
+        container: &Container,
+        faces: &[Face],
+        context: &str,
+    ) -> Result<Self, CoreError> {
+        let Some(cells) = graph.cells.as_deref() else {
+            return Self::build(particles, container, faces, context);
+        };
+        let mut w = WallContacts {
+            n_particles: particles.len(),
+            faces: faces.to_vec(),
+            starts: vec![0],
+            ..Default::default()
+        };
+        for &face in faces {
+            if !container.faces().contains(&face) {
+                return Err(CoreError::invalid(
+                    format!("wall {} ({context})", face.name()),
+                    face.name(),
+                    format!(
+                        "a face of the {} container: {:?}",
+                        container.kind(),
+                        container.faces()
+                    ),
+                ));
+            }
+            let before = w.particle.len();
+            for f in cells.on_wall(CellWall::Face(face)) {
+                w.particle.push(f.particle);
+                w.half_length.push(f.distance);
+                w.normal.push(f.normal);
+                w.facet_area.push(f.area);
+            }
+            if w.particle.len() == before {
+                return Err(CoreError::invalid(
+                    format!("wall {} ({context})", face.name()),
+                    face.name(),
+                    "a face some Laguerre cell reaches (none does: carved away?)",
+                ));
             }
             w.starts.push(w.particle.len());
         }
@@ -129,18 +187,22 @@ impl WallContacts {
         nodes.split_at(self.n_particles)
     }
 
-    /// The transmission surface of each link (m²) under `model`: C_t π R_p² (calibrated) or
-    /// α(n_p + 1) R_p² (Terreros: the wall counts as one more neighbour). `degrees` are the
-    /// particles' contact counts.
+    /// The transmission surface of each link (m²) under `model`: C_t π R_p² (calibrated),
+    /// α(n_p + 1) R_p² (Terreros: the wall counts as one more neighbour) or the facet's area
+    /// (Laguerre; links built by [`WallContacts::for_graph`] on a tessellation). `degrees` are
+    /// the particles' contact counts.
     pub fn surfaces(&self, particles: &ParticleSet, degrees: &[u32], model: &SurfaceModel) -> Vec<f64> {
         self.particle
             .iter()
-            .map(|&p| {
+            .enumerate()
+            .map(|(k, &p)| {
                 let pu = p as usize;
                 let r = particles.radii[pu];
                 match *model {
                     SurfaceModel::Calibrated { c_t } => surface_calibrated(c_t, r),
                     SurfaceModel::TerrerosAlpha => terreros_alpha(degrees[pu] + 1).alpha * r * r,
+                    // A link without a facet (contacts, not cells) has none.
+                    SurfaceModel::Laguerre => self.facet_area.get(k).copied().unwrap_or(0.0),
                 }
             })
             .collect()

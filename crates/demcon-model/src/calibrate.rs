@@ -202,8 +202,14 @@ fn calibrate_walls(
             )
         }
     };
-    let walls = WallContacts::build(&model.particles, &model.container, &faces, "thermal.bcs")
-        .map_err(|e| ModelError::at("thermal.bcs", e))?;
+    let walls = WallContacts::for_graph(
+        &model.graph,
+        &model.particles,
+        &model.container,
+        &faces,
+        "thermal.bcs",
+    )
+    .map_err(|e| ModelError::at("thermal.bcs", e))?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), sm);
     let wall_g = walls.conductances(&wall_s, |_, _, _| 1.0);
     let (net, g) = network_with_walls(model, &walls, g, wall_g)?;

@@ -4,7 +4,7 @@
 
 use demcon_core::{Face, Selector, Vec3};
 use demcon_electric::{ElectricParams, joule_power, solve_potential};
-use demcon_graph::{InterfaceRule, Mix, SurfaceModel, WallContacts, contact_surfaces, interface_value};
+use demcon_graph::{InterfaceRule, Mix, SurfaceModel, WallContacts, contact_surfaces, interface_value_split};
 use demcon_network::FloatingPolicy;
 use serde::Serialize;
 
@@ -223,14 +223,15 @@ fn contact_conductances(
         .iter()
         .zip(&model.graph.geometry)
         .zip(&s.area)
-        .map(|((&[p, q], geo), &a)| {
+        .enumerate()
+        .map(|(k, ((&[p, q], geo), &a))| {
             let (p, q) = (p as usize, q as usize);
-            let half = 0.5 * geo.distance;
+            let w = model.graph.split(k);
             let (sp, sq) = (
-                sigma.half_bond(p, &geo.normal, half),
-                sigma.half_bond(q, &(-geo.normal), half),
+                sigma.half_bond(p, &geo.normal, w * geo.distance),
+                sigma.half_bond(q, &(-geo.normal), (1.0 - w) * geo.distance),
             );
-            interface_value(sp, sq, rule) * a / geo.distance
+            interface_value_split(sp, sq, w, rule) * a / geo.distance
         })
         .collect())
 }
@@ -252,8 +253,14 @@ pub fn solve_electric(
     let sigma = particle_conductivities(model, temperatures)?;
     let g = contact_conductances(model, &sm, problem.interface, &sigma)?;
     let (faces, _) = problem.face_electrodes();
-    let walls = WallContacts::build(&model.particles, &model.container, &faces, "electric.electrodes")
-        .map_err(|e| ModelError::at("electric.electrodes", e))?;
+    let walls = WallContacts::for_graph(
+        &model.graph,
+        &model.particles,
+        &model.container,
+        &faces,
+        "electric.electrodes",
+    )
+    .map_err(|e| ModelError::at("electric.electrodes", e))?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
     let wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
     let m = g.len();

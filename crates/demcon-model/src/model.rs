@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use demcon_core::{Container, MaterialTable, ParticleSet, Region, Vec3};
 use demcon_graph::{
-    ContactGraph, ContactParams, ContactReport, HalfBond, Laminates, Mix, assign_phase,
-    assign_phase_laminate, detect_contacts,
+    ContactGraph, ContactParams, ContactReport, HalfBond, LaguerreParams, Laminates, Mix, TessellationReport,
+    assign_phase, assign_phase_laminate, detect_contacts, tessellate,
 };
 use demcon_network::Network;
 use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReason, carve, pack};
@@ -40,6 +40,14 @@ pub struct Model {
 }
 
 impl Model {
+    /// The volume of solid particle `p` stands for (m³): its Laguerre cell, or V_p/φ.
+    pub fn solid_volume_of(&self, p: usize) -> f64 {
+        match self.graph.cells.as_deref() {
+            Some(c) => c.volume[p],
+            None => self.particles.volume(p) / self.phi,
+        }
+    }
+
     /// The laminate mixes indexed by particle.
     pub fn laminates(&self) -> Laminates<'_> {
         Laminates::new(self.particles.len(), &self.mixes)
@@ -64,8 +72,10 @@ pub struct ModelReport {
     pub mixed_particles: usize,
     /// Inclusions placed (centres and radius), when asked for.
     pub inclusions: Option<InclusionReport>,
-    /// Contact detection summary.
+    /// Contact detection summary (the facet graph's, for a tessellation).
     pub contacts: ContactSummary,
+    /// The Laguerre tessellation, when the graph is one.
+    pub tessellation: Option<TessellationSummary>,
     /// Wall time of each stage (s): packing, contacts, network.
     pub pack_s: f64,
     /// Contact detection (s).
@@ -122,6 +132,42 @@ impl ContactSummary {
             n_components: r.n_components,
             largest_component: r.largest_component,
             diagnostics: r.diagnostics.iter().map(|d| d.to_string()).collect(),
+        }
+    }
+}
+
+/// A serialisable summary of the Laguerre tessellation.
+#[derive(Debug, Clone, Serialize)]
+pub struct TessellationSummary {
+    /// Facets dropped as negligible.
+    pub dropped_facets: usize,
+    /// The area below which a facet is dropped (m²).
+    pub negligible_area_m2: f64,
+    /// Facets found by one cell only.
+    pub one_sided_facets: usize,
+    /// Largest relative difference of a facet's area seen from its two cells.
+    pub max_area_mismatch: f64,
+    /// Σ cell volumes / domain volume − 1 (curved walls; carving regions on a 256³ estimate).
+    pub volume_error: f64,
+    /// Cells clipped by curved surfaces.
+    pub curved_cells: usize,
+    /// Tangent planes added for curved surfaces.
+    pub curved_planes: usize,
+    /// Wall time (s).
+    pub wall_s: f64,
+}
+
+impl TessellationSummary {
+    fn from(r: &TessellationReport) -> Self {
+        Self {
+            dropped_facets: r.dropped_facets,
+            negligible_area_m2: r.negligible_area_m2,
+            one_sided_facets: r.one_sided_facets,
+            max_area_mismatch: r.max_area_mismatch,
+            volume_error: r.volume_error,
+            curved_cells: r.curved_cells,
+            curved_planes: r.curved_planes,
+            wall_s: r.wall_s,
         }
     }
 }
@@ -195,8 +241,11 @@ pub struct ModelParams {
     pub phases: Vec<PhaseSpec>,
     /// Treatment of particles cut by an interface.
     pub phase_rule: PhaseRule,
-    /// Contact detection.
+    /// Contact detection (unused when `laguerre` is set).
     pub contacts: ContactParams,
+    /// When set, the graph is the Laguerre tessellation's facet graph (the Laguerre surface
+    /// model needs it) instead of contacts found by a gap tolerance.
+    pub laguerre: Option<LaguerreParams>,
     /// Seed (inclusion placement).
     pub seed: u64,
 }
@@ -234,7 +283,10 @@ pub fn build_model(packed: Packed, params: &ModelParams) -> Result<Model, ModelE
     let phase_fractions =
         Laminates::new(particles.len(), &mixes).phase_fractions(&particles, materials.materials.len());
     let t1 = Instant::now();
-    let graph = detect_contacts(&particles, &container, &params.contacts)?;
+    let graph = match &params.laguerre {
+        Some(lp) => tessellate(&particles, &container, params.carve.as_ref().map(|c| &c.0), lp)?,
+        None => detect_contacts(&particles, &container, &params.contacts)?,
+    };
     let contacts_s = t1.elapsed().as_secs_f64();
     check_connected(&graph, particles.len())?;
     let t2 = Instant::now();
@@ -255,6 +307,10 @@ pub fn build_model(packed: Packed, params: &ModelParams) -> Result<Model, ModelE
             mixed_particles: mixes.len(),
             inclusions,
             contacts: ContactSummary::from(&graph.report),
+            tessellation: graph
+                .cells
+                .as_deref()
+                .map(|c| TessellationSummary::from(&c.report)),
             pack_s,
             contacts_s,
             network_s,

@@ -4,8 +4,8 @@
 
 use demcon_core::{Face, Selector};
 use demcon_graph::{
-    InterfaceRule, SurfaceModel, WallContacts, conductances, contact_property_laminate, contact_surfaces,
-    representative_volumes,
+    CellWall, InterfaceRule, SurfaceModel, WallContacts, conductances, contact_property_laminate,
+    contact_surfaces, representative_volumes,
 };
 use demcon_network::{Constraints, FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
 use demcon_thermal::{
@@ -46,6 +46,8 @@ pub enum SurfaceSpec {
     Calibrated(CtSpec),
     /// Terreros α (Hubert 2017).
     TerrerosAlpha,
+    /// Facets of the Laguerre cells (the model's graph must be a tessellation).
+    Laguerre,
 }
 
 impl SurfaceSpec {
@@ -53,6 +55,7 @@ impl SurfaceSpec {
     pub fn model(&self, c_t: Option<f64>) -> SurfaceModel {
         match *self {
             SurfaceSpec::TerrerosAlpha => SurfaceModel::TerrerosAlpha,
+            SurfaceSpec::Laguerre => SurfaceModel::Laguerre,
             SurfaceSpec::Calibrated(CtSpec::Value(v)) => SurfaceModel::Calibrated { c_t: v },
             SurfaceSpec::Calibrated(CtSpec::Auto) => SurfaceModel::Calibrated {
                 c_t: c_t.unwrap_or(1.0),
@@ -305,9 +308,19 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
     let c: Vec<f64> = (0..vols.len())
         .map(|p| lam.arithmetic(p, phases, &rc_phase) / rho[p])
         .collect();
-    let mut caps = capacities(&vols, &c, &rho, RepresentativeVolume::VolumeFraction(&fv))?;
-    let walls = WallContacts::build(&model.particles, &model.container, &faces, "thermal.bcs")
-        .map_err(|e| ModelError::at("thermal.bcs", e))?;
+    let rv = match sm {
+        SurfaceModel::Laguerre => RepresentativeVolume::Given(&rep),
+        _ => RepresentativeVolume::VolumeFraction(&fv),
+    };
+    let mut caps = capacities(&vols, &c, &rho, rv)?;
+    let walls = WallContacts::for_graph(
+        &model.graph,
+        &model.particles,
+        &model.container,
+        &faces,
+        "thermal.bcs",
+    )
+    .map_err(|e| ModelError::at("thermal.bcs", e))?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
     let wall_g = walls.conductances(&wall_s, |p, e, h| lam.half_bond(p, phases, &lam_phase, e, h));
     let (network, g) = network_with_walls(model, &walls, g, wall_g)?;
@@ -428,6 +441,22 @@ pub fn thermal_bcs(
                     value: *value,
                 });
             }
+            ThermalBc::HeatFlux { face, flux } if model.graph.cells.is_some() => {
+                // Laguerre cells: each facet on the face receives the flux through its area.
+                let cells = model.graph.cells.as_deref().expect("checked by the guard");
+                let mut any = false;
+                for f in cells.on_wall(CellWall::Face(*face)) {
+                    sources[f.particle as usize] += flux * f.area;
+                    any = true;
+                }
+                if !any {
+                    return Err(ModelError::invalid(
+                        &format!("{field}.face"),
+                        face.name(),
+                        "a face of the container some Laguerre cell reaches",
+                    ));
+                }
+            }
             ThermalBc::HeatFlux { face, flux } => {
                 let ids = Selector::Face(*face)
                     .select_nonempty(&model.particles, &model.container, &format!("{field} (HeatFlux)"))
@@ -461,7 +490,7 @@ pub fn thermal_bcs(
             .select_nonempty(&model.particles, &model.container, &field)
             .map_err(|e| ModelError::at(&format!("{field}.select"), e))?;
         for &p in &ids {
-            sources[p as usize] += src.power_density * model.particles.volume(p as usize) / model.phi;
+            sources[p as usize] += src.power_density * model.solid_volume_of(p as usize);
         }
     }
     let transient = problem.solver.is_transient();

@@ -35,6 +35,7 @@ fn lattice(nx: usize, ny: usize, nz: usize, materials: Vec<Material>) -> Model {
         phases: Vec::new(),
         phase_rule: PhaseRule::Centre,
         contacts: ContactParams::relative(0.01),
+        laguerre: None,
         seed: 1,
     };
     build_model(packed, &params).unwrap()

@@ -286,6 +286,11 @@ pub enum SurfaceConfig {
     },
     /// S = √(α(n_p) R_p² α(n_q) R_q²) (Terreros, Hubert 2017).
     TerrerosAlpha,
+    /// S = the facet the Laguerre (power) cells of the two particles share, with the centre
+    /// line split where the facet crosses it; the cells replace the contacts (`contacts` is
+    /// then unused) and give each particle its volume. Exact for a linear field (no
+    /// calibration, no bias in a homogeneous body); walls are the cells' faces.
+    Laguerre,
 }
 
 impl Default for SurfaceConfig {

@@ -4,7 +4,7 @@
 //! `validate.rs`; this file only translates.
 
 use demcon_core::{Axis, Container, CoreError, Face, Material, MaterialTable, Region, Selector, Vec3};
-use demcon_graph::{ContactParams, InterfaceRule};
+use demcon_graph::{ContactParams, InterfaceRule, LaguerreParams};
 use demcon_model::{
     CarveRule, CtSpec, ElectricProblem, Electrode, ElectrodeAt, ModelParams, PhaseRule, PhaseSpec,
     SurfaceSpec, ThermalBc, ThermalProblem, ThermalSolver, TimeStepSpec, VolumeSource,
@@ -174,6 +174,7 @@ pub fn materials(ms: &[MaterialConfig]) -> Result<MaterialTable, SceneError> {
 pub fn surface(s: &SurfaceConfig) -> SurfaceSpec {
     match s {
         SurfaceConfig::TerrerosAlpha => SurfaceSpec::TerrerosAlpha,
+        SurfaceConfig::Laguerre => SurfaceSpec::Laguerre,
         SurfaceConfig::Calibrated { c_t: CtConfig::Auto } => SurfaceSpec::Calibrated(CtSpec::Auto),
         SurfaceConfig::Calibrated {
             c_t: CtConfig::Value(v),
@@ -260,8 +261,20 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
         phases,
         phase_rule: phase_rule(cfg.phase_rule),
         contacts: contact_params(&cfg.contacts)?,
+        laguerre: uses_laguerre(cfg).then(LaguerreParams::default),
         seed: cfg.seed,
     })
+}
+
+/// Whether the scene's network is the Laguerre tessellation: a physics it runs asks for the
+/// Laguerre surface (validation refuses a scene whose two physics disagree).
+pub fn uses_laguerre(cfg: &SceneConfig) -> bool {
+    let thermal = cfg.thermal.is_some() && matches!(cfg.surface, SurfaceConfig::Laguerre);
+    let electric = cfg
+        .electric
+        .as_ref()
+        .is_some_and(|e| matches!(e.surface, SurfaceConfig::Laguerre));
+    thermal || electric
 }
 
 /// The thermal problem of the scene.

@@ -266,7 +266,7 @@ impl<'a> ParticleFields<'a> {
                 d[p as usize] += l;
                 d[q as usize] += l;
             }
-            let vrep: Vec<f64> = (0..n).map(|p| m.particles.volume(p) / m.phi).collect();
+            let vrep: Vec<f64> = (0..n).map(|p| m.solid_volume_of(p)).collect();
             scalars.push((
                 "current_density",
                 d.iter().zip(&vrep).map(|(v, w)| v.norm() / (2.0 * w)).collect(),

@@ -456,7 +456,7 @@ fn post_process(
     }
     let rep = setup.map(|s| s.rep_volumes.clone()).unwrap_or_else(|| {
         (0..model.particles.len())
-            .map(|p| model.particles.volume(p) / model.phi)
+            .map(|p| model.solid_volume_of(p))
             .collect()
     });
     let index = ProbeIndex::new(&model.particles, &rep, &domain)?;

@@ -27,6 +27,16 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
         ));
     }
     check_surface("surface", &c.surface)?;
+    if let (Some(_), Some(e)) = (&c.thermal, &c.electric)
+        && matches!(c.surface, SurfaceConfig::Laguerre) != matches!(e.surface, SurfaceConfig::Laguerre)
+    {
+        return Err(SceneError::invalid(
+            "electric.surface",
+            format!("{:?} (thermal `surface`: {:?})", e.surface, c.surface),
+            "Laguerre cells replace the contacts, so both physics must use them or neither: set `surface` and \
+             `electric.surface` both to Laguerre, or both to contact models",
+        ));
+    }
     if let Some(t) = &c.thermal {
         check_thermal(c, t, container.as_ref())?;
     }

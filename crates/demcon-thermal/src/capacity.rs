@@ -14,6 +14,8 @@ pub enum RepresentativeVolume<'a> {
     PackingFraction(f64),
     /// V_p / f_v(n_p) with a per-particle volume fraction (Terreros model), in (0, 1].
     VolumeFraction(&'a [f64]),
+    /// The volume each particle stands for, given (m³): its Laguerre cell.
+    Given(&'a [f64]),
 }
 
 /// Heat capacity of each particle, C_p = c_p ρ_c,p V_rep,p (J/K).
@@ -36,11 +38,18 @@ pub fn capacities(
     check_positive("specific_heat", specific_heat)?;
     check_len("density", density.len(), n)?;
     check_positive("density", density)?;
+    if let RepresentativeVolume::Given(v) = rep {
+        check_len("representative volumes", v.len(), n)?;
+        check_positive("representative volumes", v)?;
+        return Ok((0..n).map(|p| specific_heat[p] * density[p] * v[p]).collect());
+    }
     let frac = |p: usize| match rep {
         RepresentativeVolume::PackingFraction(phi) => phi,
         RepresentativeVolume::VolumeFraction(f) => f[p],
+        RepresentativeVolume::Given(_) => unreachable!("returned above"),
     };
     match rep {
+        RepresentativeVolume::Given(_) => {}
         RepresentativeVolume::PackingFraction(phi) => {
             if !(phi > 0.0 && phi <= 1.0) {
                 return Err(ThermalError::invalid(

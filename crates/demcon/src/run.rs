@@ -106,14 +106,27 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
 
 fn print_summary(name: &str, r: &demcon_scene::RunResult) {
     let m = &r.model;
-    println!(
-        "scene {name}: {} particles, φ = {:.4}, {} contacts (Z = {:.3}, ε = {:.4})",
-        m.particles.len(),
-        m.phi,
-        m.graph.pairs.len(),
-        m.graph.coordination(),
-        m.graph.report.epsilon
-    );
+    match &m.report.tessellation {
+        Some(t) => println!(
+            "scene {name}: {} particles, φ = {:.4}, {} Laguerre facets (Z = {:.3}; {} dropped below {:.1e} m², \
+             cell volumes {:+.1e} of the domain)",
+            m.particles.len(),
+            m.phi,
+            m.graph.pairs.len(),
+            m.graph.coordination(),
+            t.dropped_facets,
+            t.negligible_area_m2,
+            t.volume_error
+        ),
+        None => println!(
+            "scene {name}: {} particles, φ = {:.4}, {} contacts (Z = {:.3}, ε = {:.4})",
+            m.particles.len(),
+            m.phi,
+            m.graph.pairs.len(),
+            m.graph.coordination(),
+            m.graph.report.epsilon
+        ),
+    }
     if let Some(p) = &m.report.packing {
         println!(
             "  packing: {:.2} s, {} events ({:.2e}/s), stop {:?}",

@@ -1,0 +1,206 @@
+//! The Laguerre network on LS packings: exact for a linear field by construction, so a
+//! homogeneous body between two walls gives λ_e = λ and T_p = linear in x_p to round-off,
+//! face electrodes give R = ρ_e L/A, and an imposed flux enters through the cells' wall facets.
+
+use approx::assert_relative_eq;
+use demcon_core::{Container, Face, Material, MaterialTable};
+use demcon_graph::{ContactParams, InterfaceRule, LaguerreParams};
+use demcon_model::*;
+use demcon_network::FloatingPolicy;
+use demcon_packing::{PackingParams, RadiusDistribution, pack};
+
+fn metal() -> Material {
+    Material {
+        resistivity: Some(2.0e-7),
+        ..Material::thermal("metal", 10.0, 8000.0, 500.0)
+    }
+}
+
+/// A Gaussian-0.3 LS packing of `n` spheres in `container`, tessellated.
+fn model(container: Container, n: usize, seed: u64) -> Model {
+    let params = PackingParams::new(container, n, 0.55, RadiusDistribution::gaussian(0.3));
+    let (particles, report) = pack(&params, seed, None).unwrap();
+    let packed = Packed {
+        particles,
+        container,
+        report: Some(report),
+        imported_from: None,
+        pack_s: 0.0,
+    };
+    let params = ModelParams {
+        materials: MaterialTable::new(vec![metal()]).unwrap(),
+        carve: None,
+        phases: Vec::new(),
+        phase_rule: PhaseRule::Centre,
+        contacts: ContactParams::default(),
+        laguerre: Some(LaguerreParams::default()),
+        seed,
+    };
+    build_model(packed, &params).unwrap()
+}
+
+fn problem(bcs: Vec<ThermalBc>, solver: ThermalSolver) -> ThermalProblem {
+    ThermalProblem {
+        surface: SurfaceSpec::Laguerre,
+        interface: InterfaceRule::HarmonicMean,
+        bcs,
+        sources: Vec::new(),
+        solver,
+        initial_temperature: 0.0,
+        output_times: Vec::new(),
+        floating: FloatingPolicy::Fail,
+        solve: default_solve_params(),
+        progress: None,
+    }
+}
+
+#[test]
+fn a_homogeneous_box_between_two_walls_is_exact() {
+    let m = model(
+        Container::Box {
+            size: [3e-3, 2e-3, 2e-3],
+        },
+        1500,
+        1,
+    );
+    let t = m.report.tessellation.as_ref().unwrap();
+    assert!(t.volume_error.abs() < 1e-12, "{t:?}");
+    let p = problem(
+        vec![
+            ThermalBc::WallTemperature {
+                face: Face::XMin,
+                value: 0.0,
+            },
+            ThermalBc::WallTemperature {
+                face: Face::XMax,
+                value: 3.0,
+            },
+        ],
+        ThermalSolver::Steady,
+    );
+    let setup = thermal_setup(&m, &p).unwrap();
+    // Capacities: the cells tile the box, so Σ C = ρ c V.
+    let c: f64 = setup.capacities[..m.particles.len()].iter().sum();
+    assert_relative_eq!(c, 8000.0 * 500.0 * 12e-9, max_relative = 1e-12);
+    let bcs = thermal_bcs(&m, &setup, &p).unwrap();
+    let run = solve_thermal(&m, &setup, &bcs, &p).unwrap();
+    for (i, t) in run.temperatures.iter().enumerate() {
+        assert_relative_eq!(*t, m.particles.centres[i].x * 1e3, epsilon = 1e-9);
+    }
+    let hot = bcs.fixed_sets[1].nodes(&setup.walls);
+    let q = demcon_network::boundary_flow(
+        setup.network(&m),
+        &setup.conductances,
+        &run.node_temperatures(),
+        &hot,
+    )
+    .unwrap();
+    // λ A ΔT / L = 10 · 4e-6 · 3 / 3e-3.
+    assert_relative_eq!(q, 0.04, max_relative = 1e-9);
+}
+
+#[test]
+fn face_electrodes_give_rho_l_over_a() {
+    let m = model(
+        Container::Box {
+            size: [2e-3, 2e-3, 4e-3],
+        },
+        1500,
+        2,
+    );
+    let e = ElectricProblem {
+        surface: SurfaceSpec::Laguerre,
+        interface: InterfaceRule::HarmonicMean,
+        electrodes: vec![
+            Electrode {
+                at: ElectrodeAt::Face(Face::ZMin),
+                potential: 0.0,
+            },
+            Electrode {
+                at: ElectrodeAt::Face(Face::ZMax),
+                potential: 1e-3,
+            },
+        ],
+        eta: 1.0,
+        floating: FloatingPolicy::Fail,
+        recouple_tolerance: None,
+        solve: default_solve_params(),
+    };
+    let run = solve_electric(&m, &e, None).unwrap();
+    assert_relative_eq!(
+        run.report.resistance_ohm.unwrap(),
+        2.0e-7 * 4e-3 / 4e-6,
+        max_relative = 1e-9
+    );
+}
+
+#[test]
+fn an_imposed_flux_enters_through_the_wall_facets() {
+    // A transient with a flux on XMin and nothing else: the heat stored is the heat injected.
+    let m = model(
+        Container::Box {
+            size: [2e-3, 2e-3, 2e-3],
+        },
+        1000,
+        3,
+    );
+    let p = ThermalProblem {
+        output_times: vec![0.05],
+        ..problem(
+            vec![ThermalBc::HeatFlux {
+                face: Face::XMin,
+                flux: 1e4,
+            }],
+            ThermalSolver::Implicit {
+                t_end: 0.05,
+                dt: 0.01,
+                scheme: demcon_thermal::Scheme::BackwardEuler,
+            },
+        )
+    };
+    let setup = thermal_setup(&m, &p).unwrap();
+    let bcs = thermal_bcs(&m, &setup, &p).unwrap();
+    let total: f64 = bcs.sources.iter().sum();
+    assert_relative_eq!(total, 1e4 * 4e-6, max_relative = 1e-12);
+    let run = solve_thermal(&m, &setup, &bcs, &p).unwrap();
+    let stored: f64 = run
+        .temperatures
+        .iter()
+        .zip(&setup.capacities)
+        .map(|(t, c)| t * c)
+        .sum();
+    assert_relative_eq!(stored, total * 0.05, max_relative = 1e-8);
+}
+
+#[test]
+fn mixing_the_laguerre_surface_with_a_contact_graph_is_refused() {
+    let packed = Packed {
+        particles: demcon_core::ParticleSet::new(
+            vec![
+                demcon_core::Vec3::new(0.5, 0.5, 0.5),
+                demcon_core::Vec3::new(1.5, 0.5, 0.5),
+            ],
+            vec![0.5, 0.5],
+        )
+        .unwrap(),
+        container: Container::Box {
+            size: [2.0, 1.0, 1.0],
+        },
+        report: None,
+        imported_from: None,
+        pack_s: 0.0,
+    };
+    let params = ModelParams {
+        materials: MaterialTable::new(vec![metal()]).unwrap(),
+        carve: None,
+        phases: Vec::new(),
+        phase_rule: PhaseRule::Centre,
+        contacts: ContactParams::relative(0.01),
+        laguerre: None,
+        seed: 1,
+    };
+    let m = build_model(packed, &params).unwrap();
+    let p = problem(Vec::new(), ThermalSolver::Steady);
+    let e = thermal_setup(&m, &p).unwrap_err().to_string();
+    assert!(e.contains("Laguerre"), "{e}");
+}
