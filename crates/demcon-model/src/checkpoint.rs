@@ -22,7 +22,7 @@ pub struct RunCheckpoint {
     pub coupling: Option<CouplingState>,
 }
 
-/// The state of a transient's ρ_e(T) coupling ([`crate::couple`]): the electric solve in
+/// The state of a transient's ρ_e(T) coupling ([`crate::couple()`]): the electric solve in
 /// force is the one at `last_temperatures`, redone on resuming (the solve is deterministic).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CouplingState {
