@@ -56,18 +56,28 @@ pub fn checkpoint_path(out: &Path) -> Result<PathBuf, SceneError> {
     Ok(parent.join(file))
 }
 
-/// Removes the checkpoint at `path` (nothing to do when there is none).
+/// Removes the checkpoint at `path`, and the temporary file a kill during a write may have
+/// left beside it (nothing to do when there is none).
 ///
 /// # Errors
-/// The file exists and cannot be removed.
+/// A file exists and cannot be removed.
 pub fn remove_checkpoint(path: &Path) -> Result<(), SceneError> {
-    match std::fs::remove_file(path) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(SceneError::Io {
-            path: path.into(),
-            source: e,
-        }),
-        _ => Ok(()),
+    for p in [path.to_path_buf(), tmp_path(path)] {
+        match std::fs::remove_file(&p) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(SceneError::Io { path: p, source: e });
+            }
+            _ => {}
+        }
     }
+    Ok(())
+}
+
+/// The temporary file a checkpoint is written to before the rename: `path.tmp`.
+fn tmp_path(path: &Path) -> PathBuf {
+    let mut tmp = path.as_os_str().to_os_string();
+    tmp.push(".tmp");
+    PathBuf::from(tmp)
 }
 
 /// What a checkpoint was written for: the demcon version, the scene (a hash per top-level
@@ -408,9 +418,7 @@ pub fn write_checkpoint(
     fingerprint: &Fingerprint,
     ck: &RunCheckpoint,
 ) -> Result<(), SceneError> {
-    let mut tmp = path.as_os_str().to_os_string();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
+    let tmp = tmp_path(path);
     let io = |p: &Path| {
         let p = p.to_path_buf();
         move |source| SceneError::Io { path: p, source }
