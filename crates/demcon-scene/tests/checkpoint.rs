@@ -195,6 +195,7 @@ fn a_coupled_implicit_run_stopped_and_resumed_writes_the_uninterrupted_outputs()
     let r = run(&s, &RunOptions::default()).unwrap();
     let solves = r.electric.as_ref().unwrap().report.solves;
     assert!(solves > 5, "{solves} potential solves");
+    let _ = std::fs::remove_dir_all(&d);
     stopped_and_resumed_equals_uninterrupted(COUPLED, "coupled", &[2]);
 }
 
