@@ -9,13 +9,20 @@
 //! - Transient with `recouple_tolerance`: one time-accurate run; the potential is re-solved
 //!   (and the Joule sources replaced) after any step that leaves a particle more than the
 //!   tolerance away from its temperature at the last solve.
+//!
+//! Transients can hand out checkpoints and continue from one bit for bit
+//! ([`couple_checkpointed`]); with re-solves the checkpoint carries the coupling's state
+//! (the temperatures of the last potential solve, which is redone on resuming).
 
+use std::cell::RefCell;
+
+use crate::checkpoint::{Checkpointing, CouplingState, RunCheckpoint, check_coupling, not_resumable};
 use crate::electric::{ElectricProblem, ElectricRun, solve_electric};
 use crate::error::ModelError;
 use crate::model::Model;
 use crate::thermal::{
     ExtraSources, ThermalBcs, ThermalProblem, ThermalRun, ThermalSetup, initial_node_temperatures,
-    solve_thermal_with,
+    solve_thermal_checkpointed, solve_thermal_with,
 };
 
 /// Largest number of steady fixed-point rounds before the coupling is declared unsettled.
@@ -42,6 +49,23 @@ pub fn couple(
     thermal: &ThermalProblem,
     electric: &ElectricProblem,
 ) -> Result<Coupled, ModelError> {
+    couple_checkpointed(model, setup, bcs, thermal, electric, None)
+}
+
+/// [`couple`], a transient handing out checkpoints on the schedule of `checkpointing` and
+/// continuing from `checkpointing.resume` bit for bit (the electric solve in force is redone
+/// from the checkpoint's coupling state, not counted again). A steady coupling refuses to
+/// resume.
+///
+/// Errors: those of [`couple`]; a checkpoint whose coupling state does not fit the run.
+pub fn couple_checkpointed(
+    model: &Model,
+    setup: &ThermalSetup,
+    bcs: &ThermalBcs,
+    thermal: &ThermalProblem,
+    electric: &ElectricProblem,
+    checkpointing: Option<Checkpointing<'_, '_>>,
+) -> Result<Coupled, ModelError> {
     // Calibrate an `Auto` C_t of the electric surfaces once, not at every re-solve.
     let e = &electric.resolved(model)?;
     let mut diagnostics = Vec::new();
@@ -60,7 +84,7 @@ pub fn couple(
     }
     let (el, th) = match (e.recouple_tolerance, thermal.solver.is_transient()) {
         (Some(tol), true) => {
-            let (el, th) = coupled_transient(model, setup, bcs, thermal, e, tol)?;
+            let (el, th) = coupled_transient(model, setup, bcs, thermal, e, tol, checkpointing)?;
             let r = &el.report;
             diagnostics.push(format!(
                 "electro-thermal coupling: {} potential solves during the transient (re-solved whenever a \
@@ -69,10 +93,28 @@ pub fn couple(
             ));
             (el, th)
         }
-        (Some(tol), false) => fixed_point(model, setup, bcs, thermal, e, tol, &mut diagnostics)?,
+        (Some(tol), false) => {
+            if checkpointing.as_ref().is_some_and(|c| c.resume.is_some()) {
+                return Err(not_resumable("Steady (electro-thermal fixed point)"));
+            }
+            fixed_point(model, setup, bcs, thermal, e, tol, &mut diagnostics)?
+        }
         (None, _) => {
+            if let Some(ck) = checkpointing.as_ref().and_then(|c| c.resume) {
+                check_coupling(ck, false, model.particles.len())?;
+            }
             let el = solve_electric(model, e, None)?;
-            let th = thermal_with_joule(model, setup, bcs, thermal, &el)?;
+            let th = solve_thermal_checkpointed(
+                model,
+                setup,
+                bcs,
+                thermal,
+                ExtraSources {
+                    initial: Some(&el.joule),
+                    update: &mut |_, _| Ok(None),
+                },
+                checkpointing,
+            )?;
             (el, th)
         }
     };
@@ -156,7 +198,8 @@ fn fixed_point(
 /// temperatures, then re-solved (and the Joule sources replaced) after any step that leaves a
 /// particle more than `tol` (K) away from its temperature at the last solve. The check is
 /// O(n) per step, beside the O(n Z) step. Returns the last electric solve (the one in force at
-/// the end, its report counting every solve) and the thermal run.
+/// the end, its report counting every solve) and the thermal run. Checkpoints carry the
+/// temperatures of the last solve; resuming redoes that solve (uncounted).
 fn coupled_transient(
     model: &Model,
     setup: &ThermalSetup,
@@ -164,38 +207,93 @@ fn coupled_transient(
     thermal: &ThermalProblem,
     e: &ElectricProblem,
     tol: f64,
+    checkpointing: Option<Checkpointing<'_, '_>>,
 ) -> Result<(ElectricRun, ThermalRun), ModelError> {
     let n = model.particles.len();
-    let t_init = initial_node_temperatures(model, setup, bcs, thermal.initial_temperature);
-    let mut last_t = t_init[..n].to_vec();
-    let mut el = solve_electric(model, e, Some(&last_t))?;
+    let resume = checkpointing.as_ref().and_then(|c| c.resume);
+    let last_t = match resume {
+        Some(ck) => {
+            check_coupling(ck, true, n)?;
+            ck.coupling
+                .as_ref()
+                .map(|c| c.last_temperatures.clone())
+                .unwrap_or_default()
+        }
+        None => initial_node_temperatures(model, setup, bcs, thermal.initial_temperature)[..n].to_vec(),
+    };
+    let el = solve_electric(model, e, Some(&last_t))?;
     let first_joule = el.joule.clone();
-    let (mut solves, mut solves_s) = (1usize, el.report.solves_wall_s);
+    let (solves, solves_s) = match resume.and_then(|ck| ck.coupling.as_ref()) {
+        Some(c) => (c.solves as usize, c.solves_wall_s),
+        None => (1usize, el.report.solves_wall_s),
+    };
+    // Shared by the source update and the checkpoints, which the solver calls in turn.
+    let state = RefCell::new(Coupling {
+        last_t,
+        el,
+        solves,
+        solves_s,
+    });
     let mut update = |_time: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, ModelError> {
+        let mut c = state.borrow_mut();
         let moved = temps[..n]
             .iter()
-            .zip(&last_t)
+            .zip(&c.last_t)
             .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
         if moved <= tol {
             return Ok(None);
         }
-        last_t.copy_from_slice(&temps[..n]);
-        el = solve_electric(model, e, Some(&last_t))?;
-        solves += 1;
-        solves_s += el.report.solves_wall_s;
-        Ok(Some(el.joule.clone()))
+        c.last_t.copy_from_slice(&temps[..n]);
+        c.el = solve_electric(model, e, Some(&c.last_t))?;
+        c.solves += 1;
+        c.solves_s += c.el.report.solves_wall_s;
+        Ok(Some(c.el.joule.clone()))
     };
-    let th = solve_thermal_with(
-        model,
-        setup,
-        bcs,
-        thermal,
-        ExtraSources {
-            initial: Some(&first_joule),
-            update: &mut update,
-        },
-    )?;
+    let extra = ExtraSources {
+        initial: Some(&first_joule),
+        update: &mut update,
+    };
+    let th = match checkpointing {
+        Some(ck) => {
+            let sink = ck.sink;
+            let mut with_coupling = |mut r: RunCheckpoint| {
+                let c = state.borrow();
+                r.coupling = Some(CouplingState {
+                    last_temperatures: c.last_t.clone(),
+                    solves: c.solves as u64,
+                    solves_wall_s: c.solves_s,
+                });
+                drop(c);
+                sink(r)
+            };
+            let ck = Checkpointing {
+                every: ck.every,
+                resume: ck.resume,
+                sink: &mut with_coupling,
+            };
+            solve_thermal_checkpointed(model, setup, bcs, thermal, extra, Some(ck))?
+        }
+        None => solve_thermal_with(model, setup, bcs, thermal, extra)?,
+    };
+    let Coupling {
+        mut el,
+        solves,
+        solves_s,
+        ..
+    } = state.into_inner();
     el.report.solves = solves;
     el.report.solves_wall_s = solves_s;
     Ok((el, th))
+}
+
+/// The state of the time-accurate coupling during a transient.
+struct Coupling {
+    /// Particle temperatures of the last potential solve (°C).
+    last_t: Vec<f64>,
+    /// That solve.
+    el: ElectricRun,
+    /// Potential solves so far.
+    solves: usize,
+    /// Their wall time (s).
+    solves_s: f64,
 }

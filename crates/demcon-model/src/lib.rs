@@ -12,6 +12,9 @@
 //!   electrodes on particles or faces, Joule power).
 //! - [`couple`](mod@couple): the electro-thermal coupling ([`couple()`]: one-way, steady fixed
 //!   point, or time-accurate re-solves in a transient).
+//! - [`checkpoint`]: what a transient (coupled or not) hands out during a run and continues
+//!   from bit for bit ([`RunCheckpoint`], [`solve_thermal_checkpointed`],
+//!   [`couple_checkpointed`]).
 //!
 //! Walls (faces held at a temperature or a potential) are [`demcon_graph::WallContacts`]:
 //! one structure that the thermal and electric conductances, the Joule bookkeeping and the
@@ -19,6 +22,7 @@
 #![warn(missing_docs)]
 
 pub mod calibrate;
+pub mod checkpoint;
 pub mod couple;
 pub mod electric;
 mod error;
@@ -26,7 +30,8 @@ pub mod model;
 pub mod thermal;
 
 pub use calibrate::{CalibrationBc, CtCalibration, calibrate_ct, calibrate_ct_with};
-pub use couple::{Coupled, couple};
+pub use checkpoint::{CheckpointSink, Checkpointing, CouplingState, RunCheckpoint};
+pub use couple::{Coupled, couple, couple_checkpointed};
 pub use electric::{
     ElectricProblem, ElectricReport, ElectricRun, Electrode, ElectrodeAt, electric_conductances,
     electric_surface_model, particle_conductivities, solve_electric,
@@ -39,6 +44,6 @@ pub use model::{
 pub use thermal::{
     CtSpec, ExtraSourceUpdate, ExtraSources, FixedSet, FixedTarget, SurfaceSpec, ThermalBc, ThermalBcs,
     ThermalProblem, ThermalRun, ThermalSetup, ThermalSolveReport, ThermalSolver, TimeStepSpec, VolumeSource,
-    default_solve_params, initial_node_temperatures, solve_thermal, solve_thermal_with, thermal_bcs,
-    thermal_setup,
+    default_solve_params, initial_node_temperatures, solve_thermal, solve_thermal_checkpointed,
+    solve_thermal_with, thermal_bcs, thermal_setup,
 };

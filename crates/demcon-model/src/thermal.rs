@@ -2,6 +2,8 @@
 //! and wall conductances, heat capacities, boundary conditions and sources, and the three
 //! solvers (explicit, implicit, steady).
 
+use std::cell::RefCell;
+
 use demcon_core::{Face, Selector};
 use demcon_graph::{
     CellWall, InterfaceRule, SurfaceModel, WallContacts, conductances, contact_property_laminate,
@@ -9,13 +11,14 @@ use demcon_graph::{
 };
 use demcon_network::{Constraints, FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
 use demcon_thermal::{
-    ExplicitParams, ImplicitParams, ProgressFn, RepresentativeVolume, Scheme, ThermalSystem, TimeStep,
-    TransientInput, capacities, face_flux_sources, paper_dt_estimate, run_explicit, run_implicit,
-    solve_steady_temperature, source_update_fn,
+    CheckpointEvery, Checkpoints, ExplicitParams, ImplicitParams, ProgressFn, RepresentativeVolume, Scheme,
+    ThermalSystem, TimeStep, TransientInput, TransientStart, TransientState, capacities, face_flux_sources,
+    paper_dt_estimate, run_explicit_from, run_implicit_from, solve_steady_temperature, source_update_fn,
 };
 use serde::Serialize;
 
 use crate::calibrate::{CalibrationBc, CtCalibration, calibrate_ct_with};
+use crate::checkpoint::{Checkpointing, RunCheckpoint, not_resumable};
 use crate::error::ModelError;
 use crate::model::Model;
 
@@ -642,6 +645,21 @@ pub fn solve_thermal_with(
     problem: &ThermalProblem,
     extra: ExtraSources<'_, '_>,
 ) -> Result<ThermalRun, ModelError> {
+    solve_thermal_checkpointed(model, setup, bcs, problem, extra, None)
+}
+
+/// [`solve_thermal_with`], a transient handing out checkpoints ([`RunCheckpoint`], without
+/// coupling state) on the schedule of `checkpointing` and continuing from
+/// `checkpointing.resume` bit for bit (`extra.initial` is then unused: the checkpoint holds
+/// the sources in force). A steady solve refuses to resume.
+pub fn solve_thermal_checkpointed(
+    model: &Model,
+    setup: &ThermalSetup,
+    bcs: &ThermalBcs,
+    problem: &ThermalProblem,
+    extra: ExtraSources<'_, '_>,
+    checkpointing: Option<Checkpointing<'_, '_>>,
+) -> Result<ThermalRun, ModelError> {
     let n = model.particles.len();
     let initial = problem.initial_temperature;
     let mut sources = bcs.sources.clone();
@@ -650,7 +668,7 @@ pub fn solve_thermal_with(
     }
     let update = extra.update;
     // The model's error that stopped a run, returned instead of the solver's.
-    let mut stopped: Option<ModelError> = None;
+    let stopped: RefCell<Option<ModelError>> = RefCell::new(None);
     let mut hook = |t: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, demcon_thermal::ThermalError> {
         match update(t, temps) {
             Ok(None) => Ok(None),
@@ -660,7 +678,7 @@ pub fn solve_thermal_with(
                 Ok(Some(s))
             }
             Err(e) => {
-                stopped = Some(e);
+                *stopped.borrow_mut() = Some(e);
                 Err(demcon_thermal::ThermalError::invalid(
                     "source update",
                     t,
@@ -671,7 +689,11 @@ pub fn solve_thermal_with(
     };
     let net = setup.network(model);
     let t_init = initial_node_temperatures(model, setup, bcs, initial);
-    let mut snapshots = Vec::new();
+    let (every, resume, mut sink) = match checkpointing {
+        Some(c) => (c.every, c.resume, Some(c.sink)),
+        None => (CheckpointEvery::default(), None, None),
+    };
+    let snapshots = RefCell::new(resume.map(|c| c.snapshots.clone()).unwrap_or_default());
     let excluded = bcs.constraints.excluded().len();
     let g = &setup.conductances;
     let system = ThermalSystem::new(net, g, &setup.capacities, &bcs.constraints)?;
@@ -679,7 +701,31 @@ pub fn solve_thermal_with(
         temperatures: &t_init,
         sources: &sources,
     };
-    let observer = |t, v: &[f64]| snapshots.push((t, v[..n].to_vec()));
+    let start = match resume {
+        Some(c) => TransientStart::Resume(&c.transient),
+        None => TransientStart::Initial(input),
+    };
+    let observer = |t, v: &[f64]| snapshots.borrow_mut().push((t, v[..n].to_vec()));
+    let mut save = |state: TransientState| {
+        let Some(sink) = sink.as_mut() else {
+            return Ok(());
+        };
+        let t = state.t;
+        let snapshots = snapshots.borrow().clone();
+        sink(RunCheckpoint {
+            transient: state,
+            snapshots,
+            coupling: None,
+        })
+        .map_err(|e| {
+            *stopped.borrow_mut() = Some(e);
+            demcon_thermal::ThermalError::invalid("checkpoint", t, "the run was stopped by its checkpoint")
+        })
+    };
+    let checkpoints = Some(Checkpoints {
+        every,
+        save: &mut save,
+    });
     let report_of = |r: &demcon_thermal::TransientReport| ThermalSolveReport {
         scheme: r.scheme.to_string(),
         steps: r.steps,
@@ -717,7 +763,14 @@ pub fn solve_thermal_with(
                 progress: problem.progress.clone(),
                 ..ExplicitParams::default()
             };
-            run_explicit(&system, input, &params, observer, source_update_fn(&mut hook))
+            run_explicit_from(
+                &system,
+                start,
+                &params,
+                observer,
+                source_update_fn(&mut hook),
+                checkpoints,
+            )
         }
         ThermalSolver::Implicit { t_end, dt, scheme } => {
             let params = ImplicitParams {
@@ -729,9 +782,19 @@ pub fn solve_thermal_with(
                 progress: problem.progress.clone(),
                 ..ImplicitParams::default()
             };
-            run_implicit(&system, input, &params, observer, source_update_fn(&mut hook))
+            run_implicit_from(
+                &system,
+                start,
+                &params,
+                observer,
+                source_update_fn(&mut hook),
+                checkpoints,
+            )
         }
         ThermalSolver::Steady => {
+            if resume.is_some() {
+                return Err(not_resumable("Steady"));
+            }
             let st = solve_steady_temperature(net, g, &bcs.constraints, &sources, &problem.solve)?;
             let mut temps = st.solution.values;
             for &p in bcs.constraints.excluded() {
@@ -752,18 +815,23 @@ pub fn solve_thermal_with(
                 energy_balance_error: st.balance_error,
                 excluded,
             };
-            return Ok(ThermalRun::from_nodes(&setup.walls, temps, snapshots, report));
+            return Ok(ThermalRun::from_nodes(
+                &setup.walls,
+                temps,
+                snapshots.into_inner(),
+                report,
+            ));
         }
     };
     // A model error raised in the hook is returned in place of the solver's "stopped".
-    let tr = match (tr, stopped) {
+    let tr = match (tr, stopped.into_inner()) {
         (_, Some(e)) => return Err(e),
         (r, None) => r?,
     };
     Ok(ThermalRun::from_nodes(
         &setup.walls,
         tr.temperatures,
-        snapshots,
+        snapshots.into_inner(),
         report_of(&tr.report),
     ))
 }

@@ -3,52 +3,14 @@
 //! between two walls (half-links of h = R, S = 1 m²) conducts exactly like the continuum
 //! (λ_e = λ, R = ρ_e L / A). Each test states the exact value it checks.
 
+mod common;
+
 use approx::assert_relative_eq;
-use demcon_core::{Container, Face, Material, MaterialTable, ParticleSet, Selector, Vec3};
-use demcon_graph::{ContactParams, InterfaceRule};
+use common::{C_T, lattice, metal};
+use demcon_core::{Container, Face, Selector};
+use demcon_graph::InterfaceRule;
 use demcon_model::*;
 use demcon_network::FloatingPolicy;
-
-/// An nx × ny × nz lattice of spheres of radius 0.5 m in a box of the same size (m).
-fn lattice(nx: usize, ny: usize, nz: usize, materials: Vec<Material>) -> Model {
-    let mut centres = Vec::new();
-    for i in 0..nx {
-        for j in 0..ny {
-            for k in 0..nz {
-                centres.push(Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5));
-            }
-        }
-    }
-    let n = centres.len();
-    let packed = Packed {
-        particles: ParticleSet::new(centres, vec![0.5; n]).unwrap(),
-        container: Container::Box {
-            size: [nx as f64, ny as f64, nz as f64],
-        },
-        report: None,
-        imported_from: None,
-        pack_s: 0.0,
-    };
-    let params = ModelParams {
-        materials: MaterialTable::new(materials).unwrap(),
-        carve: None,
-        phases: Vec::new(),
-        phase_rule: PhaseRule::Centre,
-        contacts: ContactParams::relative(0.01),
-        laguerre: None,
-        seed: 1,
-    };
-    build_model(packed, &params).unwrap()
-}
-
-fn metal() -> Material {
-    Material {
-        resistivity: Some(2.0e-7),
-        ..Material::thermal("metal", 10.0, 8000.0, 500.0)
-    }
-}
-
-const C_T: f64 = 4.0 / std::f64::consts::PI;
 
 fn steady(bcs: Vec<ThermalBc>) -> ThermalProblem {
     ThermalProblem {

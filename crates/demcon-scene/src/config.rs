@@ -416,6 +416,9 @@ pub struct ThermalConfig {
     pub sources: Vec<SourceConfig>,
     /// Time integration or steady state.
     pub solver: ThermalSolverConfig,
+    /// Checkpoints of a transient, from which `demcon run --resume` continues a killed run.
+    #[serde(default)]
+    pub checkpoint: Option<CheckpointConfig>,
 }
 
 /// A thermal boundary condition.
@@ -515,6 +518,20 @@ pub enum ThermalSolverConfig {
     },
     /// Steady state by one linear solve.
     Steady,
+}
+
+/// When a transient writes its checkpoint (`checkpoint: (every_steps: 1000, every_seconds:
+/// 600.0)`): after every `every_steps` steps and/or once `every_seconds` of wall time have
+/// passed since the last one, whichever comes first. Results never depend on it.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CheckpointConfig {
+    /// Steps between two checkpoints (≥ 1).
+    #[serde(default)]
+    pub every_steps: Option<u64>,
+    /// Wall time between two checkpoints (s, > 0).
+    #[serde(default)]
+    pub every_seconds: Option<f64>,
 }
 
 /// Electric conduction.

@@ -11,7 +11,7 @@ use demcon_model::{
 };
 use demcon_network::{FloatingPolicy, Method, SolveParams};
 use demcon_post::{HaloParams, HaloPhases, Line, ProbeMethod};
-use demcon_thermal::Scheme;
+use demcon_thermal::{CheckpointEvery, Scheme};
 
 use crate::config::*;
 use crate::error::SceneError;
@@ -341,6 +341,15 @@ pub fn thermal_problem(
         floating: floating(cfg.floating),
         solve: solve_params(&cfg.linear_solver),
         progress: None,
+    })
+}
+
+/// The checkpoint schedule of a transient scene (`thermal.checkpoint`), if any.
+pub fn checkpoint_every(cfg: &SceneConfig) -> Option<CheckpointEvery> {
+    let ck = cfg.thermal.as_ref()?.checkpoint?;
+    Some(CheckpointEvery {
+        steps: ck.every_steps,
+        seconds: ck.every_seconds,
     })
 }
 

@@ -46,6 +46,28 @@ pub enum SceneError {
         /// The error.
         source: std::io::Error,
     },
+    /// A checkpoint cannot be used: none to resume from, or one that is damaged, of another
+    /// format, or written for another scene or packing.
+    #[error("checkpoint {path}: {problem}")]
+    Checkpoint {
+        /// The checkpoint file.
+        path: PathBuf,
+        /// What is wrong, and what to do.
+        problem: String,
+    },
+    /// The run was stopped on purpose right after writing a checkpoint
+    /// ([`crate::CheckpointOptions::after_write`]); `--resume` continues it.
+    #[error(
+        "stopped after the checkpoint at step {steps} (t = {t} s) in {path}: continue the run with --resume"
+    )]
+    Stopped {
+        /// Steps done.
+        steps: u64,
+        /// Time reached (s).
+        t: f64,
+        /// The checkpoint file.
+        path: PathBuf,
+    },
     /// Packing failed (or stopped short without `allow_short`).
     #[error("packing: {0}")]
     Packing(String),

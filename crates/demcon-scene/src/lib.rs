@@ -2,7 +2,8 @@
 //! before any heavy work with clear errors (file, line, field: `validate`), the conversion to
 //! plain types (`convert` → [`convert::Problem`]), and the run as named stages (`run`: build →
 //! thermal setup → solve → post) that builds only what the scene asks for and writes
-//! `summary.json`, CSV and VTK outputs (`output`).
+//! `summary.json`, CSV and VTK outputs (`output`); a transient writes checkpoints beside its
+//! output folder and continues from one bit for bit (`checkpoint`).
 //!
 //! This is the only crate that reads RON. It builds no physics: surfaces, walls, capacities,
 //! calibration, ρ_e(T), Joule power and the electro-thermal coupling live in `demcon-model`.
@@ -33,6 +34,7 @@
 #![warn(missing_docs)]
 
 pub mod build;
+pub mod checkpoint;
 pub mod config;
 pub mod convert;
 mod error;
@@ -47,4 +49,4 @@ pub use demcon_model::Model;
 pub use demcon_thermal::ProgressFn;
 pub use error::SceneError;
 pub use output::{summary_json, write_outputs};
-pub use run::{RunOptions, RunResult, Scene, Stages, run, run_on_model};
+pub use run::{CheckpointOptions, Resumed, RunOptions, RunResult, Scene, Stages, run, run_on_model};

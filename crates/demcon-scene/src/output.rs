@@ -63,7 +63,7 @@ pub fn summary_json(name: &str, r: &RunResult) -> serde_json::Value {
 pub const RUN_MARKER: &str = ".demcon-run";
 
 /// The parent folder and the name of an output folder.
-fn split_dir(dir: &Path) -> Result<(&Path, &std::ffi::OsStr), SceneError> {
+pub(crate) fn split_dir(dir: &Path) -> Result<(&Path, &std::ffi::OsStr), SceneError> {
     let invalid = || {
         SceneError::invalid(
             "--out",

@@ -4,18 +4,22 @@
 //! outputs are written by [`crate::write_outputs`]. The physics lives in `demcon-model`; this
 //! file only sequences it on the scene's [`Problem`].
 
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use demcon_core::{Axis, Vec3};
 use demcon_model::{
-    ElectricRun, Model, ThermalBcs, ThermalProblem, ThermalRun, ThermalSetup, couple, solve_electric,
-    solve_thermal, thermal_bcs, thermal_setup,
+    Checkpointing, ElectricRun, ExtraSources, Model, ModelError, RunCheckpoint, ThermalBcs, ThermalProblem,
+    ThermalRun, ThermalSetup, couple_checkpointed, solve_electric, solve_thermal_checkpointed, thermal_bcs,
+    thermal_setup,
 };
 use demcon_post::{Domain, HaloReport, ProbeIndex, halo_flux, particle_dipoles};
+use demcon_thermal::CheckpointEvery;
 use serde::Serialize;
 
 use crate::build::build_model;
+use crate::checkpoint::{Fingerprint, read_checkpoint, write_checkpoint};
 use crate::config::*;
 use crate::convert::{self, PostPlan, Problem};
 use crate::error::SceneError;
@@ -209,6 +213,17 @@ pub struct RunResult {
     pub post_s: f64,
     /// Wall time of the whole run (s).
     pub wall_s: f64,
+    /// Where the run continued from, when it was resumed from a checkpoint.
+    pub resumed: Option<Resumed>,
+}
+
+/// Where a resumed run continued from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Resumed {
+    /// Steps done before (by the interrupted run).
+    pub steps: u64,
+    /// Time reached (s).
+    pub t: f64,
 }
 
 /// Options of a run.
@@ -218,23 +233,123 @@ pub struct RunOptions<'a> {
     pub progress: Option<&'a dyn Fn(&demcon_packing::PackProgress)>,
     /// Transient progress callback: (steps done, steps total), at most ~100 calls per run.
     pub transient_progress: Option<demcon_thermal::ProgressFn>,
+    /// Checkpoints of the transient (written on the scene's `thermal.checkpoint` schedule) and
+    /// resuming from one; none without it.
+    pub checkpoint: Option<CheckpointOptions<'a>>,
 }
 
-/// Runs a scene end to end (in memory; see [`crate::write_outputs`] for files).
+/// Checkpoints of a run: the file, whether to continue from it, and a hook after each write.
+pub struct CheckpointOptions<'a> {
+    /// The checkpoint file ([`crate::checkpoint::checkpoint_path`] of the output folder),
+    /// written on the scene's schedule (`thermal.checkpoint`; never without it). It is left in
+    /// place when the run fails or is killed; the caller removes it once the outputs are
+    /// written ([`crate::checkpoint::remove_checkpoint`]).
+    pub path: PathBuf,
+    /// Continue the interrupted run whose checkpoint is `path` (refused when there is none, or
+    /// it was written for another scene or packing, or the scene is steady). Without it, a run
+    /// refuses to start while `path` exists: it would overwrite an interrupted run's state.
+    pub resume: bool,
+    /// Called after each checkpoint is written, with the steps done and the time reached (s):
+    /// `Break` stops the run there ([`SceneError::Stopped`]), leaving the checkpoint as a kill
+    /// would.
+    pub after_write: Option<&'a dyn Fn(u64, f64) -> ControlFlow<()>>,
+}
+
+/// Runs a scene end to end (in memory; see [`crate::write_outputs`] for files). With
+/// [`RunOptions::checkpoint`], a transient writes checkpoints on the scene's schedule, or
+/// continues from one bit for bit: the resumed run's results equal the uninterrupted run's
+/// (wall times aside).
 pub fn run(scene: &Scene, opts: &RunOptions<'_>) -> Result<RunResult, SceneError> {
     let t0 = Instant::now();
     let cfg = &scene.config;
+    // The checkpoint to continue from, checked against the scene before the build.
+    let resume = match &opts.checkpoint {
+        Some(ck) => checkpoint_to_resume(cfg, ck)?,
+        None => None,
+    };
     let mut stages = Stages::default();
     let model = stages.time("build", || build_model(cfg, &scene.base_dir, opts.progress))?;
-    let mut result = run_stages(cfg, model, stages, opts.transient_progress.clone())?;
+    let plan = match &opts.checkpoint {
+        Some(ck) => {
+            let fingerprint = Fingerprint::of_scene(cfg).with_packing(&model);
+            if let Some((written, _)) = &resume {
+                written.check_packing(&fingerprint, &ck.path)?;
+            }
+            Some(CheckpointPlan {
+                path: &ck.path,
+                fingerprint,
+                every: convert::checkpoint_every(cfg).unwrap_or_default(),
+                resume: resume.map(|(_, c)| c),
+                after_write: ck.after_write,
+            })
+        }
+        None => None,
+    };
+    let resumed = plan.as_ref().and_then(|p| p.resume.as_ref()).map(|c| Resumed {
+        steps: c.transient.steps,
+        t: c.transient.t,
+    });
+    let mut result = run_stages(cfg, model, stages, opts.transient_progress.clone(), plan)?;
+    result.resumed = resumed;
     result.wall_s = t0.elapsed().as_secs_f64();
     Ok(result)
+}
+
+/// The checkpoint `ck` asks to resume from, read and checked against the scene; none for a
+/// fresh run, which refuses to overwrite an interrupted run's checkpoint.
+fn checkpoint_to_resume(
+    cfg: &SceneConfig,
+    ck: &CheckpointOptions<'_>,
+) -> Result<Option<(Fingerprint, RunCheckpoint)>, SceneError> {
+    if !ck.resume {
+        if ck.path.exists() {
+            return Err(SceneError::Checkpoint {
+                path: ck.path.clone(),
+                problem:
+                    "holds the state of an interrupted run: continue it with --resume, or remove the file \
+                          to start over"
+                        .into(),
+            });
+        }
+        return Ok(None);
+    }
+    match &cfg.thermal {
+        None => {
+            return Err(SceneError::invalid(
+                "thermal",
+                "none",
+                "a pure electric scene solves a steady state: there is nothing to resume (only a transient, \
+                 thermal.solver Explicit or Implicit, can be resumed)",
+            ));
+        }
+        Some(t) if matches!(t.solver, ThermalSolverConfig::Steady) => {
+            return Err(SceneError::invalid(
+                "thermal.solver",
+                "Steady",
+                "a steady solve has nothing to resume (only a transient, Explicit or Implicit, can be resumed)",
+            ));
+        }
+        Some(_) => {}
+    }
+    let (written, state) = read_checkpoint(&ck.path)?;
+    written.check_scene(&Fingerprint::of_scene(cfg), &ck.path)?;
+    Ok(Some((written, state)))
+}
+
+/// Checkpoints of one run, resolved: the file, what it is written for, the schedule, the
+/// state to continue from.
+struct CheckpointPlan<'a> {
+    path: &'a Path,
+    fingerprint: Fingerprint,
+    every: CheckpointEvery,
+    resume: Option<RunCheckpoint>,
+    after_write: Option<&'a dyn Fn(u64, f64) -> ControlFlow<()>>,
 }
 
 /// Runs the physics and post-processing of `cfg` on an already built model (so one packing
 /// can serve several solvers).
 pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneError> {
-    run_stages(cfg, model, Stages::default(), None)
+    run_stages(cfg, model, Stages::default(), None, None)
 }
 
 /// The stages after the build.
@@ -243,6 +358,7 @@ fn run_stages(
     model: Model,
     mut stages: Stages,
     progress: Option<demcon_thermal::ProgressFn>,
+    checkpoints: Option<CheckpointPlan<'_>>,
 ) -> Result<RunResult, SceneError> {
     let t0 = Instant::now();
     let mut problem = convert::problem(cfg)?;
@@ -255,7 +371,7 @@ fn run_stages(
         None => None,
     };
     let (thermal_run, electric) = stages.time("solve", || {
-        solve(&model, &problem, thermal.as_ref(), &mut diagnostics)
+        solve(&model, &problem, thermal.as_ref(), checkpoints, &mut diagnostics)
     })?;
     let (thermal_setup, thermal_bcs) = thermal.unzip();
     let post = stages.time("post", || {
@@ -285,6 +401,7 @@ fn run_stages(
         post_s: stages.wall_s("post"),
         stages,
         wall_s: t0.elapsed().as_secs_f64(),
+        resumed: None,
     })
 }
 
@@ -320,23 +437,67 @@ fn setup_thermal(
     Ok((setup, bcs))
 }
 
-/// The thermal solve, the electric solve, or both coupled.
+/// The thermal solve, the electric solve, or both coupled; a transient writes the checkpoints
+/// of `checkpoints` and continues from its state.
 fn solve(
     model: &Model,
     problem: &Problem,
     thermal: Option<&(ThermalSetup, ThermalBcs)>,
+    checkpoints: Option<CheckpointPlan<'_>>,
     diagnostics: &mut Vec<String>,
 ) -> Result<(Option<ThermalRun>, Option<ElectricRun>), SceneError> {
-    let (th, el) = match (&problem.thermal, thermal, &problem.electric) {
-        (Some(tp), Some((setup, bcs)), Some(ep)) => {
-            let c = couple(model, setup, bcs, tp, ep)?;
-            diagnostics.extend(c.diagnostics);
-            (Some(c.thermal), Some(c.electric))
+    // Why a checkpoint stopped the run (a write that failed, or `after_write`).
+    let mut stopped: Option<SceneError> = None;
+    let mut sink = |c: RunCheckpoint| -> Result<(), ModelError> {
+        let Some(plan) = checkpoints.as_ref() else {
+            return Ok(());
+        };
+        let (steps, t) = (c.transient.steps, c.transient.t);
+        let stop = match write_checkpoint(plan.path, &plan.fingerprint, &c) {
+            Err(e) => Some(e),
+            Ok(()) => match plan.after_write.map(|f| f(steps, t)) {
+                Some(ControlFlow::Break(())) => Some(SceneError::Stopped {
+                    steps,
+                    t,
+                    path: plan.path.into(),
+                }),
+                _ => None,
+            },
+        };
+        match stop {
+            None => Ok(()),
+            Some(e) => {
+                stopped = Some(e);
+                Err(ModelError::invalid("checkpoint", t, "the run was stopped"))
+            }
         }
-        (Some(tp), Some((setup, bcs)), None) => (Some(solve_thermal(model, setup, bcs, tp)?), None),
-        (None, _, Some(ep)) => (None, Some(solve_electric(model, ep, None)?)),
+    };
+    let checkpointing = checkpoints.as_ref().map(|p| Checkpointing {
+        every: p.every,
+        resume: p.resume.as_ref(),
+        sink: &mut sink,
+    });
+    let solved = match (&problem.thermal, thermal, &problem.electric) {
+        (Some(tp), Some((setup, bcs)), Some(ep)) => {
+            couple_checkpointed(model, setup, bcs, tp, ep, checkpointing).map(|c| {
+                diagnostics.extend(c.diagnostics);
+                (Some(c.thermal), Some(c.electric))
+            })
+        }
+        (Some(tp), Some((setup, bcs)), None) => {
+            let extra = ExtraSources {
+                initial: None,
+                update: &mut |_, _| Ok(None),
+            };
+            solve_thermal_checkpointed(model, setup, bcs, tp, extra, checkpointing).map(|t| (Some(t), None))
+        }
+        (None, _, Some(ep)) => solve_electric(model, ep, None).map(|e| (None, Some(e))),
         _ => unreachable!("validated: a scene has thermal or electric physics, and thermal physics a setup"),
     };
+    if let Some(e) = stopped {
+        return Err(e);
+    }
+    let (th, el) = solved?;
     if let Some(el) = &el {
         diagnostics.extend(el.diagnostics.iter().cloned());
     }

@@ -268,6 +268,45 @@ fn check_thermal(
             }
         }
     }
+    if let Some(ck) = &t.checkpoint {
+        check_checkpoint(ck, &t.solver)?;
+    }
+    Ok(())
+}
+
+/// Checkpoints: of a transient only, with at least one period, each valid.
+fn check_checkpoint(ck: &CheckpointConfig, solver: &ThermalSolverConfig) -> Result<(), SceneError> {
+    if matches!(solver, ThermalSolverConfig::Steady) {
+        return Err(SceneError::invalid(
+            "thermal.checkpoint",
+            "Some(..)",
+            "a steady solve has nothing to checkpoint: checkpoints need `solver: Explicit(..)` or \
+             `Implicit(..)`",
+        ));
+    }
+    if ck.every_steps.is_none() && ck.every_seconds.is_none() {
+        return Err(SceneError::invalid(
+            "thermal.checkpoint",
+            "(every_steps: None, every_seconds: None)",
+            "give every_steps (≥ 1), every_seconds (> 0) or both",
+        ));
+    }
+    if ck.every_steps == Some(0) {
+        return Err(SceneError::invalid(
+            "thermal.checkpoint.every_steps",
+            0,
+            "must be ≥ 1 (steps between two checkpoints)",
+        ));
+    }
+    if let Some(s) = ck.every_seconds
+        && !(s.is_finite() && s > 0.0)
+    {
+        return Err(SceneError::invalid(
+            "thermal.checkpoint.every_seconds",
+            s,
+            "must be a finite time > 0 (s of wall time between two checkpoints)",
+        ));
+    }
     Ok(())
 }
 

@@ -9,6 +9,7 @@ use demcon_network::{CHUNK, MIN_TASK_CHUNKS, Network, NodeKind};
 use rayon::prelude::*;
 
 use crate::capacity::DtBound;
+use crate::checkpoint::{Checkpoints, Schedule, TransientStart, TransientState, check_state};
 use crate::error::ThermalError;
 use crate::system::{SourceUpdate, ThermalSystem, TransientInput};
 use crate::transient::{
@@ -347,6 +348,7 @@ fn segment_steps(span: f64, dt: f64) -> (u64, bool) {
 ///
 /// The step is checked against the exact positivity bound min_p C_p/Σ_q H_pq; the report
 /// carries it beside the paper's estimate, the energy balance and the cost.
+/// [`run_explicit_from`] adds checkpoints and resuming.
 ///
 /// # Errors
 /// Bad input; [`ThermalError::Unstable`] for a fixed step above the bound (unless
@@ -358,21 +360,47 @@ pub fn run_explicit(
     system: &ThermalSystem<'_>,
     input: TransientInput<'_>,
     params: &ExplicitParams,
+    observer: impl FnMut(f64, &[f64]),
+    update: impl SourceUpdate,
+) -> Result<Transient, ThermalError> {
+    run_explicit_from(
+        system,
+        TransientStart::Initial(input),
+        params,
+        observer,
+        update,
+        None,
+    )
+}
+
+/// [`run_explicit`] from `start` (initial temperatures, or a [`TransientState`] of an earlier
+/// run of the same system and parameters), handing its state to `checkpoints` on their
+/// schedule. A resumed run continues bit for bit as the uninterrupted one: same
+/// temperatures, later snapshots and report (wall time and throughput aside; the wall time
+/// adds the state's). Its observer sees only the stops after the state (and not t = 0).
+///
+/// # Errors
+/// Those of [`run_explicit`]; a state that does not belong to this run (scheme, step, end
+/// time, node count, position); a bad schedule; an error returned by `checkpoints.save`
+/// stops the run and is passed on.
+pub fn run_explicit_from(
+    system: &ThermalSystem<'_>,
+    start: TransientStart<'_>,
+    params: &ExplicitParams,
     mut observer: impl FnMut(f64, &[f64]),
     mut update: impl SourceUpdate,
+    checkpoints: Option<Checkpoints<'_>>,
 ) -> Result<Transient, ThermalError> {
-    let start = Instant::now();
-    system.check_input(&input)?;
+    let clock = Instant::now();
     let (net, conductances, capacities, constraints) = (
         system.network(),
         system.conductances(),
         system.capacities(),
         system.constraints(),
     );
-    let TransientInput {
-        temperatures: t_init,
-        sources,
-    } = input;
+    if let TransientStart::Initial(input) = &start {
+        system.check_input(input)?;
+    }
     let stops = stops(params.t_end, &params.output_times)?;
     let bound: DtBound = system.stable_dt_bound();
     let dt = match params.dt {
@@ -404,7 +432,8 @@ pub fn run_explicit(
         params.max_steps,
         "use the implicit or steady solver",
     )?;
-    let total: u64 = {
+    // Steps of each segment between stops.
+    let seg_steps: Vec<u64> = {
         let mut t_start = 0.0;
         stops
             .iter()
@@ -413,18 +442,50 @@ pub fn run_explicit(
                 t_start = stop;
                 n_full + u64::from(has_partial)
             })
-            .sum()
+            .collect()
     };
+    let total: u64 = seg_steps.iter().sum();
+    const SCHEME: &str = "forward-euler";
+    let mut report = TransientReport::new(SCHEME, dt, bound, params.paper_dt);
+    let mut turnover = Turnover::default();
+    // The state to start from: t = 0, or a checkpoint.
+    let (mut cur, t0, sources, first_segment, first_step, mut steps, prior_wall_s);
+    // The envelope's growth up to the last source change (K) and that change's time (s).
+    let (mut heat_base, mut cool_base, mut t_change);
+    match start {
+        TransientStart::Initial(input) => {
+            cur = input.temperatures.to_vec();
+            constraints.impose(&mut cur);
+            t0 = cur.clone();
+            sources = input.sources.to_vec();
+            (first_segment, first_step, steps, prior_wall_s) = (0, 0, 0, 0.0);
+            (heat_base, cool_base, t_change) = (0.0f64, 0.0f64, 0.0f64);
+        }
+        TransientStart::Resume(s) => {
+            check_state(s, system, SCHEME, dt, params.t_end, &seg_steps)?;
+            cur = s.temperatures.clone();
+            t0 = s.initial_temperatures.clone();
+            sources = s.sources.clone();
+            (first_segment, first_step, steps, prior_wall_s) =
+                (s.segment as usize, s.segment_steps, s.steps, s.wall_s);
+            [heat_base, cool_base, t_change] = s.envelope;
+            report.energy_sources_j = s.energy_sources_j;
+            report.energy_boundary_j = s.energy_boundary_j;
+            turnover = Turnover {
+                boundary_j: s.turnover_boundary_j,
+                sources_j: s.turnover_sources_j,
+            };
+        }
+    }
     let mut ticker = Ticker::new(params.progress.as_ref(), total);
-    let mut stepper = ExplicitStepper::new(system, sources, dt)?;
+    ticker.skip_to(steps);
+    let mut schedule = Schedule::new(checkpoints, steps)?;
+    let mut stepper = ExplicitStepper::new(system, &sources, dt)?;
     let kinds = constraints.kinds();
-    let mut cur = t_init.to_vec();
-    constraints.impose(&mut cur);
-    let t0 = cur.clone();
     let mut next = cur.clone();
 
     // Range allowed by the maximum principle, growing with the sources.
-    let (lo0, hi0) = cur.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+    let (lo0, hi0) = t0.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
         (a.min(v), b.max(v))
     });
     let rates = |sources: &[f64]| {
@@ -437,28 +498,53 @@ pub fn run_explicit(
         }
         (heat_rate, cool_rate)
     };
-    let (mut heat_rate, mut cool_rate) = rates(sources);
-    // The envelope's growth up to the last source change (K) and that change's time (s).
-    let (mut heat_base, mut cool_base, mut t_change) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut heat_rate, mut cool_rate) = rates(&sources);
     let rounding = 1e-9 * (lo0.abs() + hi0.abs() + (hi0 - lo0)) + f64::MIN_POSITIVE;
     let unstable = dt > bound.dt_max;
 
     let edges_b = boundary_edges(net, conductances, constraints);
-    let mut p_src = source_power(constraints, sources);
-    let mut p_src_gross = source_gross(constraints, sources);
-    let mut turnover = Turnover::default();
-    let mut report = TransientReport::new("forward-euler", dt, bound, params.paper_dt);
-    if params.output_times.first() == Some(&0.0) {
+    let mut p_src = source_power(constraints, &sources);
+    let mut p_src_gross = source_gross(constraints, &sources);
+    let mut sources = sources;
+    if first_segment == 0 && first_step == 0 && params.output_times.first() == Some(&0.0) {
         observer(0.0, &cur);
     }
-    let mut t_start = 0.0;
-    let mut steps: u64 = 0;
-    for &stop in &stops {
+    // The state between two steps, as a checkpoint hands it out.
+    let state = |segment: usize,
+                 segment_steps: u64,
+                 steps: u64,
+                 t: f64,
+                 cur: &[f64],
+                 sources: &[f64],
+                 report: &TransientReport,
+                 turnover: &Turnover,
+                 envelope: [f64; 3]| TransientState {
+        scheme: SCHEME.into(),
+        dt,
+        t_end: params.t_end,
+        segment: segment as u64,
+        segment_steps,
+        steps,
+        t,
+        temperatures: cur.to_vec(),
+        initial_temperatures: t0.clone(),
+        sources: sources.to_vec(),
+        energy_sources_j: report.energy_sources_j,
+        energy_boundary_j: report.energy_boundary_j,
+        turnover_boundary_j: turnover.boundary_j,
+        turnover_sources_j: turnover.sources_j,
+        solver_iterations: 0,
+        max_relative_residual: 0.0,
+        envelope,
+        wall_s: prior_wall_s + clock.elapsed().as_secs_f64(),
+    };
+    for (seg, (&stop, &n_steps)) in stops.iter().zip(&seg_steps).enumerate().skip(first_segment) {
+        let t_start = if seg == 0 { 0.0 } else { stops[seg - 1] };
         let span = stop - t_start;
-        let (n_full, has_partial) = segment_steps(span, dt);
+        let (n_full, _) = segment_steps(span, dt);
         let rem = span - n_full as f64 * dt;
-        let n_steps = n_full + u64::from(has_partial);
-        for k in 0..n_steps {
+        let k0 = if seg == first_segment { first_step } else { 0 };
+        for k in k0..n_steps {
             let h = if k < n_full { dt } else { rem };
             report.energy_boundary_j += h * boundary_power(&edges_b, &cur);
             report.energy_sources_j += h * p_src;
@@ -513,16 +599,28 @@ pub fn run_explicit(
                 p_src_gross = source_gross(constraints, &new);
                 (heat_base, cool_base, t_change) = (heat, cool, t_now);
                 (heat_rate, cool_rate) = rates(&new);
+                sources = new;
+            }
+            if k + 1 < n_steps {
+                schedule.after_step(steps, || {
+                    let env = [heat_base, cool_base, t_change];
+                    state(seg, k + 1, steps, t_now, &cur, &sources, &report, &turnover, env)
+                })?;
             }
         }
-        t_start = stop;
         if stop < params.t_end || params.output_times.last() == Some(&stop) {
             observer(stop, &cur);
+        }
+        if seg + 1 < stops.len() {
+            schedule.after_step(steps, || {
+                let env = [heat_base, cool_base, t_change];
+                state(seg + 1, 0, steps, stop, &cur, &sources, &report, &turnover, env)
+            })?;
         }
     }
     report.steps = steps;
     report.t_end = params.t_end;
-    report.wall_s = start.elapsed().as_secs_f64();
+    report.wall_s = prior_wall_s + clock.elapsed().as_secs_f64();
     report.contacts_per_s = if report.wall_s > 0.0 {
         steps as f64 * net.n_edges() as f64 / report.wall_s
     } else {

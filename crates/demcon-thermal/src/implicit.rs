@@ -7,6 +7,7 @@ use std::time::Instant;
 use demcon_core::check::{check_finite, check_len};
 use demcon_network::{Constraints, LinearSystem, Network, NodeKind, Solution, SolveParams, solve_steady};
 
+use crate::checkpoint::{Checkpoints, Schedule, TransientStart, TransientState, check_state};
 use crate::error::ThermalError;
 use crate::system::{SourceUpdate, ThermalSystem, TransientInput};
 use crate::transient::{
@@ -74,7 +75,8 @@ impl Default for ImplicitParams {
 /// `observer` and `update` as in [`crate::run_explicit`]. Floating clusters may be kept
 /// ([`demcon_network::FloatingPolicy::Keep`]): their heat capacity makes each step well
 /// posed. Each step uses the sources in force at its start (for Crank–Nicolson, at both
-/// ends of the step); the energy ledger integrates them.
+/// ends of the step); the energy ledger integrates them. [`run_implicit_from`] adds
+/// checkpoints and resuming.
 ///
 /// # Errors
 /// Bad input; linear-solver failures ([`ThermalError::Network`]); an invalid source vector
@@ -83,21 +85,46 @@ pub fn run_implicit(
     system: &ThermalSystem<'_>,
     input: TransientInput<'_>,
     params: &ImplicitParams,
+    observer: impl FnMut(f64, &[f64]),
+    update: impl SourceUpdate,
+) -> Result<Transient, ThermalError> {
+    run_implicit_from(
+        system,
+        TransientStart::Initial(input),
+        params,
+        observer,
+        update,
+        None,
+    )
+}
+
+/// [`run_implicit`] from `start` (initial temperatures, or a [`TransientState`] of an earlier
+/// run of the same system and parameters), handing its state to `checkpoints` on their
+/// schedule; as [`crate::run_explicit_from`], a resumed run continues bit for bit as the
+/// uninterrupted one (each step's solve is warm-started from the temperatures, which the
+/// state holds; the linear system is rebuilt for the step in force).
+///
+/// # Errors
+/// Those of [`run_implicit`]; a state that does not belong to this run; a bad schedule; an
+/// error returned by `checkpoints.save` stops the run and is passed on.
+pub fn run_implicit_from(
+    system: &ThermalSystem<'_>,
+    start: TransientStart<'_>,
+    params: &ImplicitParams,
     mut observer: impl FnMut(f64, &[f64]),
     mut update: impl SourceUpdate,
+    checkpoints: Option<Checkpoints<'_>>,
 ) -> Result<Transient, ThermalError> {
-    let start = Instant::now();
-    system.check_input(&input)?;
+    let clock = Instant::now();
+    if let TransientStart::Initial(input) = &start {
+        system.check_input(input)?;
+    }
     let (net, conductances, capacities, constraints) = (
         system.network(),
         system.conductances(),
         system.capacities(),
         system.constraints(),
     );
-    let TransientInput {
-        temperatures: t_init,
-        sources,
-    } = input;
     let stops = stops(params.t_end, &params.output_times)?;
     if !(params.dt.is_finite() && params.dt > 0.0) {
         return Err(ThermalError::invalid(
@@ -122,39 +149,102 @@ pub fn run_implicit(
         params.max_steps,
         "use a larger dt or the steady solver",
     )?;
-    let mut ticker = Ticker::new(params.progress.as_ref(), total);
+    // The step each segment's linear system is built for: a segment whose step is within
+    // 1e-12 of the system in force reuses it.
+    let mut sys_h: Vec<f64> = Vec::with_capacity(stops.len());
+    let mut t_prev = 0.0;
+    for (&stop, &n_steps) in stops.iter().zip(&seg_steps) {
+        let h = (stop - t_prev) / n_steps as f64;
+        let reuse = matches!(sys_h.last(), Some(&d) if (d - h).abs() <= 1e-12 * h);
+        sys_h.push(if reuse { sys_h[sys_h.len() - 1] } else { h });
+        t_prev = stop;
+    }
     let bound = system.stable_dt_bound();
     let n = net.n_nodes();
     let cn = params.scheme == Scheme::CrankNicolson;
     let factor = if cn { 2.0 } else { 1.0 };
-    let mut report = TransientReport::new(params.scheme.name(), params.dt, bound, None);
-    let edges_b = boundary_edges(net, conductances, constraints);
-    let mut p_src = source_power(constraints, sources);
-    let mut p_src_gross = source_gross(constraints, sources);
+    let scheme = params.scheme.name();
+    let mut report = TransientReport::new(scheme, params.dt, bound, None);
     let mut turnover = Turnover::default();
-    let mut sources = sources.to_vec();
+    // The state to start from: t = 0, or a checkpoint.
+    let (mut cur, t0, mut sources, first_segment, first_step, prior_wall_s);
+    match start {
+        TransientStart::Initial(input) => {
+            cur = input.temperatures.to_vec();
+            constraints.impose(&mut cur);
+            t0 = cur.clone();
+            sources = input.sources.to_vec();
+            (first_segment, first_step, prior_wall_s) = (0, 0, 0.0);
+        }
+        TransientStart::Resume(s) => {
+            check_state(s, system, scheme, params.dt, params.t_end, &seg_steps)?;
+            cur = s.temperatures.clone();
+            t0 = s.initial_temperatures.clone();
+            sources = s.sources.clone();
+            (first_segment, first_step, prior_wall_s) = (s.segment as usize, s.segment_steps, s.wall_s);
+            report.steps = s.steps;
+            report.energy_sources_j = s.energy_sources_j;
+            report.energy_boundary_j = s.energy_boundary_j;
+            report.solver_iterations = s.solver_iterations;
+            report.max_relative_residual = s.max_relative_residual;
+            turnover = Turnover {
+                boundary_j: s.turnover_boundary_j,
+                sources_j: s.turnover_sources_j,
+            };
+        }
+    }
+    let mut ticker = Ticker::new(params.progress.as_ref(), total);
+    ticker.skip_to(report.steps);
+    let mut schedule = Schedule::new(checkpoints, report.steps)?;
+    let edges_b = boundary_edges(net, conductances, constraints);
+    let mut p_src = source_power(constraints, &sources);
+    let mut p_src_gross = source_gross(constraints, &sources);
     let kinds = constraints.kinds();
 
-    let mut cur = t_init.to_vec();
-    constraints.impose(&mut cur);
-    let t0 = cur.clone();
-    if params.output_times.first() == Some(&0.0) {
+    if first_segment == 0 && first_step == 0 && params.output_times.first() == Some(&0.0) {
         observer(0.0, &cur);
     }
+    // The state between two steps, as a checkpoint hands it out.
+    let state = |segment: usize,
+                 segment_steps: u64,
+                 t: f64,
+                 cur: &[f64],
+                 sources: &[f64],
+                 report: &TransientReport,
+                 turnover: &Turnover| TransientState {
+        scheme: scheme.into(),
+        dt: params.dt,
+        t_end: params.t_end,
+        segment: segment as u64,
+        segment_steps,
+        steps: report.steps,
+        t,
+        temperatures: cur.to_vec(),
+        initial_temperatures: t0.clone(),
+        sources: sources.to_vec(),
+        energy_sources_j: report.energy_sources_j,
+        energy_boundary_j: report.energy_boundary_j,
+        turnover_boundary_j: turnover.boundary_j,
+        turnover_sources_j: turnover.sources_j,
+        solver_iterations: report.solver_iterations,
+        max_relative_residual: report.max_relative_residual,
+        envelope: [0.0; 3],
+        wall_s: prior_wall_s + clock.elapsed().as_secs_f64(),
+    };
     let mut shift = vec![0.0; n];
     let mut rhs = vec![0.0; n];
     let mut system: Option<(f64, LinearSystem<'_>)> = None;
-    let mut t_start = 0.0;
-    for (&stop, &n_steps) in stops.iter().zip(&seg_steps) {
+    for (seg, (&stop, &n_steps)) in stops.iter().zip(&seg_steps).enumerate().skip(first_segment) {
+        let t_start = if seg == 0 { 0.0 } else { stops[seg - 1] };
         let span = stop - t_start;
         let h = span / n_steps as f64;
-        let reuse = matches!(&system, Some((dt, _)) if (dt - h).abs() <= 1e-12 * h);
-        if !reuse {
+        let h_sys = sys_h[seg];
+        if !matches!(&system, Some((d, _)) if d.to_bits() == h_sys.to_bits()) {
             for p in 0..n {
-                shift[p] = factor * capacities[p] / h;
+                shift[p] = factor * capacities[p] / h_sys;
             }
             system = Some((
-                h,
+                h_sys,
                 LinearSystem::new(net, conductances, Some(&shift), constraints, &params.solve)?,
             ));
         }
@@ -162,7 +252,8 @@ pub fn run_implicit(
             Some((_, s)) => s,
             None => unreachable!("system built above"),
         };
-        for k in 0..n_steps {
+        let k0 = if seg == first_segment { first_step } else { 0 };
+        for k in k0..n_steps {
             let p_b_old = boundary_power(&edges_b, &cur);
             if cn {
                 let k_t = net.apply_laplacian(conductances, &cur)?;
@@ -214,15 +305,24 @@ pub fn run_implicit(
                 p_src_gross = source_gross(constraints, &new);
                 sources = new;
             }
+            if k + 1 < n_steps {
+                schedule.after_step(report.steps, || {
+                    state(seg, k + 1, t_now, &cur, &sources, &report, &turnover)
+                })?;
+            }
         }
-        t_start = stop;
         if stop < params.t_end || params.output_times.last() == Some(&stop) {
             observer(stop, &cur);
+        }
+        if seg + 1 < stops.len() {
+            schedule.after_step(report.steps, || {
+                state(seg + 1, 0, stop, &cur, &sources, &report, &turnover)
+            })?;
         }
     }
     debug_assert!(kinds.len() == n);
     report.t_end = params.t_end;
-    report.wall_s = start.elapsed().as_secs_f64();
+    report.wall_s = prior_wall_s + clock.elapsed().as_secs_f64();
     close_ledger(&mut report, constraints, capacities, &t0, &cur, turnover);
     Ok(Transient {
         temperatures: cur,

@@ -6,7 +6,9 @@
 //! H_pq (T_q − T_p) (W) with each contact q: C_p dT_p/dt = Σ_q H_pq (T_q − T_p) + Q_p.
 //! Boundary conditions come resolved from [`demcon_network::resolve_fixed`] (fixed
 //! temperatures; adiabatic is no condition); imposed fluxes and Joule heating enter as
-//! per-particle sources Q_p (W, [`face_flux_sources`]).
+//! per-particle sources Q_p (W, [`face_flux_sources`]). Long transients hand out their state
+//! every K steps or T seconds ([`Checkpoints`]) and continue from it bit for bit
+//! ([`run_explicit_from`], [`run_implicit_from`] with [`TransientStart::Resume`]).
 //!
 //! ```
 //! use demcon_network::{FloatingPolicy, Network, SolveParams, resolve_fixed};
@@ -35,6 +37,7 @@
 #![warn(missing_docs)]
 
 mod capacity;
+mod checkpoint;
 mod error;
 mod explicit;
 mod implicit;
@@ -43,9 +46,12 @@ mod system;
 mod transient;
 
 pub use capacity::{DtBound, RepresentativeVolume, capacities, paper_dt_estimate, stable_dt_bound};
+pub use checkpoint::{CheckpointEvery, Checkpoints, TransientStart, TransientState};
 pub use error::ThermalError;
-pub use explicit::{ExplicitParams, ExplicitStepper, TimeStep, run_explicit};
-pub use implicit::{ImplicitParams, Scheme, SteadyTemperature, run_implicit, solve_steady_temperature};
+pub use explicit::{ExplicitParams, ExplicitStepper, TimeStep, run_explicit, run_explicit_from};
+pub use implicit::{
+    ImplicitParams, Scheme, SteadyTemperature, run_implicit, run_implicit_from, solve_steady_temperature,
+};
 pub use sources::{add_sources, face_flux_sources};
 pub use system::{NoUpdate, SourceUpdate, SourceUpdateFn, ThermalSystem, TransientInput, source_update_fn};
 pub use transient::{DEFAULT_MAX_STEPS, PROGRESS_CALLS, ProgressFn, Transient, TransientReport};

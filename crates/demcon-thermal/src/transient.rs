@@ -139,6 +139,14 @@ impl<'p> Ticker<'p> {
         }
     }
 
+    /// A resumed run: `done` steps were taken before it; the next call comes at the first
+    /// multiple of the period after them.
+    pub(crate) fn skip_to(&mut self, done: u64) {
+        if done > 0 {
+            self.next = (done / self.every + 1).saturating_mul(self.every);
+        }
+    }
+
     /// After step `done` (1-based).
     #[inline]
     pub(crate) fn tick(&mut self, done: u64) {

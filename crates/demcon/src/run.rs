@@ -1,13 +1,23 @@
-//! `demcon run SCENE.ron`: load a scene, run it, print a summary, write the outputs.
+//! `demcon run SCENE.ron`: load a scene, run it, print a summary, write the outputs. A
+//! transient whose scene sets `thermal.checkpoint` writes `OUT.checkpoint` beside the output
+//! folder as it goes; `--resume` continues a killed run from it, and a completed run removes
+//! it.
 
+use std::cell::Cell;
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use demcon_scene::checkpoint::{checkpoint_path, remove_checkpoint};
 use demcon_scene::output::check_output_dir;
-use demcon_scene::{RunOptions, Scene, run as run_scene, write_outputs};
+use demcon_scene::{CheckpointOptions, RunOptions, Scene, run as run_scene, write_outputs};
+
+/// Exit code of a run stopped by `--exit-after-checkpoints` (EX_TEMPFAIL: try again, with
+/// `--resume`).
+pub const EXIT_STOPPED: u8 = 75;
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Arguments of `demcon run`.
@@ -24,6 +34,15 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Continue the interrupted (killed) run whose checkpoint `OUT.checkpoint` lies beside the
+    /// output folder; the results are those of an uninterrupted run. Needs the same scene and
+    /// packing (only `thermal.checkpoint` may change).
+    #[arg(long)]
+    pub resume: bool,
+    /// Test hook: exit at once with code 75 right after the N-th checkpoint is written, as a
+    /// killed run would (no outputs, the checkpoint left).
+    #[arg(long, hide = true, value_name = "N")]
+    pub exit_after_checkpoints: Option<u64>,
 }
 
 /// Runs the subcommand.
@@ -44,6 +63,29 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     };
     let out = args.out.unwrap_or_else(|| PathBuf::from("out").join(&stem));
     check_output_dir(&out).with_context(|| format!("output folder {}", out.display()))?;
+    let checkpoint = checkpoint_path(&out).with_context(|| format!("output folder {}", out.display()))?;
+    if !args.quiet
+        && let Some(ck) = scene.config.thermal.as_ref().and_then(|t| t.checkpoint)
+    {
+        let every = [
+            ck.every_steps.map(|k| format!("{k} steps")),
+            ck.every_seconds.map(|s| format!("{s} s")),
+        ]
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>()
+        .join(" or ");
+        eprintln!("checkpoints every {every} in {}", checkpoint.display());
+    }
+    let written = Cell::new(0u64);
+    let after_write = |_steps: u64, _t: f64| {
+        written.set(written.get() + 1);
+        if args.exit_after_checkpoints == Some(written.get()) {
+            // As a kill: no unwinding, no outputs, the checkpoint left in place.
+            std::process::exit(i32::from(EXIT_STOPPED));
+        }
+        ControlFlow::Continue(())
+    };
     let bar = (!args.quiet).then(|| {
         let b = ProgressBar::new(1000);
         b.set_style(
@@ -88,6 +130,11 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     let opts = RunOptions {
         progress: Some(&progress),
         transient_progress,
+        checkpoint: Some(CheckpointOptions {
+            path: checkpoint.clone(),
+            resume: args.resume,
+            after_write: Some(&after_write),
+        }),
     };
     let result = run_scene(&scene, &opts).with_context(|| format!("running scene {}", args.scene.display()));
     if let Some(b) = &bar {
@@ -99,7 +146,16 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     let result = result?;
     let files = write_outputs(&name, &scene.config.outputs, &result, &out)
         .with_context(|| format!("writing outputs to {}", out.display()))?;
+    remove_checkpoint(&checkpoint).context("removing the checkpoint of the completed run")?;
     print_summary(&name, &result);
+    if let Some(r) = &result.resumed {
+        println!(
+            "  resumed from {} at step {} (t = {} s)",
+            checkpoint.display(),
+            r.steps,
+            r.t
+        );
+    }
     println!("outputs in {}: {}", out.display(), files.join(", "));
     Ok(ExitCode::SUCCESS)
 }

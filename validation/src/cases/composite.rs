@@ -46,6 +46,7 @@ pub fn slab_scene(
             bcs: vec![fixed(FaceConfig::YMin, T_COLD), fixed(FaceConfig::YMax, T_HOT)],
             sources: Vec::new(),
             solver: ThermalSolverConfig::Steady,
+            checkpoint: None,
         },
     );
     s.phases = phases;

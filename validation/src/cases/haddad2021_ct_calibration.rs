@@ -39,6 +39,7 @@ fn scene(n: usize, seed: u64) -> SceneConfig {
             bcs: vec![fixed(FaceConfig::YMin, 0.0)],
             sources: Vec::new(),
             solver: ThermalSolverConfig::Steady,
+            checkpoint: None,
         },
     )
 }

@@ -58,6 +58,7 @@ pub fn scene(count: usize, seed: u64) -> SceneConfig {
         bcs: vec![fixed(FaceConfig::ZMin, T0), fixed(FaceConfig::ZMax, T0)],
         sources: Vec::new(),
         solver: ThermalSolverConfig::Steady,
+        checkpoint: None,
     });
     s
 }

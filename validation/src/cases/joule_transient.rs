@@ -124,6 +124,7 @@ fn lattice_scene(
             bcs: Vec::new(),
             sources: Vec::new(),
             solver,
+            checkpoint: None,
         }),
         electric: Some(ElectricConfig {
             electrodes: face_electrodes(V0),
@@ -400,6 +401,7 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
             dt: 1e-3,
             scheme: ImplicitSchemeConfig::BackwardEuler,
         },
+        checkpoint: None,
     });
     if let Some(e) = pack_cfg.electric.as_mut() {
         e.electrodes = face_electrodes(V0);

@@ -38,6 +38,7 @@ pub mod slab {
                 bcs: bcs.to_vec(),
                 sources: Vec::new(),
                 solver,
+                checkpoint: None,
             },
         );
         s.outputs.times = TIMES.to_vec();
@@ -171,6 +172,7 @@ pub mod sphere {
                 bcs: vec![wall(FaceConfig::Outer, 200.0)],
                 sources: Vec::new(),
                 solver,
+                checkpoint: None,
             },
         );
         let t_end = match solver {

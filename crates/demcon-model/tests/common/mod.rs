@@ -1,0 +1,49 @@
+//! The lattice model shared by the model crate's integration tests.
+#![allow(dead_code)]
+
+use demcon_core::{Container, Material, MaterialTable, ParticleSet, Vec3};
+use demcon_graph::ContactParams;
+use demcon_model::{Model, ModelParams, Packed, PhaseRule, build_model};
+
+/// An nx × ny × nz lattice of spheres of radius 0.5 m in a box of the same size (m).
+pub fn lattice(nx: usize, ny: usize, nz: usize, materials: Vec<Material>) -> Model {
+    let mut centres = Vec::new();
+    for i in 0..nx {
+        for j in 0..ny {
+            for k in 0..nz {
+                centres.push(Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5));
+            }
+        }
+    }
+    let n = centres.len();
+    let packed = Packed {
+        particles: ParticleSet::new(centres, vec![0.5; n]).unwrap(),
+        container: Container::Box {
+            size: [nx as f64, ny as f64, nz as f64],
+        },
+        report: None,
+        imported_from: None,
+        pack_s: 0.0,
+    };
+    let params = ModelParams {
+        materials: MaterialTable::new(materials).unwrap(),
+        carve: None,
+        phases: Vec::new(),
+        phase_rule: PhaseRule::Centre,
+        contacts: ContactParams::relative(0.01),
+        laguerre: None,
+        seed: 1,
+    };
+    build_model(packed, &params).unwrap()
+}
+
+/// The lattice's metal: λ = 10 W/(m·K), ρ = 8000 kg/m³, c = 500 J/(kg·K), ρ_e = 2e-7 Ω·m.
+pub fn metal() -> Material {
+    Material {
+        resistivity: Some(2.0e-7),
+        ..Material::thermal("metal", 10.0, 8000.0, 500.0)
+    }
+}
+
+/// C_t at which every contact surface of the lattice is d² = 1 m².
+pub const C_T: f64 = 4.0 / std::f64::consts::PI;
