@@ -13,7 +13,7 @@
 
 use demcon_core::{Axis, Container, Face, Selector};
 use demcon_graph::{SurfaceModel, WallContacts, conductances, contact_surfaces};
-use demcon_network::{FloatingPolicy, SolveReport, resolve_fixed};
+use demcon_network::{FloatingPolicy, SolveReport, homogenize, resolve_fixed};
 use demcon_thermal::{face_flux_sources, solve_steady_temperature};
 use serde::Serialize;
 
@@ -60,6 +60,33 @@ pub fn calibrate_ct(model: &Model) -> Result<CtCalibration, ModelError> {
     calibrate_ct_with(model, CalibrationBc::Particles)
 }
 
+/// A periodic packing: the homogenised tensor of the network with λ = 1 W/(m·K) everywhere
+/// and C_t,arb = 1; C_t = 1 / (mean of its diagonal).
+fn calibrate_periodic(model: &Model, volume: f64) -> Result<CtCalibration, ModelError> {
+    let start = std::time::Instant::now();
+    let s = contact_surfaces(
+        &model.graph,
+        &model.particles,
+        &SurfaceModel::Calibrated { c_t: 1.0 },
+    )?;
+    let g = conductances(&model.graph, &s.area, &vec![1.0; model.graph.len()])?;
+    let branches: Vec<_> = (0..model.graph.len()).map(|k| model.graph.branch(k)).collect();
+    let h = homogenize(&model.network, &g, &branches, volume, &default_solve_params())?;
+    let lambda_e = h.diagonal().iter().sum::<f64>() / 3.0;
+    let c_t = 1.0 / lambda_e;
+    Ok(CtCalibration {
+        c_t,
+        c_t_centres: c_t,
+        method: "homogenized".into(),
+        lambda_e_arb: lambda_e,
+        lambda: 1.0,
+        delta_t: 0.0,
+        iterations: h.solves.iter().map(|r| r.iterations).sum(),
+        solve: Some(h.solves[0].clone()),
+        solve_s: start.elapsed().as_secs_f64(),
+    })
+}
+
 /// The axis a calibration runs along: y for a box, z for a cylinder, none for a sphere (a
 /// uniform source); a periodic box cannot be calibrated.
 fn calibration_axis(container: &Container) -> Result<Option<Axis>, ModelError> {
@@ -67,16 +94,15 @@ fn calibration_axis(container: &Container) -> Result<Option<Axis>, ModelError> {
         Container::Box { .. } => Ok(Some(Axis::Y)),
         Container::Cylinder { .. } => Ok(Some(Axis::Z)),
         Container::Sphere { .. } => Ok(None),
-        Container::Periodic { .. } => Err(ModelError::invalid(
-            "surface.c_t",
-            "Auto",
-            "C_t calibration needs a box, cylinder or sphere container; give `c_t: Value(..)` for periodic packings",
-        )),
+        Container::Periodic { .. } => unreachable!("periodic packings are calibrated by homogenisation"),
     }
 }
 
 /// Calibrates C_t on the model's own packing (see the module doc for the two protocols).
 pub fn calibrate_ct_with(model: &Model, bc: CalibrationBc) -> Result<CtCalibration, ModelError> {
+    if let Some(l) = model.container.period() {
+        return calibrate_periodic(model, l[0] * l[1] * l[2]);
+    }
     let axis = calibration_axis(&model.container)?;
     let sm = SurfaceModel::Calibrated { c_t: 1.0 };
     let s = contact_surfaces(&model.graph, &model.particles, &sm)?;

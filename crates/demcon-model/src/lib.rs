@@ -12,6 +12,8 @@
 //!   electrodes on particles or faces, Joule power).
 //! - [`couple`](mod@couple): the electro-thermal coupling ([`couple()`]: one-way, steady fixed
 //!   point, or time-accurate re-solves in a transient).
+//! - [`homogenize`](mod@homogenize): the effective conductivity tensors of a periodic packing
+//!   ([`homogenize_thermal`], [`homogenize_electric`]: three load cases on the fluctuation).
 //! - [`checkpoint`]: what a transient (coupled or not) hands out during a run and continues
 //!   from bit for bit ([`RunCheckpoint`], [`solve_thermal_checkpointed`],
 //!   [`couple_checkpointed`]).
@@ -26,6 +28,7 @@ pub mod checkpoint;
 pub mod couple;
 pub mod electric;
 mod error;
+pub mod homogenize;
 pub mod model;
 pub mod thermal;
 
@@ -37,13 +40,14 @@ pub use electric::{
     electric_surface_model, particle_conductivities, solve_electric,
 };
 pub use error::ModelError;
+pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogenize_thermal};
 pub use model::{
     CarveRule, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed, PhaseRule,
-    PhaseSpec, build_model, place_inclusions, set_region_phases,
+    PhaseSpec, TessellationSummary, build_model, place_inclusions, set_region_phases,
 };
 pub use thermal::{
     CtSpec, ExtraSourceUpdate, ExtraSources, FixedSet, FixedTarget, SurfaceSpec, ThermalBc, ThermalBcs,
     ThermalProblem, ThermalRun, ThermalSetup, ThermalSolveReport, ThermalSolver, TimeStepSpec, VolumeSource,
     default_solve_params, initial_node_temperatures, solve_thermal, solve_thermal_checkpointed,
-    solve_thermal_with, thermal_bcs, thermal_setup,
+    solve_thermal_with, thermal_bcs, thermal_conductances, thermal_setup,
 };

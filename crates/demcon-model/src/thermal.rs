@@ -6,7 +6,7 @@ use std::cell::RefCell;
 
 use demcon_core::{Face, Selector};
 use demcon_graph::{
-    CellWall, InterfaceRule, SurfaceModel, WallContacts, conductances, contact_property_laminate,
+    CellWall, InterfaceRule, SurfaceModel, Surfaces, WallContacts, conductances, contact_property_laminate,
     contact_surfaces, representative_volumes,
 };
 use demcon_network::{Constraints, FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
@@ -280,16 +280,8 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
         _ => None,
     };
     let sm = problem.surface.model(calibration.as_ref().map(|c| c.c_t));
-    let s = contact_surfaces(&model.graph, &model.particles, &sm)?;
+    let (s, contact_lambda, g) = contact_values(model, &sm, problem.interface)?;
     let lam_phase: Vec<f64> = model.materials.materials.iter().map(|m| m.conductivity).collect();
-    let contact_lambda = contact_property_laminate(
-        &model.graph,
-        &model.particles.phases,
-        &lam_phase,
-        &model.mixes,
-        problem.interface,
-    )?;
-    let g = conductances(&model.graph, &s.area, &contact_lambda)?;
     let rep = representative_volumes(&model.graph, &model.particles, &sm, model.phi)?;
     let vols: Vec<f64> = (0..model.particles.len())
         .map(|p| model.particles.volume(p))
@@ -347,6 +339,42 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
         clamped: s.clamped,
         paper_dt,
     })
+}
+
+/// Surfaces, contact conductivities (interface rule applied) and conductances H = λ S / d
+/// (W/K) of the contacts under `sm`.
+fn contact_values(
+    model: &Model,
+    sm: &SurfaceModel,
+    interface: InterfaceRule,
+) -> Result<(Surfaces, Vec<f64>, Vec<f64>), ModelError> {
+    let s = contact_surfaces(&model.graph, &model.particles, sm)?;
+    let lam_phase: Vec<f64> = model.materials.materials.iter().map(|m| m.conductivity).collect();
+    let lambda = contact_property_laminate(
+        &model.graph,
+        &model.particles.phases,
+        &lam_phase,
+        &model.mixes,
+        interface,
+    )?;
+    let g = conductances(&model.graph, &s.area, &lambda)?;
+    Ok((s, lambda, g))
+}
+
+/// The contact conductances H = λ S / d (W/K) under `surface` and `interface`, with C_t
+/// calibrated on the model when `Auto` (a periodic model by homogenisation).
+pub fn thermal_conductances(
+    model: &Model,
+    surface: &SurfaceSpec,
+    interface: InterfaceRule,
+) -> Result<(Vec<f64>, Option<CtCalibration>), ModelError> {
+    let calibration = match surface {
+        SurfaceSpec::Calibrated(CtSpec::Auto) => Some(calibrate_ct_with(model, CalibrationBc::Particles)?),
+        _ => None,
+    };
+    let sm = surface.model(calibration.as_ref().map(|c| c.c_t));
+    let (_, _, g) = contact_values(model, &sm, interface)?;
+    Ok((g, calibration))
 }
 
 /// Haddad eq. 16 estimate of the critical step (s) at C_t = `c_t`, with the smallest contact

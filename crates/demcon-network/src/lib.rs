@@ -40,6 +40,7 @@ mod error;
 mod faer_cg;
 pub mod fixtures;
 mod flows;
+mod homogenize;
 mod ic;
 mod network;
 mod par;
@@ -50,6 +51,7 @@ pub use constraints::{Constraints, Diagnostic, FloatingPolicy, NodeKind, resolve
 pub use demcon_core::Components;
 pub use error::SolveError;
 pub use flows::{boundary_flow, edge_flows};
+pub use homogenize::{Homogenized, homogenize};
 pub use network::Network;
 pub use par::{CHUNK, MIN_TASK_CHUNKS};
 pub use solve::{
