@@ -518,6 +518,10 @@ pub enum ThermalSolverConfig {
     },
     /// Steady state by one linear solve.
     Steady,
+    /// Periodic homogenisation (a `Periodic` container, no boundary conditions or sources):
+    /// three mean gradients on the periodic fluctuation give the full effective conductivity
+    /// tensor, `etc_tensor` in `summary.json` (W/(m·K), row-major).
+    Homogenize,
 }
 
 /// When a transient writes its checkpoint (`checkpoint: (every_steps: 1000, every_seconds:
@@ -549,6 +553,11 @@ pub struct ElectricConfig {
     /// Re-solve the potential when temperatures moved by more than this (K), for ρ_e(T).
     #[serde(default)]
     pub recouple_tolerance: Option<f64>,
+    /// Periodic homogenisation instead of electrodes (`electrodes: []`, a `Periodic`
+    /// container): the effective electric conductivity tensor, `conductivity_tensor` in
+    /// `summary.json` (S/m, row-major).
+    #[serde(default)]
+    pub homogenize: bool,
 }
 
 fn default_eta() -> f64 {

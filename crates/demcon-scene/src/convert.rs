@@ -329,6 +329,13 @@ pub fn thermal_problem(
             },
         },
         ThermalSolverConfig::Steady => ThermalSolver::Steady,
+        ThermalSolverConfig::Homogenize => {
+            return Err(SceneError::invalid(
+                "thermal.solver",
+                "Homogenize",
+                "a homogenisation is not a thermal problem with boundary conditions (see `homogenize_plan`)",
+            ));
+        }
     };
     Ok(ThermalProblem {
         surface: surface(&cfg.surface),
@@ -502,25 +509,69 @@ pub struct Problem {
     pub thermal: Option<ThermalProblem>,
     /// The electric physics.
     pub electric: Option<ElectricProblem>,
+    /// Periodic homogenisation (then `thermal` and `electric` are `None`).
+    pub homogenize: Option<HomogenizePlan>,
     /// Post-processing.
     pub post: PostPlan,
+}
+
+/// What a periodic homogenisation computes: the thermal tensor, the electric one, or both.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HomogenizePlan {
+    /// Thermal surface model and interface rule, when `thermal.solver` is `Homogenize`.
+    pub thermal: Option<(SurfaceSpec, InterfaceRule)>,
+    /// Electric surface model and interface rule, when `electric.homogenize` is set.
+    pub electric: Option<(SurfaceSpec, InterfaceRule)>,
+    /// The linear solver.
+    pub solve: SolveParams,
+}
+
+/// Whether the scene is a periodic homogenisation (thermal `Homogenize` or electric
+/// `homogenize: true`).
+pub fn is_homogenization(cfg: &SceneConfig) -> bool {
+    cfg.thermal
+        .as_ref()
+        .is_some_and(|t| matches!(t.solver, ThermalSolverConfig::Homogenize))
+        || cfg.electric.as_ref().is_some_and(|e| e.homogenize)
+}
+
+/// The homogenisation of a scene, when it is one.
+pub fn homogenize_plan(cfg: &SceneConfig) -> Option<HomogenizePlan> {
+    is_homogenization(cfg).then(|| HomogenizePlan {
+        thermal: cfg
+            .thermal
+            .as_ref()
+            .filter(|t| matches!(t.solver, ThermalSolverConfig::Homogenize))
+            .map(|_| (surface(&cfg.surface), interface(cfg.interface))),
+        electric: cfg
+            .electric
+            .as_ref()
+            .filter(|e| e.homogenize)
+            .map(|e| (surface(&e.surface), interface(cfg.interface))),
+        solve: solve_params(&cfg.linear_solver),
+    })
 }
 
 /// Converts the whole scene (every conversion error names its field).
 pub fn problem(cfg: &SceneConfig) -> Result<Problem, SceneError> {
     let model = model_params(cfg)?;
-    let thermal = match &cfg.thermal {
-        Some(t) => Some(thermal_problem(cfg, t, &model.materials)?),
-        None => None,
-    };
-    let electric = match &cfg.electric {
-        Some(e) => Some(electric_problem(cfg, e, &model.materials)?),
-        None => None,
+    let homogenize = homogenize_plan(cfg);
+    let (thermal, electric) = match (&homogenize, &cfg.thermal, &cfg.electric) {
+        (Some(_), _, _) => (None, None),
+        (None, t, e) => (
+            t.as_ref()
+                .map(|t| thermal_problem(cfg, t, &model.materials))
+                .transpose()?,
+            e.as_ref()
+                .map(|e| electric_problem(cfg, e, &model.materials))
+                .transpose()?,
+        ),
     };
     Ok(Problem {
         model,
         thermal,
         electric,
+        homogenize,
         post: post_plan(&cfg.outputs),
     })
 }

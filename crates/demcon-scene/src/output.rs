@@ -44,11 +44,18 @@ pub fn summary_json(name: &str, r: &RunResult) -> serde_json::Value {
         "c_t": r.thermal_setup.as_ref().and_then(|s| match s.surface {
             demcon_graph::SurfaceModel::Calibrated { c_t } => Some(c_t),
             _ => None,
-        }),
-        "calibration": r.thermal_setup.as_ref().and_then(|s| s.calibration.clone()),
+        }).or_else(|| homogenized_calibration(r).map(|c| c.c_t)),
+        "calibration": r.thermal_setup.as_ref().and_then(|s| s.calibration.clone())
+            .or_else(|| homogenized_calibration(r).cloned()),
         "thermal": r.thermal.as_ref().map(|t| &t.report),
         "electric": r.electric.as_ref().map(|e| &e.report),
         "etc": r.etc,
+        "etc_tensor": r.homogenization.as_ref().and_then(|h| h.thermal.as_ref()).map(|t| t.report.tensor),
+        "conductivity_tensor": r.homogenization.as_ref().and_then(|h| h.electric.as_ref()).map(|e| e.report.tensor),
+        "homogenization": r.homogenization.as_ref().map(|h| json!({
+            "thermal": h.thermal.as_ref().map(|t| &t.report),
+            "electric": h.electric.as_ref().map(|e| &e.report),
+        })),
         "halo": r.halo.as_ref().map(|h| h.2),
         "probes": r.probes,
         "profiles": r.profiles,
@@ -57,6 +64,11 @@ pub fn summary_json(name: &str, r: &RunResult) -> serde_json::Value {
         "post_s": r.post_s,
         "wall_s": r.wall_s,
     })
+}
+
+/// The C_t calibration of a thermal homogenisation, when it made one.
+fn homogenized_calibration(r: &RunResult) -> Option<&demcon_model::CtCalibration> {
+    r.homogenization.as_ref()?.thermal.as_ref()?.calibration.as_ref()
 }
 
 /// The file that marks a folder as a demcon run's output folder (which a new run may replace).
@@ -271,6 +283,13 @@ impl<'a> ParticleFields<'a> {
                 "current_density",
                 d.iter().zip(&vrep).map(|(v, w)| v.norm() / (2.0 * w)).collect(),
             ));
+        }
+        if let Some(t) = r.homogenization.as_ref().and_then(|h| h.thermal.as_ref()) {
+            // The temperature fluctuation under a unit mean gradient along each axis (m = K per K/m).
+            let [x, y, z] = &t.fluctuations;
+            scalars.push(("fluctuation_gx", x.clone()));
+            scalars.push(("fluctuation_gy", y.clone()));
+            scalars.push(("fluctuation_gz", z.clone()));
         }
         let mut vectors: Vec<(&str, &[demcon_core::Vec3])> = Vec::new();
         if let Some(f) = &r.flux {

@@ -10,9 +10,9 @@ use std::time::Instant;
 
 use demcon_core::{Axis, Vec3};
 use demcon_model::{
-    Checkpointing, ElectricRun, ExtraSources, Model, ModelError, RunCheckpoint, ThermalBcs, ThermalProblem,
-    ThermalRun, ThermalSetup, couple_checkpointed, solve_electric, solve_thermal_checkpointed, thermal_bcs,
-    thermal_setup,
+    Checkpointing, ElectricRun, ExtraSources, HomogenizeRun, Model, ModelError, RunCheckpoint, ThermalBcs,
+    ThermalProblem, ThermalRun, ThermalSetup, couple_checkpointed, homogenize_electric, homogenize_thermal,
+    solve_electric, solve_thermal_checkpointed, thermal_bcs, thermal_setup,
 };
 use demcon_post::{Domain, HaloReport, ProbeIndex, halo_flux, particle_dipoles};
 use demcon_thermal::CheckpointEvery;
@@ -21,7 +21,7 @@ use serde::Serialize;
 use crate::build::build_model;
 use crate::checkpoint::{Fingerprint, read_checkpoint, write_checkpoint};
 use crate::config::*;
-use crate::convert::{self, PostPlan, Problem};
+use crate::convert::{self, HomogenizePlan, PostPlan, Problem};
 use crate::error::SceneError;
 
 /// A loaded scene: its configuration and the folder relative paths are resolved against.
@@ -215,6 +215,17 @@ pub struct RunResult {
     pub wall_s: f64,
     /// Where the run continued from, when it was resumed from a checkpoint.
     pub resumed: Option<Resumed>,
+    /// The effective tensors of a periodic homogenisation.
+    pub homogenization: Option<Homogenization>,
+}
+
+/// The effective tensors of a periodic homogenisation.
+#[derive(Debug, Clone)]
+pub struct Homogenization {
+    /// Thermal conductivity tensor (W/(m·K)), when `thermal.solver` is `Homogenize`.
+    pub thermal: Option<HomogenizeRun>,
+    /// Electric conductivity tensor (S/m), when `electric.homogenize` is set.
+    pub electric: Option<HomogenizeRun>,
 }
 
 /// Where a resumed run continued from.
@@ -322,10 +333,15 @@ fn checkpoint_to_resume(
                  thermal.solver Explicit or Implicit, can be resumed)",
             ));
         }
-        Some(t) if matches!(t.solver, ThermalSolverConfig::Steady) => {
+        Some(t)
+            if matches!(
+                t.solver,
+                ThermalSolverConfig::Steady | ThermalSolverConfig::Homogenize
+            ) =>
+        {
             return Err(SceneError::invalid(
                 "thermal.solver",
-                "Steady",
+                format!("{:?}", t.solver),
                 "a steady solve has nothing to resume (only a transient, Explicit or Implicit, can be resumed)",
             ));
         }
@@ -366,6 +382,28 @@ fn run_stages(
         t.progress = progress;
     }
     let mut diagnostics = model_diagnostics(&model);
+    if let Some(plan) = &problem.homogenize {
+        let h = stages.time("homogenize", || homogenize(&model, plan))?;
+        return Ok(RunResult {
+            thermal_setup: None,
+            thermal_bcs: None,
+            thermal: None,
+            electric: None,
+            flux: None,
+            halo: None,
+            etc: None,
+            probes: Vec::new(),
+            profiles: Vec::new(),
+            domain: Domain::of_container(&model.container)?,
+            diagnostics,
+            post_s: 0.0,
+            stages,
+            wall_s: t0.elapsed().as_secs_f64(),
+            resumed: None,
+            homogenization: Some(h),
+            model,
+        });
+    }
     let thermal = match &problem.thermal {
         Some(tp) => Some(stages.time("thermal setup", || setup_thermal(&model, tp, &mut diagnostics))?),
         None => None,
@@ -402,7 +440,21 @@ fn run_stages(
         stages,
         wall_s: t0.elapsed().as_secs_f64(),
         resumed: None,
+        homogenization: None,
     })
+}
+
+/// The periodic homogenisation of the plan: the thermal tensor, the electric one, or both.
+fn homogenize(model: &Model, plan: &HomogenizePlan) -> Result<Homogenization, SceneError> {
+    let thermal = match &plan.thermal {
+        Some((surface, rule)) => Some(homogenize_thermal(model, surface, *rule, &plan.solve)?),
+        None => None,
+    };
+    let electric = match &plan.electric {
+        Some((surface, rule)) => Some(homogenize_electric(model, surface, *rule, &plan.solve)?),
+        None => None,
+    };
+    Ok(Homogenization { thermal, electric })
 }
 
 /// What building the model found: contact diagnostics, carved particles.

@@ -27,6 +27,9 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
         ));
     }
     check_surface("surface", &c.surface)?;
+    if convert::is_homogenization(c) {
+        check_homogenization(c, container.as_ref())?;
+    }
     if let (Some(_), Some(e)) = (&c.thermal, &c.electric)
         && matches!(c.surface, SurfaceConfig::Laguerre) != matches!(e.surface, SurfaceConfig::Laguerre)
     {
@@ -258,6 +261,7 @@ fn check_thermal(
             positive_time("thermal.solver.t_end", t_end)?;
             positive_time("thermal.solver.dt", dt)?;
         }
+        ThermalSolverConfig::Homogenize => {}
         ThermalSolverConfig::Steady => {
             if fixed == 0 {
                 return Err(SceneError::invalid(
@@ -270,6 +274,108 @@ fn check_thermal(
     }
     if let Some(ck) = &t.checkpoint {
         check_checkpoint(ck, &t.solver)?;
+    }
+    Ok(())
+}
+
+/// A periodic homogenisation: a periodic container, no boundary conditions, sources or
+/// electrodes, both physics homogenised (or one absent), and no output that needs a field
+/// under boundary conditions.
+fn check_homogenization(c: &SceneConfig, container: Option<&Container>) -> Result<(), SceneError> {
+    let thermal_h = c
+        .thermal
+        .as_ref()
+        .map(|t| matches!(t.solver, ThermalSolverConfig::Homogenize));
+    let electric_h = c.electric.as_ref().map(|e| e.homogenize);
+    let field = if thermal_h == Some(true) {
+        "thermal.solver"
+    } else {
+        "electric.homogenize"
+    };
+    if let Some(k) = container
+        && k.period().is_none()
+    {
+        return Err(SceneError::invalid(
+            field,
+            if thermal_h == Some(true) {
+                "Homogenize"
+            } else {
+                "true"
+            },
+            format!(
+                "periodic homogenisation needs a `Periodic` container; this packing's is a {} (for an effective \
+                 conductivity along one axis use `solver: Steady` with two walls and `outputs.etc_axis`)",
+                k.kind()
+            ),
+        ));
+    }
+    match (thermal_h, electric_h) {
+        (Some(false), Some(true)) => {
+            return Err(SceneError::invalid(
+                "thermal.solver",
+                "not Homogenize",
+                "`electric.homogenize: true` homogenises the whole scene: give `thermal.solver: Homogenize` too, \
+                 or remove `thermal`",
+            ));
+        }
+        (Some(true), Some(false)) => {
+            return Err(SceneError::invalid(
+                "electric.homogenize",
+                "false",
+                "`thermal.solver: Homogenize` homogenises the whole scene: set `electric.homogenize: true` too, \
+                 or remove `electric`",
+            ));
+        }
+        _ => {}
+    }
+    if let Some(t) = &c.thermal {
+        if !t.bcs.is_empty() {
+            return Err(SceneError::invalid(
+                "thermal.bcs",
+                format!("{} boundary condition(s)", t.bcs.len()),
+                "a homogenisation imposes mean gradients on a periodic cell: give `bcs: []`",
+            ));
+        }
+        if !t.sources.is_empty() {
+            return Err(SceneError::invalid(
+                "thermal.sources",
+                format!("{} source(s)", t.sources.len()),
+                "a homogenisation has no sources: give `sources: []`",
+            ));
+        }
+        if t.checkpoint.is_some() {
+            return Err(SceneError::invalid(
+                "thermal.checkpoint",
+                "Some(..)",
+                "a homogenisation has nothing to checkpoint",
+            ));
+        }
+    }
+    if let Some(e) = &c.electric
+        && !e.electrodes.is_empty()
+    {
+        return Err(SceneError::invalid(
+            "electric.electrodes",
+            format!("{} electrode(s)", e.electrodes.len()),
+            "a homogenisation imposes mean gradients on a periodic cell: give `electrodes: []`",
+        ));
+    }
+    let o = &c.outputs;
+    let refused = [
+        ("outputs.etc_axis", o.etc_axis.is_some()),
+        ("outputs.halo", o.halo.is_some()),
+        ("outputs.probes", !o.probes.is_empty()),
+        ("outputs.profiles", !o.profiles.is_empty()),
+        ("outputs.times", !o.times.is_empty()),
+        ("outputs.flux", o.flux),
+    ];
+    if let Some((f, _)) = refused.iter().find(|(_, set)| *set) {
+        return Err(SceneError::invalid(
+            f,
+            "set",
+            "a homogenisation gives the tensor (`etc_tensor`, `conductivity_tensor` in summary.json) and the \
+             fluctuation fields (vtk, particles_csv), not fields under boundary conditions: remove it",
+        ));
     }
     Ok(())
 }
@@ -335,7 +441,9 @@ fn check_electric(
             ));
         }
     }
-    if e.electrodes.len() < 2 {
+    if e.homogenize {
+        // Checked with the homogenisation.
+    } else if e.electrodes.len() < 2 {
         return Err(SceneError::invalid(
             "electric.electrodes",
             format!("{} electrode(s)", e.electrodes.len()),

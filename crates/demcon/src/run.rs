@@ -183,6 +183,32 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
             m.graph.report.epsilon
         ),
     }
+    if let Some(h) = &r.homogenization {
+        for (what, unit, t) in [
+            ("effective conductivity tensor", "W/(m·K)", h.thermal.as_ref()),
+            ("electric conductivity tensor", "S/m", h.electric.as_ref()),
+        ] {
+            let Some(t) = t else { continue };
+            let x = &t.report;
+            println!("  {what} ({unit}), periodic homogenisation, {:.2} s:", x.wall_s);
+            for row in &x.tensor {
+                println!("    [{:>12.6e} {:>12.6e} {:>12.6e}]", row[0], row[1], row[2]);
+            }
+            println!(
+                "    along x, y, z: {:.6e} {:.6e} {:.6e}; eigenvalues {:.6e} {:.6e} {:.6e}; symmetry error {:.1e}",
+                x.axes[0],
+                x.axes[1],
+                x.axes[2],
+                x.eigenvalues[0],
+                x.eigenvalues[1],
+                x.eigenvalues[2],
+                x.symmetry_error
+            );
+            if let Some(c) = &t.calibration {
+                println!("    C_t = {:.5} calibrated by homogenisation", c.c_t);
+            }
+        }
+    }
     if let Some(p) = &m.report.packing {
         println!(
             "  packing: {:.2} s, {} events ({:.2e}/s), stop {:?}",

@@ -174,6 +174,7 @@ pub fn electric_scene(
             eta: 1.0,
             surface,
             recouple_tolerance: None,
+            homogenize: false,
         }),
         outputs: OutputsConfig {
             vtk: false,

@@ -131,6 +131,7 @@ fn lattice_scene(
             eta: 1.0,
             surface,
             recouple_tolerance: tol,
+            homogenize: false,
         }),
         outputs: OutputsConfig {
             times,

@@ -179,7 +179,7 @@ pub mod sphere {
             ThermalSolverConfig::Explicit { t_end, .. } | ThermalSolverConfig::Implicit { t_end, .. } => {
                 t_end
             }
-            ThermalSolverConfig::Steady => 0.0,
+            ThermalSolverConfig::Steady | ThermalSolverConfig::Homogenize => 0.0,
         };
         s.outputs.times = TIMES.iter().copied().filter(|&t| t <= t_end).collect();
         s.outputs.probes = vec![ProbeConfig {
