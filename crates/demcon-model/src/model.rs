@@ -213,6 +213,16 @@ pub enum PhaseSpec {
         /// Box edge over inclusion diameter, ≥ 1.
         size_ratio: f64,
     },
+    /// Spheres at given centres (m) of one radius (m); in a periodic container their
+    /// periodic images count.
+    Spheres {
+        /// Phase id.
+        phase: u16,
+        /// Radius (m).
+        radius: f64,
+        /// Centres (m), inside the container's bounding box.
+        centres: Vec<Vec3>,
+    },
 }
 
 /// The particles a model starts from, and where they came from.
@@ -401,6 +411,74 @@ pub fn place_inclusions(
     Ok((centres, spheres.radii[0]))
 }
 
+/// The region of the spheres of one radius at `centres` (m) in `container`, with the periodic
+/// images that reach the cell in a periodic container. `field` names the phase in errors.
+///
+/// Errors: a radius that is not finite and > 0, a centre outside the container's bounding box
+/// (named by its index).
+pub fn spheres_region(
+    container: &Container,
+    radius: f64,
+    centres: &[Vec3],
+    field: &str,
+) -> Result<Region, ModelError> {
+    if !(radius.is_finite() && radius > 0.0) {
+        return Err(ModelError::invalid(
+            &format!("{field}.radius"),
+            radius,
+            "must be a finite number > 0 (m)",
+        ));
+    }
+    let b = container.bounds();
+    if let Some(k) = centres.iter().position(|c| !b.contains(c)) {
+        let c = centres[k];
+        return Err(ModelError::invalid(
+            &format!("{field}.centres[{k}]"),
+            format!("({:e}, {:e}, {:e}) m", c.x, c.y, c.z),
+            format!(
+                "must lie inside the container's bounding box [{:e}, {:e}] × [{:e}, {:e}] × [{:e}, {:e}] m",
+                b.min.x, b.max.x, b.min.y, b.max.y, b.min.z, b.max.z
+            ),
+        ));
+    }
+    let mut spheres = Vec::with_capacity(centres.len());
+    for c in centres {
+        match container.period() {
+            None => spheres.push(Region::Sphere { centre: *c, radius }),
+            Some(l) => {
+                for shift in image_shifts(l) {
+                    let image = c + shift;
+                    // An image counts when it reaches the cell.
+                    let gap = (0..3)
+                        .map(|k| (b.min[k] - image[k]).max(image[k] - b.max[k]).max(0.0))
+                        .map(|g| g * g)
+                        .sum::<f64>()
+                        .sqrt();
+                    if gap < radius {
+                        spheres.push(Region::Sphere {
+                            centre: image,
+                            radius,
+                        });
+                    }
+                }
+            }
+        }
+    }
+    Ok(Region::Union(spheres))
+}
+
+/// The 27 shifts (m) of a periodic cell and its neighbours, the cell itself first.
+fn image_shifts(l: [f64; 3]) -> impl Iterator<Item = Vec3> {
+    let steps = [0.0, -1.0, 1.0];
+    steps.into_iter().flat_map(move |i| {
+        steps.into_iter().flat_map(move |j| {
+            steps
+                .into_iter()
+                .map(move |k| Vec3::new(i * l[0], j * l[1], k * l[2]))
+        })
+    })
+}
+
 /// Sets the particles in `region` to `phase` under `rule` (cut particles get a [`Mix`]).
 fn assign(particles: &mut ParticleSet, region: &Region, phase: u16, rule: PhaseRule, mixes: &mut Vec<Mix>) {
     match rule {
@@ -426,8 +504,25 @@ fn apply_phases(
 ) -> Result<Option<InclusionReport>, ModelError> {
     let mut inclusions = None;
     let mut inclusion_phase = None;
-    for ph in &params.phases {
+    for (i, ph) in params.phases.iter().enumerate() {
         match ph {
+            PhaseSpec::Spheres {
+                phase,
+                radius,
+                centres,
+            } => {
+                let union = spheres_region(container, *radius, centres, &format!("phases[{i}]"))?;
+                assign(particles, &union, *phase, params.phase_rule, mixes);
+                inclusion_phase = Some(*phase);
+                inclusions = Some(InclusionReport {
+                    count: centres.len(),
+                    radius: *radius,
+                    fraction: centres.len() as f64 * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
+                        / container.bounds().volume(),
+                    particle_fraction: 0.0, // set once all phases are applied
+                    centres: centres.iter().map(|c| [c.x, c.y, c.z]).collect(),
+                });
+            }
             PhaseSpec::Region { phase, region } => {
                 assign(particles, region, *phase, params.phase_rule, mixes)
             }

@@ -346,6 +346,17 @@ pub enum PhaseConfig {
         /// Box edge / inclusion diameter (6 in the paper).
         size_ratio: f64,
     },
+    /// Spherical inclusions at given centres, to reproduce a microstructure exactly:
+    /// `Spheres(material: "silica", radius: 1e-3, centres: [(x, y, z), ...])` in metres. In a
+    /// periodic container their periodic images count.
+    Spheres {
+        /// Material name.
+        material: String,
+        /// Radius of every sphere (m).
+        radius: f64,
+        /// Centres (m), inside the container's bounding box.
+        centres: Vec<(f64, f64, f64)>,
+    },
 }
 
 /// Contact conductivity between two phases.

@@ -237,7 +237,9 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
     let mut phases = Vec::with_capacity(cfg.phases.len());
     for (i, ph) in cfg.phases.iter().enumerate() {
         let field = format!("phases[{i}]");
-        let (PhaseConfig::Region { material, .. } | PhaseConfig::Inclusions { material, .. }) = ph;
+        let (PhaseConfig::Region { material, .. }
+        | PhaseConfig::Inclusions { material, .. }
+        | PhaseConfig::Spheres { material, .. }) = ph;
         let phase = materials
             .phase_of(material)
             .map_err(|e| SceneError::at(&format!("{field}.material"), e))?;
@@ -253,6 +255,14 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
                 fraction: *fraction,
                 size_ratio: *size_ratio,
             },
+            PhaseConfig::Spheres { radius, centres, .. } => {
+                check_spheres(&field, *radius, centres)?;
+                PhaseSpec::Spheres {
+                    phase,
+                    radius: *radius,
+                    centres: centres.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect(),
+                }
+            }
         });
     }
     Ok(ModelParams {
@@ -264,6 +274,35 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
         laguerre: uses_laguerre(cfg).then(LaguerreParams::default),
         seed: cfg.seed,
     })
+}
+
+/// The values of a `Spheres` phase: a finite radius > 0, at least one centre, finite centres.
+fn check_spheres(field: &str, radius: f64, centres: &[(f64, f64, f64)]) -> Result<(), SceneError> {
+    if !(radius.is_finite() && radius > 0.0) {
+        return Err(SceneError::invalid(
+            &format!("{field}.radius"),
+            radius,
+            "must be a finite number > 0 (m)",
+        ));
+    }
+    if centres.is_empty() {
+        return Err(SceneError::invalid(
+            &format!("{field}.centres"),
+            "[]",
+            "give at least one centre (m)",
+        ));
+    }
+    if let Some(k) = centres
+        .iter()
+        .position(|c| !(c.0.is_finite() && c.1.is_finite() && c.2.is_finite()))
+    {
+        return Err(SceneError::invalid(
+            &format!("{field}.centres[{k}]"),
+            format!("{:?}", centres[k]),
+            "must be finite (m)",
+        ));
+    }
+    Ok(())
 }
 
 /// Whether the scene's network is the Laguerre tessellation: a physics it runs asks for the

@@ -27,6 +27,9 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
         ));
     }
     check_surface("surface", &c.surface)?;
+    if let Some(k) = container.as_ref() {
+        check_sphere_centres(c, k)?;
+    }
     if convert::is_homogenization(c) {
         check_homogenization(c, container.as_ref())?;
     }
@@ -274,6 +277,17 @@ fn check_thermal(
     }
     if let Some(ck) = &t.checkpoint {
         check_checkpoint(ck, &t.solver)?;
+    }
+    Ok(())
+}
+
+/// `Spheres` phases: every centre inside the container's bounding box.
+fn check_sphere_centres(c: &SceneConfig, container: &Container) -> Result<(), SceneError> {
+    for (i, ph) in c.phases.iter().enumerate() {
+        if let PhaseConfig::Spheres { radius, centres, .. } = ph {
+            let centres: Vec<Vec3> = centres.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
+            demcon_model::spheres_region(container, *radius, &centres, &format!("phases[{i}]"))?;
+        }
     }
     Ok(())
 }

@@ -120,3 +120,42 @@ fn what_a_homogenisation_cannot_take_is_refused_by_name() {
         );
     }
 }
+
+#[test]
+fn listed_spheres_count_their_periodic_images() {
+    // One sphere centred on a corner of the periodic cell: its images fill all eight corners.
+    let scene = format!(
+        r#"(
+    seed: 4,
+    packing: Generate(container: {PERIODIC}, count: 1500, phi: 0.55, radius_cov: 0.3),
+    surface: Laguerre,
+    materials: [
+        (name: "m", conductivity: 1.0, density: 1000.0, specific_heat: 500.0),
+        (name: "s", conductivity: 10.0, density: 1000.0, specific_heat: 500.0),
+    ],
+    phases: [Spheres(material: "s", radius: 0.0006, centres: [(0.0, 0.0, 0.0)])],
+    thermal: Some((bcs: [], solver: Homogenize)),
+    outputs: (vtk: false),
+)"#
+    );
+    let r = run(&parse(&scene).unwrap(), &RunOptions::default()).unwrap();
+    let p = &r.model.particles;
+    let mut corners = [false; 8];
+    for (i, c) in p.centres.iter().enumerate() {
+        if p.phases[i] == 1 {
+            let k = (0..3).map(|a| usize::from(c[a] > 0.001) << a).sum::<usize>();
+            corners[k] = true;
+        }
+    }
+    assert_eq!(corners, [true; 8]);
+    let f = r.model.report.inclusions.as_ref().unwrap().particle_fraction;
+    let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.0006f64.powi(3) / 0.002f64.powi(3);
+    assert!((f / exact - 1.0).abs() < 0.25, "{f} vs {exact}");
+    // The tensor is isotropic to the discretisation and above the matrix's.
+    let axes = r.homogenization.unwrap().thermal.unwrap().report.axes;
+    assert!(axes.iter().all(|&a| a > 1.0 && (a / axes[0] - 1.0).abs() < 0.02), "{axes:?}");
+    // A centre outside the cell is named.
+    let bad = scene.replace("(0.0, 0.0, 0.0)", "(0.0, 0.003, 0.0)");
+    let e = error_of(&bad);
+    assert!(e.contains("phases[0].centres[0]") && e.contains("bounding box"), "{e}");
+}
