@@ -13,6 +13,13 @@ pub fn multi_inclusion_fft() -> Value {
     serde_json::from_str(include_str!("../data/multi-inclusion-fft.json")).expect("bundled JSON is valid")
 }
 
+/// The same composites realisation by realisation, with exact sphere centres
+/// (`multi-inclusion-fft-realisations.json`).
+pub fn multi_inclusion_fft_realisations() -> Value {
+    serde_json::from_str(include_str!("../data/multi-inclusion-fft-realisations.json"))
+        .expect("bundled JSON is valid")
+}
+
 /// Grooved-cylinder FEM reference (`notch-electric-fem.json`).
 pub fn notch_electric_fem() -> Value {
     serde_json::from_str(include_str!("../data/notch-electric-fem.json")).expect("bundled JSON is valid")

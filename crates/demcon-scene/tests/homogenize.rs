@@ -153,9 +153,15 @@ fn listed_spheres_count_their_periodic_images() {
     assert!((f / exact - 1.0).abs() < 0.25, "{f} vs {exact}");
     // The tensor is isotropic to the discretisation and above the matrix's.
     let axes = r.homogenization.unwrap().thermal.unwrap().report.axes;
-    assert!(axes.iter().all(|&a| a > 1.0 && (a / axes[0] - 1.0).abs() < 0.02), "{axes:?}");
+    assert!(
+        axes.iter().all(|&a| a > 1.0 && (a / axes[0] - 1.0).abs() < 0.02),
+        "{axes:?}"
+    );
     // A centre outside the cell is named.
     let bad = scene.replace("(0.0, 0.0, 0.0)", "(0.0, 0.003, 0.0)");
     let e = error_of(&bad);
-    assert!(e.contains("phases[0].centres[0]") && e.contains("bounding box"), "{e}");
+    assert!(
+        e.contains("phases[0].centres[0]") && e.contains("bounding box"),
+        "{e}"
+    );
 }

@@ -128,6 +128,53 @@ pub fn model_of(cfg: &SceneConfig) -> anyhow::Result<Model> {
     Ok(build_model(&scene.config, &scene.base_dir, None)?)
 }
 
+/// Builds `cfg`'s model (its network: contacts or Laguerre cells, and its phases) on the
+/// particles of an already built model, so that several networks share one packing.
+pub fn model_on_packing(cfg: &SceneConfig, packing: &Model) -> anyhow::Result<Model> {
+    Scene::from_config(cfg.clone(), PathBuf::new())?;
+    let params = demcon_scene::convert::model_params(cfg)?;
+    let mut particles = packing.particles.clone();
+    particles.phases.iter_mut().for_each(|p| *p = 0);
+    let packed = demcon_model::Packed {
+        particles,
+        container: packing.container,
+        report: packing.report.packing.clone(),
+        imported_from: packing.report.imported_from.clone(),
+        pack_s: packing.report.pack_s,
+    };
+    Ok(demcon_model::build_model(packed, &params)?)
+}
+
+/// Re-phases a built model with the `Spheres` phases and the phase rule of `cfg` (same
+/// packing and network; for comparing phase rules on one network).
+pub fn set_phases_like(model: &mut Model, cfg: &SceneConfig) -> anyhow::Result<()> {
+    let mut regions = Vec::new();
+    for (i, ph) in cfg.phases.iter().enumerate() {
+        let PhaseConfig::Spheres {
+            material,
+            radius,
+            centres,
+        } = ph
+        else {
+            anyhow::bail!("phases[{i}]: only Spheres phases can be re-applied");
+        };
+        let phase = cfg
+            .materials
+            .iter()
+            .position(|m| &m.name == material)
+            .ok_or_else(|| anyhow::anyhow!("phases[{i}]: no material {material}"))?;
+        let centres: Vec<demcon_core::Vec3> = centres
+            .iter()
+            .map(|&(x, y, z)| demcon_core::Vec3::new(x, y, z))
+            .collect();
+        let region =
+            demcon_model::spheres_region(&model.container, *radius, &centres, &format!("phases[{i}]"))?;
+        regions.push((region, phase as u16));
+    }
+    set_region_phases(model, &regions, cfg.phase_rule);
+    Ok(())
+}
+
 /// Runs the physics of `cfg` on a clone of `model`.
 pub fn run_with(cfg: &SceneConfig, model: &Model) -> anyhow::Result<RunResult> {
     Scene::from_config(cfg.clone(), PathBuf::new())?;

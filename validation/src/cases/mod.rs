@@ -22,6 +22,7 @@ pub mod hubert2017_cylinder_resistance;
 pub mod hubert2017_notch_joule;
 pub mod hubert2017_solver_timing;
 pub mod joule_transient;
+pub mod multi_inclusion_periodic;
 pub mod packing_stress;
 
 use crate::Case;
