@@ -1,6 +1,7 @@
 //! The Laguerre tessellation (`demcon_graph::tessellate`) at 10⁵ and 10⁶ particles, in a
-//! walled box and in a periodic box: the target is 10⁶ particles in under 10 s on this
-//! 2-core machine.
+//! walled box and in a periodic box (the target is 10⁶ particles in under 10 s on this
+//! 2-core machine), and the periodic homogenisation of the resulting network at 10⁵ (three
+//! load cases on one matrix: `demcon_network::homogenize`, default AMG-PCG to 1e-10).
 //!
 //! Test set: the jittered FCC lattice of the `contacts` benchmark (`demcon_benches::jittered_fcc`),
 //! whose cells are all alike; an LSA packing's cells vary more (Gaussian radii), see
@@ -14,6 +15,7 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use demcon_benches::jittered_fcc;
 use demcon_core::Container;
 use demcon_graph::{LaguerreParams, tessellate};
+use demcon_network::{Method, Network, SolveParams, homogenize};
 
 fn laguerre(c: &mut Criterion) {
     let mut group = c.benchmark_group("laguerre");
@@ -36,5 +38,31 @@ fn laguerre(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, laguerre);
+fn homogenisation(c: &mut Criterion) {
+    let mut group = c.benchmark_group("homogenize");
+    group.sample_size(10);
+    let (p, container) = jittered_fcc(100_000, 42);
+    let Container::Box { size } = container else {
+        unreachable!("jittered_fcc builds a box")
+    };
+    let periodic = Container::Periodic { size };
+    let g = tessellate(&p, &periodic, None, &LaguerreParams::default()).unwrap();
+    let cells = g.cells.as_ref().unwrap();
+    let cond: Vec<f64> = (0..g.len()).map(|k| cells.facet_area[k] / g.geometry[k].distance).collect();
+    let branches: Vec<_> = (0..g.len()).map(|k| g.branch(k)).collect();
+    let net = Network::new(p.len(), &g.pairs).unwrap();
+    let params = SolveParams {
+        method: Method::Auto {
+            rel_tol: 1e-10,
+            max_iter: 10_000,
+        },
+    };
+    let volume = size[0] * size[1] * size[2];
+    group.bench_function(BenchmarkId::new("laguerre-periodic", p.len()), |b| {
+        b.iter(|| black_box(homogenize(&net, &cond, &branches, volume, &params).unwrap()))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, laguerre, homogenisation);
 criterion_main!(benches);
