@@ -48,7 +48,9 @@ fn homogenisation(c: &mut Criterion) {
     let periodic = Container::Periodic { size };
     let g = tessellate(&p, &periodic, None, &LaguerreParams::default()).unwrap();
     let cells = g.cells.as_ref().unwrap();
-    let cond: Vec<f64> = (0..g.len()).map(|k| cells.facet_area[k] / g.geometry[k].distance).collect();
+    let cond: Vec<f64> = (0..g.len())
+        .map(|k| cells.facet_area[k] / g.geometry[k].distance)
+        .collect();
     let branches: Vec<_> = (0..g.len()).map(|k| g.branch(k)).collect();
     let net = Network::new(p.len(), &g.pairs).unwrap();
     let params = SolveParams {

@@ -40,6 +40,9 @@ pub struct WallContacts {
     /// Per link: the area of the cell's facet on the face (m²), when built from Laguerre cells
     /// (empty otherwise).
     pub facet_area: Vec<f64>,
+    /// Per link: the facet's centroid relative to the particle's centre (m), when built from
+    /// Laguerre cells (empty otherwise: the link acts at h_p n_p).
+    pub lever: Vec<Vec3>,
 }
 
 impl WallContacts {
@@ -117,6 +120,7 @@ impl WallContacts {
                 w.half_length.push(f.distance);
                 w.normal.push(f.normal);
                 w.facet_area.push(f.area);
+                w.lever.push(f.centroid);
             }
             if w.particle.len() == before {
                 return Err(CoreError::invalid(
@@ -222,13 +226,19 @@ impl WallContacts {
 
     /// Adds each link's share to the particle dipoles D_p = Σ g (u_q − u_p) ℓ_pq: a link of
     /// conductance g over the half-length h is the bond to the mirror image at 2h, of
-    /// conductance g/2 and difference 2 (u_w − u_p), so it adds 2 g (u_w − u_p) h n.
+    /// conductance g/2 and difference 2 (u_w − u_p), so it adds 2 g (u_w − u_p) h n — or, for a
+    /// Laguerre wall facet, 2 g (u_w − u_p) a with a the facet's centroid from the centre.
     /// `g` are the link conductances, `nodes` the values of every node (particles, then walls).
     pub fn add_dipoles(&self, g: &[f64], nodes: &[f64], dipoles: &mut [Vec3]) {
         for (k, w) in self.wall_of_links().enumerate() {
             let p = self.particle[k] as usize;
             let uw = nodes[self.node(w) as usize];
-            dipoles[p] += 2.0 * g[k] * (uw - nodes[p]) * self.half_length[k] * self.normal[k];
+            let lever = self
+                .lever
+                .get(k)
+                .copied()
+                .unwrap_or_else(|| self.half_length[k] * self.normal[k]);
+            dipoles[p] += 2.0 * g[k] * (uw - nodes[p]) * lever;
         }
     }
 }

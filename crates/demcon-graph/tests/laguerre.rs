@@ -123,6 +123,28 @@ fn random_polydisperse_cells_tile_the_box_and_close() {
 }
 
 #[test]
+fn every_cell_satisfies_the_divergence_theorem_with_its_facet_centroids() {
+    // Σ_f S_f (c_f − x_p) ⊗ n_f = V_p I: the lever arms that make the per-particle flux exact.
+    let c = Container::Box { size: [12.0, 10.0, 8.0] };
+    let p = random_spheres(400, &c, 0.7, 8);
+    let g = tessellate(&p, &c, None, &LaguerreParams::default()).unwrap();
+    let cells = g.cells.as_ref().unwrap();
+    let mut m = vec![nalgebra::Matrix3::<f64>::zeros(); p.len()];
+    for (k, &[a, b]) in g.pairs.iter().enumerate() {
+        let (n, s, lever) = (g.geometry[k].normal, cells.facet_area[k], cells.centroid[k]);
+        m[a as usize] += s * lever * n.transpose();
+        m[b as usize] += s * (lever - g.branch(k)) * (-n).transpose();
+    }
+    for w in &cells.walls {
+        m[w.particle as usize] += w.area * w.centroid * w.normal.transpose();
+    }
+    for (i, mi) in m.iter().enumerate() {
+        let v = cells.volume[i];
+        assert!((mi / v - nalgebra::Matrix3::identity()).abs().max() < 1e-9, "cell {i}: {mi} vs {v}");
+    }
+}
+
+#[test]
 fn the_result_does_not_depend_on_the_thread_count() {
     let c = Container::Box {
         size: [12.0, 10.0, 8.0],

@@ -68,6 +68,39 @@ pub fn particle_dipoles(
     Ok(dipoles)
 }
 
+/// [`particle_dipoles`] with each contact's flow acting at its Laguerre facet's centroid:
+/// p receives `2 g (u_q − u_p) a_pq` and q `2 g (u_q − u_p) (ℓ_pq − a_pq)`, `a_pq` the facet
+/// centroid relative to p (`levers`, m; `ℓ/2` gives [`particle_dipoles`]). With Laguerre cells
+/// the flux `−D_p / (2 V_cell,p)` is then exact for a linear field in every cell, because
+/// Σ_facets S (c_f − x_p) ⊗ n = V_cell I (the divergence theorem; wall links included with
+/// their own facets' centroids, `WallContacts::add_dipoles`).
+pub fn particle_dipoles_levers(
+    pairs: &[[u32; 2]],
+    branches: &[Vec3],
+    conductances: &[f64],
+    values: &[f64],
+    levers: &[Vec3],
+) -> Result<Vec<Vec3>, PostError> {
+    check_contacts(values.len(), pairs, Some(branches), conductances)?;
+    check_finite("values", values)?;
+    check_len("levers", levers.len(), pairs.len())?;
+    if let Some(k) = levers.iter().position(|a| !a.iter().all(|x| x.is_finite())) {
+        return Err(PostError::invalid(
+            format!("levers[{k}]"),
+            format!("{:?}", levers[k].as_slice()),
+            "must be finite (m)",
+        ));
+    }
+    let mut dipoles = vec![Vec3::zeros(); values.len()];
+    for (((&[p, q], l), &g), a) in pairs.iter().zip(branches).zip(conductances).zip(levers) {
+        let (p, q) = (p as usize, q as usize);
+        let flow = 2.0 * g * (values[q] - values[p]);
+        dipoles[p] += flow * a;
+        dipoles[q] += flow * (l - a);
+    }
+    Ok(dipoles)
+}
+
 /// Physical per-particle flux `q_p = −D_p / (2 V_rep,p)` (W/m² for heat, A/m² for current),
 /// i.e. Haddad 2021 eq. 20 with the sign corrected: eq. 20 as printed, with `e_pq` from p to
 /// q, gives `+λ∇T`; the physical flux is `−λ∇T` (see `refs/analytic.md` §3).
@@ -161,6 +194,20 @@ pub fn flow_across_plane(
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn levers_at_mid_branch_are_the_plain_dipoles() {
+        let pairs = [[0, 1], [1, 2]];
+        let branches = [Vec3::new(1.0, 0.5, 0.0), Vec3::new(0.0, 2.0, -1.0)];
+        let g = [2.0, 3.0];
+        let t = [1.0, 4.0, -2.0];
+        let half: Vec<Vec3> = branches.iter().map(|l| 0.5 * l).collect();
+        let a = particle_dipoles(&pairs, &branches, &g, &t).unwrap();
+        let b = particle_dipoles_levers(&pairs, &branches, &g, &t, &half).unwrap();
+        assert_eq!(a, b);
+        assert!(particle_dipoles_levers(&pairs, &branches, &g, &t, &half[..1]).is_err());
+    }
+
     use super::*;
     use demcon_core::Axis;
 

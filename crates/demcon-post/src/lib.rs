@@ -55,7 +55,7 @@ mod vtk;
 pub use csv::{read_csv, write_csv};
 pub use domain::{Domain, Plane};
 pub use error::PostError;
-pub use flux::{PlaneFlow, flow_across_plane, particle_dipoles, particle_flux};
+pub use flux::{PlaneFlow, flow_across_plane, particle_dipoles, particle_dipoles_levers, particle_flux};
 pub use halo::{HaloField, HaloParams, HaloPhases, HaloReport, HaloScale, halo_flux};
 pub use probe::{Line, MAX_PROFILE_POINTS, ProbeIndex, ProbeMethod, line_points, probe, profile};
 pub use slice::{Grid, SliceParams, slice_grid};

@@ -14,7 +14,7 @@ use demcon_model::{
     ThermalProblem, ThermalRun, ThermalSetup, couple_checkpointed, homogenize_electric, homogenize_thermal,
     solve_electric, solve_thermal_checkpointed, thermal_bcs, thermal_setup,
 };
-use demcon_post::{Domain, HaloReport, ProbeIndex, halo_flux, particle_dipoles};
+use demcon_post::{Domain, HaloReport, ProbeIndex, halo_flux, particle_dipoles, particle_dipoles_levers};
 use demcon_thermal::CheckpointEvery;
 use serde::Serialize;
 
@@ -738,17 +738,28 @@ fn sample(
     Ok((probes, profiles))
 }
 
-/// Particle dipoles D_p = Σ_q H_pq (T_q − T_p) ℓ_pq of the contacts and the wall links.
+/// Particle dipoles D_p = Σ_q H_pq (T_q − T_p) ℓ_pq of the contacts and the wall links (each
+/// flow acting at its Laguerre facet's centroid with cells).
 fn heat_dipoles(model: &Model, s: &ThermalSetup, th: &ThermalRun) -> Result<Vec<Vec3>, SceneError> {
     let branches: Vec<Vec3> = (0..model.graph.pairs.len())
         .map(|k| model.graph.branch(k))
         .collect();
-    let mut d = particle_dipoles(
-        &model.graph.pairs,
-        &branches,
-        s.contact_conductances(),
-        &th.temperatures,
-    )?;
+    let mut d = match model.graph.cells.as_deref() {
+        // Laguerre cells: each flow acts at its facet's centroid (exact for a linear field).
+        Some(cells) => particle_dipoles_levers(
+            &model.graph.pairs,
+            &branches,
+            s.contact_conductances(),
+            &th.temperatures,
+            &cells.centroid,
+        )?,
+        None => particle_dipoles(
+            &model.graph.pairs,
+            &branches,
+            s.contact_conductances(),
+            &th.temperatures,
+        )?,
+    };
     s.walls
         .add_dipoles(s.wall_conductances(), &th.node_temperatures(), &mut d);
     Ok(d)

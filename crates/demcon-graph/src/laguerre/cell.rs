@@ -103,6 +103,22 @@ impl Cell {
         0.5 * a
     }
 
+    /// Centroid of face `f` relative to the site (m): the area-weighted mean of its fan
+    /// triangles' centroids (the face's first vertex when it has no area).
+    pub fn centroid(&self, f: usize) -> Vec3 {
+        let ids = self.face(f);
+        let o = self.verts[ids[0] as usize];
+        let (mut sum, mut total) = (Vec3::zeros(), 0.0);
+        let n = self.vector_area(f);
+        for w in ids[1..].windows(2) {
+            let (a, b) = (self.verts[w[0] as usize], self.verts[w[1] as usize]);
+            let t = 0.5 * (a - o).cross(&(b - o)).dot(&n);
+            sum += t * (o + a + b) / 3.0;
+            total += t;
+        }
+        if total > 0.0 { sum / total } else { o }
+    }
+
     /// Volume (m³): Σ_f (A_f · v_f) / 3 over the faces (divergence theorem).
     pub fn volume(&self) -> f64 {
         (0..self.n_faces())
@@ -274,6 +290,7 @@ mod tests {
         assert!(closure(&c) < 1e-15);
         // Outward normals: face 1 is +x.
         assert!((c.vector_area(1) - Vec3::x()).norm() < 1e-15);
+        assert!((c.centroid(1) - Vec3::new(0.5, 0.0, 0.0)).norm() < 1e-15);
     }
 
     #[test]

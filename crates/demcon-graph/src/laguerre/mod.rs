@@ -94,6 +94,9 @@ pub struct WallFacet {
     pub distance: f64,
     /// Outward unit normal (of the summed vector area).
     pub normal: Vec3,
+    /// Centroid of the facet relative to the particle's centre (m), area-weighted over its
+    /// planes: the lever arm of its flow in the particle's flux.
+    pub centroid: Vec3,
 }
 
 /// The cells of a Laguerre tessellation, beside the graph of their shared facets.
@@ -104,6 +107,10 @@ pub struct Cells {
     pub facet_area: Vec<f64>,
     /// h_p / d_pq per contact: where the facet plane splits the centre line, from p.
     pub split: Vec<f64>,
+    /// Centroid of each contact's facet relative to p's centre (m) (the mean of the two
+    /// cells' values, q's shifted by the branch): the lever arm of the contact's flow in p's
+    /// flux; q's is this minus the branch.
+    pub centroid: Vec<Vec3>,
     /// Volume of each cell (m³).
     pub volume: Vec<f64>,
     /// Wall facets, sorted by particle then wall.
@@ -120,15 +127,18 @@ impl Cells {
         let kept = |&[p, q]: &[u32; 2]| new_id[p as usize] != u32::MAX && new_id[q as usize] != u32::MAX;
         let mut facet_area = Vec::new();
         let mut split = Vec::new();
+        let mut centroid = Vec::new();
         for (k, pq) in pairs.iter().enumerate() {
             if kept(pq) {
                 facet_area.push(self.facet_area[k]);
                 split.push(self.split[k]);
+                centroid.push(self.centroid[k]);
             }
         }
         Cells {
             facet_area,
             split,
+            centroid,
             volume: keep.iter().map(|&i| self.volume[i as usize]).collect(),
             walls: self
                 .walls
@@ -345,10 +355,10 @@ struct Candidate {
 #[derive(Debug, Default)]
 struct CellOut {
     volume: f64,
-    /// (q, area, displacement) per neighbour facet.
-    facets: Vec<(u32, f64, Vec3)>,
-    /// (wall tag, vector area Σ A n, Σ A h, Σ A) per wall.
-    walls: Vec<(Tag, Vec3, f64, f64)>,
+    /// (q, area, displacement, centroid relative to the site) per neighbour facet.
+    facets: Vec<(u32, f64, Vec3, Vec3)>,
+    /// (wall tag, vector area Σ A n, Σ A h, Σ A, Σ A c) per wall.
+    walls: Vec<(Tag, Vec3, f64, f64, Vec3)>,
     curved_planes: usize,
     layers: usize,
     tried: u64,
@@ -515,13 +525,15 @@ impl Setup<'_> {
             let area = a.norm();
             if tag >= WALL_BASE {
                 let h = a.dot(&cell.verts[cell.face(f)[0] as usize]);
+                let c = area * cell.centroid(f);
                 match out.walls.iter_mut().find(|w| w.0 == tag) {
                     Some(w) => {
                         w.1 += a;
                         w.2 += h;
                         w.3 += area;
+                        w.4 += c;
                     }
-                    None => out.walls.push((tag, a, h, area)),
+                    None => out.walls.push((tag, a, h, area, c)),
                 }
             } else if tag == BOUND {
                 return Err(CellFail::TooSmallPeriod {
@@ -529,7 +541,7 @@ impl Setup<'_> {
                 });
             } else {
                 let cd = cands[tag as usize];
-                out.facets.push((cd.q, area, cd.disp));
+                out.facets.push((cd.q, area, cd.disp, cell.centroid(f)));
             }
         }
         out.facets.sort_unstable_by_key(|f| f.0);
@@ -856,17 +868,18 @@ fn assemble(
     let threshold = params.negligible_area * r_mean * r_mean;
     // Each facet seen from its smaller id p, matched with q's side (cells' facets are
     // sorted by neighbour, so a binary search finds it). Facets below the threshold drop.
-    let side = |p: usize, q: u32| -> Option<f64> {
+    let side = |p: usize, q: u32| -> Option<(f64, Vec3)> {
         let f = &cells[q as usize].facets;
         f.binary_search_by_key(&(p as u32), |e| e.0)
             .ok()
-            .map(|i| f[i].1)
-            .filter(|&a| a >= threshold)
+            .map(|i| (f[i].1, f[i].3))
+            .filter(|&(a, _)| a >= threshold)
     };
     struct Half {
         q: u32,
         area: f64,
         disp: Vec3,
+        centroid: Vec3,
         mismatch: f64,
         one_sided: bool,
     }
@@ -876,8 +889,8 @@ fn assemble(
         .map(|(p, c)| {
             let (mut dropped, mut orphans) = (0, 0);
             let mut out = Vec::new();
-            for &(q, a1, disp) in &c.facets {
-                let mine = (a1 >= threshold).then_some(a1);
+            for &(q, a1, disp, c1) in &c.facets {
+                let mine = (a1 >= threshold).then_some((a1, c1));
                 if (q as usize) < p {
                     // Counted from q's side, unless q does not list p at all (then it is lost:
                     // reported as one-sided).
@@ -891,19 +904,23 @@ fn assemble(
                     continue;
                 }
                 let theirs = side(p, q);
+                // q's centroid is relative to q: shift it by the branch into p's frame.
+                let theirs = theirs.map(|(a, c)| (a, c + disp));
                 match (mine, theirs) {
                     (None, None) => dropped += 1,
-                    (Some(a), Some(b)) => out.push(Half {
+                    (Some((a, ca)), Some((b, cb))) => out.push(Half {
                         q,
                         area: 0.5 * (a + b),
                         disp,
+                        centroid: 0.5 * (ca + cb),
                         mismatch: (a - b).abs() / a.max(b),
                         one_sided: false,
                     }),
-                    (Some(a), None) | (None, Some(a)) => out.push(Half {
+                    (Some((a, c)), None) | (None, Some((a, c))) => out.push(Half {
                         q,
                         area: a,
                         disp,
+                        centroid: c,
                         mismatch: 1.0,
                         one_sided: true,
                     }),
@@ -916,6 +933,7 @@ fn assemble(
     let mut geometry = Vec::new();
     let mut facet_area = Vec::new();
     let mut split = Vec::new();
+    let mut centroid = Vec::new();
     let (mut one_sided, mut mismatch, mut dropped_facets) = (0usize, 0.0f64, 0usize);
     let period = container.period();
     for (p, (halves, dropped, orphans)) in per_cell.into_iter().enumerate() {
@@ -951,6 +969,7 @@ fn assemble(
                 mean_radius: 0.5 * (rp + rq),
             });
             facet_area.push(h.area);
+            centroid.push(h.centroid);
             split.push((d * d + rp * rp - rq * rq) / (2.0 * d * d));
         }
     }
@@ -969,12 +988,13 @@ fn assemble(
             .walls
             .iter()
             .filter(|w| w.3 >= threshold)
-            .map(|&(tag, a, h, area)| WallFacet {
+            .map(|&(tag, a, h, area, c)| WallFacet {
                 particle: p as u32,
                 wall: wall_of(tag),
                 area,
                 distance: h / area,
                 normal: a.normalize(),
+                centroid: c / area,
             })
             .collect();
         w.sort_by_key(|f| match f.wall {
@@ -1013,6 +1033,7 @@ fn assemble(
         cells: Some(Box::new(Cells {
             facet_area,
             split,
+            centroid,
             volume,
             walls,
             report: TessellationReport {
