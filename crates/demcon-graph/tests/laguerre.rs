@@ -125,7 +125,9 @@ fn random_polydisperse_cells_tile_the_box_and_close() {
 #[test]
 fn every_cell_satisfies_the_divergence_theorem_with_its_facet_centroids() {
     // Σ_f S_f (c_f − x_p) ⊗ n_f = V_p I: the lever arms that make the per-particle flux exact.
-    let c = Container::Box { size: [12.0, 10.0, 8.0] };
+    let c = Container::Box {
+        size: [12.0, 10.0, 8.0],
+    };
     let p = random_spheres(400, &c, 0.7, 8);
     let g = tessellate(&p, &c, None, &LaguerreParams::default()).unwrap();
     let cells = g.cells.as_ref().unwrap();
@@ -140,7 +142,10 @@ fn every_cell_satisfies_the_divergence_theorem_with_its_facet_centroids() {
     }
     for (i, mi) in m.iter().enumerate() {
         let v = cells.volume[i];
-        assert!((mi / v - nalgebra::Matrix3::identity()).abs().max() < 1e-9, "cell {i}: {mi} vs {v}");
+        assert!(
+            (mi / v - nalgebra::Matrix3::identity()).abs().max() < 1e-9,
+            "cell {i}: {mi} vs {v}"
+        );
     }
 }
 
@@ -219,6 +224,29 @@ fn a_carving_region_clips_the_cells() {
         sum >= exact * (1.0 - 1e-9) && sum < exact * 1.002,
         "{sum} vs {exact}"
     );
+}
+
+#[test]
+fn a_concave_carving_region_keeps_every_site_in_its_cell() {
+    // A box with a slot cut from its top: the slot's inner corners are concave. A tangent plane
+    // at a vertex's nearest surface point could cut the site off; the exit point along the
+    // site-to-vertex segment does not.
+    let c = Container::Box {
+        size: [10.0, 10.0, 10.0],
+    };
+    let slot = Region::Box {
+        min: Vec3::new(3.0, -1.0, 6.0),
+        max: Vec3::new(7.0, 11.0, 11.0),
+    };
+    let region = Region::Difference(Box::new(c.region()), Box::new(slot));
+    let all = random_spheres(700, &c, 0.6, 9);
+    let (kept, _) = all.retain(|i| region.contains_sphere(&all.centres[i], all.radii[i]));
+    let g = tessellate(&kept, &c, Some(&region), &LaguerreParams::default()).unwrap();
+    let cells = g.cells.as_ref().unwrap();
+    let sum: f64 = cells.volume.iter().sum();
+    let exact = 1000.0 - 4.0 * 10.0 * 4.0;
+    assert!((sum / exact - 1.0).abs() < 2e-3, "{sum} vs {exact}");
+    assert!(cells.volume.iter().all(|&v| v > 0.0));
 }
 
 #[test]

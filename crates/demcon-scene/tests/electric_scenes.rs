@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use demcon_scene::config::{ContainerConfig, PackingConfig, SelectorConfig};
+use demcon_scene::config::{ContainerConfig, PackingConfig};
 use demcon_scene::{RunOptions, RunResult, Scene, run, write_outputs};
 
 fn scene_path(name: &str) -> PathBuf {
@@ -50,12 +50,9 @@ fn check_parameters(s: &Scene) {
     );
     let e = c.electric.as_ref().unwrap();
     assert_eq!(e.electrodes.len(), 2);
-    assert!(
-        matches!(e.electrodes[0].select, Some(SelectorConfig::Face(f)) if f == demcon_scene::config::FaceConfig::ZMin)
-    );
-    assert!(
-        matches!(e.electrodes[1].select, Some(SelectorConfig::Face(f)) if f == demcon_scene::config::FaceConfig::ZMax)
-    );
+    // The end faces themselves (the paper's particle electrodes are kept as comments).
+    assert_eq!(e.electrodes[0].face, Some(demcon_scene::config::FaceConfig::ZMin));
+    assert_eq!(e.electrodes[1].face, Some(demcon_scene::config::FaceConfig::ZMax));
     assert_eq!(e.eta, 1.0);
     assert!(c.outputs.vtk);
     assert!(c.thermal.is_some());

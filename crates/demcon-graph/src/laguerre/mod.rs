@@ -647,9 +647,18 @@ impl Setup<'_> {
                     }
                 }
                 let Some(y) = at else { break };
-                let Some((n, c)) = surface.tangent(&y, rp) else {
+                // Where the segment from the site to the vertex leaves the domain: its tangent
+                // plane keeps the site even where the surface is concave (a groove's corner),
+                // where the plane at the vertex's nearest surface point may not.
+                let exit = surface.exit(&x, &y);
+                let Some((n, c)) = surface.tangent(&exit, rp) else {
                     break;
                 };
+                if n.dot(&x) > c - 1e-9 * rp {
+                    // The plane would cut the site off its own cell: leave the rest (reported
+                    // in the volume error).
+                    break;
+                }
                 if cell.clip(&n, c - n.dot(&x), wall_tag(code), tol).map_err(fail)? {
                     out.curved_planes += 1;
                 } else {
@@ -687,6 +696,21 @@ impl Surface<'_> {
             Surface::Sphere(r) => y.norm() - r,
             Surface::Region(region) => region.signed_distance(y),
         }
+    }
+
+    /// The point where the segment from `inside` (distance < 0) to `outside` (distance > 0)
+    /// crosses the surface, by bisection to 1e-12 of the segment.
+    fn exit(&self, inside: &Vec3, outside: &Vec3) -> Vec3 {
+        let (mut a, mut b) = (*inside, *outside);
+        for _ in 0..40 {
+            let m = 0.5 * (a + b);
+            if self.distance(&m) > 0.0 {
+                b = m;
+            } else {
+                a = m;
+            }
+        }
+        0.5 * (a + b)
     }
 
     /// The plane tangent at the surface point nearest `y`: (unit outward normal n, offset c)
