@@ -13,11 +13,16 @@
 //! plane first, then the other grid cells in order of distance until no unseen sphere can
 //! reach the cell (certified by a lower bound on the plane offset of any sphere farther than
 //! the next grid cell). A plane is clipped only when it can reach the cell's farthest
-//! vertex; on a jittered FCC lattice every plane clipped ends as a facet. Curved walls (cylinder mantle, sphere) and a carving
-//! region are approximated by planes tangent at the nearest surface point of the vertex
-//! farthest outside, repeated until every vertex lies within `curved_tolerance` of the
-//! surface; the volume this leaves is reported. Cells run in parallel; each depends only on
-//! its own inputs, so the result does not depend on the thread count.
+//! vertex; on a jittered FCC lattice every plane clipped ends as a facet.
+//!
+//! A cylinder's mantle is one global polygon of tangent planes (within `curved_tolerance` ×
+//! R̄ of the circle), the same for every cell, so that the cells along it still close and a
+//! linear field stays exact. A sphere container and a carving region are followed cell by
+//! cell: planes tangent where the segment from the site to the vertex farthest outside leaves
+//! the domain, until every vertex lies within `curved_tolerance` × R_p of the surface;
+//! neighbouring cells may then be cut differently (their shared facet's two areas differ, see
+//! `max_area_mismatch`). The volume left is reported. Cells run in parallel; each depends only
+//! on its own inputs, so the result does not depend on the thread count.
 
 mod cell;
 
@@ -400,6 +405,11 @@ struct Setup<'a> {
     offsets: &'a [([i64; 3], f64)],
     /// Whether the offsets reach every grid cell from every other (walled grids).
     offsets_cover_grid: bool,
+    /// A cylinder container's mantle as one polygon: the outward normals of its tangent
+    /// planes (empty for other containers).
+    mantle: Vec<Vec3>,
+    /// The cylinder's radius (m).
+    mantle_radius: f64,
     r_max: f64,
     params: LaguerreParams,
 }
@@ -610,10 +620,22 @@ impl Setup<'_> {
     ) -> Result<(), CellFail> {
         let tol = 1e-12 * rp.max(self.grid.width);
         let limit = self.params.curved_tolerance * rp;
+        if !first && !self.mantle.is_empty() {
+            // A cylinder's mantle: the one global polygon of tangent planes, so that two
+            // neighbouring cells are cut alike and their shared facet is the same polygon.
+            let radius = self.mantle_radius;
+            for n in &self.mantle {
+                let c = radius - n.dot(&x);
+                if c <= 0.0 || c * c < cell.max_radius_sq() {
+                    if cell.clip(n, c, wall_tag(6), tol).map_err(fail)? {
+                        out.curved_planes += 1;
+                    }
+                }
+            }
+        }
         let surfaces: [(Option<Surface>, u32); 2] = [
             (
                 match *self.container {
-                    Container::Cylinder { radius, .. } => Some(Surface::Cylinder(radius)),
                     Container::Sphere { radius } => Some(Surface::Sphere(radius)),
                     _ => None,
                 },
@@ -670,6 +692,22 @@ impl Setup<'_> {
     }
 }
 
+/// The outward normals of a regular polygon of tangent planes that follows a circle of
+/// `radius` (m) within `sagitta` (m): M sides with R (1/cos(π/M) − 1) ≤ sagitta, M a multiple
+/// of 4 (so that the bounding box's faces are four of its sides), at least 16.
+fn mantle_polygon(radius: f64, sagitta: f64) -> Vec<Vec3> {
+    let ratio = (sagitta / radius).max(1e-12);
+    let half = (1.0 / (1.0 + ratio)).acos();
+    let m = ((std::f64::consts::PI / half).ceil() as usize).clamp(16, 1 << 16);
+    let m = m.div_ceil(4) * 4;
+    (0..m)
+        .map(|k| {
+            let t = 2.0 * std::f64::consts::PI * k as f64 / m as f64;
+            Vec3::new(t.cos(), t.sin(), 0.0)
+        })
+        .collect()
+}
+
 fn fail(e: ClipError) -> CellFail {
     match e {
         ClipError::Empty => CellFail::Empty,
@@ -680,8 +718,6 @@ fn fail(e: ClipError) -> CellFail {
 /// A curved surface bounding the cells.
 #[derive(Clone, Copy)]
 enum Surface<'a> {
-    /// A cylinder's mantle about the z axis (radius, m).
-    Cylinder(f64),
     /// A sphere about the origin (radius, m).
     Sphere(f64),
     /// A region's boundary (cells stay inside).
@@ -692,7 +728,6 @@ impl Surface<'_> {
     /// Signed distance (m), positive outside the domain.
     fn distance(&self, y: &Vec3) -> f64 {
         match *self {
-            Surface::Cylinder(r) => (y.x * y.x + y.y * y.y).sqrt() - r,
             Surface::Sphere(r) => y.norm() - r,
             Surface::Region(region) => region.signed_distance(y),
         }
@@ -718,11 +753,6 @@ impl Surface<'_> {
     /// undefined (on the axis or centre).
     fn tangent(&self, y: &Vec3, scale: f64) -> Option<(Vec3, f64)> {
         match *self {
-            Surface::Cylinder(r) => {
-                let u = Vec3::new(y.x, y.y, 0.0);
-                let l = u.norm();
-                (l > 0.0).then(|| (u / l, r))
-            }
             Surface::Sphere(r) => {
                 let l = y.norm();
                 (l > 0.0).then(|| (y / l, r))
@@ -805,6 +835,12 @@ pub fn tessellate(
     let layers = grid.max_layer().min(MAX_SEARCH_LAYERS);
     let offsets = grid.offsets(layers);
     let offsets_cover_grid = layers == grid.max_layer();
+    let (mantle, mantle_radius) = match *container {
+        Container::Cylinder { radius, .. } => {
+            (mantle_polygon(radius, params.curved_tolerance * r_mean), radius)
+        }
+        _ => (Vec::new(), 0.0),
+    };
     let setup = Setup {
         pos,
         radii,
@@ -813,6 +849,8 @@ pub fn tessellate(
         grid,
         offsets: &offsets,
         offsets_cover_grid,
+        mantle,
+        mantle_radius,
         r_max,
         params: *params,
     };
