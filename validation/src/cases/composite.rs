@@ -206,6 +206,16 @@ impl Variant {
         v
     }
 
+    /// One variant per surface model with the same boundary and rule (walls, segment rule), the
+    /// headline first: the three models side by side on equal terms.
+    pub fn side_by_side() -> [Variant; 3] {
+        Surface::ALL.map(|surface| Variant {
+            surface,
+            bc: Bc::Wall,
+            rule: PhaseRuleConfig::Segment,
+        })
+    }
+
     /// Short id used in metric names: `terreros-wall-laminate`, `calibrated-particles-centre`,
     /// `laguerre-wall-segment`, ….
     pub fn id(&self) -> String {
@@ -251,14 +261,25 @@ pub struct Calibrations {
     pub particles: f64,
     /// C_t with the temperatures held on the faces through wall half-contacts.
     pub walls: f64,
+    /// Wall time (s) of each calibration (particles, walls): part of the calibrated model's cost.
+    pub particles_s: f64,
+    /// See `particles_s`.
+    pub walls_s: f64,
 }
 
 impl Calibrations {
     /// Calibrates C_t on `model` under both boundaries.
     pub fn of(model: &Model) -> anyhow::Result<Self> {
+        let t0 = std::time::Instant::now();
+        let particles = calibrate_ct_with(model, CalibrationBc::Particles)?.c_t;
+        let particles_s = t0.elapsed().as_secs_f64();
+        let t1 = std::time::Instant::now();
+        let walls = calibrate_ct_with(model, CalibrationBc::Walls)?.c_t;
         Ok(Self {
-            particles: calibrate_ct_with(model, CalibrationBc::Particles)?.c_t,
-            walls: calibrate_ct_with(model, CalibrationBc::Walls)?.c_t,
+            particles,
+            walls,
+            particles_s,
+            walls_s: t1.elapsed().as_secs_f64(),
         })
     }
 
@@ -267,6 +288,16 @@ impl Calibrations {
         match bc {
             Bc::Particles => self.particles,
             Bc::Wall => self.walls,
+        }
+    }
+
+    /// The calibration time (s) a variant needs: its boundary's calibration for the calibrated
+    /// model, none for the others.
+    pub fn cost_s(&self, v: &Variant) -> f64 {
+        match (v.surface, v.bc) {
+            (Surface::Calibrated, Bc::Particles) => self.particles_s,
+            (Surface::Calibrated, Bc::Wall) => self.walls_s,
+            _ => 0.0,
         }
     }
 }

@@ -66,6 +66,8 @@ struct AxisFaces {
     cold: FaceConfig,
     hot: FaceConfig,
     name: &'static str,
+    /// 0, 1, 2 for x, y, z.
+    index: usize,
 }
 
 const X: AxisFaces = AxisFaces {
@@ -73,18 +75,21 @@ const X: AxisFaces = AxisFaces {
     cold: FaceConfig::XMin,
     hot: FaceConfig::XMax,
     name: "x",
+    index: 0,
 };
 const Y: AxisFaces = AxisFaces {
     axis: AxisConfig::Y,
     cold: FaceConfig::YMin,
     hot: FaceConfig::YMax,
     name: "y",
+    index: 1,
 };
 const Z: AxisFaces = AxisFaces {
     axis: AxisConfig::Z,
     cold: FaceConfig::ZMin,
     hot: FaceConfig::ZMax,
     name: "z",
+    index: 2,
 };
 
 impl Geometry {
@@ -175,6 +180,12 @@ struct PackingRun {
     volume_error: f64,
     dropped_facets: usize,
     curved_cells: usize,
+    /// Laguerre: facets found by one cell only, the largest |S_p − S_q|/S of a facet seen
+    /// from its two cells, and the largest closure defect over the axes run
+    /// ([`closure_defect`]).
+    one_sided: usize,
+    area_mismatch: f64,
+    closure: f64,
     runs: Vec<ModelRun>,
 }
 
@@ -280,6 +291,12 @@ fn measure_packing(g: Geometry, n: usize, seed: u64, k: u64) -> anyhow::Result<P
         volume_error: t.map_or(f64::NAN, |t| t.volume_error),
         dropped_facets: t.map_or(0, |t| t.dropped_facets),
         curved_cells: t.map_or(0, |t| t.curved_cells),
+        one_sided: t.map_or(0, |t| t.one_sided_facets),
+        area_mismatch: t.map_or(f64::NAN, |t| t.max_area_mismatch),
+        closure: axes
+            .iter()
+            .filter_map(|a| closure_defect(&cells, a.index))
+            .fold(0.0, f64::max),
         runs,
     })
 }
@@ -323,6 +340,14 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
         out.metric(
             &format!("laguerre_volume_error_{}", g.id()),
             Spread::of(m.of(g).map(|p| p.volume_error.abs())).json(),
+        );
+        out.metric(
+            &format!("laguerre_closure_defect_{}", g.id()),
+            Spread::of(m.of(g).map(|p| p.closure)).json(),
+        );
+        out.metric(
+            &format!("laguerre_facet_area_mismatch_{}", g.id()),
+            Spread::of(m.of(g).map(|p| p.area_mismatch)).json(),
         );
         out.metric(
             &format!("c_t_{}", g.id()),
@@ -468,10 +493,15 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
     let tess = |g: Geometry| {
         let ps: Vec<&PackingRun> = m.of(g).collect();
         format!(
-            "{}: Σ V_cells/V − 1 up to {:.1e}, {} dropped facets, {} cells on a curved wall (largest over the packings)",
+            "{}: Σ V_cells/V − 1 up to {:.1e}, {} dropped and {} one-sided facets, facet areas seen from their two \
+             cells differing by up to {:.1e} (relative), closure defect max |Σ S n·e|/Σ S {:.1e}, {} cells clipped by a \
+             curved-wall plane (largest over the packings)",
             g.id(),
             ps.iter().map(|p| p.volume_error.abs()).fold(0.0, f64::max),
             ps.iter().map(|p| p.dropped_facets).max().unwrap_or(0),
+            ps.iter().map(|p| p.one_sided).max().unwrap_or(0),
+            ps.iter().map(|p| p.area_mismatch).fold(0.0, f64::max),
+            ps.iter().map(|p| p.closure).fold(0.0, f64::max),
             ps.iter().map(|p| p.curved_cells).max().unwrap_or(0),
         )
     };
