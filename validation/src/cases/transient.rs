@@ -64,6 +64,14 @@ pub mod slab {
         s
     }
 
+    /// The slab scene with the Laguerre cells: the temperatures held on the faces through the
+    /// cells' wall facets, capacities ρ c V_cell.
+    pub fn scene_laguerre(n: usize, seed: u64, solver: ThermalSolverConfig) -> SceneConfig {
+        let mut s = scene_calibrated(n, seed, solver);
+        s.surface = SurfaceConfig::Laguerre;
+        s
+    }
+
     /// The paper's setup: calibrated surfaces, temperatures fixed on the particles touching the
     /// faces (their centres lie about a radius inside).
     pub fn scene_particle_bc(n: usize, seed: u64, solver: ThermalSolverConfig) -> SceneConfig {
@@ -157,6 +165,14 @@ pub mod sphere {
     pub fn scene(n: usize, seed: u64, solver: ThermalSolverConfig) -> SceneConfig {
         let mut s = scene_calibrated(n, seed, solver);
         s.surface = SurfaceConfig::TerrerosAlpha;
+        s
+    }
+
+    /// The sphere scene with the Laguerre cells, clipped by planes tangent to the sphere: the
+    /// 200 °C held on the surface through the cells' wall facets, capacities ρ c V_cell.
+    pub fn scene_laguerre(n: usize, seed: u64, solver: ThermalSolverConfig) -> SceneConfig {
+        let mut s = scene_calibrated(n, seed, solver);
+        s.surface = SurfaceConfig::Laguerre;
         s
     }
 
