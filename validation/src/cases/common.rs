@@ -122,7 +122,9 @@ pub fn wall_facet_area(model: &Model, face: FaceConfig) -> Option<f64> {
 /// over the cells of |Σ_facets S n · e_axis| / Σ_facets S, with the areas the NETWORK uses
 /// (shared facets: the graph's area; wall facets: theirs). A linear field along the axis
 /// solves the network exactly iff this is 0 (up to round-off) in every cell; `None` for a
-/// model without cells.
+/// model without cells. A wall facet is read as its area times its (summed) unit normal, exact
+/// when its planes share their component along the axis: flat faces, and the tangent planes of
+/// a cylinder's mantle along its axis — not the planes that follow a carving region's edges.
 pub fn closure_defect(model: &Model, axis: usize) -> Option<f64> {
     let cells = model.graph.cells.as_deref()?;
     let n = model.particles.len();
@@ -165,15 +167,17 @@ pub struct Spread {
 }
 
 impl Spread {
-    /// Mean and max of `values` (NaN for none).
+    /// Mean and max of `values`: NaN for none, and NaN when any value is NaN (a failed
+    /// packing must not vanish from a headline figure).
     pub fn of(values: impl IntoIterator<Item = f64>) -> Self {
-        let (mut sum, mut max, mut count) = (0.0, f64::NEG_INFINITY, 0);
+        let (mut sum, mut max, mut count, mut nan) = (0.0, f64::NEG_INFINITY, 0, false);
         for v in values {
+            nan |= v.is_nan();
             sum += v;
             max = max.max(v);
             count += 1;
         }
-        if count == 0 {
+        if count == 0 || nan {
             return Self {
                 mean: f64::NAN,
                 max: f64::NAN,
