@@ -554,20 +554,17 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
          interface error ∝ particle size ∝ N^(-1/3): × (1.5·10⁵/N)^(1/3), i.e. T {:.2} % and |q| {:.2} % at N = {n0}. \
          Both the headline ({}: the Laguerre cells, chosen for their consistency property before any of their numbers \
          were seen; see inclusion-etc) and the recommended contact model ({}) are gated at them; the case had no Laguerre \
-         target of its own, so its tolerances were kept, chosen before the Laguerre numbers were seen. {}",
+         target of its own, so its tolerances were kept, chosen before the Laguerre numbers were seen. The headline also \
+         ran on {} more packing(s) (seeds {}…): over all, T error {}, |q| error {}, |q| error at A {} (mean / max).",
         100.0 * tol_t,
         100.0 * tol_q,
         m.by_model[0].id,
         Variant::RECOMMENDED.id(),
-        format!(
-            "The headline also ran on {} more packing(s) (seeds {}…): over all, T error {}, |q| error {}, |q| error at A \
-             {} (mean / max).",
-            m.repeats.len(),
-            ctx.seed + 1,
-            m.headline_spread(|e| e.t).percent(),
-            m.headline_spread(|e| e.q).percent(),
-            m.headline_spread(|e| e.q_a).percent()
-        )
+        m.repeats.len(),
+        ctx.seed + 1,
+        m.headline_spread(|e| e.t).percent(),
+        m.headline_spread(|e| e.q).percent(),
+        m.headline_spread(|e| e.q_a).percent()
     ));
 
     let paper = &m.paper_table2;
