@@ -767,6 +767,19 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         ctx.seed,
         ctx.seed + PACKINGS - 1,
     ));
+    out.note(format!(
+        "Laguerre, centre carving, at N = {} on each packing (seed: R error): {}.",
+        m.runs.last().map_or(0, |r| r.nominal),
+        std::iter::once(&m.runs[m.runs.len() - 1].laguerre)
+            .chain(&m.repeats)
+            .enumerate()
+            .map(|(k, l)| match &l.error {
+                None => format!("{}: {:+.2} %", ctx.seed + k as u64, 100.0 * (l.r / r_fem - 1.0)),
+                Some(_) => format!("{}: failed (below)", ctx.seed + k as u64),
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
     let failures: Vec<String> = m
         .runs
         .iter()
