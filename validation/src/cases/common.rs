@@ -14,6 +14,194 @@ pub use demcon_model::{
 pub use demcon_scene::convert::region as scene_region;
 pub use demcon_scene::{Model, RunResult, SceneConfig, SceneError, write_outputs};
 
+/// The three transmission-surface models every case runs side by side (DESIGN.md §1, §3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Surface {
+    /// S = C_t π R_m², C_t from our own calibration on the same packing (Haddad 2021).
+    Calibrated,
+    /// S = √(α(n_p) R_p² α(n_q) R_q²) (Terreros 2013, Hubert 2017).
+    Terreros,
+    /// The facets of the Laguerre (power) cells, clipped by the container and the carving
+    /// region (ours): exact for a linear field.
+    Laguerre,
+}
+
+impl Surface {
+    /// The three models, the headline (Laguerre) first. Laguerre is the headline because of
+    /// its consistency property (a linear field solves its network exactly: no calibration, no
+    /// bias in a homogeneous body, walls are cell faces), chosen so before any of its numbers
+    /// were seen (issue 10 §4).
+    pub const ALL: [Surface; 3] = [Surface::Laguerre, Surface::Terreros, Surface::Calibrated];
+
+    /// Short id used in metric names: `laguerre`, `terreros`, `calibrated`.
+    pub fn id(self) -> &'static str {
+        match self {
+            Surface::Calibrated => "calibrated",
+            Surface::Terreros => "terreros",
+            Surface::Laguerre => "laguerre",
+        }
+    }
+
+    /// Name for tables and legends.
+    pub fn label(self) -> &'static str {
+        match self {
+            Surface::Calibrated => "calibrated C_t",
+            Surface::Terreros => "Terreros α",
+            Surface::Laguerre => "Laguerre",
+        }
+    }
+
+    /// The scene's surface: the calibrated model at `c_t` when given (else `Auto`: the scene
+    /// calibrates on its own packing), Terreros α, or the Laguerre cells.
+    pub fn config(self, c_t: Option<f64>) -> SurfaceConfig {
+        match self {
+            Surface::Calibrated => SurfaceConfig::Calibrated {
+                c_t: c_t.map_or(CtConfig::Auto, CtConfig::Value),
+            },
+            Surface::Terreros => SurfaceConfig::TerrerosAlpha,
+            Surface::Laguerre => SurfaceConfig::Laguerre,
+        }
+    }
+
+    /// Whether the model needs the Laguerre cells as its network (else the contacts).
+    pub fn needs_cells(self) -> bool {
+        self == Surface::Laguerre
+    }
+}
+
+/// `cfg` with the surface model `s` for every physics it runs: the thermal `surface` and
+/// `electric.surface` alike (a scene refuses a Laguerre/contact mix).
+pub fn with_surface_model(cfg: &SceneConfig, s: Surface, c_t: Option<f64>) -> SceneConfig {
+    let mut c = cfg.clone();
+    c.surface = s.config(c_t);
+    if let Some(e) = c.electric.as_mut() {
+        e.surface = s.config(c_t);
+    }
+    c
+}
+
+/// The model `cfg` builds on the particles of `model`, without packing again: `cfg`'s
+/// carving, phases and network — the contacts, or the Laguerre cells when `cfg` asks for
+/// them. The way to put the Laguerre network on a packing first built with contacts (same
+/// particles, so the models compare on one microstructure). Particles already carved by the
+/// same region are all kept by carving them again.
+pub fn rebuild_on(cfg: &SceneConfig, model: &Model) -> anyhow::Result<Model> {
+    Scene::from_config(cfg.clone(), PathBuf::new())?;
+    let params = demcon_scene::convert::model_params(cfg)?;
+    let packed = demcon_model::Packed {
+        particles: model.particles.clone(),
+        container: model.container,
+        report: model.report.packing.clone(),
+        imported_from: model.report.imported_from.clone(),
+        pack_s: model.report.pack_s,
+    };
+    Ok(demcon_model::build_model(packed, &params)?)
+}
+
+/// The Laguerre model of the packing of `model` for the scene `cfg` (its surface is set to
+/// Laguerre here): [`rebuild_on`].
+pub fn laguerre_model(cfg: &SceneConfig, model: &Model) -> anyhow::Result<Model> {
+    rebuild_on(&with_surface_model(cfg, Surface::Laguerre, None), model)
+}
+
+/// Σ area (m²) of the Laguerre cells' facets on `face`: the section the network actually has
+/// there (the container's, up to the tangent planes that follow a curved wall); `None` for a
+/// model without cells.
+pub fn wall_facet_area(model: &Model, face: FaceConfig) -> Option<f64> {
+    let cells = model.graph.cells.as_deref()?;
+    let face = demcon_scene::convert::face(face);
+    Some(
+        cells
+            .on_wall(demcon_graph::CellWall::Face(face))
+            .map(|f| f.area)
+            .sum(),
+    )
+}
+
+/// The closure defect of the Laguerre cells along `axis` (0, 1, 2 for x, y, z): the largest
+/// over the cells of |Σ_facets S n · e_axis| / Σ_facets S, with the areas the NETWORK uses
+/// (shared facets: the graph's area; wall facets: theirs). A linear field along the axis
+/// solves the network exactly iff this is 0 (up to round-off) in every cell; `None` for a
+/// model without cells. A wall facet is read as its area times its (summed) unit normal, exact
+/// when its planes share their component along the axis: flat faces, and the tangent planes of
+/// a cylinder's mantle along its axis — not the planes that follow a carving region's edges.
+pub fn closure_defect(model: &Model, axis: usize) -> Option<f64> {
+    let cells = model.graph.cells.as_deref()?;
+    let n = model.particles.len();
+    let (mut flux, mut total) = (vec![0.0; n], vec![0.0; n]);
+    for (k, &[p, q]) in model.graph.pairs.iter().enumerate() {
+        let s = cells.facet_area[k];
+        let e = model.graph.geometry[k].normal[axis];
+        flux[p as usize] += s * e;
+        flux[q as usize] -= s * e;
+        total[p as usize] += s;
+        total[q as usize] += s;
+    }
+    for w in &cells.walls {
+        flux[w.particle as usize] += w.area * w.normal[axis];
+        total[w.particle as usize] += w.area;
+    }
+    Some(
+        flux.iter()
+            .zip(&total)
+            .map(|(f, t)| f.abs() / t)
+            .fold(0.0, f64::max),
+    )
+}
+
+/// Wall time (s) of building a model's network: contact detection, or the tessellation.
+pub fn network_s(model: &Model) -> f64 {
+    model.report.contacts_s + model.report.network_s
+}
+
+/// The mean and the largest value of a quantity over independent packings (DESIGN.md §3: a
+/// headline figure is both, never one seed).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spread {
+    /// Mean over the packings.
+    pub mean: f64,
+    /// Largest value.
+    pub max: f64,
+    /// Number of packings.
+    pub count: usize,
+}
+
+impl Spread {
+    /// Mean and max of `values`: NaN for none, and NaN when any value is NaN (a failed
+    /// packing must not vanish from a headline figure).
+    pub fn of(values: impl IntoIterator<Item = f64>) -> Self {
+        let (mut sum, mut max, mut count, mut nan) = (0.0, f64::NEG_INFINITY, 0, false);
+        for v in values {
+            nan |= v.is_nan();
+            sum += v;
+            max = max.max(v);
+            count += 1;
+        }
+        if count == 0 || nan {
+            return Self {
+                mean: f64::NAN,
+                max: f64::NAN,
+                count,
+            };
+        }
+        Self {
+            mean: sum / count as f64,
+            max,
+            count,
+        }
+    }
+
+    /// `{"mean": …, "max": …, "packings": …}` for the JSON metrics.
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::json!({ "mean": self.mean, "max": self.max, "packings": self.count })
+    }
+
+    /// `mean / max` as percentages, for tables.
+    pub fn percent(&self) -> String {
+        format!("{:.3} / {:.3} %", 100.0 * self.mean, 100.0 * self.max)
+    }
+}
+
 /// [`demcon_model::set_region_phases`] with the scene's phase rule.
 pub fn set_region_phases(model: &mut Model, regions: &[(demcon_core::Region, u16)], rule: PhaseRuleConfig) {
     demcon_model::set_region_phases(model, regions, demcon_scene::convert::phase_rule(rule));

@@ -113,8 +113,8 @@ pub fn rule_index(rule: PhaseRuleConfig) -> usize {
 /// One DEM model of a composite: surface model × boundary × phase rule.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Variant {
-    /// Terreros α surfaces (else calibrated C_t π R_m²).
-    pub terreros: bool,
+    /// Transmission-surface model.
+    pub surface: Surface,
     /// Boundary temperatures.
     pub bc: Bc,
     /// Phase rule at the inclusion interfaces.
@@ -122,38 +122,55 @@ pub struct Variant {
 }
 
 impl Variant {
-    /// The recommended model: Terreros α (the contact surfaces follow each contact's local
-    /// geometry, so the conductance is right locally — near interfaces and walls — not only
-    /// on average as a global C_t fit), temperatures held on the faces (the FEM/FFT boundary
-    /// condition itself; fixed particles put the isothermal surface about a radius inside) and
-    /// the segment rule (each half-bond conducts as the series mix of what lies along its own
-    /// segment). History, stated because it matters for the checks: Terreros and walls were
-    /// chosen before any comparison (from the slab case); the phase rule chosen then was the
-    /// laminate, which lost to every alternative for a diagnosed reason (it gives a half-bond
-    /// along the interface the volume-averaged conductivity although the network's flow runs
-    /// through the centre's phase there); the segment rule was built from that diagnosis and
-    /// replaced it after the laminate results were seen. The tolerances did not change.
+    /// The recommended model of the papers' two (contact) surface models: Terreros α (the
+    /// contact surfaces follow each contact's local geometry, so the conductance is right
+    /// locally — near interfaces and walls — not only on average as a global C_t fit),
+    /// temperatures held on the faces (the FEM/FFT boundary condition itself; fixed particles
+    /// put the isothermal surface about a radius inside) and the segment rule (each half-bond
+    /// conducts as the series mix of what lies along its own segment). History, stated because
+    /// it matters for the checks: Terreros and walls were chosen before any comparison (from
+    /// the slab case); the phase rule chosen then was the laminate, which lost to every
+    /// alternative for a diagnosed reason (it gives a half-bond along the interface the
+    /// volume-averaged conductivity although the network's flow runs through the centre's
+    /// phase there); the segment rule was built from that diagnosis and replaced it after the
+    /// laminate results were seen. The tolerances did not change. The headline of the
+    /// single-inclusion cases is now [`Variant::HEADLINE`]; the multi-inclusion cases keep
+    /// this one until they run the Laguerre model.
     pub const RECOMMENDED: Variant = Variant {
-        terreros: true,
+        surface: Surface::Terreros,
         bc: Bc::Wall,
         rule: PhaseRuleConfig::Segment,
     };
 
-    /// The twelve variants, the recommended one first, the former default (calibrated,
-    /// particle-fixed, centre rule) second.
+    /// The headline model of the single-inclusion cases: the Laguerre cells (chosen for their
+    /// consistency property — a linear field solves the network exactly, so a homogeneous body
+    /// carries no bias and needs no calibration — before any of their numbers were seen), the
+    /// temperatures held on the faces (the cells' wall facets: the Laguerre network is exact
+    /// with walls, while particle-held temperatures put the isotherm at the particles'
+    /// centres) and the segment rule (the series rule along each half-bond, the rule the
+    /// contact models' comparison settled on; DESIGN.md §1 gives its interface error on the
+    /// Laguerre cells).
+    pub const HEADLINE: Variant = Variant {
+        surface: Surface::Laguerre,
+        bc: Bc::Wall,
+        rule: PhaseRuleConfig::Segment,
+    };
+
+    /// The twelve variants of the two contact surface models, the recommended one first, the
+    /// former default (calibrated, particle-fixed, centre rule) second.
     pub fn all() -> Vec<Variant> {
         let mut v = vec![
             Self::RECOMMENDED,
             Variant {
-                terreros: false,
+                surface: Surface::Calibrated,
                 bc: Bc::Particles,
                 rule: PhaseRuleConfig::Centre,
             },
         ];
-        for terreros in [false, true] {
+        for surface in [Surface::Calibrated, Surface::Terreros] {
             for bc in [Bc::Particles, Bc::Wall] {
                 for rule in RULES {
-                    let x = Variant { terreros, bc, rule };
+                    let x = Variant { surface, bc, rule };
                     if !v.contains(&x) {
                         v.push(x);
                     }
@@ -163,11 +180,48 @@ impl Variant {
         v
     }
 
-    /// Short id used in metric names: `terreros-wall-laminate`, `calibrated-particles-centre`, ….
+    /// The Laguerre variants, the headline first: walls only (particle-held temperatures
+    /// would put the isotherm at the particles' centres, a radius inside the face, and throw
+    /// away the cells' wall facets), each phase rule.
+    pub fn laguerre() -> Vec<Variant> {
+        let mut v = vec![Self::HEADLINE];
+        for rule in RULES {
+            let x = Variant {
+                surface: Surface::Laguerre,
+                bc: Bc::Wall,
+                rule,
+            };
+            if !v.contains(&x) {
+                v.push(x);
+            }
+        }
+        v
+    }
+
+    /// Every variant of the three surface models: the headline first, then the other
+    /// Laguerre variants, then [`Variant::all`] (the recommended contact model first).
+    pub fn with_laguerre() -> Vec<Variant> {
+        let mut v = Self::laguerre();
+        v.extend(Self::all());
+        v
+    }
+
+    /// One variant per surface model with the same boundary and rule (walls, segment rule), the
+    /// headline first: the three models side by side on equal terms.
+    pub fn side_by_side() -> [Variant; 3] {
+        Surface::ALL.map(|surface| Variant {
+            surface,
+            bc: Bc::Wall,
+            rule: PhaseRuleConfig::Segment,
+        })
+    }
+
+    /// Short id used in metric names: `terreros-wall-laminate`, `calibrated-particles-centre`,
+    /// `laguerre-wall-segment`, ….
     pub fn id(&self) -> String {
         format!(
             "{}-{}-{}",
-            if self.terreros { "terreros" } else { "calibrated" },
+            self.surface.id(),
             match self.bc {
                 Bc::Particles => "particles",
                 Bc::Wall => "wall",
@@ -182,7 +236,7 @@ impl Variant {
 
     /// `cfg` with this variant's surface (C_t given for the calibrated model) and boundary.
     pub fn scene(&self, cfg: &SceneConfig, c_t: f64) -> SceneConfig {
-        let mut c = with_surface(cfg, (!self.terreros).then_some(c_t));
+        let mut c = with_surface_model(cfg, self.surface, Some(c_t));
         if let Some(th) = c.thermal.as_mut() {
             th.bcs = match self.bc {
                 Bc::Particles => vec![fixed(FaceConfig::YMin, T_COLD), fixed(FaceConfig::YMax, T_HOT)],
@@ -207,14 +261,25 @@ pub struct Calibrations {
     pub particles: f64,
     /// C_t with the temperatures held on the faces through wall half-contacts.
     pub walls: f64,
+    /// Wall time (s) of each calibration (particles, walls): part of the calibrated model's cost.
+    pub particles_s: f64,
+    /// See `particles_s`.
+    pub walls_s: f64,
 }
 
 impl Calibrations {
     /// Calibrates C_t on `model` under both boundaries.
     pub fn of(model: &Model) -> anyhow::Result<Self> {
+        let t0 = std::time::Instant::now();
+        let particles = calibrate_ct_with(model, CalibrationBc::Particles)?.c_t;
+        let particles_s = t0.elapsed().as_secs_f64();
+        let t1 = std::time::Instant::now();
+        let walls = calibrate_ct_with(model, CalibrationBc::Walls)?.c_t;
         Ok(Self {
-            particles: calibrate_ct_with(model, CalibrationBc::Particles)?.c_t,
-            walls: calibrate_ct_with(model, CalibrationBc::Walls)?.c_t,
+            particles,
+            walls,
+            particles_s,
+            walls_s: t1.elapsed().as_secs_f64(),
         })
     }
 
@@ -223,6 +288,16 @@ impl Calibrations {
         match bc {
             Bc::Particles => self.particles,
             Bc::Wall => self.walls,
+        }
+    }
+
+    /// The calibration time (s) a variant needs: its boundary's calibration for the calibrated
+    /// model, none for the others.
+    pub fn cost_s(&self, v: &Variant) -> f64 {
+        match (v.surface, v.bc) {
+            (Surface::Calibrated, Bc::Particles) => self.particles_s,
+            (Surface::Calibrated, Bc::Wall) => self.walls_s,
+            _ => 0.0,
         }
     }
 }
@@ -250,6 +325,42 @@ impl ModelsByRule {
     /// The model under `rule`.
     pub fn get(&self, rule: PhaseRuleConfig) -> &Model {
         &self.models[rule_index(rule)]
+    }
+}
+
+/// One packing's models under each phase rule on both networks: the contacts (calibrated and
+/// Terreros surfaces) and the Laguerre cells, built on the same particles.
+pub struct ModelSet {
+    contacts: ModelsByRule,
+    cells: ModelsByRule,
+    /// The Laguerre model with the scene's own phases (centre rule).
+    pub laguerre: Model,
+}
+
+impl ModelSet {
+    /// The models of the scene `base` on the particles of `model` (built from `base` with
+    /// contacts), re-phased by `regions` under each rule.
+    pub fn new(base: &SceneConfig, model: &Model, regions: &[(Region, u16)]) -> anyhow::Result<Self> {
+        let laguerre = laguerre_model(base, model)?;
+        Ok(Self {
+            contacts: ModelsByRule::new(model, regions),
+            cells: ModelsByRule::new(&laguerre, regions),
+            laguerre,
+        })
+    }
+
+    /// The model a variant runs on.
+    pub fn get(&self, v: &Variant) -> &Model {
+        self.by_rule(v.surface).get(v.rule)
+    }
+
+    /// The models of one surface model's network under each rule.
+    pub fn by_rule(&self, s: Surface) -> &ModelsByRule {
+        if s.needs_cells() {
+            &self.cells
+        } else {
+            &self.contacts
+        }
     }
 }
 
@@ -298,19 +409,6 @@ pub fn etc_of(cfg: &SceneConfig, model: Model) -> anyhow::Result<Etc> {
         solve_s: th.report.wall_s,
         residual: th.report.residual,
     })
-}
-
-/// `cfg` with the calibrated surface model at a given C_t (so a calibration made once serves
-/// every run on the same packing) or the Terreros α model.
-pub fn with_surface(cfg: &SceneConfig, c_t: Option<f64>) -> SceneConfig {
-    let mut c = cfg.clone();
-    c.surface = match c_t {
-        Some(v) => SurfaceConfig::Calibrated {
-            c_t: CtConfig::Value(v),
-        },
-        None => SurfaceConfig::TerrerosAlpha,
-    };
-    c
 }
 
 /// The Halo ratio of the paper's field pictures.

@@ -5,14 +5,33 @@
 //!
 //! The centre temperature is the volume-weighted mean over the particles whose centre lies
 //! within R/10 of the centre (a point value of a particle field needs a small average).
-//! Model: Terreros α surfaces, surface temperature held on the sphere surface (wall
-//! half-contacts); the calibrated model is measured beside. Tolerance: the paper's maximum
-//! absolute error, 1.93 °C at 10⁵ particles; `--quick` runs 2·10⁴ particles and accepts the
-//! same scaled by N^(-1/3) (3.3 °C). The explicit solver runs at 0.9 × the exact bound.
+//! Models, on the same packing, the surface temperature held on the sphere surface (wall
+//! half-contacts): the Laguerre cells, clipped by planes tangent to the sphere (the headline,
+//! chosen for its consistency property — a linear field solves the network exactly — before
+//! any of its numbers were seen; explicit, and implicit in `--full`), Terreros α (explicit and
+//! implicit) and the calibrated model (implicit); each with its cost.
+//!
+//! Tolerances: the papers' models keep the paper's maximum absolute error, 1.93 °C at 10⁵
+//! particles; `--quick` runs 2·10⁴ particles and accepts the same scaled by N^(-1/3)
+//! (3.3 °C). The Laguerre headline (explicit, the largest error over the packings run:
+//! `--full` 3, `--quick` [`packings`]): the issue's target 0.3 °C at 10⁵ in `--full`, scaled by
+//! N^(-1/3) in `--quick` (0.51 °C at 2·10⁴), both chosen before any Laguerre number was seen.
+//! Its implicit run (backward Euler, 20 ms) is reported, not gated: the step's own error is
+//! of that order (Terreros: explicit and implicit differ by about 0.4 °C). The explicit solver
+//! runs at 0.9 × the exact bound.
+//!
+//! The compared quantity of the Laguerre gate was changed after its first numbers were seen
+//! (the tolerance was not): the centre probe is a ball average over r < R/10, and the ball
+//! average of the ANALYTIC field differs from its centre value by up to 0.8 °C (t = 2 s;
+//! 0.7 °C at 5 s) — a bias of the probe, the same at every N, larger than the 0.3 °C target.
+//! The gate compares the probe with the analytic field probed the same way (T_an(|x_p|, t) over
+//! the same particles with the same weights, `max_abs_error_centre_c_same_ball`); the error
+//! against the centre value (`max_abs_error_centre_c`, the paper's comparison) is reported
+//! beside it for every model, and the papers' models keep their checks on it.
 
 use super::common::*;
 use super::transient::sphere::{
-    A_AL, R, SphereErrors, explicit, implicit, measure as errors_of, scene, scene_calibrated,
+    A_AL, R, SphereErrors, explicit, implicit, measure as errors_of, scene, scene_calibrated, scene_laguerre,
 };
 use crate::analytic::{sphere_centre_temperature, sphere_temperature};
 use crate::chart::{Chart, Scale, Series, draw};
@@ -24,12 +43,31 @@ fn centre_analytic(t: f64) -> f64 {
     sphere_centre_temperature(t, R, 20.0, 200.0, A_AL)
 }
 
-/// Everything the case measures, on one packing.
+/// Packings of the Laguerre headline (the first carries every model).
+fn packings(ctx: &Ctx) -> u64 {
+    ctx.pick(1, 3)
+}
+
+/// The Laguerre headline on one packing.
+struct LaguerreRun {
+    explicit: SphereErrors,
+    /// Backward Euler (`--full` only).
+    implicit: Option<SphereErrors>,
+    /// Tessellation (s) and Σ V_cells/V − 1.
+    network_s: f64,
+    volume_error: f64,
+}
+
+/// Everything the case measures, on one packing (and the headline on further ones).
 struct Measured {
     /// Particles.
     n: usize,
-    /// Requested particles (the tolerance scales with it).
+    /// Requested particles (the tolerances scale with it).
     n_requested: usize,
+    /// Contact detection (s).
+    contacts_s: f64,
+    /// Laguerre cells, every packing (the first first).
+    laguerre: Vec<LaguerreRun>,
     /// Terreros α, walls: explicit and implicit.
     explicit: SphereErrors,
     implicit: SphereErrors,
@@ -42,6 +80,30 @@ impl Measured {
     fn tolerance(&self) -> f64 {
         1.93 * (100_000.0 / self.n_requested as f64).cbrt()
     }
+
+    /// The Laguerre tolerance: 0.3 °C at 10⁵ (`--full`), scaled by N^(-1/3) (`--quick`).
+    fn tolerance_laguerre(&self, ctx: &Ctx) -> f64 {
+        ctx.pick(0.3 * (100_000.0 / self.n_requested as f64).cbrt(), 0.3)
+    }
+
+    /// The headline on the first packing.
+    fn headline(&self) -> &LaguerreRun {
+        &self.laguerre[0]
+    }
+
+    /// The headline's explicit centre error over its packings, against the centre value.
+    fn spread(&self) -> Spread {
+        Spread::of(self.laguerre.iter().map(|r| r.explicit.max_abs_error_centre))
+    }
+
+    /// The same against the analytic field probed like the DEM one (the gated quantity).
+    fn spread_same_ball(&self) -> Spread {
+        Spread::of(
+            self.laguerre
+                .iter()
+                .map(|r| r.explicit.max_abs_error_centre_same_ball),
+        )
+    }
 }
 
 /// Runs the case.
@@ -49,57 +111,139 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let m = measure(ctx)?;
     let mut out = CaseOutcome::new("sphere-transient", ctx.mode);
     out.n_particles = m.n;
-    compare(&m, &mut out);
+    compare(ctx, &m, &mut out);
     report(ctx, &m, &mut out)?;
     Ok(out)
 }
 
-/// One packing, three runs to 30 s.
+/// The Laguerre model of a packing (of `model`, or packed here) and its runs.
+fn laguerre_run(ctx: &Ctx, n: usize, seed: u64, model: Option<&Model>) -> anyhow::Result<LaguerreRun> {
+    let cfg = scene_laguerre(n, seed, explicit(30.0));
+    let cells = match model {
+        Some(m) => laguerre_model(&cfg, m)?,
+        None => model_of(&cfg)?,
+    };
+    let implicit = match ctx.mode {
+        crate::Mode::Full => Some(errors_of(&cells, &scene_laguerre(n, seed, implicit(30.0)))?),
+        crate::Mode::Quick => None,
+    };
+    Ok(LaguerreRun {
+        explicit: errors_of(&cells, &cfg)?,
+        implicit,
+        network_s: network_s(&cells),
+        volume_error: cells
+            .report
+            .tessellation
+            .as_ref()
+            .map_or(f64::NAN, |t| t.volume_error),
+    })
+}
+
+/// One packing, every model to 30 s; the headline on further packings.
 fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let n = ctx.pick(20_000, 100_000);
     let model = model_of(&scene(n, ctx.seed, explicit(30.0)))?;
+    let mut laguerre = vec![laguerre_run(ctx, n, ctx.seed, Some(&model))?];
+    for k in 1..packings(ctx) {
+        laguerre.push(laguerre_run(ctx, n, ctx.seed + k, None)?);
+    }
     Ok(Measured {
         n: model.particles.len(),
         n_requested: n,
+        contacts_s: network_s(&model),
+        laguerre,
         explicit: errors_of(&model, &scene(n, ctx.seed, explicit(30.0)))?,
         implicit: errors_of(&model, &scene(n, ctx.seed, implicit(30.0)))?,
         calibrated: errors_of(&model, &scene_calibrated(n, ctx.seed, implicit(30.0)))?,
     })
 }
 
-/// Metrics, references and the three checks.
-fn compare(m: &Measured, out: &mut CaseOutcome) {
+/// Metrics, references and the checks.
+fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
     let (ex, im, cal) = (&m.explicit, &m.implicit, &m.calibrated);
+    let head = m.headline();
+    let spread = m.spread();
+    out.metric("headline_model", "laguerre");
+    out.metric("max_abs_error_centre_c", head.explicit.max_abs_error_centre);
+    out.metric("max_abs_error_centre_c_laguerre", spread.json());
+    let same = m.spread_same_ball();
+    out.metric("max_abs_error_centre_c_same_ball", same.json());
+    out.metric(
+        "max_abs_error_centre_c_same_ball_terreros",
+        ex.max_abs_error_centre_same_ball,
+    );
+    out.metric(
+        "max_abs_error_centre_c_same_ball_terreros_implicit",
+        im.max_abs_error_centre_same_ball,
+    );
+    out.metric(
+        "max_abs_error_centre_c_same_ball_calibrated",
+        cal.max_abs_error_centre_same_ball,
+    );
+    if let Some(i) = &head.implicit {
+        out.metric("max_abs_error_centre_c_implicit", i.max_abs_error_centre);
+    }
+    out.metric("centre_t10_c", head.explicit.centre_t10);
+    out.metric(
+        "max_abs_error_profile_t10_c",
+        head.explicit.max_abs_error_profile_t10,
+    );
     out.metric("max_abs_error_centre_c_calibrated", cal.max_abs_error_centre);
     out.metric("c_t", cal.c_t);
-    out.metric("max_abs_error_centre_c", ex.max_abs_error_centre);
-    out.metric("centre_t10_c", ex.centre_t10);
-    out.metric("max_abs_error_centre_c_implicit", im.max_abs_error_centre);
-    out.metric("max_abs_error_profile_t10_c", ex.max_abs_error_profile_t10);
-    out.metric("wall_s_explicit", ex.wall_s);
-    out.metric("wall_s_implicit", im.wall_s);
-    out.metric("steps_explicit", ex.steps);
+    out.metric("max_abs_error_centre_c_terreros", ex.max_abs_error_centre);
+    out.metric("centre_t10_c_terreros", ex.centre_t10);
+    out.metric(
+        "max_abs_error_centre_c_terreros_implicit",
+        im.max_abs_error_centre,
+    );
+    out.metric(
+        "max_abs_error_profile_t10_c_terreros",
+        ex.max_abs_error_profile_t10,
+    );
+    out.metric("wall_s_explicit", head.explicit.wall_s);
+    out.metric("wall_s_explicit_terreros", ex.wall_s);
+    out.metric("wall_s_implicit_terreros", im.wall_s);
+    out.metric("wall_s_implicit_calibrated", cal.wall_s);
+    out.metric("network_s_laguerre", head.network_s);
+    out.metric("network_s_contacts", m.contacts_s);
+    out.metric("steps_explicit", head.explicit.steps);
+    out.metric("steps_explicit_terreros", ex.steps);
+    out.metric(
+        "laguerre_volume_error",
+        Spread::of(m.laguerre.iter().map(|r| r.volume_error.abs())).json(),
+    );
     out.reference("max_abs_error_centre_c", 1.93);
     out.reference("centre_t10_c", centre_analytic(10.0));
     out.reference(
         "source",
-        "Haddad 2021 §2.2 Figs. 7–8 (10⁵ DE, 1.93 °C); analytic: corrected eq. 19",
+        "Haddad 2021 §2.2 Figs. 7–8 (10⁵ DE, 1.93 °C); analytic: corrected eq. 19; Laguerre target 0.3 °C at 10⁵ \
+         (issue 10)",
     );
+    out.compare(Comparison::at_most(
+        &format!(
+            "Laguerre (headline), explicit: max |T_centre − analytic probed the same way| (°C), largest of {} \
+             packing(s)",
+            same.count
+        ),
+        same.max,
+        m.tolerance_laguerre(ctx),
+        "the issue's 0.3 °C at 10⁵ (quick: scaled by N^(-1/3)); compared quantity changed after the first run (notes)",
+    ));
     let tol = m.tolerance();
     out.compare(Comparison::at_most(
-        "explicit: max |T_centre − analytic| (°C)",
+        "Terreros α, explicit: max |T_centre − analytic| (°C)",
         ex.max_abs_error_centre,
         tol,
         "paper 1.93 °C at 10⁵ DE",
     ));
     out.compare(Comparison::at_most(
-        "implicit: max |T_centre − analytic| (°C)",
+        "Terreros α, implicit: max |T_centre − analytic| (°C)",
         im.max_abs_error_centre,
         tol,
         "paper 1.93 °C at 10⁵ DE",
     ));
     out.compare(Comparison::absolute(
-        "T_centre(10 s) (°C)",
+        "Terreros α: T_centre(10 s) (°C)",
         ex.centre_t10,
         centre_analytic(10.0),
         tol,
@@ -110,29 +254,113 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
 /// A line of the centre table.
 struct CentreLine {
     t: f64,
+    /// The analytic field probed like the DEM one (Laguerre run's particles and weights).
+    same_ball: f64,
+    laguerre: f64,
     explicit: f64,
     implicit: f64,
 }
 
-/// The centre table, the two charts and the note.
+/// A line of the side-by-side table.
+struct ModelLine<'a> {
+    name: &'static str,
+    solver: &'static str,
+    e: &'a SphereErrors,
+    network_s: f64,
+}
+
+/// The tables, the two charts and the notes.
 fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
     let (ex, im, cal) = (&m.explicit, &m.implicit, &m.calibrated);
+    let head = m.headline();
+    let mut models = vec![ModelLine {
+        name: "Laguerre (headline)",
+        solver: "explicit",
+        e: &head.explicit,
+        network_s: head.network_s,
+    }];
+    if let Some(i) = &head.implicit {
+        models.push(ModelLine {
+            name: "Laguerre (headline)",
+            solver: "implicit",
+            e: i,
+            network_s: head.network_s,
+        });
+    }
+    models.extend([
+        ModelLine {
+            name: "Terreros α",
+            solver: "explicit",
+            e: ex,
+            network_s: m.contacts_s,
+        },
+        ModelLine {
+            name: "Terreros α",
+            solver: "implicit",
+            e: im,
+            network_s: m.contacts_s,
+        },
+        ModelLine {
+            name: "calibrated C_t",
+            solver: "implicit",
+            e: cal,
+            network_s: m.contacts_s,
+        },
+    ]);
+    out.tables.push(
+        Columns::new()
+            .column("model", |l: &ModelLine| l.name.to_string())
+            .column("solver", |l| l.solver.to_string())
+            .column("max |T_centre − analytic| (°C)", |l| {
+                format!("{:.3}", l.e.max_abs_error_centre)
+            })
+            .column("same, analytic probed alike (°C)", |l| {
+                format!("{:.3}", l.e.max_abs_error_centre_same_ball)
+            })
+            .column("max |T(r) − analytic| at 10 s (°C)", |l| {
+                format!("{:.3}", l.e.max_abs_error_profile_t10)
+            })
+            .column("steps", |l| l.e.steps.to_string())
+            .column("solver (s)", |l| format!("{:.2}", l.e.wall_s))
+            .column("network (s)", |l| format!("{:.2}", l.network_s))
+            .table(
+                format!(
+                    "The models side by side on one packing, N = {} (calibration time not counted)",
+                    m.n
+                ),
+                &models,
+            ),
+    );
     let lines: Vec<CentreLine> = ex
         .centre
         .iter()
         .enumerate()
         .map(|(i, &(t, v))| CentreLine {
             t,
+            laguerre: head.explicit.centre.get(i).map(|c| c.1).unwrap_or(f64::NAN),
+            same_ball: head
+                .explicit
+                .centre_same_ball
+                .get(i)
+                .map(|c| c.1)
+                .unwrap_or(f64::NAN),
             explicit: v,
             implicit: im.centre.get(i).map(|c| c.1).unwrap_or(f64::NAN),
         })
         .collect();
     let table = Columns::new()
         .column("t (s)", |l: &CentreLine| format!("{}", l.t))
-        .column("explicit (°C)", |l| format!("{:.2}", l.explicit))
-        .column("implicit (°C)", |l| format!("{:.2}", l.implicit))
+        .column("Laguerre, explicit (°C)", |l| format!("{:.2}", l.laguerre))
+        .column("Terreros α, explicit (°C)", |l| format!("{:.2}", l.explicit))
+        .column("Terreros α, implicit (°C)", |l| format!("{:.2}", l.implicit))
         .column("analytic (°C)", |l| format!("{:.2}", centre_analytic(l.t)))
-        .table("Centre temperature", &lines);
+        .column("analytic, ball average like the probe (°C)", |l| {
+            format!("{:.2}", l.same_ball)
+        })
+        .table(
+            "Centre temperature (ball average over r < R/10; the analytic field at the centre and averaged alike)",
+            &lines,
+        );
     out.tables.push(table);
     let curve: Vec<(f64, f64)> = (1..=120)
         .map(|i| i as f64 * 0.25)
@@ -147,8 +375,9 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
             y_scale: Scale::Linear,
             series: vec![
                 Series::line("analytic (corrected eq. 19)", curve),
-                Series::markers("DEM explicit", ex.centre.clone()),
-                Series::markers("DEM implicit (BE, 20 ms)", im.centre.clone()),
+                Series::markers("DEM Laguerre, explicit", head.explicit.centre.clone()),
+                Series::markers("DEM Terreros α, explicit", ex.centre.clone()),
+                Series::markers("DEM Terreros α, implicit (BE, 20 ms)", im.centre.clone()),
             ],
         },
         &ctx.out.join("sphere-transient.png"),
@@ -167,19 +396,52 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
             y_scale: Scale::Linear,
             series: vec![
                 Series::line("analytic", radial),
-                Series::markers("DEM explicit (radial layers)", ex.profile_t10.clone()),
+                Series::markers(
+                    "DEM Laguerre, explicit (radial layers)",
+                    head.explicit.profile_t10.clone(),
+                ),
+                Series::markers("DEM Terreros α, explicit (radial layers)", ex.profile_t10.clone()),
             ],
         },
         &ctx.out.join("sphere-profile-t10.png"),
     )?;
     out.charts.push("sphere-profile-t10.png".into());
     out.note(format!(
-        "Model: Terreros α surfaces with representative volumes V_p/f_v(n_p); the 200 °C is held on the sphere surface \
-         itself (wall half-contacts to the particles touching it). With calibrated surfaces (C_t = {:.4}, our own \
-         calibration on this sphere: uniform source, surface at 0, mean rise q R²/(15 λ_e)) the implicit run gives a \
-         largest centre error of {:.2} °C (`max_abs_error_centre_c_calibrated`). Explicit {} steps; implicit backward \
+        "Headline: the Laguerre cells (capacities ρ c V_cell; the 200 °C held on the sphere through the cells' wall facets, \
+         which follow the sphere by tangent planes: Σ V_cells/V − 1 = {:.1e}), chosen for their consistency property before \
+         any of their numbers were seen. Over {} packing(s) (seeds {}…): explicit centre error {:.3} / {:.3} °C against \
+         the analytic field probed alike, {:.3} / {:.3} °C against its centre value (mean / max); `--quick` runs one \
+         packing and no Laguerre implicit run (time), `--full` three packings and the implicit run.",
+        head.volume_error,
+        m.laguerre.len(),
+        ctx.seed,
+        m.spread_same_ball().mean,
+        m.spread_same_ball().max,
+        m.spread().mean,
+        m.spread().max,
+    ));
+    out.note(
+        "Changed after the first Laguerre run (stated, the tolerance was not changed): the Laguerre gate compares the centre \
+         probe with the analytic field probed the same way, not with its centre value. The probe is a volume-weighted ball \
+         average over r < R/10, and the analytic field's ball average exceeds its centre value by up to 0.8 °C at t = 2 s \
+         (0.7 °C at 5 s, 0.2 °C at 10 s; column 'analytic, ball average like the probe') — a bias of the probe, the same \
+         at every N, which alone exceeds the 0.3 °C target. The first run's Laguerre error against the centre value was \
+         0.86 °C (quick, 2·10⁴), failing its 0.51 °C; against the analytic probed alike it is the figure gated here. The \
+         papers' models keep their checks on the centre value (the paper's comparison); both measures are in the table.",
+    );
+    out.note(format!(
+        "The papers' models on the same packing: Terreros α surfaces with representative volumes V_p/f_v(n_p), the 200 °C \
+         held on the sphere surface itself (wall half-contacts to the particles touching it), {:.2} °C explicit, {:.2} °C \
+         implicit (their checks keep the paper's tolerance). With calibrated surfaces (C_t = {:.4}, our own calibration on \
+         this sphere: uniform source, surface at 0, mean rise q R²/(15 λ_e)) the implicit run gives a largest centre error \
+         of {:.2} °C (`max_abs_error_centre_c_calibrated`). Explicit {} steps (Laguerre; Terreros {}); implicit backward \
          Euler Δt = 20 ms.",
-        cal.c_t, cal.max_abs_error_centre, ex.steps
+        ex.max_abs_error_centre,
+        im.max_abs_error_centre,
+        cal.c_t,
+        cal.max_abs_error_centre,
+        head.explicit.steps,
+        ex.steps
     ));
     Ok(())
 }

@@ -5,16 +5,25 @@
 //! `analytic::uniform_resistance`).
 //!
 //! Compared quantity: the relative error |R − ρ_e l/A| / (ρ_e l/A), averaged over the 3
-//! packings of each N (the paper's "absolute error"), for the Terreros α surfaces, the
-//! paper's model, with the electrodes on the end faces themselves (`electric.electrodes:
-//! [(face: ZMin, ..)]`, half-contacts σ S/h from each particle touching the face) —
-//! `mean_rel_error`, the headline: the electrodes of the continuum problem are the end faces —
-//! and with the paper's electrodes, the particle layers touching the faces
-//! (`mean_rel_error_particle_electrodes`). The calibrated surfaces S = C_t π R_m² with C_t
+//! packings of each N (the paper's "absolute error"), for the three surface models on the same
+//! packings: the Laguerre cells with the electrodes on the end faces (the cells' wall facets)
+//! — `mean_rel_error` (and `max_rel_error`), the headline, chosen for the Laguerre network's
+//! consistency property (a uniform field solves it exactly) before any of its numbers were
+//! seen; the Terreros α surfaces, the paper's model, with the electrodes on the end faces
+//! themselves (`electric.electrodes: [(face: ZMin, ..)]`, half-contacts σ S/h from each
+//! particle touching the face; `mean_rel_error_terreros_face`, the headline before the
+//! Laguerre cells) and with the paper's electrodes, the particle layers touching the faces
+//! (`mean_rel_error_particle_electrodes`); the calibrated surfaces S = C_t π R_m² with C_t
 //! calibrated on the same packing: `mean_rel_error_calibrated` (particle electrodes) and
-//! `mean_rel_error_face_calibrated`.
+//! `mean_rel_error_face_calibrated`. Each model's cost (network, calibration, solve) is
+//! reported beside its error.
 //!
-//! Tolerances, fixed before the face-electrode runs: the headline must be no worse than the
+//! Laguerre tolerance, chosen before its numbers were seen: every packing at every N within
+//! the issue's 1 % (the network is exact for the uniform field; what is left is the section
+//! of the cells, which follow the mantle by tangent planes).
+//!
+//! Tolerances of the papers' models, fixed before the face-electrode runs: Terreros with face
+//! electrodes must be no worse than the
 //! paper's own mean error at the largest N of the run (2.85 % at 20 000, 3.77 % at 10 000:
 //! the project's aim is to beat the papers' code); both electrode models' errors must fall
 //! with N, as the paper's; face electrodes must not be worse than particle electrodes (they
@@ -94,6 +103,16 @@ const REALISATIONS: u64 = 3;
 struct Sample {
     n: usize,
     mean_radius: f64,
+    /// Laguerre cells, face electrodes: R (Ω), tessellation (s), solve (ms), the cells' section
+    /// on ZMax over π r² − 1.
+    r_laguerre: f64,
+    laguerre_network_s: f64,
+    laguerre_ms: f64,
+    laguerre_section: f64,
+    /// Contact detection (s), calibration (s) and the calibrated model's solve (ms).
+    contacts_s: f64,
+    calibration_s: f64,
+    calibrated_ms: f64,
     r_terreros: f64,
     r_terreros_62: f64,
     r_calibrated: f64,
@@ -114,6 +133,8 @@ struct Sample {
 
 /// Signed relative errors R/R_th − 1 of one packing's models.
 struct Errors {
+    /// Laguerre cells, face electrodes (the headline).
+    laguerre: f64,
     /// Terreros α, particle electrodes, Z = 7.5.
     terreros: f64,
     /// The same at Z = 6.2.
@@ -132,6 +153,7 @@ impl Sample {
     /// The errors against the uniform-conductor resistance `r_th` (Ω).
     fn errors(&self, r_th: f64) -> Errors {
         Errors {
+            laguerre: self.r_laguerre / r_th - 1.0,
             terreros: self.r_terreros / r_th - 1.0,
             z62: self.r_terreros_62 / r_th - 1.0,
             calibrated: self.r_calibrated / r_th - 1.0,
@@ -155,6 +177,9 @@ struct PackingLine {
 /// Means over the packings of one N: |errors| (fractions), C_t and the mean radius (m).
 struct SizeMeans {
     n: usize,
+    /// Laguerre: mean and largest |error| over the packings.
+    laguerre: f64,
+    laguerre_max: f64,
     terreros: f64,
     calibrated: f64,
     length_corrected: f64,
@@ -190,10 +215,12 @@ fn measure_packing(n: usize, seed: u64) -> anyhow::Result<Sample> {
         V0,
     );
     let model = model_of(&terreros)?;
-    let pack_s = t0.elapsed().as_secs_f64();
+    let pack_s = t0.elapsed().as_secs_f64() - network_s(&model);
     let rt = run_with(&terreros, &model)?;
     let et = rt.electric.as_ref().expect("electric run");
+    let t1 = Instant::now();
     let cal = calibrate_ct(&model)?;
+    let calibration_s = t1.elapsed().as_secs_f64();
     let calibrated = electric_scene(
         "cylinder-resistance",
         seed,
@@ -217,6 +244,14 @@ fn measure_packing(n: usize, seed: u64) -> anyhow::Result<Sample> {
     let ef = rf.electric.as_ref().expect("electric run");
     let rfc = run_with(&face(calibrated.clone()), &model)?;
     let efc = rfc.electric.as_ref().expect("electric run");
+    // The Laguerre cells on the same particles, face electrodes (their wall facets).
+    let laguerre_cfg = with_surface_model(&face(terreros.clone()), Surface::Laguerre, None);
+    let cells = laguerre_model(&laguerre_cfg, &model)?;
+    let rl = run_with(&laguerre_cfg, &cells)?;
+    let el = rl.electric.as_ref().expect("electric run");
+    let section = wall_facet_area(&cells, FaceConfig::ZMax).unwrap_or(f64::NAN)
+        / (std::f64::consts::PI * RADIUS * RADIUS)
+        - 1.0;
     let model62 = with_coordination(&model, 6.2)?;
     let r62 = run_with(&terreros, &model62)?;
     let (lo, hi) = electrode_layers(&model)?;
@@ -238,6 +273,13 @@ fn measure_packing(n: usize, seed: u64) -> anyhow::Result<Sample> {
     Ok(Sample {
         n: model.particles.len(),
         mean_radius: model.particles.radius_stats().mean,
+        r_laguerre: missing(el.report.resistance_ohm)?,
+        laguerre_network_s: network_s(&cells),
+        laguerre_ms: 1e3 * el.report.wall_s,
+        laguerre_section: section,
+        contacts_s: network_s(&model),
+        calibration_s,
+        calibrated_ms: 1e3 * ec.report.wall_s,
         r_terreros: missing(et.report.resistance_ohm)?,
         r_calibrated: missing(ec.report.resistance_ohm)?,
         r_face: missing(ef.report.resistance_ohm)?,
@@ -248,7 +290,7 @@ fn measure_packing(n: usize, seed: u64) -> anyhow::Result<Sample> {
         l_eff: effective_length(&model, &lo, &hi),
         iterations: et.report.iterations,
         solve_ms: 1e3 * et.report.wall_s,
-        mismatch: [et, ec, ef, efc]
+        mismatch: [et, ec, ef, efc, el]
             .iter()
             .map(|e| e.report.current_mismatch)
             .fold(0.0, f64::max),
@@ -291,6 +333,8 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
             |f: fn(&PackingLine) -> f64| these.iter().fold(0.0, |acc, p| acc + f(p)) / REALISATIONS as f64;
         means.push(SizeMeans {
             n,
+            laguerre: mean(|p| p.e.laguerre.abs()),
+            laguerre_max: these.iter().map(|p| p.e.laguerre.abs()).fold(0.0, f64::max),
             terreros: mean(|p| p.e.terreros.abs()),
             calibrated: mean(|p| p.e.calibrated.abs()),
             length_corrected: mean(|p| p.e.length_corrected.abs()),
@@ -318,7 +362,10 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
     let by_n = |f: fn(&SizeMeans) -> f64| -> Value {
         Value::Object(m.means.iter().map(|s| (key(s.n), Value::from(f(s)))).collect())
     };
-    out.metric("mean_rel_error", by_n(|s| s.face));
+    out.metric("headline_model", "laguerre, face electrodes");
+    out.metric("mean_rel_error", by_n(|s| s.laguerre));
+    out.metric("max_rel_error", by_n(|s| s.laguerre_max));
+    out.metric("mean_rel_error_terreros_face", by_n(|s| s.face));
     out.metric("mean_rel_error_particle_electrodes", by_n(|s| s.terreros));
     out.metric("mean_rel_error_calibrated", by_n(|s| s.calibrated));
     out.metric("mean_rel_error_length_corrected", by_n(|s| s.length_corrected));
@@ -338,13 +385,53 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
             )
         })
         .collect();
-    out.reference("mean_rel_error", Value::Object(paper_ref));
+    out.reference("mean_rel_error_terreros_face", Value::Object(paper_ref));
+    out.reference("max_rel_error", "0.01 at every N (issue 10, Laguerre)");
+    let wall = |f: fn(&PackingLine) -> f64| -> Value {
+        Value::Object(
+            m.sizes
+                .iter()
+                .map(|&n| {
+                    let these: Vec<&PackingLine> = m.packings.iter().filter(|p| p.n == n).collect();
+                    (key(n), Value::from(Spread::of(these.iter().map(|p| f(p))).mean))
+                })
+                .collect(),
+        )
+    };
+    out.metric(
+        "wall_s_laguerre",
+        wall(|p| p.s.laguerre_network_s + 1e-3 * p.s.laguerre_ms),
+    );
+    out.metric(
+        "wall_s_terreros_face",
+        wall(|p| p.s.contacts_s + 1e-3 * p.s.face_ms),
+    );
+    out.metric(
+        "wall_s_calibrated",
+        wall(|p| p.s.contacts_s + p.s.calibration_s + 1e-3 * p.s.calibrated_ms),
+    );
+    out.metric(
+        "laguerre_section_error_max",
+        m.packings
+            .iter()
+            .map(|p| p.s.laguerre_section.abs())
+            .fold(0.0, f64::max),
+    );
     out.reference(
         "source",
         "Hubert 2017 §3.1 Table 3 / Fig. 4 (Terreros surfaces, 3 packings per N); analytic ρ_e l / A",
     );
     let (first, last) = (&m.means[0], &m.means[m.means.len() - 1]);
     let (n_min, n_max) = (first.n, last.n);
+    out.compare(Comparison::at_most(
+        &format!(
+            "Laguerre (headline), face electrodes: largest |R/R_th − 1| over every packing at every N ({} packings)",
+            m.packings.len()
+        ),
+        m.means.iter().map(|s| s.laguerre_max).fold(0.0, f64::max),
+        0.01,
+        "the issue's Laguerre target, 1 %",
+    ));
     if let Some(p) = paper_mean(n_max) {
         out.compare(Comparison::at_most(
             &format!("Terreros, face electrodes: mean |R/R_th − 1| at N = {n_max}"),
@@ -403,12 +490,22 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         .column("Z wall / bulk", |p| {
             format!("{:.2} / {:.2}", p.s.z_wall, p.s.z_bulk)
         })
+        .column("R Laguerre, face electrodes (mΩ)", |p| {
+            format!("{:.5}", 1e3 * p.s.r_laguerre)
+        })
+        .column("error", |p| format!("{:+.4} %", 100.0 * p.e.laguerre))
+        .column("A_cells/A − 1", |p| format!("{:+.1e}", p.s.laguerre_section))
+        .column("Laguerre: tessellation (s); solve (ms)", |p| {
+            format!("{:.3}; {:.1}", p.s.laguerre_network_s, p.s.laguerre_ms)
+        })
         .column("R Terreros (mΩ)", |p| format!("{:.5}", 1e3 * p.s.r_terreros))
         .column("error", |p| pct(p.e.terreros))
         .column("error, Z = 6.2", |p| pct(p.e.z62))
         .column("R calibrated (mΩ)", |p| format!("{:.5}", 1e3 * p.s.r_calibrated))
         .column("error", |p| pct(p.e.calibrated))
-        .column("C_t", |p| format!("{:.4}", p.s.c_t))
+        .column("C_t (calibration s)", |p| {
+            format!("{:.4} ({:.2})", p.s.c_t, p.s.calibration_s)
+        })
         .column("L_eff / l", |p| format!("{:.4}", p.s.l_eff / LENGTH))
         .column("Terreros error, L_eff-corrected", |p| pct(p.e.length_corrected))
         .column("R Terreros, face electrodes (mΩ)", |p| {
@@ -419,6 +516,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         .column("CG iter.", |p| p.s.iterations.to_string())
         .column("solve (ms)", |p| format!("{:.1}", p.s.solve_ms))
         .column("solve, face electrodes (ms)", |p| format!("{:.1}", p.s.face_ms))
+        .column("contacts (s)", |p| format!("{:.3}", p.s.contacts_s))
         .column("paper error", |p| {
             paper_at(p.n)
                 .map(|row| format!("{:.2} %", row.errors_percent[p.k as usize]))
@@ -449,6 +547,10 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
             x_scale: Scale::Log,
             y_scale: Scale::Linear,
             series: vec![
+                Series::line(
+                    "demcon, Laguerre cells, face electrodes (headline)",
+                    series(|s| s.laguerre),
+                ),
                 Series::line("demcon, Terreros α, Z = 7.5", series(|s| s.terreros)),
                 Series::line("demcon, Terreros α, Z = 6.2", series(|s| s.z62)),
                 Series::line("demcon, calibrated C_t", series(|s| s.calibrated)),
@@ -472,12 +574,28 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
          the cylinder, Gaussian radii std/mean 0.3, aiming at φ = 0.64 and accepting the jammed state (column φ: the narrow \
          cylinder's wall layers jam below 0.64); contacts for Z = 7.5 (the column 'Z = 6.2' re-detects the contacts of the same \
          packing for the electric paper's coordination); electrodes = particles touching each end face (surface within half a \
-         radius), {V0} V apart. Packing and contacts took {:.1} s in all.",
+         radius), {V0} V apart. Packing took {:.1} s in all (shared by the models, not in their wall time).",
         ctx.mode.name(),
         m.sizes,
         ctx.seed,
         ctx.seed + REALISATIONS - 1,
         m.pack_s,
+    ));
+    let lag = Spread::of(m.packings.iter().map(|p| p.e.laguerre.abs()));
+    out.note(format!(
+        "Headline: the Laguerre cells of the same packings with the electrodes on the end faces (each face linked to the \
+         cells' wall facets on it), chosen for their consistency property before any of their numbers were seen: a \
+         uniform field solves the network exactly, so R = ρ_e l / A_cells, where A_cells is the section of the cells, which \
+         follow the curved mantle by tangent planes (column 'A_cells/A − 1', at most {:.1e}). Over all {} packings: \
+         |R/R_th − 1| mean {:.2e}, max {:.2e}; Laguerre costs a tessellation (column) where the contact models cost a \
+         contact detection (and the calibrated one a calibration).",
+        m.packings
+            .iter()
+            .map(|p| p.s.laguerre_section.abs())
+            .fold(0.0, f64::max),
+        lag.count,
+        lag.mean,
+        lag.max,
     ));
     out.note(
         "With the paper's particle electrodes (`mean_rel_error_particle_electrodes`), Terreros α is worse than the paper \
@@ -497,7 +615,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
          the paper's measure and is shown only to separate that bias from the bulk error of the surfaces.",
     );
     out.note(
-        "Face electrodes (headline: `mean_rel_error`): each end face is one node held at its potential and linked to \
+        "Face electrodes (Terreros: `mean_rel_error_terreros_face`, the headline before the Laguerre cells): each end face is one node held at its potential and linked to \
          every particle touching it by a half-contact σ_p S_p / h_p (h_p the centre-to-face distance, S_p the particle's own \
          surface), as the thermal `WallTemperature`. The network then spans the whole length l, so the electrode-layer bias \
          (R low by about 2 r̄/l) is gone; what remains is the bulk error of the surfaces, which is why the check asks the \

@@ -25,6 +25,19 @@
 //!   electric ones (same surfaces, same fixed particles) — so the tolerance is 10⁻³ (solver
 //!   tolerance and the absence of a particle exactly at u = V0/2), not the paper's 7.6–11.6 %.
 //!   It checks the Joule coupling (power split, sign, η, the fixed sets), not the geometry.
+//!
+//! Models: the papers' (Terreros α, above, particle and face electrodes) and the Laguerre cells
+//! of the same packings, clipped by the grooved body (planes tangent to the carving region),
+//! with the electrodes and the 20 °C on the end faces (the cells' wall facets) — the headline,
+//! chosen for the Laguerre network's consistency property before any of its numbers were seen:
+//! `r_rel_error_vs_fem` (the first packing at each N) and `r_rel_error_vs_fem_laguerre` (mean and
+//! max over 3 packings at the largest N), both carvings, with the tessellation's volume error
+//! Σ V_cells / V_groove − 1 (the region's volume is estimated on a 256³ grid) and each model's
+//! cost. Laguerre tolerance, chosen before its numbers were seen: the largest error over the 3
+//! packings at the largest N within the issue's 2 % in `--full` (4·10⁴), scaled by N^(-1/3) in
+//! `--quick` (2 % × (4·10⁴/N)^(1/3): 3.2 % at 10⁴). Its ΔT_max against Kohlrausch is reported,
+//! not gated: with walls the identity of the particle-held sets no longer holds on the
+//! network (a wall link's Joule power goes to its particle), so it measures the discretisation.
 
 use std::time::Instant;
 
@@ -92,6 +105,96 @@ fn series_potential(z: f64) -> f64 {
     V0 * r_per_len(z) / total
 }
 
+/// The Laguerre cells of one carving: electrodes and temperatures on the end faces.
+struct LaguerreSample {
+    /// Particles kept.
+    n: usize,
+    /// R (Ω) and ΔT_max (K).
+    r: f64,
+    rise: f64,
+    /// Σ V_cells / V_groove − 1 as the tessellation reports it (V_groove estimated on a 256³
+    /// grid), and against the exact volume π (4 r² + 1 (r/2)²) mm³.
+    volume_error: f64,
+    volume_error_exact: f64,
+    /// Tessellation (s) and the electric and thermal solves (ms).
+    network_s: f64,
+    solve_ms_electric: f64,
+    solve_ms_thermal: f64,
+    /// Why the Laguerre model could not be built or run (every value is then NaN).
+    error: Option<String>,
+}
+
+impl LaguerreSample {
+    /// A failed tessellation or run: NaN values and the error, reported, never dropped.
+    fn failed(e: &anyhow::Error) -> Self {
+        Self {
+            n: 0,
+            r: f64::NAN,
+            rise: f64::NAN,
+            volume_error: f64::NAN,
+            volume_error_exact: f64::NAN,
+            network_s: f64::NAN,
+            solve_ms_electric: f64::NAN,
+            solve_ms_thermal: f64::NAN,
+            error: Some(format!("{e:#}")),
+        }
+    }
+}
+
+/// The exact volume of the grooved body (m³): the cylinder minus the ring.
+fn grooved_volume() -> f64 {
+    let w = GROOVE_Z.1 - GROOVE_Z.0;
+    std::f64::consts::PI * (RADIUS * RADIUS * (LENGTH - w) + GROOVE_RADIUS * GROOVE_RADIUS * w)
+}
+
+/// The grooved-cylinder scene on the Laguerre cells: carved by `how` from the cylinder packing,
+/// the electrodes and the 20 °C on the end faces.
+fn laguerre_scene(count: usize, seed: u64, how: Carving) -> SceneConfig {
+    let mut s = with_surface_model(&scene(count, seed), Surface::Laguerre, None);
+    s.carve_rule = match how {
+        Carving::Centre => CarveRuleConfig::Centre,
+        Carving::WholeSphere => CarveRuleConfig::WholeSphere,
+    };
+    if let Some(e) = s.electric.as_mut() {
+        e.electrodes = face_electrodes(V0);
+    }
+    if let Some(t) = s.thermal.as_mut() {
+        t.bcs = vec![wall(FaceConfig::ZMin, T0), wall(FaceConfig::ZMax, T0)];
+    }
+    s
+}
+
+/// The Laguerre cells of the uncarved model `full` carved by `how`, and their measurements; a
+/// failure is kept as a failed sample (the case reports it and its check fails).
+fn measure_laguerre(full: &Model, count: usize, seed: u64, how: Carving) -> LaguerreSample {
+    try_laguerre(full, count, seed, how).unwrap_or_else(|e| LaguerreSample::failed(&e))
+}
+
+fn try_laguerre(full: &Model, count: usize, seed: u64, how: Carving) -> anyhow::Result<LaguerreSample> {
+    let cfg = laguerre_scene(count, seed, how);
+    let model = rebuild_on(&cfg, full)?;
+    let r = run_with(&cfg, &model)?;
+    let el = r.electric.as_ref().expect("electric run");
+    let th = r.thermal.as_ref().expect("thermal run");
+    let t = model.report.tessellation.as_ref();
+    Ok(LaguerreSample {
+        n: model.particles.len(),
+        r: el
+            .report
+            .resistance_ohm
+            .ok_or_else(|| anyhow::anyhow!("Laguerre: no resistance: no current flowed"))?,
+        rise: th.temperatures.iter().copied().fold(f64::NEG_INFINITY, f64::max) - T0,
+        volume_error: t.map_or(f64::NAN, |t| t.volume_error),
+        volume_error_exact: model.graph.cells.as_ref().map_or(f64::NAN, |c| {
+            c.volume.iter().sum::<f64>() / grooved_volume() - 1.0
+        }),
+        network_s: network_s(&model),
+        solve_ms_electric: 1e3 * el.report.wall_s,
+        solve_ms_thermal: 1e3 * th.report.wall_s,
+        error: None,
+    })
+}
+
 /// One carved model's measurements.
 struct Sample {
     n: usize,
@@ -113,19 +216,28 @@ struct Sample {
     solve_ms_thermal: f64,
     profile: Vec<(f64, f64)>,
     build_s: f64,
+    /// Contact detection (s; of the cylinder packing, the carved one's is of the same order).
+    network_s: f64,
 }
 
-/// Packs the uncarved cylinder for `nominal` particles in the grooved body and cuts the
-/// groove out both ways: (centre-carved, whole-sphere-carved, packing + contact time (s)).
-fn models(nominal: usize, seed: u64) -> anyhow::Result<(Model, Model, f64)> {
-    let t0 = Instant::now();
+/// The uncarved cylinder packing for `nominal` particles in the grooved body: (its model, the
+/// particle count packed).
+fn full_model(nominal: usize, seed: u64) -> anyhow::Result<(Model, usize)> {
     let count = (nominal as f64 / GROOVED_VOLUME_RATIO).round() as usize;
     let mut full_cfg = scene(count, seed);
     full_cfg.carve = None;
-    let full = model_of(&full_cfg)?;
+    Ok((model_of(&full_cfg)?, count))
+}
+
+/// Packs the uncarved cylinder for `nominal` particles in the grooved body and cuts the
+/// groove out both ways: (centre-carved, whole-sphere-carved, packing + contact time (s)), and
+/// the uncarved model with its packed count.
+fn models(nominal: usize, seed: u64) -> anyhow::Result<(Model, Model, f64, (Model, usize))> {
+    let t0 = Instant::now();
+    let (full, count) = full_model(nominal, seed)?;
     let centre = carved(&full, &grooved_region(), Carving::Centre)?;
     let sphere = carved(&full, &grooved_region(), Carving::WholeSphere)?;
-    Ok((centre, sphere, t0.elapsed().as_secs_f64()))
+    Ok((centre, sphere, t0.elapsed().as_secs_f64(), (full, count)))
 }
 
 /// Runs the scene on one carved model and measures it; writes its VTK when asked.
@@ -239,15 +351,18 @@ fn measure_model(
         solve_ms_thermal: 1e3 * th.report.wall_s,
         profile,
         build_s,
+        network_s: network_s(model),
     })
 }
 
-/// One N: the centre-carved model (the headline) and the whole-sphere-carved one.
+/// One N: the centre-carved model and the whole-sphere-carved one, Terreros α and Laguerre.
 struct SizeRun {
     /// Nominal particles in the grooved body.
     nominal: usize,
     centre: Sample,
     whole_sphere: Sample,
+    laguerre: LaguerreSample,
+    laguerre_whole_sphere: LaguerreSample,
 }
 
 impl SizeRun {
@@ -269,6 +384,13 @@ impl SizeRun {
     fn e_t(&self, exact: f64) -> f64 {
         self.centre.rise / exact - 1.0
     }
+    /// Signed R/R_FEM − 1 of the Laguerre cells, centre and whole-sphere carving.
+    fn e_laguerre(&self, r_fem: f64) -> f64 {
+        self.laguerre.r / r_fem - 1.0
+    }
+    fn e_laguerre_whole(&self, r_fem: f64) -> f64 {
+        self.laguerre_whole_sphere.r / r_fem - 1.0
+    }
 }
 
 /// Everything the case measures.
@@ -280,16 +402,39 @@ struct Measured {
     /// Kohlrausch ΔT_max (K).
     exact: f64,
     runs: Vec<SizeRun>,
+    /// The Laguerre cells (centre carving) on the further packings at the largest N.
+    repeats: Vec<LaguerreSample>,
     /// The N whose VTK was written.
     vtk_at: usize,
 }
+
+impl Measured {
+    /// |R/R_FEM − 1| of the Laguerre cells (centre carving) over every packing at the largest N.
+    fn laguerre_spread(&self) -> Spread {
+        let last = self.runs.last().expect("at least one size");
+        Spread::of(
+            std::iter::once(&last.laguerre)
+                .chain(&self.repeats)
+                .map(|l| (l.r / self.r_fem - 1.0).abs()),
+        )
+    }
+
+    /// The Laguerre tolerance at the largest N: 2 % at 4·10⁴, scaled by N^(-1/3) below.
+    fn laguerre_tolerance(&self, ctx: &Ctx) -> f64 {
+        let n = self.runs.last().expect("at least one size").nominal as f64;
+        ctx.pick(0.02 * (40_000.0 / n).cbrt().max(1.0), 0.02)
+    }
+}
+
+/// Packings at the largest N for the Laguerre headline (the first carries every model).
+const PACKINGS: u64 = 3;
 
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let m = measure(ctx)?;
     let mut out = CaseOutcome::new("notch-joule", ctx.mode);
     out.n_particles = m.runs.iter().map(|r| r.centre.n).max().unwrap_or(0);
-    compare(&m, &mut out);
+    compare(ctx, &m, &mut out);
     report(ctx, &m, &mut out)?;
     Ok(out)
 }
@@ -307,12 +452,20 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let vtk_at = *sizes.iter().find(|&&n| n == 10_000).unwrap_or(&sizes[0]);
     let mut runs = Vec::new();
     for &n in &sizes {
-        let (centre, sphere, build_s) = models(n, ctx.seed)?;
+        let (centre, sphere, build_s, (full, count)) = models(n, ctx.seed)?;
         runs.push(SizeRun {
             nominal: n,
             centre: measure_model(ctx, n, &centre, build_s, n == vtk_at)?,
             whole_sphere: measure_model(ctx, n, &sphere, build_s, false)?,
+            laguerre: measure_laguerre(&full, count, ctx.seed, Carving::Centre),
+            laguerre_whole_sphere: measure_laguerre(&full, count, ctx.seed, Carving::WholeSphere),
         });
+    }
+    let n_max = *sizes.last().expect("at least one size");
+    let mut repeats = Vec::new();
+    for k in 1..PACKINGS {
+        let (full, count) = full_model(n_max, ctx.seed + k)?;
+        repeats.push(measure_laguerre(&full, count, ctx.seed + k, Carving::Centre));
     }
     Ok(Measured {
         sizes,
@@ -320,12 +473,13 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
         r_series,
         exact: kohlrausch_max_rise(V0, RHO_E, LAMBDA),
         runs,
+        repeats,
         vtk_at,
     })
 }
 
 /// Metrics, references and the three checks (R at the largest N, ΔT_max, the identity).
-fn compare(m: &Measured, out: &mut CaseOutcome) {
+fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
     let (r_fem, exact) = (m.r_fem, m.exact);
     let by_n = |f: &dyn Fn(&SizeRun) -> Value| -> Value {
         Value::Object(m.runs.iter().map(|r| (key(r.nominal), f(r))).collect())
@@ -338,7 +492,57 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
     let worst_k = m.runs.iter().fold(0.0f64, |w, r| {
         w.max(r.whole_sphere.kohl_particle).max(r.centre.kohl_particle)
     });
-    out.metric("r_rel_error_vs_fem", by_n(&|r| Value::from(r.e_r(r_fem).abs())));
+    out.metric("headline_model", "laguerre, face electrodes, centre carving");
+    out.metric(
+        "r_rel_error_vs_fem",
+        by_n(&|r| Value::from(r.e_laguerre(r_fem).abs())),
+    );
+    let lag = m.laguerre_spread();
+    out.metric("r_rel_error_vs_fem_laguerre", lag.json());
+    out.metric(
+        "r_rel_error_vs_fem_laguerre_whole_sphere_carving",
+        by_n(&|r| Value::from(r.e_laguerre_whole(r_fem).abs())),
+    );
+    out.metric(
+        "tmax_rel_error_laguerre",
+        by_n(&|r| Value::from((r.laguerre.rise / exact - 1.0).abs())),
+    );
+    out.metric(
+        "laguerre_volume_error",
+        by_n(&|r| {
+            serde_json::json!({
+                "centre": r.laguerre.volume_error,
+                "whole_sphere": r.laguerre_whole_sphere.volume_error
+            })
+        }),
+    );
+    out.metric(
+        "laguerre_volume_error_exact",
+        by_n(&|r| {
+            serde_json::json!({
+                "centre": r.laguerre.volume_error_exact,
+                "whole_sphere": r.laguerre_whole_sphere.volume_error_exact
+            })
+        }),
+    );
+    out.metric(
+        "wall_s_laguerre",
+        by_n(&|r| {
+            Value::from(
+                r.laguerre.network_s + 1e-3 * (r.laguerre.solve_ms_electric + r.laguerre.solve_ms_thermal),
+            )
+        }),
+    );
+    out.metric(
+        "wall_s_terreros",
+        by_n(&|r| {
+            Value::from(r.centre.network_s + 1e-3 * (r.centre.solve_ms_electric + r.centre.solve_ms_thermal))
+        }),
+    );
+    out.metric(
+        "r_rel_error_vs_fem_terreros",
+        by_n(&|r| Value::from(r.e_r(r_fem).abs())),
+    );
     out.metric("tmax_rel_error", by_n(&|r| Value::from(r.e_t(exact).abs())));
     out.metric(
         "kohlrausch_particle_error",
@@ -382,7 +586,17 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
     let last = m.runs.last().expect("at least one size");
     let (n_max, e_r) = (last.nominal, last.e_r(r_fem).abs());
     out.compare(Comparison::at_most(
-        &format!("|R/R_FEM − 1| at N = {n_max}"),
+        &format!(
+            "Laguerre (headline), face electrodes, centre carving: |R/R_FEM − 1| at N = {n_max}, largest of {} \
+             packings",
+            lag.count
+        ),
+        lag.max,
+        m.laguerre_tolerance(ctx),
+        "the issue's 2 % at 4·10⁴ (quick: scaled by N^(-1/3))",
+    ));
+    out.compare(Comparison::at_most(
+        &format!("Terreros α, particle electrodes: |R/R_FEM − 1| at N = {n_max}"),
         e_r,
         1.5 * paper_r_error(n_max),
         &format!(
@@ -424,7 +638,36 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         .column("N", |r| r.centre.n.to_string())
         .column("r̄ (µm)", |r| format!("{:.1}", 1e6 * r.centre.mean_radius))
         .column("in 4r̄ slice", |r| r.centre.section_count.to_string())
-        .column("R (mΩ)", |r| format!("{:.5}", 1e3 * r.centre.r))
+        .column("N Laguerre", |r| r.laguerre.n.to_string())
+        .column("R Laguerre (mΩ)", |r| format!("{:.5}", 1e3 * r.laguerre.r))
+        .column("R error, Laguerre", |r| {
+            format!("{:+.2} %", 100.0 * r.e_laguerre(r_fem))
+        })
+        .column("same, whole-sphere carving", |r| {
+            format!("{:+.2} %", 100.0 * r.e_laguerre_whole(r_fem))
+        })
+        .column("Σ V_cells/V − 1, reported (centre; whole-sphere)", |r| {
+            format!(
+                "{:+.1e}; {:+.1e}",
+                r.laguerre.volume_error, r.laguerre_whole_sphere.volume_error
+            )
+        })
+        .column("against the exact V", |r| {
+            format!(
+                "{:+.1e}; {:+.1e}",
+                r.laguerre.volume_error_exact, r.laguerre_whole_sphere.volume_error_exact
+            )
+        })
+        .column("ΔT error, Laguerre", |r| {
+            format!("{:+.2} %", 100.0 * (r.laguerre.rise / exact - 1.0))
+        })
+        .column("Laguerre: tessellation (s); solves el./th. (ms)", |r| {
+            format!(
+                "{:.2}; {:.1} / {:.1}",
+                r.laguerre.network_s, r.laguerre.solve_ms_electric, r.laguerre.solve_ms_thermal
+            )
+        })
+        .column("R Terreros (mΩ)", |r| format!("{:.5}", 1e3 * r.centre.r))
         .column("R error", |r| format!("{:+.2} %", 100.0 * r.e_r(r_fem)))
         .column("R error, whole-sphere carving", |r| {
             format!("{:+.2} %", 100.0 * r.e_r_whole(r_fem))
@@ -451,6 +694,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         .column("solve ms el./th.", |r| {
             format!("{:.1} / {:.1}", r.centre.solve_ms_electric, r.centre.solve_ms_thermal)
         })
+        .column("contacts (s)", |r| format!("{:.2}", r.centre.network_s))
         .column("build (s)", |r| format!("{:.1}", r.centre.build_s))
         .table(
             format!(
@@ -496,7 +740,8 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
     )?;
     out.charts.push("notch-joule.png".into());
     out.note(format!(
-        "Mode {}: N = {:?} particles in the grooved body (one packing each, seed {}; the cylinder is packed with N / 0.85 \
+        "Mode {}: N = {:?} particles in the grooved body (one packing each, seed {}, plus two for the Laguerre headline at the \
+         largest N; the cylinder is packed with N / 0.85 \
          particles and the groove cut out by particle centre), Terreros α surfaces for both the electric \
          and the thermal network, Z = 7.5, steady thermal solve with the Joule power per particle as its source. `--full` runs \
          5000, 10 000, 20 000 and 40 000. The 1-D series resistance is {:.5} mΩ (FEM {:.5} mΩ).",
@@ -506,8 +751,65 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         1e3 * m.r_series,
         1e3 * r_fem
     ));
+    let lag = m.laguerre_spread();
+    out.note(format!(
+        "Headline: the Laguerre cells of the same cylinder packings, keeping the particles whose centre lies in the grooved \
+         body (or, beside it, the whole spheres), their cells clipped by planes tangent to the groove's surface (Σ V_cells/V \
+         − 1 in the table; V is the region's volume estimated on a 256³ grid, so that column carries the estimate's own \
+         error; 'against the exact V' divides by π (4 r² + (r/2)²) · 1 mm), the electrodes and the 20 °C on the end faces through the cells' wall facets, chosen for their consistency \
+         property before any of their numbers were seen. At N = {}: |R/R_FEM − 1| {:.2} % / {:.2} % (mean / max over {} \
+         packings, seeds {}…{}). The same cells with whole-sphere carving tile the same region, so they do not carry the whole-sphere \
+         carving's bias. The Laguerre ΔT_max is reported against Kohlrausch, not gated (no discrete identity with walls).",
+        m.runs.last().map_or(0, |r| r.nominal),
+        100.0 * lag.mean,
+        100.0 * lag.max,
+        lag.count,
+        ctx.seed,
+        ctx.seed + PACKINGS - 1,
+    ));
+    out.note(format!(
+        "Laguerre, centre carving, at N = {} on each packing (seed: R error): {}.",
+        m.runs.last().map_or(0, |r| r.nominal),
+        std::iter::once(&m.runs[m.runs.len() - 1].laguerre)
+            .chain(&m.repeats)
+            .enumerate()
+            .map(|(k, l)| match &l.error {
+                None => format!("{}: {:+.2} %", ctx.seed + k as u64, 100.0 * (l.r / r_fem - 1.0)),
+                Some(_) => format!("{}: failed (below)", ctx.seed + k as u64),
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    let failures: Vec<String> = m
+        .runs
+        .iter()
+        .flat_map(|r| {
+            [
+                (r.nominal, "centre", 0, &r.laguerre),
+                (r.nominal, "whole-sphere", 0, &r.laguerre_whole_sphere),
+            ]
+        })
+        .chain(
+            m.repeats
+                .iter()
+                .enumerate()
+                .map(|(k, l)| (m.sizes[m.sizes.len() - 1], "centre", k as u64 + 1, l)),
+        )
+        .filter_map(|(n, how, k, l)| {
+            l.error
+                .as_ref()
+                .map(|e| format!("N = {n}, {how} carving, seed {}: {e}", ctx.seed + k))
+        })
+        .collect();
+    if !failures.is_empty() {
+        out.note(format!(
+            "The Laguerre model FAILED on {} of the grooved packings (no number from them; the headline check fails): {}.",
+            failures.len(),
+            failures.join("; ")
+        ));
+    }
     out.note(
-        "The resistance is measured as in the paper between the particles touching the end faces; as in \
+        "The papers' model (Terreros α): the resistance is measured as in the paper between the particles touching the end faces; as in \
          `cylinder-resistance` those layers sit about one radius inside the faces, which lowers R by about 2 r̄/l, while a \
          carving that keeps only whole spheres raises it: spheres crossing the groove surface are removed, so the reduced \
          section's solid ends a fraction of a radius inside r = 0.5 mm ('φ groove (whole-sphere) / plain' compares the solid \

@@ -18,6 +18,7 @@ pub mod haddad2021_multi_inclusion_fields;
 pub mod haddad2021_slab_transient;
 pub mod haddad2021_sphere_transient;
 pub mod haddad2021_stability;
+pub mod homogeneous_exactness;
 pub mod hubert2017_cylinder_resistance;
 pub mod hubert2017_notch_joule;
 pub mod hubert2017_solver_timing;
@@ -39,6 +40,11 @@ pub fn registry() -> Vec<Case> {
             id: "ct-calibration",
             about: "Haddad 2021 §2.1: C_t on our packings against N, 4 realisations",
             run: haddad2021_ct_calibration::run,
+        },
+        Case {
+            id: "homogeneous-exactness",
+            about: "λ_e/λ − 1 of a homogeneous box and cylinder (walls), calibrated C_t, Terreros α and Laguerre, 3 packings",
+            run: homogeneous_exactness::run,
         },
         Case {
             id: "slab-transient",
