@@ -626,10 +626,10 @@ impl Setup<'_> {
             let radius = self.mantle_radius;
             for n in &self.mantle {
                 let c = radius - n.dot(&x);
-                if c <= 0.0 || c * c < cell.max_radius_sq() {
-                    if cell.clip(n, c, wall_tag(6), tol).map_err(fail)? {
-                        out.curved_planes += 1;
-                    }
+                if (c <= 0.0 || c * c < cell.max_radius_sq())
+                    && cell.clip(n, c, wall_tag(6), tol).map_err(fail)?
+                {
+                    out.curved_planes += 1;
                 }
             }
         }
