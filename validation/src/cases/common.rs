@@ -88,8 +88,11 @@ pub fn with_surface_model(cfg: &SceneConfig, s: Surface, c_t: Option<f64>) -> Sc
 pub fn rebuild_on(cfg: &SceneConfig, model: &Model) -> anyhow::Result<Model> {
     Scene::from_config(cfg.clone(), PathBuf::new())?;
     let params = demcon_scene::convert::model_params(cfg)?;
+    // The phases come from `cfg` alone: every particle starts from phase 0.
+    let mut particles = model.particles.clone();
+    particles.phases.iter_mut().for_each(|p| *p = 0);
     let packed = demcon_model::Packed {
-        particles: model.particles.clone(),
+        particles,
         container: model.container,
         report: model.report.packing.clone(),
         imported_from: model.report.imported_from.clone(),
@@ -314,23 +317,6 @@ pub fn thermal_scene(
 pub fn model_of(cfg: &SceneConfig) -> anyhow::Result<Model> {
     let scene = Scene::from_config(cfg.clone(), PathBuf::new())?;
     Ok(build_model(&scene.config, &scene.base_dir, None)?)
-}
-
-/// Builds `cfg`'s model (its network: contacts or Laguerre cells, and its phases) on the
-/// particles of an already built model, so that several networks share one packing.
-pub fn model_on_packing(cfg: &SceneConfig, packing: &Model) -> anyhow::Result<Model> {
-    Scene::from_config(cfg.clone(), PathBuf::new())?;
-    let params = demcon_scene::convert::model_params(cfg)?;
-    let mut particles = packing.particles.clone();
-    particles.phases.iter_mut().for_each(|p| *p = 0);
-    let packed = demcon_model::Packed {
-        particles,
-        container: packing.container,
-        report: packing.report.packing.clone(),
-        imported_from: packing.report.imported_from.clone(),
-        pack_s: packing.report.pack_s,
-    };
-    Ok(demcon_model::build_model(packed, &params)?)
 }
 
 /// Re-phases a built model with the `Spheres` phases and the phase rule of `cfg` (same

@@ -237,7 +237,7 @@ fn run_realisation(r: &Realisation, n: usize, seed: u64) -> anyhow::Result<Reali
         let model = if m.laguerre {
             if laguerre.is_none() {
                 let t = Instant::now();
-                let lm = model_on_packing(&cfg, &base)?;
+                let lm = rebuild_on(&cfg, &base)?;
                 laguerre = Some((lm, t.elapsed().as_secs_f64()));
             }
             let (lm, _) = laguerre.as_ref().expect("built above");
