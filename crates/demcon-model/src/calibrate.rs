@@ -12,7 +12,7 @@
 //!   at 0 gives the mean temperature rise q R² / (15 λ_e).
 
 use demcon_core::{Axis, Container, Face, Selector};
-use demcon_graph::{SurfaceModel, WallContacts, conductances, contact_surfaces};
+use demcon_graph::{SurfaceModel, conductances, contact_surfaces};
 use demcon_network::{FloatingPolicy, SolveReport, homogenize, resolve_fixed};
 use demcon_thermal::{face_flux_sources, solve_steady_temperature};
 use serde::Serialize;
@@ -228,14 +228,7 @@ fn calibrate_walls(
             )
         }
     };
-    let walls = WallContacts::for_graph(
-        &model.graph,
-        &model.particles,
-        &model.container,
-        &faces,
-        "thermal.bcs",
-    )
-    .map_err(|e| ModelError::at("thermal.bcs", e))?;
+    let walls = model.wall_contacts(&faces, "thermal.bcs")?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), sm);
     let wall_g = walls.conductances(&wall_s, |_, _, _| 1.0);
     let (net, g) = network_with_walls(model, &walls, g, wall_g)?;

@@ -253,14 +253,7 @@ pub fn solve_electric(
     let sigma = particle_conductivities(model, temperatures)?;
     let g = contact_conductances(model, &sm, problem.interface, &sigma)?;
     let (faces, _) = problem.face_electrodes();
-    let walls = WallContacts::for_graph(
-        &model.graph,
-        &model.particles,
-        &model.container,
-        &faces,
-        "electric.electrodes",
-    )
-    .map_err(|e| ModelError::at("electric.electrodes", e))?;
+    let walls = model.wall_contacts(&faces, "electric.electrodes")?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
     let wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
     let m = g.len();

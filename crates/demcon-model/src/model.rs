@@ -4,10 +4,10 @@
 
 use std::time::Instant;
 
-use demcon_core::{Container, MaterialTable, ParticleSet, Region, Vec3};
+use demcon_core::{Container, Face, MaterialTable, ParticleSet, Region, Vec3};
 use demcon_graph::{
     ContactGraph, ContactParams, ContactReport, HalfBond, LaguerreParams, Laminates, Mix, TessellationReport,
-    assign_phase, assign_phase_laminate, detect_contacts, tessellate,
+    WallContacts, assign_phase, assign_phase_laminate, detect_contacts, tessellate,
 };
 use demcon_network::Network;
 use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReason, carve, pack};
@@ -46,6 +46,13 @@ impl Model {
             Some(c) => c.volume[p],
             None => self.particles.volume(p) / self.phi,
         }
+    }
+
+    /// The wall links of `faces` on this model's graph (the cells' wall facets, or the
+    /// particles touching each face); errors are named `context` (e.g. `thermal.bcs`).
+    pub fn wall_contacts(&self, faces: &[Face], context: &str) -> Result<WallContacts, ModelError> {
+        WallContacts::for_graph(&self.graph, &self.particles, &self.container, faces, context)
+            .map_err(|e| ModelError::at(context, e))
     }
 
     /// The laminate mixes indexed by particle.

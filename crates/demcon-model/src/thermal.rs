@@ -308,14 +308,7 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
         _ => RepresentativeVolume::VolumeFraction(&fv),
     };
     let mut caps = capacities(&vols, &c, &rho, rv)?;
-    let walls = WallContacts::for_graph(
-        &model.graph,
-        &model.particles,
-        &model.container,
-        &faces,
-        "thermal.bcs",
-    )
-    .map_err(|e| ModelError::at("thermal.bcs", e))?;
+    let walls = model.wall_contacts(&faces, "thermal.bcs")?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
     let wall_g = walls.conductances(&wall_s, |p, e, h| lam.half_bond(p, phases, &lam_phase, e, h));
     let (network, g) = network_with_walls(model, &walls, g, wall_g)?;
