@@ -175,7 +175,7 @@ impl Cell {
                     self.new_loops.push(self.map[a as usize]);
                 }
                 if ia != ib {
-                    let x = self.intersection(a, b, tol);
+                    let x = self.intersection(a, b);
                     self.new_loops.push(x);
                     crossings += 1;
                     if ia {
@@ -228,7 +228,7 @@ impl Cell {
     }
 
     /// The vertex where edge (a, b) crosses the plane, created once per edge.
-    fn intersection(&mut self, a: u32, b: u32, _tol: f64) -> u32 {
+    fn intersection(&mut self, a: u32, b: u32) -> u32 {
         let key = (a.min(b), a.max(b));
         if let Some(&(_, _, x)) = self.edges.iter().find(|e| (e.0, e.1) == key) {
             return x;
