@@ -278,10 +278,8 @@ fn bad_input_is_named() {
         size: [2.2, 2.2, 2.2],
     };
     let p = random_spheres(3, &per, 0.3, 7);
-    let e = tessellate(&p, &per, None, &LaguerreParams::default());
-    if let Err(e) = e {
-        assert!(e.to_string().contains("container.size"), "{e}");
-    }
+    let e = tessellate(&p, &per, None, &LaguerreParams::default()).unwrap_err().to_string();
+    assert!(e.contains("container.size") && e.contains("too small"), "{e}");
     // Bad parameters.
     let params = LaguerreParams {
         curved_tolerance: -1.0,
