@@ -278,7 +278,9 @@ fn bad_input_is_named() {
         size: [2.2, 2.2, 2.2],
     };
     let p = random_spheres(3, &per, 0.3, 7);
-    let e = tessellate(&p, &per, None, &LaguerreParams::default()).unwrap_err().to_string();
+    let e = tessellate(&p, &per, None, &LaguerreParams::default())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("container.size") && e.contains("too small"), "{e}");
     // Bad parameters.
     let params = LaguerreParams {

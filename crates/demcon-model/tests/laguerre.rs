@@ -2,19 +2,15 @@
 //! homogeneous body between two walls gives λ_e = λ and T_p = linear in x_p to round-off,
 //! face electrodes give R = ρ_e L/A, and an imposed flux enters through the cells' wall facets.
 
+mod common;
+
 use approx::assert_relative_eq;
-use demcon_core::{Container, Face, Material, MaterialTable};
+use common::{metal, two_walls, z_face_electrodes};
+use demcon_core::{Container, Face, MaterialTable};
 use demcon_graph::{ContactParams, InterfaceRule, LaguerreParams};
 use demcon_model::*;
 use demcon_network::FloatingPolicy;
 use demcon_packing::{PackingParams, RadiusDistribution, pack};
-
-fn metal() -> Material {
-    Material {
-        resistivity: Some(2.0e-7),
-        ..Material::thermal("metal", 10.0, 8000.0, 500.0)
-    }
-}
 
 /// A Gaussian-0.3 LS packing of `n` spheres in `container`, tessellated.
 fn model(container: Container, n: usize, seed: u64) -> Model {
@@ -65,19 +61,7 @@ fn a_homogeneous_box_between_two_walls_is_exact() {
     );
     let t = m.report.tessellation.as_ref().unwrap();
     assert!(t.volume_error.abs() < 1e-12, "{t:?}");
-    let p = problem(
-        vec![
-            ThermalBc::WallTemperature {
-                face: Face::XMin,
-                value: 0.0,
-            },
-            ThermalBc::WallTemperature {
-                face: Face::XMax,
-                value: 3.0,
-            },
-        ],
-        ThermalSolver::Steady,
-    );
+    let p = problem(two_walls(Face::XMin, 0.0, Face::XMax, 3.0), ThermalSolver::Steady);
     let setup = thermal_setup(&m, &p).unwrap();
     // Capacities: the cells tile the box, so Σ C = ρ c V.
     let c: f64 = setup.capacities[..m.particles.len()].iter().sum();
@@ -108,24 +92,7 @@ fn face_electrodes_give_rho_l_over_a() {
         1500,
         2,
     );
-    let e = ElectricProblem {
-        surface: SurfaceSpec::Laguerre,
-        interface: InterfaceRule::HarmonicMean,
-        electrodes: vec![
-            Electrode {
-                at: ElectrodeAt::Face(Face::ZMin),
-                potential: 0.0,
-            },
-            Electrode {
-                at: ElectrodeAt::Face(Face::ZMax),
-                potential: 1e-3,
-            },
-        ],
-        eta: 1.0,
-        floating: FloatingPolicy::Fail,
-        recouple_tolerance: None,
-        solve: default_solve_params(),
-    };
+    let e = z_face_electrodes(SurfaceSpec::Laguerre, 1e-3);
     let run = solve_electric(&m, &e, None).unwrap();
     assert_relative_eq!(
         run.report.resistance_ohm.unwrap(),
@@ -270,19 +237,7 @@ fn a_homogeneous_cylinder_between_its_end_walls_is_exact() {
         2000,
         6,
     );
-    let p = problem(
-        vec![
-            ThermalBc::WallTemperature {
-                face: Face::ZMin,
-                value: 0.0,
-            },
-            ThermalBc::WallTemperature {
-                face: Face::ZMax,
-                value: 3.0,
-            },
-        ],
-        ThermalSolver::Steady,
-    );
+    let p = problem(two_walls(Face::ZMin, 0.0, Face::ZMax, 3.0), ThermalSolver::Steady);
     let setup = thermal_setup(&m, &p).unwrap();
     let bcs = thermal_bcs(&m, &setup, &p).unwrap();
     let run = solve_thermal(&m, &setup, &bcs, &p).unwrap();

@@ -6,7 +6,7 @@
 mod common;
 
 use approx::assert_relative_eq;
-use common::{C_T, lattice, metal};
+use common::{C_T, lattice, metal, two_walls, z_face_electrodes};
 use demcon_core::{Container, Face, Selector};
 use demcon_graph::InterfaceRule;
 use demcon_model::*;
@@ -30,16 +30,7 @@ fn steady(bcs: Vec<ThermalBc>) -> ThermalProblem {
 #[test]
 fn walls_give_the_continuum_conductivity_exactly() {
     let model = lattice(3, 6, 3, vec![metal()]);
-    let problem = steady(vec![
-        ThermalBc::WallTemperature {
-            face: Face::YMin,
-            value: 0.0,
-        },
-        ThermalBc::WallTemperature {
-            face: Face::YMax,
-            value: 1.0,
-        },
-    ]);
+    let problem = steady(two_walls(Face::YMin, 0.0, Face::YMax, 1.0));
     let setup = thermal_setup(&model, &problem).unwrap();
     // Contacts: λ S / d = 10 W/K; wall links: λ S / h = 20 W/K, one per face particle.
     assert!(
@@ -118,24 +109,7 @@ fn calibration_with_walls_finds_four_over_pi_on_the_lattice() {
 #[test]
 fn face_electrodes_give_rho_l_over_a_and_one_way_joule_heat() {
     let model = lattice(2, 2, 8, vec![metal()]);
-    let electric = ElectricProblem {
-        surface: SurfaceSpec::Calibrated(CtSpec::Value(C_T)),
-        interface: InterfaceRule::HarmonicMean,
-        electrodes: vec![
-            Electrode {
-                at: ElectrodeAt::Face(Face::ZMin),
-                potential: 0.0,
-            },
-            Electrode {
-                at: ElectrodeAt::Face(Face::ZMax),
-                potential: 1e-3,
-            },
-        ],
-        eta: 1.0,
-        floating: FloatingPolicy::Fail,
-        recouple_tolerance: None,
-        solve: default_solve_params(),
-    };
+    let electric = z_face_electrodes(SurfaceSpec::Calibrated(CtSpec::Value(C_T)), 1e-3);
     let el = solve_electric(&model, &electric, None).unwrap();
     let r_exact = 2.0e-7 * 8.0 / 4.0;
     assert_relative_eq!(el.report.resistance_ohm.unwrap(), r_exact, max_relative = 1e-8);
@@ -143,16 +117,7 @@ fn face_electrodes_give_rho_l_over_a_and_one_way_joule_heat() {
     assert_relative_eq!(el.report.joule_w, 1e-6 / r_exact, max_relative = 1e-8);
     // One-way coupling: the steady thermal solve with the uniform Joule sources, both faces
     // held at 0 °C, gives the chain's discrete parabola in every column.
-    let thermal = steady(vec![
-        ThermalBc::WallTemperature {
-            face: Face::ZMin,
-            value: 0.0,
-        },
-        ThermalBc::WallTemperature {
-            face: Face::ZMax,
-            value: 0.0,
-        },
-    ]);
+    let thermal = steady(two_walls(Face::ZMin, 0.0, Face::ZMax, 0.0));
     let setup = thermal_setup(&model, &thermal).unwrap();
     let bcs = thermal_bcs(&model, &setup, &thermal).unwrap();
     let c = couple(&model, &setup, &bcs, &thermal, &electric).unwrap();

@@ -1,9 +1,15 @@
 //! The lattice model shared by the model crate's integration tests.
 #![allow(dead_code)]
 
+use demcon_core::Face;
 use demcon_core::{Container, Material, MaterialTable, ParticleSet, Vec3};
 use demcon_graph::ContactParams;
-use demcon_model::{Model, ModelParams, Packed, PhaseRule, build_model};
+use demcon_graph::InterfaceRule;
+use demcon_model::{
+    ElectricProblem, Electrode, ElectrodeAt, Model, ModelParams, Packed, PhaseRule, SurfaceSpec, ThermalBc,
+    build_model, default_solve_params,
+};
+use demcon_network::FloatingPolicy;
 
 /// An nx × ny × nz lattice of spheres of radius 0.5 m in a box of the same size (m).
 pub fn lattice(nx: usize, ny: usize, nz: usize, materials: Vec<Material>) -> Model {
@@ -47,3 +53,39 @@ pub fn metal() -> Material {
 
 /// C_t at which every contact surface of the lattice is d² = 1 m².
 pub const C_T: f64 = 4.0 / std::f64::consts::PI;
+
+/// Electrodes on the faces ZMin (0 V) and ZMax (`volts`), η = 1, under `surface`.
+pub fn z_face_electrodes(surface: SurfaceSpec, volts: f64) -> ElectricProblem {
+    ElectricProblem {
+        surface,
+        interface: InterfaceRule::HarmonicMean,
+        electrodes: vec![
+            Electrode {
+                at: ElectrodeAt::Face(Face::ZMin),
+                potential: 0.0,
+            },
+            Electrode {
+                at: ElectrodeAt::Face(Face::ZMax),
+                potential: volts,
+            },
+        ],
+        eta: 1.0,
+        floating: FloatingPolicy::Fail,
+        recouple_tolerance: None,
+        solve: default_solve_params(),
+    }
+}
+
+/// The two faces `lo` and `hi` held at `t_lo` and `t_hi` (°C) through wall links.
+pub fn two_walls(lo: Face, t_lo: f64, hi: Face, t_hi: f64) -> Vec<ThermalBc> {
+    vec![
+        ThermalBc::WallTemperature {
+            face: lo,
+            value: t_lo,
+        },
+        ThermalBc::WallTemperature {
+            face: hi,
+            value: t_hi,
+        },
+    ]
+}
