@@ -1,7 +1,8 @@
 //! Shared vocabulary of demcon: particles, containers and regions, face/region selectors,
-//! materials, and the error type for bad input.
+//! materials, the error type for bad input, and the stages of a run (time and memory).
 //!
-//! Every other crate builds on these plain types; none of them does file I/O.
+//! Every other crate builds on these plain types; none of them does file I/O (the stages
+//! only read the process's own memory figures from `/proc`).
 //!
 //! ```
 //! use demcon_core::{Container, Face, ParticleSet, Selector, Vec3};
@@ -28,6 +29,7 @@ mod particles;
 mod region;
 mod selector;
 mod shape;
+mod stages;
 
 pub use components::Components;
 pub use diagnostic::Diagnostic;
@@ -38,6 +40,7 @@ pub use particles::{ParticleSet, RadiusStats};
 pub use region::Region;
 pub use selector::{DEFAULT_FACE_GAP, Face, Selector};
 pub use shape::{Aabb, Axis, Container};
+pub use stages::{StageObserver, StageRecord, Stages, available_memory, reset_peak_resident, resident_bytes};
 
 /// A point or vector in 3-D space (m).
 pub type Vec3 = nalgebra::Vector3<f64>;

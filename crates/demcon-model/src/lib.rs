@@ -43,7 +43,8 @@ pub use error::ModelError;
 pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogenize_thermal};
 pub use model::{
     CarveRule, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed, PhaseRule,
-    PhaseSpec, TessellationSummary, build_model, place_inclusions, set_region_phases, spheres_region,
+    PhaseSpec, TessellationSummary, build_model, build_model_staged, place_inclusions, set_region_phases,
+    spheres_region,
 };
 pub use thermal::{
     CtSpec, ExtraSourceUpdate, ExtraSources, FixedSet, FixedTarget, SurfaceSpec, ThermalBc, ThermalBcs,

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use demcon_core::{Container, Face, MaterialTable, ParticleSet, Region, Vec3};
+use demcon_core::{Container, Face, MaterialTable, ParticleSet, Region, Stages, Vec3};
 use demcon_graph::{
     ContactGraph, ContactParams, ContactReport, HalfBond, LaguerreParams, Laminates, Mix, TessellationReport,
     WallContacts, assign_phase, assign_phase_laminate, detect_contacts, tessellate,
@@ -269,6 +269,16 @@ pub struct ModelParams {
 
 /// Builds the model: carving, phases, contacts, network structure.
 pub fn build_model(packed: Packed, params: &ModelParams) -> Result<Model, ModelError> {
+    build_model_staged(packed, params, &mut Stages::default())
+}
+
+/// [`build_model`], timing its stages into `stages`: `phases` (carving and phase
+/// assignment), `tessellation` or `contacts`, and `network`.
+pub fn build_model_staged(
+    packed: Packed,
+    params: &ModelParams,
+    stages: &mut Stages,
+) -> Result<Model, ModelError> {
     let Packed {
         mut particles,
         container,
@@ -277,37 +287,44 @@ pub fn build_model(packed: Packed, params: &ModelParams) -> Result<Model, ModelE
         pack_s,
     } = packed;
     let materials = params.materials.clone();
-    let mut domain_volume = container.volume();
-    let mut carved_away = 0;
-    if let Some((region, rule)) = &params.carve {
-        let (kept, _) = match rule {
-            CarveRule::WholeSphere => carve(&particles, region),
-            CarveRule::Centre => particles.retain(|i| region.contains_point(&particles.centres[i])),
-        };
-        carved_away = particles.len() - kept.len();
-        if kept.is_empty() {
-            return Err(ModelError::invalid(
-                "carve",
-                "region",
-                "no particle lies inside the carving region",
-            ));
+    let (domain_volume, carved_away, mixes, inclusions, phase_fractions) = stages.time("phases", || {
+        let mut domain_volume = container.volume();
+        let mut carved_away = 0;
+        if let Some((region, rule)) = &params.carve {
+            let (kept, _) = match rule {
+                CarveRule::WholeSphere => carve(&particles, region),
+                CarveRule::Centre => particles.retain(|i| region.contains_point(&particles.centres[i])),
+            };
+            carved_away = particles.len() - kept.len();
+            if kept.is_empty() {
+                return Err(ModelError::invalid(
+                    "carve",
+                    "region",
+                    "no particle lies inside the carving region",
+                ));
+            }
+            particles = kept;
+            domain_volume = region.volume(256);
         }
-        particles = kept;
-        domain_volume = region.volume(256);
-    }
-    let mut mixes = Vec::new();
-    let inclusions = apply_phases(params, &mut particles, &container, &materials, &mut mixes)?;
-    let phase_fractions =
-        Laminates::new(particles.len(), &mixes).phase_fractions(&particles, materials.materials.len());
+        let mut mixes = Vec::new();
+        let inclusions = apply_phases(params, &mut particles, &container, &materials, &mut mixes)?;
+        let phase_fractions =
+            Laminates::new(particles.len(), &mixes).phase_fractions(&particles, materials.materials.len());
+        Ok((domain_volume, carved_away, mixes, inclusions, phase_fractions))
+    })?;
     let t1 = Instant::now();
     let graph = match &params.laguerre {
-        Some(lp) => tessellate(&particles, &container, params.carve.as_ref().map(|c| &c.0), lp)?,
-        None => detect_contacts(&particles, &container, &params.contacts)?,
+        Some(lp) => stages.time("tessellation", || {
+            tessellate(&particles, &container, params.carve.as_ref().map(|c| &c.0), lp)
+        })?,
+        None => stages.time("contacts", || {
+            detect_contacts(&particles, &container, &params.contacts)
+        })?,
     };
     let contacts_s = t1.elapsed().as_secs_f64();
     check_connected(&graph, particles.len())?;
     let t2 = Instant::now();
-    let network = Network::new(particles.len(), &graph.pairs)?;
+    let network = stages.time("network", || Network::new(particles.len(), &graph.pairs))?;
     let network_s = t2.elapsed().as_secs_f64();
     let mut phase_counts = vec![0; materials.materials.len()];
     for &p in &particles.phases {

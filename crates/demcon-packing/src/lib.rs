@@ -1,6 +1,7 @@
 //! Dense random sphere packings for demcon: the Lubachevsky–Stillinger algorithm (LSA)
 //! with radii growing in proportion, in a box, cylinder, sphere or periodic box; radius
-//! distributions; carving of packings by regions; plain-text `x y z r` files.
+//! distributions; carving of packings by regions; tiling of periodic packings; plain-text
+//! `x y z r` files.
 //!
 //! ```
 //! use demcon_core::Container;
@@ -29,6 +30,7 @@ mod params;
 mod radius;
 mod report;
 mod stress;
+mod tile;
 mod xyzr;
 
 pub use carve::carve;
@@ -42,6 +44,7 @@ pub use params::{
 pub use radius::{DEFAULT_TRUNCATION_SIGMAS, MIN_RATIO_FLOOR, RadiusDistribution, jamming_estimate};
 pub use report::{PackingReport, PackingSummary, RadiusSummary, bulk_phi, max_overlap, summarize};
 pub use stress::{STRESS_GROWTH_RATES, StressFailure, StressReport, stress_packings};
+pub use tile::{Repeat, tile, tiled_count};
 pub use xyzr::{
     INSIDE_TOLERANCE, MAX_FILE_PHI, XyzrFile, check_inside, check_writable, format_xyzr, parse_xyzr,
     read_xyzr, read_xyzr_container, read_xyzr_file, write_atomic, write_atomic_all, write_xyzr,

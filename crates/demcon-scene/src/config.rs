@@ -142,6 +142,23 @@ pub enum PackingConfig {
         #[serde(default)]
         container: Option<ContainerConfig>,
     },
+    /// Copies of a periodic packing (generated or read), `repeat` = (nx, ny, nz) times along
+    /// x, y and z: a large periodic packing at the cost of a small one. The local structure
+    /// is the original's exactly; the structure repeats every original period (see
+    /// `docs/packing.md`).
+    Tile {
+        /// The periodic packing to copy.
+        packing: Box<PackingConfig>,
+        /// Copies along x, y and z (each ≥ 1).
+        repeat: (usize, usize, usize),
+        /// Turn the tiled box's faces into walls (a `Box` container of the same size) instead
+        /// of keeping it periodic: the copies are cut at the faces, each sphere belonging to the
+        /// box its centre lies in, and its Laguerre cell clipped there (as carving with the
+        /// `Centre` rule does), so there is no wall layering and the faces can carry boundary
+        /// conditions. Needs `surface: Laguerre` (spheres cross the faces).
+        #[serde(default)]
+        walls: bool,
+    },
 }
 
 fn default_cov() -> f64 {

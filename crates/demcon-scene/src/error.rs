@@ -149,6 +149,28 @@ impl SceneError {
     }
 }
 
+/// An invalid parameter keeps its field, value and allowed range (the field is already the
+/// scene's path where this conversion is used).
+impl From<CoreError> for SceneError {
+    fn from(e: CoreError) -> Self {
+        match e {
+            CoreError::InvalidParameter {
+                field,
+                value,
+                allowed,
+            } => Self::Invalid {
+                field,
+                value,
+                allowed,
+            },
+            other => Self::Core {
+                field: String::new(),
+                source: other,
+            },
+        }
+    }
+}
+
 impl From<demcon_model::ModelError> for SceneError {
     /// The model's errors keep their kind (and so their message): a bad value stays
     /// [`SceneError::Invalid`], a solver failure stays the solver's.

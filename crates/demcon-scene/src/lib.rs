@@ -49,6 +49,4 @@ pub use demcon_model::Model;
 pub use demcon_thermal::ProgressFn;
 pub use error::SceneError;
 pub use output::{summary_json, write_outputs};
-pub use run::{
-    CheckpointOptions, Homogenization, Resumed, RunOptions, RunResult, Scene, Stages, run, run_on_model,
-};
+pub use run::{CheckpointOptions, Homogenization, Resumed, RunOptions, RunResult, Scene, run, run_on_model};

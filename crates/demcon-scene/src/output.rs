@@ -5,6 +5,7 @@
 
 use std::path::Path;
 
+use demcon_core::StageRecord;
 use demcon_post::{Field, write_csv, write_vtu};
 use serde::Serialize;
 use serde_json::json;
@@ -36,7 +37,26 @@ struct Stats {
 
 /// The run summary as JSON (also what `summary.json` holds).
 pub fn summary_json(name: &str, r: &RunResult) -> serde_json::Value {
+    summary_with(name, r, r.stages.records())
+}
+
+/// One stage as `summary.json` lists it: wall time (s), resident size after it and its peak
+/// (MB = 10⁶ bytes), and whether that peak is the stage's own or the process's so far.
+fn stage_json(s: &StageRecord) -> serde_json::Value {
+    let mb = |b: Option<u64>| b.map(|b| b as f64 / 1e6);
+    json!({
+        "stage": s.stage,
+        "wall_s": s.wall_s,
+        "rss_mb": mb(s.rss_bytes),
+        "peak_rss_mb": mb(s.peak_rss_bytes),
+        "peak_is_stage": s.peak_is_stage,
+    })
+}
+
+/// The summary with the given stage list (the run's, plus the writing of the outputs).
+fn summary_with(name: &str, r: &RunResult, stages: &[StageRecord]) -> serde_json::Value {
     let m = &r.model;
+    let peak = stages.iter().filter_map(|s| s.peak_rss_bytes).max();
     json!({
         "scene": name,
         "model": Stats { n_particles: m.particles.len(), domain_volume_m3: m.domain_volume, phi: m.phi },
@@ -60,7 +80,11 @@ pub fn summary_json(name: &str, r: &RunResult) -> serde_json::Value {
         "probes": r.probes,
         "profiles": r.profiles,
         "diagnostics": r.diagnostics,
-        "stages": r.stages,
+        "stages": stages.iter().map(stage_json).collect::<Vec<_>>(),
+        "memory": json!({
+            "peak_rss_mb": peak.map(|b| b as f64 / 1e6),
+            "peak_bytes_per_particle": peak.map(|b| b as f64 / m.particles.len().max(1) as f64),
+        }),
         "post_s": r.post_s,
         "wall_s": r.wall_s,
     })
@@ -171,6 +195,8 @@ fn write_files(
     r: &RunResult,
     dir: &Path,
 ) -> Result<Vec<String>, SceneError> {
+    let reset = demcon_core::reset_peak_resident();
+    let t0 = std::time::Instant::now();
     let mut written = Vec::new();
     let fields = ParticleFields::of(r);
     if outputs.vtk {
@@ -207,7 +233,16 @@ fn write_files(
         write_atomic(&dir.join("profiles.csv"), s.as_bytes())?;
         written.push("profiles.csv".into());
     }
-    let summary = serde_json::to_vec_pretty(&summary_json(name, r)).expect("summary serialises");
+    let (rss_bytes, peak_rss_bytes) = demcon_core::resident_bytes();
+    let mut stages = r.stages.records().to_vec();
+    stages.push(StageRecord {
+        stage: "outputs",
+        wall_s: t0.elapsed().as_secs_f64(),
+        rss_bytes,
+        peak_rss_bytes,
+        peak_is_stage: reset,
+    });
+    let summary = serde_json::to_vec_pretty(&summary_with(name, r, &stages)).expect("summary serialises");
     write_atomic(&dir.join("summary.json"), &summary)?;
     written.push("summary.json".into());
     Ok(written)

@@ -1,14 +1,16 @@
-//! The run pipeline, as named stages: build (packing, phases, contacts) → thermal setup
-//! (surfaces, walls, capacities, boundary conditions) → solve (thermal, electric, or both
-//! coupled) → post (flux, Halo, ETC, probes, profiles). Each stage is timed by [`Stages`];
+//! The run pipeline, as named stages: packing → phases → tessellation or contacts → network →
+//! thermal setup (surfaces, walls, capacities, boundary conditions) → solve (thermal, electric,
+//! or both coupled) → flux → halo → probes (ETC, probes, profiles). Each stage is timed (wall
+//! time and memory) by [`Stages`];
 //! outputs are written by [`crate::write_outputs`]. The physics lives in `demcon-model`; this
 //! file only sequences it on the scene's [`Problem`].
 
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
-use demcon_core::{Axis, Vec3};
+use demcon_core::{Axis, StageObserver, Stages, Vec3};
 use demcon_model::{
     Checkpointing, ElectricRun, ExtraSources, HomogenizeRun, Model, ModelError, RunCheckpoint, ThermalBcs,
     ThermalProblem, ThermalRun, ThermalSetup, couple_checkpointed, homogenize_electric, homogenize_thermal,
@@ -18,7 +20,7 @@ use demcon_post::{Domain, HaloReport, ProbeIndex, halo_flux, particle_dipoles, p
 use demcon_thermal::CheckpointEvery;
 use serde::Serialize;
 
-use crate::build::build_model;
+use crate::build::build_model_staged;
 use crate::checkpoint::{Fingerprint, read_checkpoint, write_checkpoint};
 use crate::config::*;
 use crate::convert::{self, HomogenizePlan, PostPlan, Problem};
@@ -97,37 +99,6 @@ fn parse_message(code: &ron::error::Error) -> String {
             "the scene is nested too deeply (regions within regions, more than the parser's limit)".into()
         }
         other => other.to_string(),
-    }
-}
-
-/// Wall time of one stage of a run.
-#[derive(Debug, Clone, Serialize)]
-pub struct StageTime {
-    /// The stage: `build`, `thermal setup`, `solve`, `post`.
-    pub stage: &'static str,
-    /// Wall time (s).
-    pub wall_s: f64,
-}
-
-/// The stages of a run and their wall times, in order.
-#[derive(Debug, Clone, Default, Serialize)]
-pub struct Stages(pub Vec<StageTime>);
-
-impl Stages {
-    /// Runs `f` as stage `stage`, recording its wall time.
-    pub fn time<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
-        let t0 = Instant::now();
-        let out = f();
-        self.0.push(StageTime {
-            stage,
-            wall_s: t0.elapsed().as_secs_f64(),
-        });
-        out
-    }
-
-    /// The wall time of `stage` (s), 0 if it did not run.
-    pub fn wall_s(&self, stage: &str) -> f64 {
-        self.0.iter().filter(|s| s.stage == stage).map(|s| s.wall_s).sum()
     }
 }
 
@@ -244,6 +215,8 @@ pub struct RunOptions<'a> {
     pub progress: Option<&'a dyn Fn(&demcon_packing::PackProgress)>,
     /// Transient progress callback: (steps done, steps total), at most ~100 calls per run.
     pub transient_progress: Option<demcon_thermal::ProgressFn>,
+    /// Sees every stage start and end (wall time, memory): a progress display.
+    pub stages: Option<Arc<dyn StageObserver>>,
     /// Checkpoints of the transient (written on the scene's `thermal.checkpoint` schedule) and
     /// resuming from one; none without it.
     pub checkpoint: Option<CheckpointOptions<'a>>,
@@ -278,8 +251,8 @@ pub fn run(scene: &Scene, opts: &RunOptions<'_>) -> Result<RunResult, SceneError
         Some(ck) => checkpoint_to_resume(cfg, ck)?,
         None => None,
     };
-    let mut stages = Stages::default();
-    let model = stages.time("build", || build_model(cfg, &scene.base_dir, opts.progress))?;
+    let mut stages = Stages::new(opts.stages.clone());
+    let model = build_model_staged(cfg, &scene.base_dir, opts.progress, &mut stages)?;
     let plan = match &opts.checkpoint {
         Some(ck) => {
             let fingerprint = Fingerprint::of_scene(cfg).with_packing(&model);
@@ -412,17 +385,19 @@ fn run_stages(
         solve(&model, &problem, thermal.as_ref(), checkpoints, &mut diagnostics)
     })?;
     let (thermal_setup, thermal_bcs) = thermal.unzip();
-    let post = stages.time("post", || {
-        post_process(
-            &model,
+    let t_post = Instant::now();
+    let post = post_process(
+        &mut stages,
+        &PostInputs {
+            model: &model,
             cfg,
-            &problem,
-            thermal_setup.as_ref(),
-            thermal_bcs.as_ref(),
-            thermal_run.as_ref(),
-            electric.as_ref(),
-        )
-    })?;
+            problem: &problem,
+            setup: thermal_setup.as_ref(),
+            bcs: thermal_bcs.as_ref(),
+            th: thermal_run.as_ref(),
+            el: electric.as_ref(),
+        },
+    )?;
     Ok(RunResult {
         model,
         thermal_setup,
@@ -436,7 +411,7 @@ fn run_stages(
         profiles: post.profiles,
         domain: post.domain,
         diagnostics,
-        post_s: stages.wall_s("post"),
+        post_s: t_post.elapsed().as_secs_f64(),
         stages,
         wall_s: t0.elapsed().as_secs_f64(),
         resumed: None,
@@ -591,15 +566,26 @@ struct SampledField {
 }
 
 /// Flux, Halo, ETC, probes and profiles: only what the outputs ask for.
-fn post_process(
-    model: &Model,
-    cfg: &SceneConfig,
-    problem: &Problem,
-    setup: Option<&ThermalSetup>,
-    bcs: Option<&ThermalBcs>,
-    th: Option<&ThermalRun>,
-    el: Option<&ElectricRun>,
-) -> Result<Post, SceneError> {
+/// What the post-processing reads: the model, the scene and the solutions.
+struct PostInputs<'a> {
+    model: &'a Model,
+    cfg: &'a SceneConfig,
+    problem: &'a Problem,
+    setup: Option<&'a ThermalSetup>,
+    bcs: Option<&'a ThermalBcs>,
+    th: Option<&'a ThermalRun>,
+    el: Option<&'a ElectricRun>,
+}
+
+/// Flux, Halo, ETC, probes and profiles, timed as the stages `flux`, `halo` and `probes`.
+fn post_process(stages: &mut Stages, inp: &PostInputs<'_>) -> Result<Post, SceneError> {
+    let PostInputs {
+        model,
+        problem,
+        setup,
+        th,
+        ..
+    } = *inp;
     let plan = &problem.post;
     let domain = match &problem.model.carve {
         Some((region, _)) => Domain::of_region(region.clone()),
@@ -607,7 +593,7 @@ fn post_process(
     };
     let (mut flux, mut halo) = (None, None);
     if let (true, Some(th), Some(s)) = (plan.flux, th, setup) {
-        let d = heat_dipoles(model, s, th)?;
+        let d = stages.time("flux", || heat_dipoles(model, s, th))?;
         flux = Some(
             d.iter()
                 .zip(&s.rep_volumes)
@@ -615,10 +601,32 @@ fn post_process(
                 .collect::<Vec<Vec3>>(),
         );
         if let Some(params) = &plan.halo {
-            let h = halo_flux(&model.particles, &d, &s.rep_volumes, &domain, params)?;
+            let h = stages.time("halo", || {
+                halo_flux(&model.particles, &d, &s.rep_volumes, &domain, params)
+            })?;
             halo = Some((h.flux, h.truncated, h.report));
         }
     }
+    stages.time("probes", || probes_and_fields(inp, domain, flux, halo))
+}
+
+/// ETC, probes and profiles of the post-processing, on the flux and Halo already computed.
+fn probes_and_fields(
+    inp: &PostInputs<'_>,
+    domain: Domain,
+    flux: Option<Vec<Vec3>>,
+    halo: Option<(Vec<Vec3>, Vec<bool>, HaloReport)>,
+) -> Result<Post, SceneError> {
+    let PostInputs {
+        model,
+        cfg,
+        problem,
+        setup,
+        bcs,
+        th,
+        el,
+    } = *inp;
+    let plan = &problem.post;
     let etc = match (plan.etc_axis, th, setup, bcs) {
         (Some(ax), Some(th), Some(s), Some(b)) => Some(effective_conductivity(model, ax, th, s, b)?),
         _ => None,

@@ -16,9 +16,16 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
     // Materials, contacts, carving, phases, selectors, electrodes' select/face: by conversion.
     convert::problem(c)?;
     let container = known_container(c, base_dir)?;
+    if let Some(n) = known_count(&c.packing, "packing")? {
+        let field = match c.packing {
+            PackingConfig::Tile { .. } => "packing.repeat",
+            _ => "packing.count",
+        };
+        check_run_memory(n, c, field)?;
+    }
     check_contacts(&c.contacts)?;
     check_linear_solver(&c.linear_solver)?;
-    check_probes(c)?;
+    check_probes(c, container.as_ref())?;
     if c.thermal.is_none() && c.electric.is_none() {
         return Err(SceneError::invalid(
             "thermal",
@@ -27,6 +34,7 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
         ));
     }
     check_surface("surface", &c.surface)?;
+    check_tile_walls(c)?;
     if let Some(k) = container.as_ref() {
         check_sphere_centres(c, k)?;
     }
@@ -54,23 +62,137 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
 
 /// The container, when it is known before packing: a generated packing's, the one the scene
 /// gives a file, or the one in the file's header (read alone; a file that cannot be read is
-/// reported by the build, as the first thing it does).
+/// reported by the build, as the first thing it does); a tiling's is its packing's, copied.
 fn known_container(c: &SceneConfig, base_dir: &Path) -> Result<Option<Container>, SceneError> {
-    Ok(match &c.packing {
+    container_of(&c.packing, "packing", base_dir)
+}
+
+fn container_of(p: &PackingConfig, field: &str, base_dir: &Path) -> Result<Option<Container>, SceneError> {
+    Ok(match p {
         PackingConfig::Generate { container, .. } => {
-            Some(convert::container(container, "packing.container")?)
+            Some(convert::container(container, &format!("{field}.container"))?)
         }
         PackingConfig::File {
             container: Some(container),
             ..
-        } => Some(convert::container(container, "packing.container")?),
+        } => Some(convert::container(container, &format!("{field}.container"))?),
         PackingConfig::File {
             path,
             container: None,
         } => demcon_packing::read_xyzr_container(&base_dir.join(path))
             .ok()
             .flatten(),
+        PackingConfig::Tile {
+            packing,
+            repeat,
+            walls,
+        } => {
+            let inner_field = format!("{field}.packing");
+            let inner = container_of(packing, &inner_field, base_dir)?;
+            let repeat = [repeat.0, repeat.1, repeat.2];
+            demcon_packing::tiled_count(1, repeat, &format!("{field}.repeat"))?;
+            match inner {
+                Some(Container::Periodic { size }) => {
+                    let size = [0, 1, 2].map(|k| size[k] * repeat[k] as f64);
+                    Some(if *walls {
+                        Container::Box { size }
+                    } else {
+                        Container::Periodic { size }
+                    })
+                }
+                Some(other) => {
+                    return Err(SceneError::invalid(
+                        &format!("{inner_field}.container"),
+                        other.kind(),
+                        "only a periodic packing can be tiled: copies of a walled packing would meet at its \
+                         walls, with the gaps and layering of a wall between them (pack a Periodic box, and \
+                         carve it to shape with `carve` if walls are wanted)",
+                    ));
+                }
+                None => None,
+            }
+        }
     })
+}
+
+/// A tiling cut to walls leaves spheres across the faces: only Laguerre cells (clipped at the
+/// faces) model that; a contact model would see spheres poking through its walls.
+fn check_tile_walls(c: &SceneConfig) -> Result<(), SceneError> {
+    if let PackingConfig::Tile { walls: true, .. } = c.packing
+        && !matches!(c.surface, SurfaceConfig::Laguerre)
+    {
+        return Err(SceneError::invalid(
+            "packing.walls",
+            "true",
+            format!(
+                "walls cut the tiled spheres at the faces, which only `surface: Laguerre` models (the cells are \
+                 clipped there); with `surface: {:?}` keep the tiling periodic (walls: false) or pack a walled \
+                 container",
+                c.surface
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Number of particles the packing section will give, when it is known before packing
+/// (a generated packing, or a tiling of one); errors on a tiling beyond 32-bit ids.
+fn known_count(p: &PackingConfig, field: &str) -> Result<Option<usize>, SceneError> {
+    Ok(match p {
+        PackingConfig::Generate { count, .. } => Some(*count),
+        PackingConfig::File { .. } => None,
+        PackingConfig::Tile { packing, repeat, .. } => {
+            match known_count(packing, &format!("{field}.packing"))? {
+                Some(n) => Some(demcon_packing::tiled_count(
+                    n,
+                    [repeat.0, repeat.1, repeat.2],
+                    &format!("{field}.repeat"),
+                )?),
+                None => None,
+            }
+        }
+    })
+}
+
+/// Memory a run needs per particle (bytes), measured at 10⁶ particles (peak resident size of
+/// whole runs over the particle count, `docs/performance.md`), rounded up: a Laguerre model
+/// carries its cells' facets and wall facets, a contact model only the contact list.
+pub fn run_bytes_per_particle(c: &SceneConfig) -> u64 {
+    if matches!(c.surface, SurfaceConfig::Laguerre) {
+        RUN_BYTES_PER_PARTICLE_LAGUERRE
+    } else {
+        RUN_BYTES_PER_PARTICLE_CONTACTS
+    }
+}
+
+/// See [`run_bytes_per_particle`].
+pub const RUN_BYTES_PER_PARTICLE_LAGUERRE: u64 = 1500;
+/// See [`run_bytes_per_particle`].
+pub const RUN_BYTES_PER_PARTICLE_CONTACTS: u64 = 1200;
+
+/// Refuses a run of `n` particles whose memory estimate ([`run_bytes_per_particle`]) exceeds
+/// the memory available now (`MemAvailable`; no check where it is unknown). `field` names
+/// what set the count.
+pub fn check_run_memory(n: usize, c: &SceneConfig, field: &str) -> Result<(), SceneError> {
+    let Some(available) = demcon_core::available_memory() else {
+        return Ok(());
+    };
+    let per = run_bytes_per_particle(c);
+    let need = (n as u64).saturating_mul(per);
+    if need > available {
+        return Err(SceneError::invalid(
+            field,
+            format!("{n} particles"),
+            format!(
+                "a run needs about {per} bytes per particle ({:.1} GB for {n} particles), but only {:.1} GB \
+                 of memory is available (MemAvailable in /proc/meminfo): at most ~{} particles",
+                need as f64 / 1e9,
+                available as f64 / 1e9,
+                available / per
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Largest target coordination accepted: a random packing of spheres has at most ~14
@@ -126,13 +248,11 @@ fn check_linear_solver(l: &LinearSolverConfig) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// Probes must lie in the domain; with a generated packing it is known before packing.
-fn check_probes(c: &SceneConfig) -> Result<(), SceneError> {
-    let domain = match (&c.carve, &c.packing) {
+/// Probes must lie in the domain, when it is known before packing.
+fn check_probes(c: &SceneConfig, container: Option<&Container>) -> Result<(), SceneError> {
+    let domain = match (&c.carve, container) {
         (Some(r), _) => Some(convert::region(r, "carve")?),
-        (None, PackingConfig::Generate { container, .. }) => {
-            Some(convert::container(container, "packing.container")?.region())
-        }
+        (None, Some(container)) => Some(container.region()),
         _ => None,
     };
     if let Some(d) = domain {

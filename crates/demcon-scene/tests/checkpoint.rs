@@ -106,7 +106,7 @@ fn summary_without_timings(dir: &Path) -> serde_json::Value {
     fn strip(v: &mut serde_json::Value) {
         match v {
             serde_json::Value::Object(m) => {
-                m.retain(|k, _| !(k.ends_with("_s") || k == "stages"));
+                m.retain(|k, _| !(k.ends_with("_s") || k == "stages" || k == "memory"));
                 m.values_mut().for_each(strip);
             }
             serde_json::Value::Array(a) => a.iter_mut().for_each(strip),

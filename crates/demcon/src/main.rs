@@ -3,6 +3,7 @@
 mod calibrate;
 mod info;
 mod pack;
+mod progress;
 mod run;
 
 use std::process::ExitCode;

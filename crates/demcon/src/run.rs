@@ -7,8 +7,9 @@ use std::cell::Cell;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Duration;
+use std::sync::Arc;
 
+use crate::progress::RunDisplay;
 use anyhow::{Context, Result};
 use clap::Args;
 use demcon_scene::checkpoint::{checkpoint_path, remove_checkpoint};
@@ -18,7 +19,6 @@ use demcon_scene::{CheckpointOptions, RunOptions, Scene, run as run_scene, write
 /// Exit code of a run stopped by `--exit-after-checkpoints` (EX_TEMPFAIL: try again, with
 /// `--resume`).
 pub const EXIT_STOPPED: u8 = 75;
-use indicatif::{ProgressBar, ProgressStyle};
 
 /// Arguments of `demcon run`.
 #[derive(Debug, Args)]
@@ -86,50 +86,16 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }
         ControlFlow::Continue(())
     };
-    let bar = (!args.quiet).then(|| {
-        let b = ProgressBar::new(1000);
-        b.set_style(
-            ProgressStyle::with_template("{spinner} packing {bar:30} φ {msg} [{elapsed}]")
-                .expect("static template")
-                .progress_chars("=> "),
-        );
-        b.enable_steady_tick(Duration::from_millis(200));
-        b
-    });
-    let progress = |p: &demcon_packing::PackProgress| {
-        if let Some(b) = &bar {
-            b.set_position((1000.0 * p.phi / p.target_phi).round() as u64);
-            b.set_message(format!("{:.4}", p.phi));
-        }
-    };
-    // The transient's own bar, started at its first report (after packing and setup).
-    let steps_bar = (!args.quiet).then(|| {
-        let b = ProgressBar::hidden();
-        b.set_style(
-            ProgressStyle::with_template(
-                "{spinner} transient {bar:30} {pos}/{len} steps [{elapsed}, ETA {eta}]",
-            )
-            .expect("static template")
-            .progress_chars("=> "),
-        );
-        b
-    });
-    let packing_bar = bar.clone();
-    let transient_progress = steps_bar.clone().map(|b| {
-        demcon_scene::ProgressFn::new(move |done, total| {
-            if b.is_hidden() {
-                if let Some(p) = &packing_bar {
-                    p.finish_and_clear();
-                }
-                b.set_draw_target(indicatif::ProgressDrawTarget::stderr());
-            }
-            b.set_length(total);
-            b.set_position(done);
-        })
-    });
+    let display = RunDisplay::new(!args.quiet);
+    let progress = |p: &demcon_packing::PackProgress| display.packing(p);
+    let steps = display.clone();
+    let transient_progress = Some(demcon_scene::ProgressFn::new(move |done, total| {
+        steps.transient(done, total)
+    }));
     let opts = RunOptions {
         progress: Some(&progress),
         transient_progress,
+        stages: Some(Arc::new(display.clone())),
         checkpoint: Some(CheckpointOptions {
             path: checkpoint.clone(),
             resume: args.resume,
@@ -137,12 +103,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }),
     };
     let result = run_scene(&scene, &opts).with_context(|| format!("running scene {}", args.scene.display()));
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
-    if let Some(b) = &steps_bar {
-        b.finish_and_clear();
-    }
+    display.finish();
     let result = result?;
     let files = write_outputs(&name, &scene.config.outputs, &result, &out)
         .with_context(|| format!("writing outputs to {}", out.display()))?;

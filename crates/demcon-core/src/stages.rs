@@ -1,0 +1,196 @@
+//! The stages of a run: wall time and resident memory of each, and an observer that shows
+//! them as they happen (a progress display).
+//!
+//! Memory is read from `/proc/self/status` (Linux): the resident set after the stage
+//! (`VmRSS`) and its peak during the stage (`VmHWM`, reset at the start of each stage by
+//! writing `5` to `/proc/self/clear_refs`). Elsewhere, or when the kernel refuses the reset,
+//! the values are `None` or the peak since the process started, and say so
+//! ([`StageRecord::peak_is_stage`]).
+
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Wall time and memory of one stage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StageRecord {
+    /// The stage (`packing`, `tessellation`, `solve`, …).
+    pub stage: &'static str,
+    /// Wall time (s).
+    pub wall_s: f64,
+    /// Resident set size after the stage (bytes), when the system tells.
+    pub rss_bytes: Option<u64>,
+    /// Peak resident set size (bytes), when the system tells: during the stage if
+    /// [`peak_is_stage`](Self::peak_is_stage), else since the process started.
+    pub peak_rss_bytes: Option<u64>,
+    /// Whether `peak_rss_bytes` is the peak of this stage alone (the reset worked).
+    pub peak_is_stage: bool,
+}
+
+/// Watches the stages of a run as they start and end (e.g. a progress display).
+pub trait StageObserver: Send + Sync {
+    /// Stage `stage` begins.
+    fn started(&self, stage: &'static str);
+    /// A stage ended, with its record.
+    fn finished(&self, record: &StageRecord);
+}
+
+/// The stages of a run, in order, with an optional observer.
+#[derive(Clone, Default)]
+pub struct Stages {
+    records: Vec<StageRecord>,
+    observer: Option<Arc<dyn StageObserver>>,
+}
+
+impl std::fmt::Debug for Stages {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Stages")
+            .field("records", &self.records)
+            .field("observer", &self.observer.is_some())
+            .finish()
+    }
+}
+
+impl Stages {
+    /// No stages yet; `observer` (if any) sees each one start and end.
+    pub fn new(observer: Option<Arc<dyn StageObserver>>) -> Self {
+        Self {
+            records: Vec::new(),
+            observer,
+        }
+    }
+
+    /// Runs `f` as stage `stage`, recording its wall time and memory.
+    pub fn time<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
+        if let Some(o) = &self.observer {
+            o.started(stage);
+        }
+        let peak_is_stage = reset_peak_resident();
+        let t0 = Instant::now();
+        let out = f();
+        let wall_s = t0.elapsed().as_secs_f64();
+        let (rss_bytes, peak_rss_bytes) = resident_bytes();
+        self.push(StageRecord {
+            stage,
+            wall_s,
+            rss_bytes,
+            peak_rss_bytes,
+            peak_is_stage,
+        });
+        out
+    }
+
+    /// Adds a stage timed elsewhere.
+    pub fn push(&mut self, record: StageRecord) {
+        if let Some(o) = &self.observer {
+            o.finished(&record);
+        }
+        self.records.push(record);
+    }
+
+    /// The stages so far, in order.
+    pub fn records(&self) -> &[StageRecord] {
+        &self.records
+    }
+
+    /// The wall time of `stage` (s), summed over its runs; 0 if it did not run.
+    pub fn wall_s(&self, stage: &str) -> f64 {
+        self.records
+            .iter()
+            .filter(|s| s.stage == stage)
+            .map(|s| s.wall_s)
+            .sum()
+    }
+
+    /// The largest peak resident size of any stage (bytes), when the system tells.
+    pub fn peak_rss_bytes(&self) -> Option<u64> {
+        self.records.iter().filter_map(|r| r.peak_rss_bytes).max()
+    }
+}
+
+/// Resident set size now and its peak (bytes): `VmRSS` and `VmHWM` of `/proc/self/status`;
+/// `None` where that file does not exist.
+pub fn resident_bytes() -> (Option<u64>, Option<u64>) {
+    let Ok(text) = std::fs::read_to_string("/proc/self/status") else {
+        return (None, None);
+    };
+    let field = |name: &str| {
+        text.lines()
+            .find_map(|l| l.strip_prefix(name))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+            .map(|kb| kb.saturating_mul(1024))
+    };
+    (field("VmRSS:"), field("VmHWM:"))
+}
+
+/// Resets the peak resident size (`VmHWM`) to the current one; false where the system does
+/// not allow it.
+pub fn reset_peak_resident() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+/// Memory available to a new allocation (bytes): `MemAvailable` of `/proc/meminfo`, `None`
+/// where that file does not exist.
+pub fn available_memory() -> Option<u64> {
+    std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
+        t.lines()
+            .find_map(|l| l.strip_prefix("MemAvailable:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+            .map(|kb| kb.saturating_mul(1024))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Mutex;
+
+    #[derive(Default)]
+    struct Log(Mutex<Vec<String>>);
+
+    impl StageObserver for Log {
+        fn started(&self, stage: &'static str) {
+            self.0.lock().unwrap().push(format!("start {stage}"));
+        }
+        fn finished(&self, r: &StageRecord) {
+            self.0.lock().unwrap().push(format!("end {}", r.stage));
+        }
+    }
+
+    #[test]
+    fn records_stages_in_order_and_tells_the_observer() {
+        let log = Arc::new(Log::default());
+        let mut s = Stages::new(Some(log.clone()));
+        let v = s.time("a", || 2 + 2);
+        s.time("b", || ());
+        s.time("a", || ());
+        assert_eq!(v, 4);
+        assert_eq!(
+            s.records().iter().map(|r| r.stage).collect::<Vec<_>>(),
+            ["a", "b", "a"]
+        );
+        assert_eq!(
+            *log.0.lock().unwrap(),
+            ["start a", "end a", "start b", "end b", "start a", "end a"]
+        );
+        assert!(s.wall_s("a") >= 0.0 && s.wall_s("c") == 0.0);
+    }
+
+    /// On Linux the peak of a stage that allocates 64 MiB (touched) is at least that much
+    /// above the resident size before it.
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn the_peak_of_a_stage_sees_what_it_allocated() {
+        let before = resident_bytes().0.unwrap();
+        let mut s = Stages::new(None);
+        s.time("alloc", || {
+            let v = vec![1u8; 64 << 20];
+            std::hint::black_box(&v);
+        });
+        let r = &s.records()[0];
+        assert!(
+            r.peak_rss_bytes.unwrap() >= before + (60 << 20),
+            "{r:?}, before {before}"
+        );
+        assert!(available_memory().unwrap() > 0);
+    }
+}
