@@ -67,6 +67,7 @@ impl Stages {
         let peak_is_stage = reset_peak_resident();
         let t0 = Instant::now();
         let out = f();
+        release_free_memory();
         let wall_s = t0.elapsed().as_secs_f64();
         let (rss_bytes, peak_rss_bytes) = resident_bytes();
         self.push(StageRecord {
@@ -120,6 +121,20 @@ pub fn resident_bytes() -> (Option<u64>, Option<u64>) {
             .map(|kb| kb.saturating_mul(1024))
     };
     (field("VmRSS:"), field("VmHWM:"))
+}
+
+/// Hands the allocator's free memory back to the system (glibc's `malloc_trim`), so that
+/// what a stage allocated and freed (e.g. the tessellation's per-cell lists) does not stay
+/// resident for the rest of the run: the freed small blocks are scattered through the heap,
+/// which glibc otherwise keeps. A no-op elsewhere.
+pub fn release_free_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    #[allow(unsafe_code)]
+    // SAFETY: `malloc_trim` takes no pointer and only walks the allocator's own free lists,
+    // locking each arena; it is safe to call from any thread at any time.
+    unsafe {
+        libc::malloc_trim(0);
+    }
 }
 
 /// Resets the peak resident size (`VmHWM`) to the current one; false where the system does

@@ -93,7 +93,7 @@ impl ContactParams {
 }
 
 /// Geometry of one contact, computed once; thermal and electric models only read it.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ContactGeometry {
     /// Centre distance d_pq (m), minimum image in a periodic box.
     pub distance: f64,

@@ -527,8 +527,13 @@ impl Setup<'_> {
             return Err(f);
         }
         self.curve_clip(x, rp, cell, &mut out, false)?;
-        // Faces.
+        // Faces. The facet list is allocated at its exact length: a million cells' lists
+        // grown by doubling would hold a third more memory than their facets.
         out.volume = cell.volume();
+        let neighbour_faces = (0..cell.n_faces())
+            .filter(|&f| cell.tags[f] < WALL_BASE && cell.tags[f] != BOUND)
+            .count();
+        out.facets.reserve_exact(neighbour_faces);
         for f in 0..cell.n_faces() {
             let tag = cell.tags[f];
             let a = cell.vector_area(f);
@@ -937,102 +942,145 @@ fn assemble(
             .map(|i| (f[i].1, f[i].3))
             .filter(|&(a, _)| a >= threshold)
     };
-    struct Half {
-        q: u32,
-        area: f64,
-        disp: Vec3,
-        centroid: Vec3,
-        mismatch: f64,
-        one_sided: bool,
-    }
-    let per_cell: Vec<(Vec<Half>, usize, usize)> = cells
+    // One facet as p (the smaller id) records it: both sides matched, or one side only.
+    // Returns (area, centroid relative to p, area mismatch, one-sided), or None if dropped.
+    let facet = |p: usize, q: u32, a1: f64, disp: Vec3, c1: Vec3| {
+        let mine = (a1 >= threshold).then_some((a1, c1));
+        // q's centroid is relative to q: shift it by the branch into p's frame.
+        let theirs = side(p, q).map(|(a, c)| (a, c + disp));
+        match (mine, theirs) {
+            (None, None) => None,
+            (Some((a, ca)), Some((b, cb))) => {
+                Some((0.5 * (a + b), 0.5 * (ca + cb), (a - b).abs() / a.max(b), false))
+            }
+            (Some((a, c)), None) | (None, Some((a, c))) => Some((a, c, 1.0, true)),
+        }
+    };
+    // Pass 1: how many facets each cell records (those towards larger ids that are kept), so
+    // that the graph's arrays are allocated once at their final size and filled in place (a
+    // list per cell, or arrays grown by doubling, cost up to three times the graph's memory).
+    let counts: Vec<u32> = cells
         .par_iter()
         .enumerate()
         .map(|(p, c)| {
-            let (mut dropped, mut orphans) = (0, 0);
-            let mut out = Vec::new();
-            for &(q, a1, disp, c1) in &c.facets {
-                let mine = (a1 >= threshold).then_some((a1, c1));
-                if (q as usize) < p {
-                    // Counted from q's side, unless q does not list p at all (then it is lost:
-                    // reported as one-sided).
-                    let listed = cells[q as usize]
-                        .facets
-                        .binary_search_by_key(&(p as u32), |e| e.0)
-                        .is_ok();
-                    if mine.is_some() && !listed {
-                        orphans += 1;
-                    }
-                    continue;
-                }
-                let theirs = side(p, q);
-                // q's centroid is relative to q: shift it by the branch into p's frame.
-                let theirs = theirs.map(|(a, c)| (a, c + disp));
-                match (mine, theirs) {
-                    (None, None) => dropped += 1,
-                    (Some((a, ca)), Some((b, cb))) => out.push(Half {
-                        q,
-                        area: 0.5 * (a + b),
-                        disp,
-                        centroid: 0.5 * (ca + cb),
-                        mismatch: (a - b).abs() / a.max(b),
-                        one_sided: false,
-                    }),
-                    (Some((a, c)), None) | (None, Some((a, c))) => out.push(Half {
-                        q,
-                        area: a,
-                        disp,
-                        centroid: c,
-                        mismatch: 1.0,
-                        one_sided: true,
-                    }),
-                }
-            }
-            (out, dropped, orphans)
+            c.facets
+                .iter()
+                .filter(|&&(q, a1, disp, c1)| q as usize > p && facet(p, q, a1, disp, c1).is_some())
+                .count() as u32
         })
         .collect();
-    let mut pairs = Vec::new();
-    let mut geometry = Vec::new();
-    let mut facet_area = Vec::new();
-    let mut split = Vec::new();
-    let mut centroid = Vec::new();
-    let (mut one_sided, mut mismatch, mut dropped_facets) = (0usize, 0.0f64, 0usize);
+    let mut offsets = Vec::with_capacity(n + 1);
+    offsets.push(0usize);
+    for &c in &counts {
+        offsets.push(offsets[offsets.len() - 1] + c as usize);
+    }
+    drop(counts);
+    let total = offsets[n];
+    let mut pairs = vec![[0u32; 2]; total];
+    let mut geometry = vec![ContactGeometry::default(); total];
+    let mut facet_area = vec![0.0; total];
+    let mut split = vec![0.0; total];
+    let mut centroid = vec![Vec3::zeros(); total];
+    // Pass 2: fill, in blocks of particles writing to disjoint slices (the order is the
+    // particles', so the result is the same for any thread count).
+    const BLOCK: usize = 4096;
     let period = container.period();
-    for (p, (halves, dropped, orphans)) in per_cell.into_iter().enumerate() {
-        dropped_facets += dropped;
-        one_sided += orphans;
-        for h in halves {
-            let (p, q, disp) = (p as u32, h.q, h.disp);
-            if h.one_sided {
-                one_sided += 1;
-            } else {
-                mismatch = mismatch.max(h.mismatch);
+    let blocks: Vec<(usize, usize)> = (0..n).step_by(BLOCK).map(|b| (b, (b + BLOCK).min(n))).collect();
+    let mut slices = Vec::with_capacity(blocks.len());
+    {
+        let (mut pr, mut ge, mut fa, mut sp, mut ce) = (
+            &mut pairs[..],
+            &mut geometry[..],
+            &mut facet_area[..],
+            &mut split[..],
+            &mut centroid[..],
+        );
+        for &(lo, hi) in &blocks {
+            let len = offsets[hi] - offsets[lo];
+            let (a, r) = pr.split_at_mut(len);
+            pr = r;
+            let (b, r) = ge.split_at_mut(len);
+            ge = r;
+            let (c, r) = fa.split_at_mut(len);
+            fa = r;
+            let (d, r) = sp.split_at_mut(len);
+            sp = r;
+            let (e, r) = ce.split_at_mut(len);
+            ce = r;
+            slices.push(((lo, hi), a, b, c, d, e));
+        }
+    }
+    /// Per block: dropped facets, one-sided facets, largest area mismatch, first pair across
+    /// more than half a period.
+    type BlockStats = (usize, usize, f64, Option<(u32, u32)>);
+    let stats: Vec<BlockStats> = slices
+        .into_par_iter()
+        .map(|((lo, hi), pr, ge, fa, sp, ce)| {
+            let (mut dropped, mut one_sided, mut mismatch, mut too_small) = (0, 0, 0.0f64, None);
+            let mut k = 0;
+            for p in lo..hi {
+                for &(q, a1, disp, c1) in &cells[p].facets {
+                    if (q as usize) < p {
+                        // Counted from q's side, unless q does not list p at all (then it is
+                        // lost: reported as one-sided).
+                        let listed = cells[q as usize]
+                            .facets
+                            .binary_search_by_key(&(p as u32), |e| e.0)
+                            .is_ok();
+                        if a1 >= threshold && !listed {
+                            one_sided += 1;
+                        }
+                        continue;
+                    }
+                    let Some((area, c, mis, one)) = facet(p, q, a1, disp, c1) else {
+                        dropped += 1;
+                        continue;
+                    };
+                    if one {
+                        one_sided += 1;
+                    } else {
+                        mismatch = mismatch.max(mis);
+                    }
+                    if let Some(l) = period
+                        && too_small.is_none()
+                        && (0..3).any(|i| disp[i].abs() > 0.5 * l[i])
+                    {
+                        too_small = Some((p as u32, q));
+                    }
+                    let d = disp.norm();
+                    let (rp, rq) = (radii[p], radii[q as usize]);
+                    pr[k] = [p as u32, q];
+                    ge[k] = ContactGeometry {
+                        distance: d,
+                        normal: disp / d,
+                        gap: d - rp - rq,
+                        mean_radius: 0.5 * (rp + rq),
+                    };
+                    fa[k] = area;
+                    ce[k] = c;
+                    sp[k] = (d * d + rp * rp - rq * rq) / (2.0 * d * d);
+                    k += 1;
+                }
             }
-            if let Some(l) = period
-                && (0..3).any(|i| disp[i].abs() > 0.5 * l[i])
-            {
-                return Err(CoreError::invalid(
-                    "container.size",
-                    format!("{l:?} m"),
-                    format!(
-                        "the periodic box is too small for the tessellation: particles {p} and {q} share a facet \
-                         across more than half a period"
-                    ),
-                )
-                .into());
-            }
-            let d = disp.norm();
-            let (rp, rq) = (radii[p as usize], radii[q as usize]);
-            pairs.push([p, q]);
-            geometry.push(ContactGeometry {
-                distance: d,
-                normal: disp / d,
-                gap: d - rp - rq,
-                mean_radius: 0.5 * (rp + rq),
-            });
-            facet_area.push(h.area);
-            centroid.push(h.centroid);
-            split.push((d * d + rp * rp - rq * rq) / (2.0 * d * d));
+            debug_assert_eq!(k, pr.len());
+            (dropped, one_sided, mismatch, too_small)
+        })
+        .collect();
+    let (mut one_sided, mut mismatch, mut dropped_facets) = (0usize, 0.0f64, 0usize);
+    for &(d, o, m, too_small) in &stats {
+        dropped_facets += d;
+        one_sided += o;
+        mismatch = mismatch.max(m);
+        if let (Some((p, q)), Some(l)) = (too_small, period) {
+            return Err(CoreError::invalid(
+                "container.size",
+                format!("{l:?} m"),
+                format!(
+                    "the periodic box is too small for the tessellation: particles {p} and {q} share a facet \
+                     across more than half a period"
+                ),
+            )
+            .into());
         }
     }
     let mut walls = Vec::new();
