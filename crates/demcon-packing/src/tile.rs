@@ -57,7 +57,7 @@ pub fn tile(
 ) -> Result<(ParticleSet, Container), PackingError> {
     let Container::Periodic { size } = *container else {
         return Err(CoreError::invalid(
-            "packing.container",
+            "container",
             container.kind(),
             "only a periodic packing can be tiled: copies of a walled packing would meet at its walls, \
              with the gaps and layering of a wall between them",
@@ -125,7 +125,7 @@ mod tests {
         let (p, _) = small();
         let walled = Container::Box { size: [1e-3; 3] };
         let e = tile(&p, &walled, [2, 2, 2]).unwrap_err().to_string();
-        assert!(e.contains("packing.container") && e.contains("periodic"), "{e}");
+        assert!(e.contains("container = box") && e.contains("periodic"), "{e}");
         let e = tile(&p, &Container::Periodic { size: [1e-3; 3] }, [2, 0, 2])
             .unwrap_err()
             .to_string();

@@ -5,6 +5,7 @@ mod info;
 mod pack;
 mod progress;
 mod run;
+mod tile;
 
 use std::process::ExitCode;
 
@@ -22,6 +23,8 @@ struct Cli {
 enum Command {
     /// Make a dense random packing by the Lubachevsky–Stillinger algorithm.
     Pack(Box<pack::PackArgs>),
+    /// Copy a periodic packing file NX × NY × NZ times into a larger periodic packing.
+    Tile(tile::TileArgs),
     /// Print the report of a packing file (`x y z r`).
     Info(info::InfoArgs),
     /// Run a scene file (RON): packing, contacts, thermal and/or electric solve, outputs.
@@ -50,6 +53,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Pack(args) => pack::run(*args),
+        Command::Tile(args) => tile::run(args),
         Command::Info(args) => info::run(args),
         Command::Run(args) => run::run(args),
         Command::Calibrate(args) => calibrate::run(args),

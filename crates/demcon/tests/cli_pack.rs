@@ -1,4 +1,4 @@
-//! End-to-end robustness tests of `demcon pack`, `info` and `calibrate` (fuzz findings):
+//! End-to-end robustness tests of `demcon pack`, `tile`, `info` and `calibrate` (fuzz findings):
 //! bad input is refused up front with the flag, the value and what is allowed; budget stops
 //! exit with status 3; outputs are checked before packing and written all or none.
 
@@ -171,6 +171,40 @@ fn info_refuses_truncated_outside_and_impossible_files() {
         let o = demcon(&["info", f.to_str().unwrap()]);
         assert_eq!(o.status.code(), Some(1), "{}", text(&o));
         assert!(text(&o).contains(want), "{}", text(&o));
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn tile_copies_a_periodic_file_and_refuses_what_it_cannot_tile() {
+    let d = common::scratch("clipack", "tile");
+    let (p, b, t) = (d.join("p.xyzr"), d.join("b.xyzr"), d.join("t.xyzr"));
+    let (p_s, b_s, t_s) = (p.to_str().unwrap(), b.to_str().unwrap(), t.to_str().unwrap());
+    let o = pack(p_s, &["--container", "periodic", "--size", "0.001,0.001,0.001"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = demcon(&["tile", p_s, "--repeat", "2,1,3", "--out", t_s]);
+    assert!(o.status.success(), "{}", text(&o));
+    let tiled = std::fs::read_to_string(&t).unwrap();
+    assert!(
+        tiled.contains("# container periodic 0.002 0.001 0.003"),
+        "{tiled}"
+    );
+    assert!(tiled.contains("# count 1800"), "{tiled}");
+    assert!(text(&o).contains("volume fraction    0.55000"), "{}", text(&o));
+    std::fs::remove_file(&t).unwrap();
+    let o = pack(b_s, &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    for (args, want) in [
+        (vec!["tile", p_s, "--repeat", "2,0,3"], "repeat[1] = 0"),
+        (vec!["tile", p_s, "--repeat", "2,2"], "three counts"),
+        (vec!["tile", b_s, "--repeat", "2,2,2"], "only a periodic packing"),
+    ] {
+        let mut args = args;
+        args.extend(["--out", t_s]);
+        let o = demcon(&args);
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        assert!(text(&o).contains(want), "{}", text(&o));
+        assert!(!t.exists());
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
