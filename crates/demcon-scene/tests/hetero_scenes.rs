@@ -302,3 +302,37 @@ fn cut_particles_conduct_heat_and_current_alike_and_store_heat_by_volume() {
         }
     }
 }
+
+/// `scenes/multi-inclusion-8m.ron`, shrunk to 1000 particles tiled 2 × 2 × 2: the tiling cut
+/// to walls carries the wall temperatures, the 83 spheres are placed on the whole cube, and
+/// the result is the coarse multi-inclusion answer (ETC between the phases, readings between
+/// the fixed temperatures, every stage timed).
+#[test]
+fn paper_scale_scene_runs_shrunk() {
+    let mut s = Scene::load(&scene_path("multi-inclusion-8m.ron")).unwrap();
+    let PackingConfig::Tile { packing, repeat, walls } = &mut s.config.packing else {
+        panic!("multi-inclusion-8m.ron: expected a tiled packing");
+    };
+    assert!(*walls);
+    let PackingConfig::Generate { container, count, .. } = packing.as_mut() else {
+        panic!("multi-inclusion-8m.ron: expected a generated packing inside the tiling");
+    };
+    *count = 1000;
+    *container = demcon_scene::config::ContainerConfig::Periodic { size: (0.05, 0.05, 0.05) };
+    *repeat = (2, 2, 2);
+    s.config.outputs.halo = Some(2.0);
+    let r = run(&s, &RunOptions::default()).unwrap();
+    assert_eq!(r.model.particles.len(), 8000);
+    assert_eq!(r.model.report.inclusions.as_ref().unwrap().count, 83);
+    let etc = r.etc.as_ref().unwrap().lambda_e;
+    assert!(etc > 0.22 && etc < 0.36, "λ_e = {etc}");
+    for name in ["A", "B", "C", "D"] {
+        let t = probe(&r, name, "temperature");
+        assert!((25.0..=35.0).contains(&t), "T({name}) = {t}");
+    }
+    let stages: Vec<&str> = r.stages.records().iter().map(|s| s.stage).collect();
+    assert_eq!(
+        stages,
+        ["packing", "phases", "tessellation", "network", "thermal setup", "solve", "flux", "halo", "probes"]
+    );
+}

@@ -360,8 +360,13 @@ struct Candidate {
 #[derive(Debug, Default)]
 struct CellOut {
     volume: f64,
-    /// (q, area, displacement, centroid relative to the site) per neighbour facet.
-    facets: Vec<(u32, f64, Vec3, Vec3)>,
+    /// (q, area, displacement, centroid relative to the site) per facet towards a larger id
+    /// q, sorted by q: the graph's record of that facet.
+    up: Vec<(u32, f64, Vec3, Vec3)>,
+    /// (q, area) per facet towards a smaller id q, sorted by q: only to check the facet
+    /// against q's record (its area, and that q lists it), so each facet's full record is
+    /// kept once, not twice.
+    down: Vec<(u32, f64)>,
     /// (wall tag, vector area Σ A n, Σ A h, Σ A, Σ A c) per wall.
     walls: Vec<(Tag, Vec3, f64, f64, Vec3)>,
     curved_planes: usize,
@@ -530,10 +535,19 @@ impl Setup<'_> {
         // Faces. The facet list is allocated at its exact length: a million cells' lists
         // grown by doubling would hold a third more memory than their facets.
         out.volume = cell.volume();
-        let neighbour_faces = (0..cell.n_faces())
-            .filter(|&f| cell.tags[f] < WALL_BASE && cell.tags[f] != BOUND)
-            .count();
-        out.facets.reserve_exact(neighbour_faces);
+        let (mut ups, mut downs) = (0, 0);
+        for f in 0..cell.n_faces() {
+            let tag = cell.tags[f];
+            if tag < WALL_BASE {
+                if cands[tag as usize].q as usize > p {
+                    ups += 1;
+                } else {
+                    downs += 1;
+                }
+            }
+        }
+        out.up.reserve_exact(ups);
+        out.down.reserve_exact(downs);
         for f in 0..cell.n_faces() {
             let tag = cell.tags[f];
             let a = cell.vector_area(f);
@@ -556,11 +570,16 @@ impl Setup<'_> {
                 });
             } else {
                 let cd = cands[tag as usize];
-                out.facets.push((cd.q, area, cd.disp, cell.centroid(f)));
+                if cd.q as usize > p {
+                    out.up.push((cd.q, area, cd.disp, cell.centroid(f)));
+                } else {
+                    out.down.push((cd.q, area));
+                }
             }
         }
-        out.facets.sort_unstable_by_key(|f| f.0);
-        if out.facets.windows(2).any(|w| w[0].0 == w[1].0) {
+        out.up.sort_unstable_by_key(|f| f.0);
+        out.down.sort_unstable_by_key(|f| f.0);
+        if out.up.windows(2).any(|w| w[0].0 == w[1].0) || out.down.windows(2).any(|w| w[0].0 == w[1].0) {
             // Two facets with one neighbour: two of its images (refused in periodic boxes).
             return Err(CellFail::TooSmallPeriod {
                 layers: out.layers as i64,
@@ -933,28 +952,22 @@ fn assemble(
     let n = particles.len();
     let radii = &particles.radii;
     let threshold = params.negligible_area * r_mean * r_mean;
-    // Each facet seen from its smaller id p, matched with q's side (cells' facets are
-    // sorted by neighbour, so a binary search finds it). Facets below the threshold drop.
-    let side = |p: usize, q: u32| -> Option<(f64, Vec3)> {
-        let f = &cells[q as usize].facets;
+    // Each facet recorded by its smaller id p, checked against q's side (its area; cells'
+    // lists are sorted by neighbour, so a binary search finds it). Facets below the threshold
+    // drop. The centroid is p's (both sides compute the same polygon, to round-off).
+    let side = |p: usize, q: u32| -> Option<f64> {
+        let f = &cells[q as usize].down;
         f.binary_search_by_key(&(p as u32), |e| e.0)
             .ok()
-            .map(|i| (f[i].1, f[i].3))
-            .filter(|&(a, _)| a >= threshold)
+            .map(|i| f[i].1)
+            .filter(|&a| a >= threshold)
     };
-    // One facet as p (the smaller id) records it: both sides matched, or one side only.
-    // Returns (area, centroid relative to p, area mismatch, one-sided), or None if dropped.
-    let facet = |p: usize, q: u32, a1: f64, disp: Vec3, c1: Vec3| {
-        let mine = (a1 >= threshold).then_some((a1, c1));
-        // q's centroid is relative to q: shift it by the branch into p's frame.
-        let theirs = side(p, q).map(|(a, c)| (a, c + disp));
-        match (mine, theirs) {
-            (None, None) => None,
-            (Some((a, ca)), Some((b, cb))) => {
-                Some((0.5 * (a + b), 0.5 * (ca + cb), (a - b).abs() / a.max(b), false))
-            }
-            (Some((a, c)), None) | (None, Some((a, c))) => Some((a, c, 1.0, true)),
-        }
+    // One facet as p records it: (area, centroid relative to p, area mismatch, one-sided),
+    // or None if dropped.
+    let facet = |p: usize, q: u32, a1: f64, c1: Vec3| match ((a1 >= threshold).then_some(a1), side(p, q)) {
+        (None, None) => None,
+        (Some(a), Some(b)) => Some((0.5 * (a + b), c1, (a - b).abs() / a.max(b), false)),
+        (Some(a), None) | (None, Some(a)) => Some((a, c1, 1.0, true)),
     };
     // Pass 1: how many facets each cell records (those towards larger ids that are kept), so
     // that the graph's arrays are allocated once at their final size and filled in place (a
@@ -963,9 +976,8 @@ fn assemble(
         .par_iter()
         .enumerate()
         .map(|(p, c)| {
-            c.facets
-                .iter()
-                .filter(|&&(q, a1, disp, c1)| q as usize > p && facet(p, q, a1, disp, c1).is_some())
+            c.up.iter()
+                .filter(|&&(q, a1, _, c1)| facet(p, q, a1, c1).is_some())
                 .count() as u32
         })
         .collect();
@@ -1019,20 +1031,19 @@ fn assemble(
             let (mut dropped, mut one_sided, mut mismatch, mut too_small) = (0, 0, 0.0f64, None);
             let mut k = 0;
             for p in lo..hi {
-                for &(q, a1, disp, c1) in &cells[p].facets {
-                    if (q as usize) < p {
-                        // Counted from q's side, unless q does not list p at all (then it is
-                        // lost: reported as one-sided).
-                        let listed = cells[q as usize]
-                            .facets
-                            .binary_search_by_key(&(p as u32), |e| e.0)
-                            .is_ok();
-                        if a1 >= threshold && !listed {
-                            one_sided += 1;
-                        }
-                        continue;
+                // Facets towards smaller ids are counted from q's side, unless q does not list
+                // p at all (then it is lost: reported as one-sided).
+                for &(q, a1) in &cells[p].down {
+                    let listed = cells[q as usize]
+                        .up
+                        .binary_search_by_key(&(p as u32), |e| e.0)
+                        .is_ok();
+                    if a1 >= threshold && !listed {
+                        one_sided += 1;
                     }
-                    let Some((area, c, mis, one)) = facet(p, q, a1, disp, c1) else {
+                }
+                for &(q, a1, disp, c1) in &cells[p].up {
+                    let Some((area, c, mis, one)) = facet(p, q, a1, c1) else {
                         dropped += 1;
                         continue;
                     };
