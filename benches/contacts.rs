@@ -10,12 +10,15 @@
 //! whose largest particles set the grid's cell size. Ids follow the lattice (spatially
 //! ordered); the `shuffled` case renumbers them at random.
 //!
-//! Run: `cargo bench -p demcon-benches --bench contacts`.
+//! Run: `cargo bench -p demcon-benches --bench contacts`; one case with e.g.
+//! `cargo bench -p demcon-benches --bench contacts -- 'contacts/grid/1000188$'` (a case is
+//! named by the lattice's particle count: 10 976, 97 556, 1 000 188). With
+//! `DEMCON_BENCH_SUMMARY_ONLY=1` only the one-off line per case is printed.
 
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use demcon_benches::{SplitMix, jittered_fcc};
+use demcon_benches::{SplitMix, jittered_fcc, summary_only, wanted};
 use demcon_core::ParticleSet;
 use demcon_graph::{ContactParams, NeighbourSearch, detect_contacts};
 
@@ -34,6 +37,15 @@ fn contacts(c: &mut Criterion) {
     let mut group = c.benchmark_group("contacts");
     group.sample_size(10);
     for n in [10_000usize, 100_000, 1_000_000] {
+        // The lattice's particle count (4 m³), which names the case.
+        let m = ((n as f64 / 4.0).cbrt().round() as usize).max(1);
+        let len = 4 * m * m * m;
+        if !["grid", "rtree", "grid-shuffled"]
+            .iter()
+            .any(|c| wanted(&format!("contacts/{c}/{len}")))
+        {
+            continue;
+        }
         let (p, container) = jittered_fcc(n, 42);
         let mut cases = vec![
             ("grid", p.clone(), NeighbourSearch::CellGrid),
@@ -43,6 +55,9 @@ fn contacts(c: &mut Criterion) {
             cases.push(("grid-shuffled", shuffled(&p, 7), NeighbourSearch::CellGrid));
         }
         for (name, set, search) in cases {
+            if !wanted(&format!("contacts/{name}/{len}")) {
+                continue;
+            }
             let params = ContactParams {
                 search,
                 ..ContactParams::target(7.5)
@@ -59,6 +74,9 @@ fn contacts(c: &mut Criterion) {
                 g.report.rattlers.len(),
                 g.report.wall_time_s
             );
+            if summary_only() {
+                continue;
+            }
             group.bench_with_input(BenchmarkId::new(name, set.len()), &set, |b, set| {
                 b.iter(|| black_box(detect_contacts(set, &container, &params).unwrap()))
             });

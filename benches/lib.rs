@@ -61,3 +61,25 @@ pub fn jittered_fcc(n: usize, seed: u64) -> (ParticleSet, Container) {
         Container::Box { size: [size; 3] },
     )
 }
+
+/// Whether criterion's name filter (the first positional argument, a regex; matched here
+/// as `|`-separated plain substrings, a trailing `$` anchoring one at the end, e.g.
+/// `contacts/grid/1000000$`) selects `id`, so that unselected cases are neither built nor
+/// summarised.
+pub fn wanted(id: &str) -> bool {
+    let filter = std::env::args()
+        .skip(1)
+        .find(|a| !a.starts_with('-') && a != "--bench");
+    filter.is_none_or(|f| {
+        f.split('|').any(|part| {
+            part.strip_suffix('$')
+                .map_or(id.contains(part), |p| id.ends_with(p))
+        })
+    })
+}
+
+/// Whether only the one-off summary lines are wanted (`DEMCON_BENCH_SUMMARY_ONLY=1`): no
+/// criterion sampling.
+pub fn summary_only() -> bool {
+    std::env::var("DEMCON_BENCH_SUMMARY_ONLY").is_ok_and(|v| v == "1")
+}

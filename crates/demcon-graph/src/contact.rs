@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::error::{GraphError, positive};
 use crate::laguerre::Cells;
-use crate::search::{Candidate, NeighbourSearch, candidates, separation, wrap};
+use crate::search::{Candidates, NeighbourSearch, candidates, separation, wrap};
 
 /// Which pairs count as contacts.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -162,14 +162,16 @@ pub struct ContactGraph {
 }
 
 impl ContactGraph {
-    /// Number of contacts of each particle.
+    /// Number of contacts of each particle (counted in parallel; integer counts, so the
+    /// result does not depend on the thread count).
     pub fn degrees(&self) -> Vec<u32> {
-        let mut d = vec![0u32; self.n_particles];
-        for &[p, q] in &self.pairs {
-            d[p as usize] += 1;
-            d[q as usize] += 1;
-        }
-        d
+        use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+        let d: Vec<AtomicU32> = (0..self.n_particles).map(|_| AtomicU32::new(0)).collect();
+        self.pairs.par_iter().for_each(|&[p, q]| {
+            d[p as usize].fetch_add(1, Relaxed);
+            d[q as usize].fetch_add(1, Relaxed);
+        });
+        d.into_iter().map(AtomicU32::into_inner).collect()
     }
 
     /// Mean coordination number Z = 2·contacts/N (contacts per particle); 0 for no particle.
@@ -276,13 +278,14 @@ pub(crate) fn summarise(graph: &mut ContactGraph) {
         .collect();
     r.under_two_contacts = degrees.iter().filter(|&&d| d < 2).count();
     let single = degrees.iter().filter(|&&d| d == 1).count();
-    let (mut overlaps, mut max_rel) = (0usize, 0.0f64);
-    for g in &graph.geometry {
-        if g.gap < 0.0 {
-            overlaps += 1;
-            max_rel = max_rel.max(-g.gap / (2.0 * g.mean_radius));
-        }
-    }
+    // Count and largest overlap: integer sums and a maximum, so any reduction order gives
+    // the same result.
+    let (overlaps, max_rel) = graph
+        .geometry
+        .par_iter()
+        .filter(|g| g.gap < 0.0)
+        .map(|g| (1usize, -g.gap / (2.0 * g.mean_radius)))
+        .reduce(|| (0, 0.0f64), |a, b| (a.0 + b.0, a.1.max(b.1)));
     r.overlaps = overlaps;
     r.n_components = comps.count();
     r.largest_component = comps.largest();
@@ -456,6 +459,91 @@ pub fn coordination_curve(
         .collect())
 }
 
+/// The `k`-th and the (`k` + 1)-th smallest relative gaps of the candidates (0-based; the
+/// second is `None` past the end). Exact: a histogram of the gaps' leading bits (in
+/// parallel; counts are integers, so the result does not depend on the thread count) finds
+/// the buckets holding both ranks, and only their values are ranked.
+fn kth_gaps(cands: &Candidates, k: usize) -> (f64, Option<f64>) {
+    const BITS: u32 = 16;
+    // Order-preserving map of f64 to u64 (the order of `f64::total_cmp`).
+    let key = |x: f64| {
+        let b = x.to_bits();
+        if b >> 63 == 1 { !b } else { b | (1 << 63) }
+    };
+    let bucket = |x: f64| (key(x) >> (64 - BITS)) as usize;
+    let hist = cands
+        .parts
+        .par_iter()
+        .fold(
+            || vec![0usize; 1 << BITS],
+            |mut h, part| {
+                for c in part {
+                    h[bucket(c.rel_gap)] += 1;
+                }
+                h
+            },
+        )
+        .reduce(
+            || vec![0usize; 1 << BITS],
+            |mut a, b| {
+                for (x, y) in a.iter_mut().zip(&b) {
+                    *x += y;
+                }
+                a
+            },
+        );
+    let total: usize = hist.iter().sum();
+    // The bucket of rank r, and the number of values in the buckets below it.
+    let locate = |r: usize| {
+        let mut below = 0;
+        for (b, &h) in hist.iter().enumerate() {
+            if below + h > r {
+                return (b, below);
+            }
+            below += h;
+        }
+        unreachable!("rank {r} below the total {total}")
+    };
+    let (b0, below) = locate(k);
+    let b1 = if k + 1 < total { locate(k + 1).0 } else { b0 };
+    let mut vals: Vec<f64> = cands
+        .parts
+        .par_iter()
+        .flat_map_iter(|part| {
+            part.iter()
+                .map(|c| c.rel_gap)
+                .filter(|&x| (b0..=b1).contains(&bucket(x)))
+        })
+        .collect();
+    let (_, kth, right) = vals.select_nth_unstable_by(k - below, f64::total_cmp);
+    let kth = *kth;
+    (kth, right.iter().copied().min_by(f64::total_cmp))
+}
+
+/// The pairs of the candidates with relative gap ≤ `epsilon`, in key order: counted per part,
+/// then each part writes its own slice, in parallel.
+fn accepted_pairs(cands: &Candidates, epsilon: f64) -> Vec<[u32; 2]> {
+    let counts: Vec<usize> = cands
+        .parts
+        .par_iter()
+        .map(|part| part.iter().filter(|c| c.rel_gap <= epsilon).count())
+        .collect();
+    let mut pairs = vec![[0u32; 2]; counts.iter().sum()];
+    let mut slices = Vec::with_capacity(counts.len());
+    let mut rest = pairs.as_mut_slice();
+    for &m in &counts {
+        let (head, tail) = rest.split_at_mut(m);
+        slices.push(head);
+        rest = tail;
+    }
+    slices.into_par_iter().zip(&cands.parts).for_each(|(out, part)| {
+        for (o, c) in out.iter_mut().zip(part.iter().filter(|c| c.rel_gap <= epsilon)) {
+            *o = [c.p(), c.q()];
+        }
+    });
+    pairs
+}
+
 /// Finds the contacts of a packing.
 ///
 /// A pair (p, q) is a contact when its gap g_pq = d_pq − R_p − R_q is at most ε·(R_p + R_q),
@@ -489,11 +577,12 @@ pub fn detect_contacts(
     let radii = &particles.radii;
     let search = |eps: f64| candidates(params.search, pos, radii, period, eps);
 
-    let (cands, epsilon, rounds, target, overshoot): (Vec<Candidate>, f64, u32, Option<f64>, bool) =
-        match params.tolerance {
-            ContactTolerance::Relative(eps) => {
-                if eps > eps_limit {
-                    return Err(CoreError::invalid(
+    let (cands, epsilon, rounds, target, overshoot): (Candidates, f64, u32, Option<f64>, bool) = match params
+        .tolerance
+    {
+        ContactTolerance::Relative(eps) => {
+            if eps > eps_limit {
+                return Err(CoreError::invalid(
                         "tolerance.relative",
                         eps,
                         format!(
@@ -501,57 +590,60 @@ pub fn detect_contacts(
                         ),
                     )
                     .into());
+            }
+            (search(eps)?, eps, 1, None, false)
+        }
+        ContactTolerance::TargetCoordination(z) => {
+            let need = (z * n as f64 / 2.0).ceil();
+            let all_pairs = n as f64 * (n as f64 - 1.0) / 2.0;
+            let cap = params.max_epsilon.min(eps_limit);
+            let mut eps_s = params.initial_epsilon.min(cap);
+            let mut rounds = 0;
+            let cands = loop {
+                rounds += 1;
+                let c = search(eps_s)?;
+                if c.len() as f64 >= need {
+                    break c;
                 }
-                (search(eps)?, eps, 1, None, false)
-            }
-            ContactTolerance::TargetCoordination(z) => {
-                let need = (z * n as f64 / 2.0).ceil();
-                let all_pairs = n as f64 * (n as f64 - 1.0) / 2.0;
-                let cap = params.max_epsilon.min(eps_limit);
-                let mut eps_s = params.initial_epsilon.min(cap);
-                let mut rounds = 0;
-                let cands = loop {
-                    rounds += 1;
-                    let c = search(eps_s)?;
-                    if c.len() as f64 >= need {
-                        break c;
-                    }
-                    if eps_s >= cap || c.len() as f64 >= all_pairs {
-                        return Err(GraphError::UnreachableCoordination {
-                            target: z,
-                            max_coordination: 2.0 * c.len() as f64 / n as f64,
-                            max_epsilon: eps_s,
-                        });
-                    }
-                    eps_s = (2.0 * eps_s).min(cap);
-                };
-                let k = need as usize - 1;
-                let mut rel: Vec<f64> = cands.iter().map(|c| c.rel_gap).collect();
-                let (_, kth, right) = rel.select_nth_unstable_by(k, f64::total_cmp);
-                let eps_k = *kth;
-                let next = right.iter().copied().min_by(f64::total_cmp);
-                let epsilon = match next {
-                    Some(nx) if nx > eps_k => {
-                        let mid = 0.5 * (eps_k + nx);
-                        if mid >= eps_k && mid < nx { mid } else { eps_k }
-                    }
-                    _ => eps_k,
-                };
-                let accepted = cands.iter().filter(|c| c.rel_gap <= epsilon).count();
-                let reached = 2.0 * accepted as f64 / n as f64;
-                let overshoot = reached - z > params.coordination_tolerance;
-                (cands, epsilon, rounds, Some(z), overshoot)
-            }
-        };
+                if eps_s >= cap || c.len() as f64 >= all_pairs {
+                    return Err(GraphError::UnreachableCoordination {
+                        target: z,
+                        max_coordination: 2.0 * c.len() as f64 / n as f64,
+                        max_epsilon: eps_s,
+                    });
+                }
+                eps_s = (2.0 * eps_s).min(cap);
+            };
+            let (eps_k, next) = kth_gaps(&cands, need as usize - 1);
+            let epsilon = match next {
+                Some(nx) if nx > eps_k => {
+                    let mid = 0.5 * (eps_k + nx);
+                    if mid >= eps_k && mid < nx { mid } else { eps_k }
+                }
+                _ => eps_k,
+            };
+            let accepted: usize = cands
+                .parts
+                .par_iter()
+                .map(|part| part.iter().filter(|c| c.rel_gap <= epsilon).count())
+                .sum();
+            let reached = 2.0 * accepted as f64 / n as f64;
+            let overshoot = reached - z > params.coordination_tolerance;
+            (cands, epsilon, rounds, Some(z), overshoot)
+        }
+    };
     let n_candidates = cands.len();
-    let accepted: Vec<Candidate> = cands.into_iter().filter(|c| c.rel_gap <= epsilon).collect();
-    if let Some(c) = accepted.iter().find(|c| c.rel_gap <= -1.0 + 1e-12) {
+    if let Some(c) = cands.parts.par_iter().find_map_first(|part| {
+        part.iter()
+            .find(|c| c.rel_gap <= epsilon && c.rel_gap <= -1.0 + 1e-12)
+    }) {
         let (p, q) = (c.p(), c.q());
         let d = separation(&pos[p as usize], &pos[q as usize], period.as_ref()).norm();
         return Err(GraphError::CoincidentCentres { p, q, distance: d });
     }
     let per = period.as_ref();
-    let pairs: Vec<[u32; 2]> = accepted.par_iter().map(|c| [c.p(), c.q()]).collect();
+    let pairs = accepted_pairs(&cands, epsilon);
+    drop(cands);
     let geometry: Vec<ContactGeometry> = pairs
         .par_iter()
         .map(|&[p, q]| {
@@ -566,7 +658,6 @@ pub fn detect_contacts(
             }
         })
         .collect();
-    drop(accepted);
     let mut diagnostics = Vec::new();
     let mut graph = ContactGraph {
         n_particles: n,
@@ -600,4 +691,41 @@ pub fn detect_contacts(
     summarise(&mut graph);
     graph.report.wall_time_s = start.elapsed().as_secs_f64();
     Ok(graph)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::search::Candidate;
+
+    /// The histogram selection agrees with a full sort, across parts, with negative gaps,
+    /// ties, and ranks at the ends.
+    #[test]
+    fn kth_gaps_agrees_with_a_sort() {
+        let mut x = 0x2545f4914f6cdd1du64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let parts: Vec<Vec<Candidate>> = (0..7)
+            .map(|p| {
+                (0..300)
+                    .map(|q| Candidate {
+                        key: ((p as u64) << 32) | q,
+                        rel_gap: if q % 50 == 0 { 0.05 } else { 0.3 * next() - 0.1 },
+                    })
+                    .collect()
+            })
+            .collect();
+        let cands = Candidates { parts };
+        let mut all: Vec<f64> = cands.iter().map(|c| c.rel_gap).collect();
+        all.sort_by(f64::total_cmp);
+        for k in [0, 1, 17, 500, 1049, 1050, all.len() - 2, all.len() - 1] {
+            let (kth, next) = kth_gaps(&cands, k);
+            assert_eq!(kth, all[k], "rank {k}");
+            assert_eq!(next, all.get(k + 1).copied(), "rank {k} + 1");
+        }
+    }
 }

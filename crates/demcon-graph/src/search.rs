@@ -85,6 +85,25 @@ impl Candidate {
     }
 }
 
+/// Candidate pairs in parts (one per parallel task); the parts, concatenated, are sorted by
+/// key.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Candidates {
+    pub parts: Vec<Vec<Candidate>>,
+}
+
+impl Candidates {
+    /// Number of pairs.
+    pub fn len(&self) -> usize {
+        self.parts.iter().map(Vec::len).sum()
+    }
+
+    /// The pairs in key order.
+    pub fn iter(&self) -> impl Iterator<Item = &Candidate> {
+        self.parts.iter().flatten()
+    }
+}
+
 /// Margin on the prefilter distance so that rounding never drops a pair with rel ≤ ε.
 const MARGIN: f64 = 1.0 + 1e-9;
 
@@ -92,7 +111,7 @@ const MARGIN: f64 = 1.0 + 1e-9;
 /// overflow f64 and cell indices lose meaning.
 pub(crate) const MAX_SPAN: f64 = 1e150;
 
-/// Pairs with relative gap ≤ `eps`, sorted by key. `pos` must be wrapped into the period
+/// Pairs with relative gap ≤ `eps`, sorted by key (across the parts). `pos` must be wrapped into the period
 /// when `period` is given, and every contact distance must stay under half the period.
 ///
 /// Errors: a non-finite position or radius, or particles spanning more than [`MAX_SPAN`]
@@ -103,7 +122,7 @@ pub(crate) fn candidates(
     radii: &[f64],
     period: Option<[f64; 3]>,
     eps: f64,
-) -> Result<Vec<Candidate>, GraphError> {
+) -> Result<Candidates, GraphError> {
     check_span(pos, radii)?;
     Ok(match method {
         NeighbourSearch::CellGrid => grid_candidates(pos, radii, period, eps),
@@ -149,11 +168,13 @@ impl Grid {
                 (min, max - min)
             }
         };
-        // Never more than ~2 cells per particle: sparse sets get wider cells. Cell counts are
+        // Never more than ~3 cells per particle: sparse sets get wider cells. Cell counts are
         // clamped before the cast (a tiny reach or a huge span once overflowed the index), the
-        // width starts at span / max_cells and widens at most 200 times; a degenerate span
-        // falls back to a single cell (slow, still exact).
-        let max_cells = 2.0 * pos.len() as f64 + 64.0;
+        // width starts at the larger of span / max_cells and (volume / max_cells)^(1/3), and
+        // widens at most 200 times (by 2 % for the first 100, so that the grid is as fine as
+        // allowed: each particle tests the particles of 27 cells); a degenerate span falls
+        // back to a single cell (slow, still exact).
+        let max_cells = 3.0 * pos.len() as f64 + 64.0;
         let e_max = extent.max();
         let mut h = if reach.is_finite() && reach > 0.0 {
             reach
@@ -161,6 +182,10 @@ impl Grid {
             e_max
         };
         h = h.max(e_max / max_cells);
+        let volume = extent.x * extent.y * extent.z;
+        if volume.is_finite() && volume > 0.0 {
+            h = h.max((volume / max_cells).cbrt());
+        }
         let dims_for = |h: f64| -> [usize; 3] {
             std::array::from_fn(|k| {
                 let cells = (extent[k] / h).floor();
@@ -175,7 +200,7 @@ impl Grid {
                 }
             })
         };
-        for _ in 0..200 {
+        for i in 0..200 {
             let dims = dims_for(h);
             let total = dims.iter().map(|&d| d as f64).product::<f64>();
             if total <= max_cells {
@@ -190,7 +215,7 @@ impl Grid {
                     periodic: period.is_some(),
                 };
             }
-            h *= 1.25;
+            h *= if i < 100 { 1.02 } else { 1.25 };
         }
         Self {
             dims: [1, 1, 1],
@@ -212,53 +237,73 @@ impl Grid {
         i[0] + self.dims[0] * (i[1] + self.dims[1] * i[2])
     }
 
-    /// The distinct neighbour cells of `a` with index > `a`, into `out`; returns their count.
-    fn forward_neighbours(&self, a: usize, out: &mut [usize; 27]) -> usize {
+    /// The particles of cell `a` and of its neighbours, as ranges of the cell-sorted arrays
+    /// (`start[c]..start[c + 1]` holds cell `c`), into `out`; returns their count. Every
+    /// distinct cell lies in exactly one range (a periodic axis of one or two cells wraps onto
+    /// itself), and cells adjacent along x share a range.
+    fn neighbour_ranges(&self, a: usize, start: &[u32], out: &mut [(u32, u32); 27]) -> usize {
         let [nx, ny, nz] = self.dims;
         let ix = a % nx;
         let iy = (a / nx) % ny;
         let iz = a / (nx * ny);
-        let step = |i: usize, d: isize, n: usize| -> Option<usize> {
-            let j = i as isize + d;
-            if (0..n as isize).contains(&j) {
-                Some(j as usize)
-            } else if self.periodic {
-                Some(j.rem_euclid(n as isize) as usize)
-            } else {
-                None
+        let interior = |i: usize, n: usize| i >= 1 && i + 1 < n;
+        if !self.periodic || (interior(ix, nx) && interior(iy, ny) && interior(iz, nz)) {
+            // Runs clamped to the grid: distinct cells, each x-run contiguous.
+            let (x0, x1) = (ix.saturating_sub(1), (ix + 1).min(nx - 1));
+            let mut m = 0;
+            for jz in iz.saturating_sub(1)..=(iz + 1).min(nz - 1) {
+                for jy in iy.saturating_sub(1)..=(iy + 1).min(ny - 1) {
+                    let row = nx * (jy + ny * jz);
+                    out[m] = (start[row + x0], start[row + x1 + 1]);
+                    m += 1;
+                }
             }
-        };
-        let mut m = 0;
+            return m;
+        }
+        // A periodic boundary cell: the wrapped cells, sorted, deduplicated and coalesced.
+        let wrapped = |i: usize, d: isize, n: usize| (i as isize + d).rem_euclid(n as isize) as usize;
+        let mut cells = [0usize; 27];
+        let mut k = 0;
         for dz in -1..=1 {
-            let Some(jz) = step(iz, dz, nz) else { continue };
             for dy in -1..=1 {
-                let Some(jy) = step(iy, dy, ny) else { continue };
                 for dx in -1..=1 {
-                    let Some(jx) = step(ix, dx, nx) else { continue };
-                    let b = jx + nx * (jy + ny * jz);
-                    if b > a {
-                        out[m] = b;
-                        m += 1;
-                    }
+                    cells[k] = wrapped(ix, dx, nx) + nx * (wrapped(iy, dy, ny) + ny * wrapped(iz, dz, nz));
+                    k += 1;
                 }
             }
         }
-        out[..m].sort_unstable();
-        let mut k = 0;
-        for i in 0..m {
-            if i == 0 || out[i] != out[k - 1] {
-                out[k] = out[i];
-                k += 1;
+        cells.sort_unstable();
+        let mut m = 0;
+        let mut prev = usize::MAX;
+        for &c in &cells {
+            if c == prev {
+                continue;
             }
+            if m > 0 && c == prev + 1 {
+                out[m - 1].1 = start[c + 1];
+            } else {
+                out[m] = (start[c], start[c + 1]);
+                m += 1;
+            }
+            prev = c;
         }
-        k
+        m
     }
 }
 
+/// Particles per parallel task of the cell-grid sweep (fixed, so the parts, and the work
+/// each does, do not depend on the thread count).
+const SWEEP_CHUNK: usize = 4096;
+
 /// Cell-grid search. Cells are at least one largest contact distance wide, so every pair
-/// within tolerance lies in the same or adjacent cells; each unordered cell pair is visited
-/// once (the cell with the smaller index visits), in parallel over fixed cell ranges.
-fn grid_candidates(pos: &[Vec3], radii: &[f64], period: Option<[f64; 3]>, eps: f64) -> Vec<Candidate> {
+/// within tolerance lies in the same or adjacent cells. Particles are binned by a counting
+/// sort (ids ascending within a cell, centre and radius copied side by side in cell order);
+/// then each particle p, in id order, tests the particles q > p of its cell and of the
+/// neighbouring ones, and its pairs are sorted by q. Fixed id ranges run in parallel, so the
+/// parts, concatenated, are sorted by (p, q) with no global sort and do not depend on the
+/// thread count. Each pair is tested from both ends (twice the distance tests of a half-shell
+/// sweep), which costs less than sorting the candidates afterwards.
+fn grid_candidates(pos: &[Vec3], radii: &[f64], period: Option<[f64; 3]>, eps: f64) -> Candidates {
     let n = pos.len();
     let rmax = radii.iter().copied().fold(0.0, f64::max);
     let reach = 2.0 * rmax * (1.0 + eps.max(0.0)) * MARGIN;
@@ -281,70 +326,110 @@ fn grid_candidates(pos: &[Vec3], radii: &[f64], period: Option<[f64; 3]>, eps: f
         fill[c as usize] += 1;
     }
     drop(fill);
-    drop(cell);
-    let packed: Vec<(Vec3, f64)> = order
+    let packed: Vec<[f64; 4]> = order
         .par_iter()
-        .map(|&i| (pos[i as usize], radii[i as usize]))
+        .map(|&i| {
+            let c = &pos[i as usize];
+            [c.x, c.y, c.z, radii[i as usize]]
+        })
         .collect();
-    let per = period.as_ref();
     let scale = (1.0 + eps) * MARGIN;
 
-    let test = |i: usize, j: usize, out: &mut Vec<Candidate>| {
-        let (ci, ri) = &packed[i];
-        let (cj, rj) = &packed[j];
-        let d = separation(ci, cj, per);
-        let d2 = d.norm_squared();
-        let s = ri + rj;
-        let cut = s * scale;
-        if d2 <= cut * cut {
-            let rel = relative_gap(d2.sqrt(), *ri, *rj);
-            if rel <= eps {
-                out.push(Candidate::new(order[i], order[j], rel));
-            }
-        }
+    let sweep = Sweep {
+        grid: &grid,
+        start: &start,
+        cell: &cell,
+        order: &order,
+        packed: &packed,
+        pos,
+        radii,
+        scale,
+        eps,
     };
-
-    let chunk = ncell.div_ceil(256).max(1);
-    let nchunks = ncell.div_ceil(chunk);
-    let parts: Vec<Vec<Candidate>> = (0..nchunks)
+    let parts = (0..n.div_ceil(SWEEP_CHUNK))
         .into_par_iter()
         .map(|ch| {
-            let mut out = Vec::new();
-            let mut nb = [0usize; 27];
-            for a in ch * chunk..((ch + 1) * chunk).min(ncell) {
-                let (sa, ea) = (start[a] as usize, start[a + 1] as usize);
-                if sa == ea {
-                    continue;
-                }
-                for i in sa..ea {
-                    for j in i + 1..ea {
-                        test(i, j, &mut out);
+            let ids = ch * SWEEP_CHUNK..((ch + 1) * SWEEP_CHUNK).min(n);
+            match period {
+                Some(l) => sweep.run::<true>(ids, &l),
+                None => sweep.run::<false>(ids, &[0.0; 3]),
+            }
+        })
+        .collect();
+    Candidates { parts }
+}
+
+/// The binned particles and what the sweep of one id range needs.
+struct Sweep<'a> {
+    grid: &'a Grid,
+    start: &'a [u32],
+    /// Cell of each particle, by id.
+    cell: &'a [u32],
+    /// Particle ids in cell order.
+    order: &'a [u32],
+    /// Centre and radius in cell order.
+    packed: &'a [[f64; 4]],
+    pos: &'a [Vec3],
+    radii: &'a [f64],
+    /// (1 + ε) with the rounding margin.
+    scale: f64,
+    eps: f64,
+}
+
+impl Sweep<'_> {
+    /// The candidates (p, q > p) of the particles p in `ids`, sorted by key; `PERIODIC` with
+    /// the period `l` (the minimum image, as [`separation`]).
+    fn run<const PERIODIC: bool>(&self, ids: std::ops::Range<usize>, l: &[f64; 3]) -> Vec<Candidate> {
+        let mut out: Vec<Candidate> = Vec::with_capacity(8 * ids.len());
+        let mut ranges = [(0u32, 0u32); 27];
+        let (mut last, mut m) = (usize::MAX, 0);
+        let h = l.map(|x| 0.5 * x);
+        for p in ids {
+            let a = self.cell[p] as usize;
+            if a != last {
+                m = self.grid.neighbour_ranges(a, self.start, &mut ranges);
+                last = a;
+            }
+            let (cp, rp) = (&self.pos[p], self.radii[p]);
+            let p = p as u32;
+            let from = out.len();
+            for &(lo, hi) in &ranges[..m] {
+                let (lo, hi) = (lo as usize, hi as usize);
+                for (x, &q) in self.packed[lo..hi].iter().zip(&self.order[lo..hi]) {
+                    // The same operations as `separation(cp, x)`, so the same bits.
+                    let mut d = [x[0] - cp.x, x[1] - cp.y, x[2] - cp.z];
+                    if PERIODIC {
+                        for k in 0..3 {
+                            if d[k] > h[k] {
+                                d[k] -= l[k];
+                            } else if d[k] < -h[k] {
+                                d[k] += l[k];
+                            }
+                        }
                     }
-                }
-                let m = grid.forward_neighbours(a, &mut nb);
-                for &b in &nb[..m] {
-                    let (sb, eb) = (start[b] as usize, start[b + 1] as usize);
-                    for i in sa..ea {
-                        for j in sb..eb {
-                            test(i, j, &mut out);
+                    let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                    let cut = (rp + x[3]) * self.scale;
+                    // `&`, not `&&`: one rarely taken branch.
+                    if (d2 <= cut * cut) & (q > p) {
+                        let rel = relative_gap(d2.sqrt(), rp, x[3]);
+                        if rel <= self.eps {
+                            out.push(Candidate {
+                                key: ((p as u64) << 32) | q as u64,
+                                rel_gap: rel,
+                            });
                         }
                     }
                 }
             }
-            out
-        })
-        .collect();
-    let mut all = Vec::with_capacity(parts.iter().map(Vec::len).sum());
-    for p in parts {
-        all.extend(p);
+            out[from..].sort_unstable_by_key(|c| c.key);
+        }
+        out
     }
-    all.par_sort_unstable_by_key(|c| c.key);
-    all
 }
 
 /// R-tree search: boxes inflated by (1 + ε) around each sphere (plus ghost images near the
 /// faces of a periodic box), joined with themselves, then filtered by the exact distance.
-fn rtree_candidates(pos: &[Vec3], radii: &[f64], period: Option<[f64; 3]>, eps: f64) -> Vec<Candidate> {
+fn rtree_candidates(pos: &[Vec3], radii: &[f64], period: Option<[f64; 3]>, eps: f64) -> Candidates {
     type Item = GeomWithData<Rectangle<[f64; 3]>, u32>;
     let scale = (1.0 + eps.max(0.0)) * MARGIN;
     let rmax = radii.iter().copied().fold(0.0, f64::max);
@@ -396,7 +481,7 @@ fn rtree_candidates(pos: &[Vec3], radii: &[f64], period: Option<[f64; 3]>, eps: 
         .collect();
     out.sort_unstable_by_key(|c| c.key);
     out.dedup_by_key(|c| c.key);
-    out
+    Candidates { parts: vec![out] }
 }
 
 #[cfg(test)]
@@ -416,7 +501,8 @@ mod tests {
         for method in [NeighbourSearch::CellGrid, NeighbourSearch::RTree] {
             let c = candidates(method, &pos, &radii, None, 0.1).unwrap();
             assert_eq!(c.len(), 1);
-            assert_eq!((c[0].p(), c[0].q()), (0, 2));
+            let c0 = c.iter().next().unwrap();
+            assert_eq!((c0.p(), c0.q()), (0, 2));
             let c = candidates(method, &pos, &radii, Some([3.0; 3]), 0.1).unwrap();
             assert_eq!(c.len(), 1);
         }

@@ -7,20 +7,28 @@ use rayon::prelude::*;
 use crate::par::{CHUNK, MIN_TASK_CHUNKS, chunks_map, ordered_sum, sequential};
 
 /// A sparse matrix in compressed rows: the entries of row i are
-/// `cols[ptr[i]..ptr[i + 1]]` (sorted, unique) with values `vals[..]`.
+/// `cols[ptr[i]..ptr[i + 1]]` (sorted, unique) with values `vals[..]`. Values are f64, or f32
+/// for the operators only the multigrid preconditioner reads ([`Csr::to_f32`]); products
+/// always compute in f64.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct Csr {
+pub(crate) struct Csr<T = f64> {
     pub nrows: usize,
     pub ncols: usize,
-    pub ptr: Vec<usize>,
+    /// Row starts (u32: half the bytes of usize on every pass; `from_rows` checks the count).
+    pub ptr: Vec<u32>,
     pub cols: Vec<u32>,
-    pub vals: Vec<f64>,
+    pub vals: Vec<T>,
 }
+
+/// A stored matrix value: f64, or f32 widened to f64 exactly on every use.
+pub(crate) trait Value: Copy + Send + Sync + Into<f64> {}
+impl Value for f64 {}
+impl Value for f32 {}
 
 /// Rows of one chunk built by [`Csr::from_rows`]: columns, values, row lengths.
 type ChunkRows = (Vec<u32>, Vec<f64>, Vec<usize>);
 
-impl Csr {
+impl<T: Value> Csr<T> {
     /// Number of stored entries.
     pub fn nnz(&self) -> usize {
         self.cols.len()
@@ -28,24 +36,155 @@ impl Csr {
 
     /// Row i as (columns, values).
     #[inline(always)]
-    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
-        let (lo, hi) = (self.ptr[i], self.ptr[i + 1]);
+    pub fn row(&self, i: usize) -> (&[u32], &[T]) {
+        let (lo, hi) = (self.ptr[i] as usize, self.ptr[i + 1] as usize);
         (&self.cols[lo..hi], &self.vals[lo..hi])
     }
 
-    /// Builds a matrix row by row, rows in parallel chunks of [`CHUNK`]. `row(scratch, i,
-    /// cols, vals)` appends the entries of row i (sorted unique columns); `init` makes a
-    /// scratch state per parallel task (it must not influence the values).
+    /// y = self · x.
+    pub fn spmv(&self, x: &[f64], y: &mut [f64]) {
+        chunks_map(y, |c, yc| {
+            let base = c * CHUNK;
+            for (k, yi) in yc.iter_mut().enumerate() {
+                *yi = self.row_dot(base + k, x);
+            }
+        });
+    }
+
+    /// q = self · p; returns p·q.
+    pub fn spmv_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
+        let partials = chunks_map(q, |c, qc| {
+            let base = c * CHUNK;
+            let mut acc = 0.0;
+            for (k, qi) in qc.iter_mut().enumerate() {
+                let v = self.row_dot(base + k, p);
+                acc += v * p[base + k];
+                *qi = v;
+            }
+            acc
+        });
+        ordered_sum(&partials)
+    }
+
+    /// r = b − self · (s ∘ b), s ∘ b the entrywise product (the residual after one Jacobi
+    /// sweep from zero, x = s ∘ b, without forming x; the same bits as forming it).
+    pub fn residual_scaled(&self, b: &[f64], s: &[f64], r: &mut [f64]) {
+        chunks_map(r, |c, rc| {
+            let base = c * CHUNK;
+            for (k, ri) in rc.iter_mut().enumerate() {
+                let (cols, vals) = self.row(base + k);
+                let mut acc = [0.0f64; 4];
+                let (c4, v4) = (cols.chunks_exact(4), vals.chunks_exact(4));
+                let (cr, vr) = (c4.remainder(), v4.remainder());
+                for (cc, v) in c4.zip(v4) {
+                    for l in 0..4 {
+                        let j = cc[l] as usize;
+                        acc[l] += v[l].into() * (s[j] * b[j]);
+                    }
+                }
+                for (l, (&j, &v)) in cr.iter().zip(vr).enumerate() {
+                    let j = j as usize;
+                    acc[l] += v.into() * (s[j] * b[j]);
+                }
+                *ri = b[base + k] - ((acc[0] + acc[1]) + (acc[2] + acc[3]));
+            }
+        });
+    }
+
+    /// y = s ∘ b + self · x (s ∘ b the entrywise product).
+    pub fn spmv_affine(&self, x: &[f64], s: &[f64], b: &[f64], y: &mut [f64]) {
+        chunks_map(y, |c, yc| {
+            let base = c * CHUNK;
+            for (k, yi) in yc.iter_mut().enumerate() {
+                let i = base + k;
+                *yi = s[i] * b[i] + self.row_dot(i, x);
+            }
+        });
+    }
+
+    /// r = b − self · x.
+    #[cfg(test)]
+    pub fn residual(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
+        chunks_map(r, |c, rc| {
+            let base = c * CHUNK;
+            for (k, ri) in rc.iter_mut().enumerate() {
+                *ri = b[base + k] - self.row_dot(base + k, x);
+            }
+        });
+    }
+
+    /// Σ_j a_ij x_j for row i, in f64. Four independent partial sums (entry k goes to sum
+    /// k mod 4, combined as (s0 + s1) + (s2 + s3)): a row has ~8 entries, and one accumulator
+    /// would serialise them on the floating-point add latency. Fixed order: deterministic.
+    #[inline(always)]
+    pub fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
+        let (rc, rv) = self.row(i);
+        let mut acc = [0.0f64; 4];
+        let (c4, v4) = (rc.chunks_exact(4), rv.chunks_exact(4));
+        let (cr, vr) = (c4.remainder(), v4.remainder());
+        for (c, v) in c4.zip(v4) {
+            for l in 0..4 {
+                acc[l] += v[l].into() * x[c[l] as usize];
+            }
+        }
+        for (l, (&j, &v)) in cr.iter().zip(vr).enumerate() {
+            acc[l] += v.into() * x[j as usize];
+        }
+        (acc[0] + acc[1]) + (acc[2] + acc[3])
+    }
+}
+
+impl Csr {
+    /// The same matrix with f32 values (each value rounded to nearest): half the value
+    /// bytes for operators that only the preconditioner reads.
+    pub fn to_f32(&self) -> Csr<f32> {
+        Csr {
+            nrows: self.nrows,
+            ncols: self.ncols,
+            ptr: self.ptr.clone(),
+            cols: self.cols.clone(),
+            vals: self.vals.par_iter().map(|&v| v as f32).collect(),
+        }
+    }
+
+    /// As [`Self::to_f32`], reusing the structure.
+    pub fn into_f32(self) -> Csr<f32> {
+        Csr {
+            nrows: self.nrows,
+            ncols: self.ncols,
+            vals: self.vals.par_iter().map(|&v| v as f32).collect(),
+            ptr: self.ptr,
+            cols: self.cols,
+        }
+    }
+
+    /// As [`Self::from_rows_reserving`] with no reservation.
     pub fn from_rows<S, I, F>(nrows: usize, ncols: usize, init: I, row: F) -> Self
     where
         I: Fn() -> S + Sync + Send,
         F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) + Sync + Send,
     {
+        Self::from_rows_reserving(nrows, ncols, |_| 0, init, row)
+    }
+
+    /// Builds a matrix row by row, rows in parallel chunks of [`CHUNK`]. `row(scratch, i,
+    /// cols, vals)` appends the entries of row i (sorted unique columns); `init` makes a
+    /// scratch state per parallel task (it must not influence the values); `reserve(rows)`
+    /// bounds the entries of a chunk of rows (reserved up front, so rows are never moved
+    /// while they grow; untouched reserved memory costs nothing). The chunks are then copied
+    /// into place in parallel.
+    pub fn from_rows_reserving<S, I, F, R>(nrows: usize, ncols: usize, reserve: R, init: I, row: F) -> Self
+    where
+        I: Fn() -> S + Sync + Send,
+        F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) + Sync + Send,
+        R: Fn(std::ops::Range<usize>) -> usize + Sync + Send,
+    {
         let n_chunks = nrows.div_ceil(CHUNK);
         let build = |s: &mut S, c: usize| -> ChunkRows {
             let (lo, hi) = (c * CHUNK, ((c + 1) * CHUNK).min(nrows));
-            let mut cols = Vec::new();
-            let mut vals = Vec::new();
+            let cap = reserve(lo..hi);
+            let mut cols = Vec::with_capacity(cap);
+            let mut vals = Vec::with_capacity(cap);
             let mut lens = Vec::with_capacity(hi - lo);
             for i in lo..hi {
                 let before = cols.len();
@@ -65,18 +204,40 @@ impl Csr {
                 .collect()
         };
         let nnz: usize = chunks.iter().map(|c| c.0.len()).sum();
+        assert!(
+            u32::try_from(nnz).is_ok(),
+            "{nnz} entries: more than a u32 row pointer holds"
+        );
         let mut ptr = Vec::with_capacity(nrows + 1);
-        let mut cols = Vec::with_capacity(nnz);
-        let mut vals = Vec::with_capacity(nnz);
-        ptr.push(0);
-        for (c, v, lens) in chunks {
-            for l in lens {
+        ptr.push(0u32);
+        let mut starts = Vec::with_capacity(chunks.len());
+        for (c, _, lens) in &chunks {
+            starts.push(ptr[ptr.len() - 1] as usize);
+            for &l in lens {
                 let last = ptr[ptr.len() - 1];
-                ptr.push(last + l);
+                ptr.push(last + l as u32);
             }
-            cols.extend_from_slice(&c);
-            vals.extend_from_slice(&v);
+            debug_assert_eq!(ptr[ptr.len() - 1] as usize, starts[starts.len() - 1] + c.len());
         }
+        let mut cols = vec![0u32; nnz];
+        let mut vals = vec![0.0f64; nnz];
+        // Each chunk's slice of the result, in order, filled in parallel.
+        let mut targets = Vec::with_capacity(chunks.len());
+        let (mut rest_c, mut rest_v) = (cols.as_mut_slice(), vals.as_mut_slice());
+        for (c, _, _) in &chunks {
+            let (hc, tc) = rest_c.split_at_mut(c.len());
+            let (hv, tv) = rest_v.split_at_mut(c.len());
+            targets.push((hc, hv));
+            rest_c = tc;
+            rest_v = tv;
+        }
+        targets
+            .into_par_iter()
+            .zip(chunks.into_par_iter())
+            .for_each(|((tc, tv), (c, v, _))| {
+                tc.copy_from_slice(&c);
+                tv.copy_from_slice(&v);
+            });
         Self {
             nrows,
             ncols,
@@ -95,7 +256,7 @@ impl Csr {
         for j in 0..self.ncols {
             count[j + 1] += count[j];
         }
-        let ptr = count.clone();
+        let ptr = count.iter().map(|&c| c as u32).collect();
         let mut fill = count;
         let mut cols = vec![0u32; self.nnz()];
         let mut vals = vec![0.0; self.nnz()];
@@ -122,9 +283,17 @@ impl Csr {
     pub fn matmul(&self, b: &Csr) -> Self {
         debug_assert_eq!(self.ncols, b.nrows);
         let m = b.ncols;
-        Self::from_rows(
+        Self::from_rows_reserving(
             self.nrows,
             m,
+            // At most the sum of the rows of b met, per chunk.
+            |rows| {
+                let (lo, hi) = (self.ptr[rows.start] as usize, self.ptr[rows.end] as usize);
+                self.cols[lo..hi]
+                    .iter()
+                    .map(|&k| (b.ptr[k as usize + 1] - b.ptr[k as usize]) as usize)
+                    .sum()
+            },
             || Accumulator::new(m),
             |acc, i, cols, vals| {
                 let (ac, av) = self.row(i);
@@ -137,58 +306,6 @@ impl Csr {
                 acc.drain_sorted(cols, vals);
             },
         )
-    }
-
-    /// y = self · x.
-    pub fn spmv(&self, x: &[f64], y: &mut [f64]) {
-        chunks_map(y, |c, yc| {
-            let base = c * CHUNK;
-            for (k, yi) in yc.iter_mut().enumerate() {
-                *yi = self.row_dot(base + k, x);
-            }
-        });
-    }
-
-    /// y += self · x.
-    pub fn spmv_add(&self, x: &[f64], y: &mut [f64]) {
-        chunks_map(y, |c, yc| {
-            let base = c * CHUNK;
-            for (k, yi) in yc.iter_mut().enumerate() {
-                *yi += self.row_dot(base + k, x);
-            }
-        });
-    }
-
-    /// q = self · p; returns p·q.
-    pub fn spmv_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
-        let partials = chunks_map(q, |c, qc| {
-            let base = c * CHUNK;
-            let mut acc = 0.0;
-            for (k, qi) in qc.iter_mut().enumerate() {
-                let v = self.row_dot(base + k, p);
-                acc += v * p[base + k];
-                *qi = v;
-            }
-            acc
-        });
-        ordered_sum(&partials)
-    }
-
-    /// r = b − self · x.
-    pub fn residual(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
-        chunks_map(r, |c, rc| {
-            let base = c * CHUNK;
-            for (k, ri) in rc.iter_mut().enumerate() {
-                *ri = b[base + k] - self.row_dot(base + k, x);
-            }
-        });
-    }
-
-    /// Σ_j a_ij x_j for row i.
-    #[inline(always)]
-    pub fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
-        let (rc, rv) = self.row(i);
-        rc.iter().zip(rv).map(|(&j, &v)| v * x[j as usize]).sum()
     }
 }
 

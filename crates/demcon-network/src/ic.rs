@@ -195,7 +195,11 @@ impl Triangle {
         Csr {
             nrows: n,
             ncols: n,
-            ptr: self.ptr,
+            ptr: self
+                .ptr
+                .into_iter()
+                .map(|p| u32::try_from(p).expect("entries fit a u32 row pointer"))
+                .collect(),
             cols: self.cols,
             vals: self.vals,
         }
