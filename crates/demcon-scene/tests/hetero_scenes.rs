@@ -310,7 +310,12 @@ fn cut_particles_conduct_heat_and_current_alike_and_store_heat_by_volume() {
 #[test]
 fn paper_scale_scene_runs_shrunk() {
     let mut s = Scene::load(&scene_path("multi-inclusion-8m.ron")).unwrap();
-    let PackingConfig::Tile { packing, repeat, walls } = &mut s.config.packing else {
+    let PackingConfig::Tile {
+        packing,
+        repeat,
+        walls,
+    } = &mut s.config.packing
+    else {
         panic!("multi-inclusion-8m.ron: expected a tiled packing");
     };
     assert!(*walls);
@@ -318,7 +323,9 @@ fn paper_scale_scene_runs_shrunk() {
         panic!("multi-inclusion-8m.ron: expected a generated packing inside the tiling");
     };
     *count = 1000;
-    *container = demcon_scene::config::ContainerConfig::Periodic { size: (0.05, 0.05, 0.05) };
+    *container = demcon_scene::config::ContainerConfig::Periodic {
+        size: (0.05, 0.05, 0.05),
+    };
     *repeat = (2, 2, 2);
     s.config.outputs.halo = Some(2.0);
     let r = run(&s, &RunOptions::default()).unwrap();
@@ -333,6 +340,16 @@ fn paper_scale_scene_runs_shrunk() {
     let stages: Vec<&str> = r.stages.records().iter().map(|s| s.stage).collect();
     assert_eq!(
         stages,
-        ["packing", "phases", "tessellation", "network", "thermal setup", "solve", "flux", "halo", "probes"]
+        [
+            "packing",
+            "phases",
+            "tessellation",
+            "network",
+            "thermal setup",
+            "solve",
+            "flux",
+            "halo",
+            "probes"
+        ]
     );
 }

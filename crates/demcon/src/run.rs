@@ -177,9 +177,22 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
         );
     }
     println!(
-        "  contacts {:.2} s, network {:.2} s",
-        m.report.contacts_s, m.report.network_s
+        "  {} {:.2} s, network {:.2} s",
+        if m.report.tessellation.is_some() {
+            "tessellation"
+        } else {
+            "contacts"
+        },
+        m.report.contacts_s,
+        m.report.network_s
     );
+    if let Some(peak) = r.stages.peak_rss_bytes() {
+        println!(
+            "  peak memory {:.2} GB ({:.0} bytes per particle)",
+            peak as f64 / 1e9,
+            peak as f64 / m.particles.len().max(1) as f64
+        );
+    }
     if let Some(c) = r.thermal_setup.as_ref().and_then(|s| s.calibration.as_ref()) {
         println!(
             "  C_t = {:.4} (calibrated on this packing, {}, {} CG iterations)",
