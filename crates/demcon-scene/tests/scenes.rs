@@ -15,7 +15,19 @@ fn every_example_scene_loads() {
     for entry in std::fs::read_dir(scenes_dir()).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().and_then(|e| e.to_str()) == Some("ron") {
-            Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            match Scene::load(&path) {
+                Ok(_) => {}
+                // The paper-scale scene needs ~12 GB: on a smaller machine its refusal must be
+                // the memory estimate's, and nothing else.
+                Err(e) if e.to_string().contains("bytes per particle") => {
+                    assert!(
+                        path.ends_with("multi-inclusion-8m.ron"),
+                        "{}: {e}",
+                        path.display()
+                    );
+                }
+                Err(e) => panic!("{}: {e}", path.display()),
+            }
             n += 1;
         }
     }
