@@ -12,6 +12,7 @@ use std::sync::Arc;
 use crate::progress::RunDisplay;
 use anyhow::{Context, Result};
 use clap::Args;
+use demcon_core::StageObserver;
 use demcon_scene::checkpoint::{checkpoint_path, remove_checkpoint};
 use demcon_scene::output::check_output_dir;
 use demcon_scene::{CheckpointOptions, RunOptions, Scene, run as run_scene, write_outputs};
@@ -103,10 +104,18 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }),
     };
     let result = run_scene(&scene, &opts).with_context(|| format!("running scene {}", args.scene.display()));
-    display.finish();
-    let result = result?;
+    let result = match result {
+        Ok(r) => r,
+        Err(e) => {
+            display.finish();
+            return Err(e);
+        }
+    };
+    display.started("outputs");
     let files = write_outputs(&name, &scene.config.outputs, &result, &out)
-        .with_context(|| format!("writing outputs to {}", out.display()))?;
+        .with_context(|| format!("writing outputs to {}", out.display()));
+    display.finish();
+    let files = files?;
     remove_checkpoint(&checkpoint).context("removing the checkpoint of the completed run")?;
     print_summary(&name, &result);
     if let Some(r) = &result.resumed {
