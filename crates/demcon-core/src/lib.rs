@@ -40,7 +40,10 @@ pub use particles::{ParticleSet, RadiusStats};
 pub use region::Region;
 pub use selector::{DEFAULT_FACE_GAP, Face, Selector};
 pub use shape::{Aabb, Axis, Container};
-pub use stages::{StageObserver, StageRecord, Stages, available_memory, reset_peak_resident, resident_bytes};
+pub use stages::{
+    StageObserver, StageRecord, Stages, available_memory, release_free_memory, reset_peak_resident,
+    resident_bytes,
+};
 
 /// A point or vector in 3-D space (m).
 pub type Vec3 = nalgebra::Vector3<f64>;
