@@ -66,44 +66,17 @@ impl<T: Value> Csr<T> {
         ordered_sum(&partials)
     }
 
-    /// r = b − self · (s ∘ b), s ∘ b the entrywise product (the residual after one Jacobi
-    /// sweep from zero, x = s ∘ b, without forming x; the same bits as forming it).
-    pub fn residual_scaled(&self, b: &[f64], s: &[f64], r: &mut [f64]) {
-        chunks_map(r, |c, rc| {
-            let base = c * CHUNK;
-            for (k, ri) in rc.iter_mut().enumerate() {
-                let (cols, vals) = self.row(base + k);
-                let mut acc = [0.0f64; 4];
-                let (c4, v4) = (cols.chunks_exact(4), vals.chunks_exact(4));
-                let (cr, vr) = (c4.remainder(), v4.remainder());
-                for (cc, v) in c4.zip(v4) {
-                    for l in 0..4 {
-                        let j = cc[l] as usize;
-                        acc[l] += v[l].into() * (s[j] * b[j]);
-                    }
-                }
-                for (l, (&j, &v)) in cr.iter().zip(vr).enumerate() {
-                    let j = j as usize;
-                    acc[l] += v.into() * (s[j] * b[j]);
-                }
-                *ri = b[base + k] - ((acc[0] + acc[1]) + (acc[2] + acc[3]));
-            }
-        });
-    }
-
-    /// y = s ∘ b + self · x (s ∘ b the entrywise product).
-    pub fn spmv_affine(&self, x: &[f64], s: &[f64], b: &[f64], y: &mut [f64]) {
+    /// y += self · x.
+    pub fn spmv_add(&self, x: &[f64], y: &mut [f64]) {
         chunks_map(y, |c, yc| {
             let base = c * CHUNK;
             for (k, yi) in yc.iter_mut().enumerate() {
-                let i = base + k;
-                *yi = s[i] * b[i] + self.row_dot(i, x);
+                *yi += self.row_dot(base + k, x);
             }
         });
     }
 
     /// r = b − self · x.
-    #[cfg(test)]
     pub fn residual(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
         chunks_map(r, |c, rc| {
             let base = c * CHUNK;
