@@ -8,7 +8,7 @@ use crate::par::{CHUNK, MIN_TASK_CHUNKS, chunks_map, ordered_sum, sequential};
 
 /// A sparse matrix in compressed rows: the entries of row i are
 /// `cols[ptr[i]..ptr[i + 1]]` (sorted, unique) with values `vals[..]`. Values are f64, or f32
-/// for the operators only the multigrid preconditioner reads ([`Csr::to_f32`]); products
+/// for the operators only the multigrid preconditioner reads ([`Csr::into_f32`]); products
 /// always compute in f64.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Csr<T = f64> {
@@ -53,17 +53,7 @@ impl<T: Value> Csr<T> {
 
     /// q = self · p; returns p·q.
     pub fn spmv_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
-        let partials = chunks_map(q, |c, qc| {
-            let base = c * CHUNK;
-            let mut acc = 0.0;
-            for (k, qi) in qc.iter_mut().enumerate() {
-                let v = self.row_dot(base + k, p);
-                acc += v * p[base + k];
-                *qi = v;
-            }
-            acc
-        });
-        ordered_sum(&partials)
+        self.spmv_dot_with(&self.vals, p, q)
     }
 
     /// y += self · x.
@@ -91,7 +81,15 @@ impl<T: Value> Csr<T> {
     /// would serialise them on the floating-point add latency. Fixed order: deterministic.
     #[inline(always)]
     pub fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
-        let (rc, rv) = self.row(i);
+        self.row_dot_with(&self.vals, i, x)
+    }
+
+    /// As [`Self::row_dot`] with other values on the same structure (`vals` as long as
+    /// `cols`): the fine operator's f64 values beside the f32 ones the smoother reads.
+    #[inline(always)]
+    pub fn row_dot_with<V: Value>(&self, vals: &[V], i: usize, x: &[f64]) -> f64 {
+        let (lo, hi) = (self.ptr[i] as usize, self.ptr[i + 1] as usize);
+        let (rc, rv) = (&self.cols[lo..hi], &vals[lo..hi]);
         let mut acc = [0.0f64; 4];
         let (c4, v4) = (rc.chunks_exact(4), rv.chunks_exact(4));
         let (cr, vr) = (c4.remainder(), v4.remainder());
@@ -105,22 +103,27 @@ impl<T: Value> Csr<T> {
         }
         (acc[0] + acc[1]) + (acc[2] + acc[3])
     }
+
+    /// q = A · p with A's values `vals` on this structure; returns p·q.
+    pub fn spmv_dot_with<V: Value>(&self, vals: &[V], p: &[f64], q: &mut [f64]) -> f64 {
+        debug_assert_eq!(vals.len(), self.cols.len());
+        let partials = chunks_map(q, |c, qc| {
+            let base = c * CHUNK;
+            let mut acc = 0.0;
+            for (k, qi) in qc.iter_mut().enumerate() {
+                let v = self.row_dot_with(vals, base + k, p);
+                acc += v * p[base + k];
+                *qi = v;
+            }
+            acc
+        });
+        ordered_sum(&partials)
+    }
 }
 
 impl Csr {
-    /// The same matrix with f32 values (each value rounded to nearest): half the value
-    /// bytes for operators that only the preconditioner reads.
-    pub fn to_f32(&self) -> Csr<f32> {
-        Csr {
-            nrows: self.nrows,
-            ncols: self.ncols,
-            ptr: self.ptr.clone(),
-            cols: self.cols.clone(),
-            vals: self.vals.par_iter().map(|&v| v as f32).collect(),
-        }
-    }
-
-    /// As [`Self::to_f32`], reusing the structure.
+    /// The same matrix with f32 values (each value rounded to nearest), reusing the
+    /// structure: half the value bytes for operators that only the preconditioner reads.
     pub fn into_f32(self) -> Csr<f32> {
         Csr {
             nrows: self.nrows,
