@@ -7,7 +7,8 @@
 //! depend on the packing crate. Run one group with e.g.
 //! `cargo bench -p demcon-benches --bench solvers -- explicit_step`.
 //! Before the groups, a one-off measurement prints the explicit step's effective bandwidth
-//! as a fraction of the triad's, and each solve case prints its iterations, setup and solve
+//! as a fraction of the triad's (f64 and f32 weights), `explicit_accuracy/summary` what f32
+//! weights change (energy drift, temperature difference over a long adiabatic run), and each solve case prints its iterations, setup and solve
 //! times once. With `DEMCON_BENCH_SUMMARY_ONLY=1` only these one-off lines are produced
 //! (no criterion sampling), which is how the 10⁶-particle figures are taken quickly.
 //!
@@ -26,7 +27,7 @@ use demcon_graph::{ContactParams, SurfaceModel, conductances, contact_surfaces, 
 use demcon_network::{
     Constraints, FloatingPolicy, LinearSystem, Method, Network, SolveParams, resolve_fixed, solve_steady,
 };
-use demcon_thermal::{ExplicitStepper, ThermalSystem};
+use demcon_thermal::{ExplicitStepper, ThermalSystem, WeightPrecision};
 use rand::seq::SliceRandom;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -174,11 +175,48 @@ fn triad(a: &mut [f64], b: &[f64], c: &[f64], s: f64) {
         });
 }
 
-fn stepper<'a>(case: &'a Case, bcs: &'a Constraints) -> ExplicitStepper<'a> {
+fn stepper<'a>(case: &'a Case, bcs: &'a Constraints, precision: WeightPrecision) -> ExplicitStepper<'a> {
     let system = ThermalSystem::new(&case.net, &case.g, &case.caps, bcs).expect("valid inputs");
     let dt = system.stable_dt_bound().dt_max;
     let zeros = vec![0.0; case.net.n_nodes()];
-    ExplicitStepper::new(&system, &zeros, 0.8 * dt).expect("valid inputs")
+    ExplicitStepper::with_precision(&system, &zeros, 0.8 * dt, precision).expect("valid inputs")
+}
+
+/// One-off: what f32 conductances change. Adiabatic walls (no fixed node), no source,
+/// temperatures drawn in [250, 350] K, `steps` steps at 0.8 of the bound with each
+/// precision: the relative drift of Σ C_p T_p for each, and the largest |T_f32 − T_f64|.
+fn accuracy_summary(n: usize, steps: usize) {
+    let case = build(n, false, 1);
+    let bcs = resolve_fixed(&case.net, &[], FloatingPolicy::Keep).expect("no fixed node");
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let t0: Vec<f64> = (0..n).map(|_| rng.random_range(250.0..350.0)).collect();
+    let energy = |t: &[f64]| t.iter().zip(&case.caps).map(|(t, c)| t * c).sum::<f64>();
+    let e0 = energy(&t0);
+    let mut finals = Vec::new();
+    for precision in [WeightPrecision::F64, WeightPrecision::F32] {
+        let st = stepper(&case, &bcs, precision);
+        let (mut a, mut b) = (t0.clone(), vec![0.0; n]);
+        for _ in 0..steps {
+            st.step(&a, &mut b);
+            std::mem::swap(&mut a, &mut b);
+        }
+        let (lo, hi) = a.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+        println!(
+            "explicit accuracy n = {n}, {steps} steps, {precision:?} weights: relative drift of sum C T {:.1e}, T now in [{lo:.3}, {hi:.3}] K",
+            (energy(&a) - e0) / e0
+        );
+        finals.push(a);
+    }
+    let diff = finals[0]
+        .iter()
+        .zip(&finals[1])
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    println!(
+        "explicit accuracy n = {n}, {steps} steps: max |T_f32 - T_f64| = {diff:.2e} K (initial spread 100 K)"
+    );
 }
 
 /// One-off: effective bandwidth of the explicit step vs the triad, printed.
@@ -188,33 +226,39 @@ fn bandwidth_summary() {
     for (n, random) in [(100_000, false), (1_000_000, false), (1_000_000, true)] {
         let case = build(n, random, 1);
         let bcs = constraints(&case);
-        let st = stepper(&case, &bcs);
-        let mut a = vec![0.5; n];
-        let mut b = vec![0.0; n];
-        let mut best = f64::INFINITY;
-        for _ in 0..30 {
-            let t = Instant::now();
-            black_box(st.step(&a, &mut b));
-            best = best.min(t.elapsed().as_secs_f64());
-            std::mem::swap(&mut a, &mut b);
+        for precision in [WeightPrecision::F64, WeightPrecision::F32] {
+            let st = stepper(&case, &bcs, precision);
+            let mut a = vec![0.5; n];
+            let mut b = vec![0.0; n];
+            let mut best = f64::INFINITY;
+            for _ in 0..30 {
+                let t = Instant::now();
+                black_box(st.step(&a, &mut b));
+                best = best.min(t.elapsed().as_secs_f64());
+                std::mem::swap(&mut a, &mut b);
+            }
+            let eff = st.bytes_per_step() / best / 1e9;
+            println!(
+                "explicit step n = {n} ({}, {precision:?} weights), {} contacts: {:.3} ms (best of 30), {:.0} M contacts/s, {:.1} B/contact, {:.2} GB/s = {:.0} % of triad",
+                if random { "random order" } else { "Morton order" },
+                case.net.n_edges(),
+                best * 1e3,
+                case.net.n_edges() as f64 / best / 1e6,
+                st.bytes_per_step() / case.net.n_edges() as f64,
+                eff,
+                100.0 * eff / gbs
+            );
         }
-        let eff = st.bytes_per_step() / best / 1e9;
-        println!(
-            "explicit step n = {n} ({}), {} contacts: {:.3} ms (best of 30), {:.0} M contacts/s, {:.1} B/contact, {:.2} GB/s = {:.0} % of triad",
-            if random { "random order" } else { "Morton order" },
-            case.net.n_edges(),
-            best * 1e3,
-            case.net.n_edges() as f64 / best / 1e6,
-            st.bytes_per_step() / case.net.n_edges() as f64,
-            eff,
-            100.0 * eff / gbs
-        );
     }
 }
 
 fn bench_triad(c: &mut Criterion) {
     if wanted("stream_triad/summary") {
         bandwidth_summary();
+    }
+    if wanted("explicit_accuracy/summary") {
+        accuracy_summary(100_000, 5000);
+        accuracy_summary(1_000_000, 500);
     }
     let len = 1 << 24;
     let b = vec![1.0f64; len];
@@ -231,14 +275,17 @@ fn bench_explicit(c: &mut Criterion) {
     let mut group = c.benchmark_group("explicit_step");
     group.sample_size(20);
     for n in [100_000usize, 1_000_000] {
-        for random in [false, true] {
-            let label = if random { "random" } else { "morton" };
+        for (label, random, precision) in [
+            ("morton", false, WeightPrecision::F64),
+            ("random", true, WeightPrecision::F64),
+            ("morton-f32", false, WeightPrecision::F32),
+        ] {
             if !wanted(&format!("explicit_step/{label}/{n}")) {
                 continue;
             }
             let case = build(n, random, 1);
             let bcs = constraints(&case);
-            let st = stepper(&case, &bcs);
+            let st = stepper(&case, &bcs, precision);
             let mut a = vec![0.5; n];
             let mut b = vec![0.0; n];
             // Elements = contacts, so criterion reports contacts per second.

@@ -29,9 +29,10 @@
 //! Grid cells are one largest contact distance wide, so a cell and its 26 neighbours hold
 //! a few dozen spheres stored contiguously (nine runs along x); each particle tests them
 //! for partners of higher id, so fixed id ranges run in parallel and emit their pairs
-//! already sorted (no global sort), with no tree to build or descend. Since issue 12 the
-//! 10⁶ case takes 0.35 s on an idle machine (see `docs/performance.md`; figures above are
-//! the earlier cell-order sweep, under load). rstar's self-join walks two trees
+//! already sorted (no global sort), with no tree to build or descend (ids in no spatial order
+//! are swept in cell order and sorted once). Since issue 12 the 10⁶ case takes 0.35 s on a
+//! quiet machine, 0.8 s under a load of 5 (see `docs/performance.md`; the table above is the
+//! earlier sweep, under load). rstar's self-join walks two trees
 //! of inflated boxes on one thread. rstar remains the right tool for region, probe and
 //! Halo queries. With a target coordination, ε is exact: candidates are found once at a
 //! search tolerance and ranked by relative gap (no bisection iterations needed).

@@ -302,7 +302,9 @@ const SWEEP_CHUNK: usize = 4096;
 /// neighbouring ones, and its pairs are sorted by q. Fixed id ranges run in parallel, so the
 /// parts, concatenated, are sorted by (p, q) with no global sort and do not depend on the
 /// thread count. Each pair is tested from both ends (twice the distance tests of a half-shell
-/// sweep), which costs less than sorting the candidates afterwards.
+/// sweep), which costs less than sorting the candidates afterwards. When the ids do not
+/// follow space ([`ids_follow_space`]), particles are visited in cell order instead and the
+/// pairs sorted once (the same pairs, the same values).
 fn grid_candidates(pos: &[Vec3], radii: &[f64], period: Option<[f64; 3]>, eps: f64) -> Candidates {
     let n = pos.len();
     let rmax = radii.iter().copied().fold(0.0, f64::max);
@@ -346,17 +348,53 @@ fn grid_candidates(pos: &[Vec3], radii: &[f64], period: Option<[f64; 3]>, eps: f
         scale,
         eps,
     };
-    let parts = (0..n.div_ceil(SWEEP_CHUNK))
-        .into_par_iter()
-        .map(|ch| {
-            let ids = ch * SWEEP_CHUNK..((ch + 1) * SWEEP_CHUNK).min(n);
-            match period {
-                Some(l) => sweep.run::<true>(ids, &l),
-                None => sweep.run::<false>(ids, &[0.0; 3]),
-            }
+    let run = |ids: &mut dyn ExactSizeIterator<Item = usize>| match period {
+        Some(l) => sweep.run::<true>(ids, &l),
+        None => sweep.run::<false>(ids, &[0.0; 3]),
+    };
+    let chunks = 0..n.div_ceil(SWEEP_CHUNK);
+    let range = |ch: usize| ch * SWEEP_CHUNK..((ch + 1) * SWEEP_CHUNK).min(n);
+    if ids_follow_space(&grid, &cell) {
+        // Id order: each part sorted, the parts in order.
+        let parts = chunks.into_par_iter().map(|ch| run(&mut range(ch))).collect();
+        Candidates { parts }
+    } else {
+        // Ids in no spatial order (e.g. shuffled): visiting them in id order would read
+        // scattered cells, so particles are visited in cell order, each pair once (half
+        // shell), and the pairs sorted once.
+        let parts: Vec<Vec<Candidate>> = chunks
+            .into_par_iter()
+            .map(|ch| match period {
+                Some(l) => sweep.run_cells::<true>(range(ch), &l),
+                None => sweep.run_cells::<false>(range(ch), &[0.0; 3]),
+            })
+            .collect();
+        let mut all = Vec::with_capacity(parts.iter().map(Vec::len).sum());
+        for part in parts {
+            all.extend(part);
+        }
+        all.par_sort_unstable_by_key(|c| c.key);
+        Candidates { parts: vec![all] }
+    }
+}
+
+/// Whether particle ids follow space: at least half of the consecutive ids lie in the same
+/// or adjacent cells (a Morton or lattice numbering: nearly all; random ids: almost none).
+fn ids_follow_space(grid: &Grid, cell: &[u32]) -> bool {
+    let [nx, ny, _] = grid.dims;
+    let coords = |a: u32| {
+        let a = a as usize;
+        [a % nx, (a / nx) % ny, a / (nx * ny)]
+    };
+    let near = cell
+        .par_windows(2)
+        .with_min_len(SWEEP_CHUNK)
+        .filter(|w| {
+            let (x, y) = (coords(w[0]), coords(w[1]));
+            (0..3).all(|k| x[k].abs_diff(y[k]) <= 1)
         })
-        .collect();
-    Candidates { parts }
+        .count();
+    2 * near >= cell.len().saturating_sub(1)
 }
 
 /// The binned particles and what the sweep of one id range needs.
@@ -379,7 +417,11 @@ struct Sweep<'a> {
 impl Sweep<'_> {
     /// The candidates (p, q > p) of the particles p in `ids`, sorted by key; `PERIODIC` with
     /// the period `l` (the minimum image, as [`separation`]).
-    fn run<const PERIODIC: bool>(&self, ids: std::ops::Range<usize>, l: &[f64; 3]) -> Vec<Candidate> {
+    fn run<const PERIODIC: bool>(
+        &self,
+        ids: impl ExactSizeIterator<Item = usize>,
+        l: &[f64; 3],
+    ) -> Vec<Candidate> {
         let mut out: Vec<Candidate> = Vec::with_capacity(8 * ids.len());
         let mut ranges = [(0u32, 0u32); 27];
         let (mut last, mut m) = (usize::MAX, 0);
@@ -422,6 +464,53 @@ impl Sweep<'_> {
                 }
             }
             out[from..].sort_unstable_by_key(|c| c.key);
+        }
+        out
+    }
+
+    /// The candidates of the particles at cell-sorted positions `slots`, each pair once: a
+    /// particle tests the neighbours after it in cell order. Unsorted.
+    fn run_cells<const PERIODIC: bool>(&self, slots: std::ops::Range<usize>, l: &[f64; 3]) -> Vec<Candidate> {
+        let mut out: Vec<Candidate> = Vec::with_capacity(8 * slots.len());
+        let mut ranges = [(0u32, 0u32); 27];
+        let (mut last, mut m) = (usize::MAX, 0);
+        let h = l.map(|x| 0.5 * x);
+        for i in slots {
+            let p = self.order[i];
+            let a = self.cell[p as usize] as usize;
+            if a != last {
+                m = self.grid.neighbour_ranges(a, self.start, &mut ranges);
+                last = a;
+            }
+            let [cx, cy, cz, rp] = self.packed[i];
+            for &(lo, hi) in &ranges[..m] {
+                let (lo, hi) = ((lo as usize).max(i + 1), hi as usize);
+                if lo >= hi {
+                    continue;
+                }
+                for (x, &q) in self.packed[lo..hi].iter().zip(&self.order[lo..hi]) {
+                    // As `separation(c_i, x)`: exactly antisymmetric, so the same gap as
+                    // from the other end.
+                    let mut d = [x[0] - cx, x[1] - cy, x[2] - cz];
+                    if PERIODIC {
+                        for k in 0..3 {
+                            if d[k] > h[k] {
+                                d[k] -= l[k];
+                            } else if d[k] < -h[k] {
+                                d[k] += l[k];
+                            }
+                        }
+                    }
+                    let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                    let cut = (rp + x[3]) * self.scale;
+                    if d2 <= cut * cut {
+                        let rel = relative_gap(d2.sqrt(), rp, x[3]);
+                        if rel <= self.eps {
+                            out.push(Candidate::new(p, q, rel));
+                        }
+                    }
+                }
+            }
         }
         out
     }

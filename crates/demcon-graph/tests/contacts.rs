@@ -56,6 +56,22 @@ fn agrees_with_brute_force_in_a_periodic_box() {
     check_against_brute_force(&f, &Container::Periodic { size: [l; 3] }, 0.25);
 }
 
+/// Ids in no spatial order take the cell-order sweep: still exactly the brute-force pairs.
+#[test]
+fn agrees_with_brute_force_with_shuffled_ids() {
+    for periodic in [false, true] {
+        let (f, l) = jittered_fcc(6, 13);
+        let n = f.len() as u32;
+        let order: Vec<u32> = (0..n).map(|i| (i as u64 * 7919 % n as u64) as u32).collect();
+        let container = if periodic {
+            Container::Periodic { size: [l; 3] }
+        } else {
+            Container::Box { size: [l; 3] }
+        };
+        check_against_brute_force(&f.permuted(&order), &container, 0.25);
+    }
+}
+
 #[test]
 fn periodic_contacts_use_the_minimum_image() {
     // Two spheres of radius 0.1 m, 0.2 m apart through the x faces of a 2 m periodic box;

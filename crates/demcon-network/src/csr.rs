@@ -8,7 +8,7 @@ use crate::par::{CHUNK, MIN_TASK_CHUNKS, chunks_map, ordered_sum, sequential};
 
 /// A sparse matrix in compressed rows: the entries of row i are
 /// `cols[ptr[i]..ptr[i + 1]]` (sorted, unique) with values `vals[..]`. Values are f64, or f32
-/// for the operators only the multigrid preconditioner reads ([`Csr::to_f32`]); products
+/// for the operators only the multigrid preconditioner reads ([`Csr::into_f32`]); products
 /// always compute in f64.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Csr<T = f64> {
@@ -53,57 +53,20 @@ impl<T: Value> Csr<T> {
 
     /// q = self · p; returns p·q.
     pub fn spmv_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
-        let partials = chunks_map(q, |c, qc| {
-            let base = c * CHUNK;
-            let mut acc = 0.0;
-            for (k, qi) in qc.iter_mut().enumerate() {
-                let v = self.row_dot(base + k, p);
-                acc += v * p[base + k];
-                *qi = v;
-            }
-            acc
-        });
-        ordered_sum(&partials)
+        self.spmv_dot_with(&self.vals, p, q)
     }
 
-    /// r = b − self · (s ∘ b), s ∘ b the entrywise product (the residual after one Jacobi
-    /// sweep from zero, x = s ∘ b, without forming x; the same bits as forming it).
-    pub fn residual_scaled(&self, b: &[f64], s: &[f64], r: &mut [f64]) {
-        chunks_map(r, |c, rc| {
-            let base = c * CHUNK;
-            for (k, ri) in rc.iter_mut().enumerate() {
-                let (cols, vals) = self.row(base + k);
-                let mut acc = [0.0f64; 4];
-                let (c4, v4) = (cols.chunks_exact(4), vals.chunks_exact(4));
-                let (cr, vr) = (c4.remainder(), v4.remainder());
-                for (cc, v) in c4.zip(v4) {
-                    for l in 0..4 {
-                        let j = cc[l] as usize;
-                        acc[l] += v[l].into() * (s[j] * b[j]);
-                    }
-                }
-                for (l, (&j, &v)) in cr.iter().zip(vr).enumerate() {
-                    let j = j as usize;
-                    acc[l] += v.into() * (s[j] * b[j]);
-                }
-                *ri = b[base + k] - ((acc[0] + acc[1]) + (acc[2] + acc[3]));
-            }
-        });
-    }
-
-    /// y = s ∘ b + self · x (s ∘ b the entrywise product).
-    pub fn spmv_affine(&self, x: &[f64], s: &[f64], b: &[f64], y: &mut [f64]) {
+    /// y += self · x.
+    pub fn spmv_add(&self, x: &[f64], y: &mut [f64]) {
         chunks_map(y, |c, yc| {
             let base = c * CHUNK;
             for (k, yi) in yc.iter_mut().enumerate() {
-                let i = base + k;
-                *yi = s[i] * b[i] + self.row_dot(i, x);
+                *yi += self.row_dot(base + k, x);
             }
         });
     }
 
     /// r = b − self · x.
-    #[cfg(test)]
     pub fn residual(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
         chunks_map(r, |c, rc| {
             let base = c * CHUNK;
@@ -118,7 +81,15 @@ impl<T: Value> Csr<T> {
     /// would serialise them on the floating-point add latency. Fixed order: deterministic.
     #[inline(always)]
     pub fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
-        let (rc, rv) = self.row(i);
+        self.row_dot_with(&self.vals, i, x)
+    }
+
+    /// As [`Self::row_dot`] with other values on the same structure (`vals` as long as
+    /// `cols`): the fine operator's f64 values beside the f32 ones the smoother reads.
+    #[inline(always)]
+    pub fn row_dot_with<V: Value>(&self, vals: &[V], i: usize, x: &[f64]) -> f64 {
+        let (lo, hi) = (self.ptr[i] as usize, self.ptr[i + 1] as usize);
+        let (rc, rv) = (&self.cols[lo..hi], &vals[lo..hi]);
         let mut acc = [0.0f64; 4];
         let (c4, v4) = (rc.chunks_exact(4), rv.chunks_exact(4));
         let (cr, vr) = (c4.remainder(), v4.remainder());
@@ -132,22 +103,27 @@ impl<T: Value> Csr<T> {
         }
         (acc[0] + acc[1]) + (acc[2] + acc[3])
     }
+
+    /// q = A · p with A's values `vals` on this structure; returns p·q.
+    pub fn spmv_dot_with<V: Value>(&self, vals: &[V], p: &[f64], q: &mut [f64]) -> f64 {
+        debug_assert_eq!(vals.len(), self.cols.len());
+        let partials = chunks_map(q, |c, qc| {
+            let base = c * CHUNK;
+            let mut acc = 0.0;
+            for (k, qi) in qc.iter_mut().enumerate() {
+                let v = self.row_dot_with(vals, base + k, p);
+                acc += v * p[base + k];
+                *qi = v;
+            }
+            acc
+        });
+        ordered_sum(&partials)
+    }
 }
 
 impl Csr {
-    /// The same matrix with f32 values (each value rounded to nearest): half the value
-    /// bytes for operators that only the preconditioner reads.
-    pub fn to_f32(&self) -> Csr<f32> {
-        Csr {
-            nrows: self.nrows,
-            ncols: self.ncols,
-            ptr: self.ptr.clone(),
-            cols: self.cols.clone(),
-            vals: self.vals.par_iter().map(|&v| v as f32).collect(),
-        }
-    }
-
-    /// As [`Self::to_f32`], reusing the structure.
+    /// The same matrix with f32 values (each value rounded to nearest), reusing the
+    /// structure: half the value bytes for operators that only the preconditioner reads.
     pub fn into_f32(self) -> Csr<f32> {
         Csr {
             nrows: self.nrows,

@@ -59,6 +59,8 @@ pub struct ExplicitParams {
     /// Optional progress callback ([`ProgressFn`]: steps done, steps total), called at most
     /// ~100 times per run.
     pub progress: Option<ProgressFn>,
+    /// How the step stores the contact conductances (default [`WeightPrecision::F64`]).
+    pub weights: WeightPrecision,
 }
 
 impl Default for ExplicitParams {
@@ -70,8 +72,28 @@ impl Default for ExplicitParams {
             paper_dt: None,
             max_steps: DEFAULT_MAX_STEPS,
             progress: None,
+            weights: WeightPrecision::default(),
         }
     }
+}
+
+/// Storage of the contact conductances in the explicit step.
+///
+/// The step is memory-bound: at 10⁶ particles it streams its arrays at the machine's
+/// bandwidth, so its speed is the bytes per contact (see `docs/performance.md`, issue 12).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum WeightPrecision {
+    /// w_pq = Δt H_pq/C_p in f64 (12 bytes per stored entry):
+    /// T'_p = c_p T_p + Σ_q w_pq T_q + s_p, c_p = 1 − Σ_q w_pq.
+    #[default]
+    F64,
+    /// H_pq rounded once to f32, the same value for (p, q) and (q, p) (8 bytes per stored
+    /// entry, −25 % bytes per contact): T'_p = T_p + (Δt/C_p) Σ_q H̃_pq (T_q − T_p) + s_p.
+    /// Because H̃ is symmetric, the energy Σ C_p T_p is conserved to f64 round-off exactly as
+    /// with [`Self::F64`]; the conductances differ by ≤ 6·10⁻⁸ relative (f32 rounding), which
+    /// moves the temperatures by the same relative order (measured: see
+    /// `docs/performance.md`). Conductances outside f32's normal range are refused.
+    F32,
 }
 
 /// Rows swept together by the explicit kernel (one slice).
@@ -104,10 +126,8 @@ pub struct ExplicitStepper<'a> {
     slice_ptr: Vec<u32>,
     /// Neighbour of each slice entry (entry j of lane l at slice_ptr[s] + 4j + l).
     cols: Vec<u32>,
-    /// w_pq of each slice entry, 0 on padding.
-    weights: Vec<f64>,
-    /// c_p in sorted order.
-    centre: Vec<f64>,
+    /// The coefficients of each slice entry, 0 on padding.
+    weights: Weights,
     /// s_p in sorted order, absent when every source is zero.
     source: Option<Vec<f64>>,
     /// Δt/C_p in sorted order on free rows, 0 on the others (s/(J/K)): turns a new source
@@ -116,15 +136,38 @@ pub struct ExplicitStepper<'a> {
     dt: f64,
 }
 
+/// The per-entry coefficients of the step, by [`WeightPrecision`].
+#[derive(Debug, Clone)]
+enum Weights {
+    /// w_pq in f64, with c_p in sorted order.
+    F64 { w: Vec<f64>, centre: Vec<f64> },
+    /// H̃_pq in f32 (the row's factor Δt/C_p is `scale`).
+    F32 { h: Vec<f32> },
+}
+
 impl<'a> ExplicitStepper<'a> {
     /// Precomputes the coefficients for step `dt` (s) on a checked `system`, with the
-    /// sources Q_p (W per node; ignored at fixed and excluded nodes). `dt` is not checked
-    /// against the bound here.
+    /// sources Q_p (W per node; ignored at fixed and excluded nodes), weights in f64. `dt`
+    /// is not checked against the bound here.
     ///
     /// # Errors
     /// Bad sources (length, non-finite values) or step, or a network whose padded entries
     /// exceed u32::MAX.
     pub fn new(system: &ThermalSystem<'a>, sources: &[f64], dt: f64) -> Result<Self, ThermalError> {
+        Self::with_precision(system, sources, dt, WeightPrecision::F64)
+    }
+
+    /// As [`Self::new`], storing the conductances as `precision` says.
+    ///
+    /// # Errors
+    /// Those of [`Self::new`]; with [`WeightPrecision::F32`], a conductance of a free row
+    /// outside f32's normal range (named).
+    pub fn with_precision(
+        system: &ThermalSystem<'a>,
+        sources: &[f64],
+        dt: f64,
+        precision: WeightPrecision,
+    ) -> Result<Self, ThermalError> {
         let (net, conductances, capacities, constraints) = (
             system.network(),
             system.conductances(),
@@ -207,9 +250,11 @@ impl<'a> ExplicitStepper<'a> {
                     let mut sum = 0.0;
                     let (lo, hi) = (row_ptr[p], row_ptr[p + 1]);
                     for (j, (&q, &e)) in net_cols[lo..hi].iter().zip(&entry_edges[lo..hi]).enumerate() {
-                        let w = a * conductances[e as usize];
+                        let h = conductances[e as usize];
+                        let w = a * h;
                         sc[LANES * j + l] = q;
-                        sw[LANES * j + l] = w;
+                        // F32 keeps H itself (rounded below), the same for (p, q) and (q, p).
+                        sw[LANES * j + l] = if precision == WeightPrecision::F32 { h } else { w };
                         sum += w;
                     }
                     *c = 1.0 - sum;
@@ -218,6 +263,27 @@ impl<'a> ExplicitStepper<'a> {
                 }
             });
         let source = source.iter().any(|&v| v != 0.0).then_some(source);
+        let weights = match precision {
+            WeightPrecision::F64 => Weights::F64 { w: weights, centre },
+            WeightPrecision::F32 => {
+                if let Some(k) = weights.iter().position(|&h| {
+                    h != 0.0 && !(h.abs() >= f32::MIN_POSITIVE as f64 && h.abs() <= f32::MAX as f64)
+                }) {
+                    return Err(ThermalError::invalid(
+                        "conductances",
+                        weights[k],
+                        "must lie in f32's normal range (1.2e-38 to 3.4e38 W/K) for f32 weights; use WeightPrecision::F64",
+                    ));
+                }
+                Weights::F32 {
+                    h: weights
+                        .par_iter()
+                        .with_min_len(CHUNK)
+                        .map(|&h| h as f32)
+                        .collect(),
+                }
+            }
+        };
         Ok(Self {
             net: std::marker::PhantomData,
             n,
@@ -225,7 +291,6 @@ impl<'a> ExplicitStepper<'a> {
             slice_ptr: slice_ptr.iter().map(|&v| v as u32).collect(),
             cols,
             weights,
-            centre,
             source,
             scale,
             dt,
@@ -256,19 +321,32 @@ impl<'a> ExplicitStepper<'a> {
         self.dt
     }
 
-    /// Bytes one step moves at least (B): 12 per stored entry (u32 column + f64 weight,
-    /// padding included) and, per row, 4 (permutation) + 8 (c_p) + 8 (read T_p) + 8 (write
-    /// T'_p) + 8 (s_p, when present), plus 4 per slice; the gathers T_q are counted as cache
-    /// hits. Divide by the step time for the achieved bandwidth.
+    /// Bytes one step moves at least (B): per stored entry (padding included) a u32 column
+    /// and the weight, 8 bytes in f64 or 4 in f32; per row 4 (permutation) + 8 (c_p, or
+    /// Δt/C_p with f32 weights) + 8 (read T_p) + 8 (write T'_p) + 8 (s_p, when present);
+    /// plus 4 per slice. The gathers T_q are counted as cache hits. Divide by the step time
+    /// for the achieved bandwidth.
     pub fn bytes_per_step(&self) -> f64 {
         let per_row = if self.source.is_some() { 36.0 } else { 28.0 };
-        12.0 * self.weights.len() as f64 + per_row * self.n as f64 + 4.0 * self.slice_ptr.len() as f64
+        let per_entry = match self.weights {
+            Weights::F64 { .. } => 12.0,
+            Weights::F32 { .. } => 8.0,
+        };
+        per_entry * self.cols.len() as f64 + per_row * self.n as f64 + 4.0 * self.slice_ptr.len() as f64
     }
 
     /// Stored entries (contact weights and padding): twice the free-row contacts, plus the
     /// padding of each four-row slice to its longest row.
     pub fn stored_entries(&self) -> usize {
-        self.weights.len()
+        self.cols.len()
+    }
+
+    /// How the conductances are stored.
+    pub fn precision(&self) -> WeightPrecision {
+        match self.weights {
+            Weights::F64 { .. } => WeightPrecision::F64,
+            Weights::F32 { .. } => WeightPrecision::F32,
+        }
     }
 
     /// One step from `t_old` into `t_new` (K); returns the (min, max) of `t_new` and
@@ -293,17 +371,40 @@ impl<'a> ExplicitStepper<'a> {
                     let i0 = s * LANES;
                     let lanes = LANES.min(end - i0);
                     let mut acc = [0.0f64; LANES];
-                    for (l, v) in acc.iter_mut().enumerate().take(lanes) {
-                        let i = i0 + l;
-                        let src = self.source.as_ref().map_or(0.0, |src| src[i]);
-                        *v = self.centre[i] * t_old[self.perm[i] as usize] + src;
-                    }
-                    for (cj, wj) in self.cols[a..b]
-                        .chunks_exact(LANES)
-                        .zip(self.weights[a..b].chunks_exact(LANES))
-                    {
-                        for ((v, &w), &q) in acc.iter_mut().zip(wj).zip(cj) {
-                            *v += w * t_old[q as usize];
+                    match &self.weights {
+                        Weights::F64 { w, centre } => {
+                            for (l, v) in acc.iter_mut().enumerate().take(lanes) {
+                                let i = i0 + l;
+                                let src = self.source.as_ref().map_or(0.0, |src| src[i]);
+                                *v = centre[i] * t_old[self.perm[i] as usize] + src;
+                            }
+                            for (cj, wj) in self.cols[a..b]
+                                .chunks_exact(LANES)
+                                .zip(w[a..b].chunks_exact(LANES))
+                            {
+                                for ((v, &w), &q) in acc.iter_mut().zip(wj).zip(cj) {
+                                    *v += w * t_old[q as usize];
+                                }
+                            }
+                        }
+                        Weights::F32 { h } => {
+                            let mut tp = [0.0f64; LANES];
+                            for (l, t) in tp.iter_mut().enumerate().take(lanes) {
+                                *t = t_old[self.perm[i0 + l] as usize];
+                            }
+                            for (cj, hj) in self.cols[a..b]
+                                .chunks_exact(LANES)
+                                .zip(h[a..b].chunks_exact(LANES))
+                            {
+                                for (((v, &h), &q), &t) in acc.iter_mut().zip(hj).zip(cj).zip(&tp) {
+                                    *v += f64::from(h) * (t_old[q as usize] - t);
+                                }
+                            }
+                            for (l, v) in acc.iter_mut().enumerate().take(lanes) {
+                                let i = i0 + l;
+                                let src = self.source.as_ref().map_or(0.0, |src| src[i]);
+                                *v = tp[l] + self.scale[i] * *v + src;
+                            }
                         }
                     }
                     for (l, &v) in acc.iter().enumerate().take(lanes) {
@@ -480,7 +581,7 @@ pub fn run_explicit_from(
     let mut ticker = Ticker::new(params.progress.as_ref(), total);
     ticker.skip_to(steps);
     let mut schedule = Schedule::new(checkpoints, steps)?;
-    let mut stepper = ExplicitStepper::new(system, &sources, dt)?;
+    let mut stepper = ExplicitStepper::with_precision(system, &sources, dt, params.weights)?;
     let kinds = constraints.kinds();
     let mut next = cur.clone();
 
@@ -740,5 +841,102 @@ mod tests {
         t_bad[n - 1] = f64::NAN;
         let mut out = vec![0.0; n];
         assert!(st.step(&t_bad, &mut out).2);
+    }
+
+    /// The f32 update written row by row: T_p + (Δt/C_p) Σ_q f32(H_pq) (T_q − T_p) + Δt Q_p/C_p,
+    /// neighbours in index order.
+    fn reference_f32(
+        net: &Network,
+        g: &[f64],
+        caps: &[f64],
+        c: &Constraints,
+        q: &[f64],
+        dt: f64,
+        t: &[f64],
+    ) -> Vec<f64> {
+        (0..net.n_nodes())
+            .map(|p| {
+                if c.kinds()[p] != NodeKind::Free {
+                    return t[p];
+                }
+                let a = dt / caps[p];
+                let range = net.row_ptr()[p]..net.row_ptr()[p + 1];
+                let mut acc = 0.0;
+                for (&col, &e) in net.cols()[range.clone()].iter().zip(&net.entry_edges()[range]) {
+                    acc += f64::from(g[e as usize] as f32) * (t[col as usize] - t[p]);
+                }
+                t[p] + a * acc + a * q[p]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn f32_kernel_matches_its_row_formula_bit_for_bit_for_any_thread_count() {
+        let n = 40_003;
+        let (net, g, caps, q) = network(n, 5);
+        let fixed: Vec<u32> = (0..n as u32).step_by(89).collect();
+        let c = resolve_fixed(&net, &[(fixed, 2.0)], FloatingPolicy::Keep).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(6);
+        let t: Vec<f64> = (0..n).map(|_| rng.random_range(0.0..4.0)).collect();
+        let dt = 0.5;
+        for sources in [q.clone(), vec![0.0; n]] {
+            let system = ThermalSystem::new(&net, &g, &caps, &c).unwrap();
+            let st = ExplicitStepper::with_precision(&system, &sources, dt, WeightPrecision::F32).unwrap();
+            assert_eq!(st.precision(), WeightPrecision::F32);
+            let want = reference_f32(&net, &g, &caps, &c, &sources, dt, &t);
+            for threads in [1, 3] {
+                let mut out = vec![0.0; n];
+                let (lo, hi, bad) = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| st.step(&t, &mut out));
+                assert_eq!(out, want, "{threads} threads");
+                assert!(!bad);
+                assert_eq!(lo, want.iter().cloned().fold(f64::INFINITY, f64::min));
+                assert_eq!(hi, want.iter().cloned().fold(f64::NEG_INFINITY, f64::max));
+            }
+        }
+        // Conductances f32 cannot hold are refused, not flushed to zero.
+        let tiny = vec![1e-300; g.len()];
+        let system = ThermalSystem::new(&net, &tiny, &caps, &c).unwrap();
+        let e = ExplicitStepper::with_precision(&system, &q, dt, WeightPrecision::F32).unwrap_err();
+        assert!(e.to_string().contains("f32"), "{e}");
+    }
+
+    /// Adiabatic walls, no source: Σ C_p T_p is conserved to round-off with either
+    /// precision (f32 conductances are symmetric), and the f32 run stays within the f32
+    /// rounding of the conductances of the f64 run.
+    #[test]
+    fn both_precisions_conserve_energy_and_agree() {
+        let n = 20_000;
+        let (net, g, caps, _) = network(n, 7);
+        let c = resolve_fixed(&net, &[], FloatingPolicy::Keep).unwrap();
+        let system = ThermalSystem::new(&net, &g, &caps, &c).unwrap();
+        let dt = 0.8 * system.stable_dt_bound().dt_max;
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let t0: Vec<f64> = (0..n).map(|_| rng.random_range(250.0..350.0)).collect();
+        let energy = |t: &[f64]| t.iter().zip(&caps).map(|(t, c)| t * c).sum::<f64>();
+        let e0 = energy(&t0);
+        let mut runs = Vec::new();
+        for precision in [WeightPrecision::F64, WeightPrecision::F32] {
+            let st = ExplicitStepper::with_precision(&system, &vec![0.0; n], dt, precision).unwrap();
+            let (mut a, mut b) = (t0.clone(), vec![0.0; n]);
+            for _ in 0..500 {
+                st.step(&a, &mut b);
+                std::mem::swap(&mut a, &mut b);
+            }
+            let drift = (energy(&a) - e0).abs() / e0;
+            assert!(drift < 1e-13, "{precision:?}: relative energy drift {drift:e}");
+            runs.push(a);
+        }
+        let diff = runs[0]
+            .iter()
+            .zip(&runs[1])
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        // 100 K of initial spread, conductances perturbed by ≤ 6e-8 relative.
+        assert!(diff < 100.0 * 1e-7, "max |T_f32 − T_f64| = {diff:e} K");
+        assert!(diff > 0.0);
     }
 }

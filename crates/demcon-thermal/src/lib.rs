@@ -48,7 +48,9 @@ mod transient;
 pub use capacity::{DtBound, RepresentativeVolume, capacities, paper_dt_estimate, stable_dt_bound};
 pub use checkpoint::{CheckpointEvery, Checkpoints, TransientStart, TransientState};
 pub use error::ThermalError;
-pub use explicit::{ExplicitParams, ExplicitStepper, TimeStep, run_explicit, run_explicit_from};
+pub use explicit::{
+    ExplicitParams, ExplicitStepper, TimeStep, WeightPrecision, run_explicit, run_explicit_from,
+};
 pub use implicit::{
     ImplicitParams, Scheme, SteadyTemperature, run_implicit, run_implicit_from, solve_steady_temperature,
 };
