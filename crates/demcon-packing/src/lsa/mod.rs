@@ -37,6 +37,10 @@ use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay, plane_d
 /// it is reported as a numerical failure.
 pub const MAX_OVERLAP: f64 = 1e-9;
 
+/// Reduced pressure at which the fast compression stage ends early (dimensionless): well
+/// above the equilibrium fluid at φ = 0.5 (p* ≈ 13), far below jamming.
+const COMPRESSION_MAX_PRESSURE: f64 = 100.0;
+
 /// Wall index of the radial wall of a cylinder or sphere (box walls are `2k` and `2k + 1`).
 const RADIAL: u8 = 6;
 
@@ -65,6 +69,10 @@ struct Engine {
     a_mean: f64,
     s0: f64,
     g: f64,
+    /// Growth rate after the fast compression stage (equal to `g` once it is over).
+    g_final: f64,
+    /// Scale `s` at which the fast compression stage ends (`f64::INFINITY` when none).
+    s_switch: f64,
     count: Vec<u32>,
     ev: Vec<Ev>,
     heap: EventHeap,
@@ -306,6 +314,8 @@ impl Engine {
             a_mean,
             s0,
             g: params.growth_rate,
+            g_final: params.growth_rate,
+            s_switch: f64::INFINITY,
             count: vec![0; n],
             ev: vec![Ev::Exit; n],
             heap: EventHeap::new(vec![f64::INFINITY; n]),
@@ -340,6 +350,11 @@ impl Engine {
                 eng.nb[j as usize].push(i as u32);
             }
             eng.nb[i].extend_from_slice(&list);
+        }
+        let s_switch = (params.compression_phi / params.target_phi).cbrt();
+        if params.compression_growth_rate > params.growth_rate && s_switch > s0 && s_switch < 1.0 {
+            eng.g = params.compression_growth_rate;
+            eng.s_switch = s_switch;
         }
         eng.predict_all(0.0);
         Ok(eng)
@@ -518,14 +533,15 @@ impl Engine {
     }
 
     /// Synchronises everyone at `now`, restarts the clock at 0 and rescales the velocities to
-    /// the target kinetic energy; recomputes all events.
-    fn thermostat(&mut self, now: f64) {
+    /// the target kinetic energy; continues with growth rate `g`; recomputes all events.
+    fn thermostat(&mut self, now: f64, g: f64) {
         let n = self.p.len();
         for i in 0..n {
             self.advance(i, now);
             self.p[i].t = 0.0;
         }
         self.s0 = self.s(now);
+        self.g = g;
         let ke = 0.5 * self.p.iter().map(|p| p.v.norm_squared()).sum::<f64>();
         if ke > 0.0 {
             let f = (self.ke_target / ke).sqrt();
@@ -534,6 +550,12 @@ impl Engine {
         self.ke = self.ke_target;
         self.rescales += 1;
         self.predict_all(0.0);
+    }
+
+    /// Ends the fast compression stage at `now`: rescale, final growth rate, new events.
+    fn end_compression(&mut self, now: f64) {
+        self.s_switch = f64::INFINITY;
+        self.thermostat(now, self.g_final);
     }
 
     /// The event loop. Returns the stop reason and the last reduced pressure.
@@ -578,8 +600,16 @@ impl Engine {
             }
             let (i, te) = self.heap.top();
             let t_target = (1.0 - self.s0) / self.g;
-            if te >= t_target {
-                return (StopReason::TargetReached, p_red);
+            if te >= t_target.min((self.s_switch - self.s0) / self.g) {
+                if te >= t_target {
+                    return (StopReason::TargetReached, p_red);
+                }
+                // End of the fast compression stage: no event before it, so everyone can be
+                // advanced to it; the pressure window restarts with the final growth rate.
+                let ts = (self.s_switch - self.s0) / self.g;
+                self.end_compression(ts);
+                (win_elapsed_before, win_collisions, self.virial) = (0.0, 0, 0.0);
+                continue;
             }
             match self.ev[i] {
                 Ev::Pair { j, cj } => {
@@ -640,7 +670,13 @@ impl Engine {
                 } else {
                     win_elapsed_before = dt;
                 }
-                self.thermostat(te);
+                if self.s_switch.is_finite() && p_red >= COMPRESSION_MAX_PRESSURE {
+                    // Fast growth is near its own (looser) jamming point: slow down now.
+                    self.end_compression(te);
+                    (win_elapsed_before, win_collisions, self.virial) = (0.0, 0, 0.0);
+                    continue;
+                }
+                self.thermostat(te, self.g);
                 if p_red >= params.jam_pressure {
                     return (StopReason::Jammed, p_red);
                 }
