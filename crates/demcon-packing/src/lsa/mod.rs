@@ -16,6 +16,7 @@
 
 pub(crate) mod grid;
 pub(crate) mod heap;
+pub(crate) mod nblist;
 pub mod predict;
 
 use std::time::Instant;
@@ -31,7 +32,8 @@ use crate::radius::jamming_estimate;
 use crate::report::{PackingReport, summarize};
 use grid::{CellGrid, SphereGrid};
 use heap::EventHeap;
-use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay, plane_delay};
+use nblist::NbLists;
+use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay_coef, plane_delay};
 
 /// Largest overlap (relative to the smaller radius) accepted in a finished packing before
 /// it is reported as a numerical failure.
@@ -76,13 +78,12 @@ struct Engine {
     count: Vec<u32>,
     ev: Vec<Ev>,
     heap: EventHeap,
-    nb: Vec<Vec<u32>>,
-    /// Bounding-sphere centre of each particle (m).
-    bc: Vec<Vec3>,
-    /// Bounding-sphere radius of each particle (m).
-    brad: Vec<f64>,
+    /// Bounding spheres and neighbour lists.
+    nb: NbLists,
     grid: SphereGrid,
     skin: f64,
+    /// Scratch list for rebuilds.
+    scratch: Vec<u32>,
     ke: f64,
     ke_target: f64,
     // statistics
@@ -319,11 +320,10 @@ impl Engine {
             count: vec![0; n],
             ev: vec![Ev::Exit; n],
             heap: EventHeap::new(vec![f64::INFINITY; n]),
-            nb: vec![Vec::new(); n],
-            bc: vec![Vec3::zeros(); n],
-            brad: vec![0.0; n],
+            nb: NbLists::new(n),
             grid,
             skin,
+            scratch: Vec::new(),
             ke: ke_target,
             ke_target,
             collisions: 0,
@@ -334,22 +334,22 @@ impl Engine {
             virial: 0.0,
         };
         for i in 0..n {
-            eng.bc[i] = eng.p[i].x;
-            eng.brad[i] = (eng.p[i].a + skin * a_mean) * s0;
-            eng.grid.insert(i, eng.bc[i], eng.brad[i]);
+            let (c, rad) = (eng.p[i].x, (eng.p[i].a + skin * a_mean) * s0);
+            eng.nb.set_sphere(i, c, rad);
+            eng.grid.insert(i, c, rad);
         }
-        // Symmetric lists: `nb[i]` already holds the neighbours k < i (pushed while k was
-        // processed); add those above i to both sides. (Taking `nb[i]` as the scratch list,
-        // as an earlier version did, dropped the k < i entries: the lists were one-sided
-        // until each particle's first rebuild, and collisions were missed.)
+        // Symmetric lists: the list of i already holds the neighbours k < i (pushed while k
+        // was processed); add those above i to both sides. (Taking the list of i as the
+        // scratch list, as an earlier version did, dropped the k < i entries: the lists were
+        // one-sided until each particle's first rebuild, and collisions were missed.)
         let mut list = Vec::new();
         for i in 0..n {
             eng.find_neighbours(i, &mut list);
             list.retain(|&j| j as usize > i);
             for &j in &list {
-                eng.nb[j as usize].push(i as u32);
+                eng.nb.push(j as usize, i as u32);
+                eng.nb.push(i, j);
             }
-            eng.nb[i].extend_from_slice(&list);
         }
         let s_switch = (params.compression_phi / params.target_phi).cbrt();
         if params.compression_growth_rate > params.growth_rate && s_switch > s0 && s_switch < 1.0 {
@@ -389,7 +389,7 @@ impl Engine {
     /// Particles whose bounding spheres overlap that of `i` (written into `out`).
     fn find_neighbours(&self, i: usize, out: &mut Vec<u32>) {
         out.clear();
-        let (ci, ri) = (self.bc[i], self.brad[i]);
+        let (ci, ri) = self.nb.sphere(i);
         self.grid.for_each_near(&ci, |e| {
             let d = min_image(self.period, e.c - ci);
             let s = ri + e.rad;
@@ -401,22 +401,21 @@ impl Engine {
 
     /// New bounding sphere and neighbour list for `i` (synchronised at `now`).
     fn rebuild(&mut self, i: usize, now: f64) {
-        let mut list = std::mem::take(&mut self.nb[i]);
+        let mut list = std::mem::take(&mut self.scratch);
+        self.nb.take(i, &mut list);
         for &j in &list {
-            let l = &mut self.nb[j as usize];
-            if let Some(k) = l.iter().position(|&q| q as usize == i) {
-                l.swap_remove(k);
-            }
+            self.nb.remove(j as usize, i as u32);
         }
         self.grid.remove(i);
-        self.bc[i] = self.p[i].x;
-        self.brad[i] = (self.p[i].a + self.skin * self.a_mean) * self.s(now);
-        self.grid.insert(i, self.bc[i], self.brad[i]);
+        let (c, rad) = (self.p[i].x, (self.p[i].a + self.skin * self.a_mean) * self.s(now));
+        self.nb.set_sphere(i, c, rad);
+        self.grid.insert(i, c, rad);
         self.find_neighbours(i, &mut list);
         for &j in &list {
-            self.nb[j as usize].push(i as u32);
+            self.nb.push(j as usize, i as u32);
         }
-        self.nb[i] = list;
+        self.nb.set(i, &list);
+        self.scratch = list;
         self.rebuilds += 1;
     }
 
@@ -430,8 +429,9 @@ impl Engine {
         let ri = ai * s;
         let gi = ai * self.g;
         // Leaving the bounding sphere.
-        let p = min_image(self.period, xi - self.bc[i]);
-        let room = self.brad[i] - ri;
+        let (bc, brad) = self.nb.sphere(i);
+        let p = min_image(self.period, xi - bc);
+        let room = brad - ri;
         let mut best = if room - p.norm() <= 0.0 {
             0.0
         } else {
@@ -464,33 +464,48 @@ impl Engine {
             }
             Container::Periodic { .. } => {}
         }
-        // Neighbours. A pair whose gap polynomial f(τ) = aτ² + 2bτ + c is still positive at
-        // the current best delay, and decreasing up to it, cannot collide earlier: skip the
-        // square root.
-        for &j in &self.nb[i] {
-            let j = j as usize;
-            let pj = &self.p[j];
-            let r = min_image(self.period, pj.x + pj.v * (now - pj.t) - xi);
-            let v = pj.v - vi;
-            let sa = ai + pj.a;
-            let (sigma, gamma) = (sa * s, sa * self.g);
-            let b = r.dot(&v) - sigma * gamma;
-            let c = r.norm_squared() - sigma * sigma;
-            if c > 0.0 {
-                let a = v.norm_squared() - gamma * gamma;
-                if (b >= 0.0 && a >= 0.0)
-                    || ((a * best + 2.0 * b) * best + c > 0.0 && (a <= 0.0 || -b >= a * best))
-                {
-                    continue;
+        // Neighbours, in two passes over chunks of the list: the first only loads and does
+        // arithmetic (no branches), so the loads of all neighbours are in flight at once; the
+        // second decides. A pair whose gap polynomial f(τ) = aτ² + 2bτ + c is still positive
+        // at the current best delay, and decreasing up to it, cannot collide earlier: skip
+        // the square root.
+        let (inline, spilled) = self.nb.get(i);
+        for list in [inline, spilled] {
+            for chunk in list.chunks(nblist::INLINE) {
+                let mut coef = [[0.0; 6]; nblist::INLINE];
+                for (q, &j) in coef.iter_mut().zip(chunk) {
+                    let pj = &self.p[j as usize];
+                    let r = min_image(self.period, pj.x + pj.v * (now - pj.t) - xi);
+                    let v = pj.v - vi;
+                    let sa = ai + pj.a;
+                    let (sigma, gamma) = (sa * s, sa * self.g);
+                    let rv = r.dot(&v);
+                    let r2 = r.norm_squared();
+                    *q = [
+                        v.norm_squared() - gamma * gamma,
+                        rv - sigma * gamma,
+                        r2 - sigma * sigma,
+                        rv,
+                        r2,
+                        gamma,
+                    ];
                 }
-            }
-            let d = pair_delay(&r, &v, sigma, gamma);
-            if d < best {
-                best = d;
-                kind = Ev::Pair {
-                    j: j as u32,
-                    cj: self.count[j],
-                };
+                for (&[a, b, c, rv, r2, gamma], &j) in coef.iter().zip(chunk) {
+                    if c > 0.0
+                        && ((b >= 0.0 && a >= 0.0)
+                            || ((a * best + 2.0 * b) * best + c > 0.0 && (a <= 0.0 || -b >= a * best)))
+                    {
+                        continue;
+                    }
+                    let d = pair_delay_coef(a, b, c, rv, r2, gamma);
+                    if d < best {
+                        best = d;
+                        kind = Ev::Pair {
+                            j,
+                            cj: self.count[j as usize],
+                        };
+                    }
+                }
             }
         }
         (now + best, kind)
@@ -726,9 +741,11 @@ mod tests {
         let eng = Engine::start(&params, a, a_mean, &mut rng).unwrap();
         let mut pairs = 0;
         for i in 0..400 {
-            for &j in &eng.nb[i] {
+            let (a, b) = eng.nb.get(i);
+            for &j in a.iter().chain(b) {
+                let (c, d) = eng.nb.get(j as usize);
                 assert!(
-                    eng.nb[j as usize].contains(&(i as u32)),
+                    c.contains(&(i as u32)) || d.contains(&(i as u32)),
                     "{i} lists {j}, not the reverse"
                 );
                 pairs += 1;
