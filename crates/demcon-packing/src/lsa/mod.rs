@@ -46,8 +46,9 @@ const COMPRESSION_MAX_PRESSURE: f64 = 100.0;
 /// Wall index of the radial wall of a cylinder or sphere (box walls are `2k` and `2k + 1`).
 const RADIAL: u8 = 6;
 
+/// Kind of a scheduled event.
 #[derive(Debug, Clone, Copy)]
-enum Ev {
+pub(crate) enum Ev {
     Pair { j: u32, cj: u32 },
     Wall(u8),
     Exit,
@@ -76,7 +77,6 @@ struct Engine {
     /// Scale `s` at which the fast compression stage ends (`f64::INFINITY` when none).
     s_switch: f64,
     count: Vec<u32>,
-    ev: Vec<Ev>,
     heap: EventHeap,
     /// Bounding spheres and neighbour lists.
     nb: NbLists,
@@ -318,7 +318,6 @@ impl Engine {
             g_final: params.growth_rate,
             s_switch: f64::INFINITY,
             count: vec![0; n],
-            ev: vec![Ev::Exit; n],
             heap: EventHeap::new(vec![f64::INFINITY; n]),
             nb: NbLists::new(n),
             grid,
@@ -514,7 +513,7 @@ impl Engine {
     #[inline]
     fn predict(&mut self, i: usize, now: f64) {
         let (t, kind) = self.next_event(i, now);
-        self.ev[i] = kind;
+        self.nb.set_event(i, kind);
         self.heap.update(i, t);
     }
 
@@ -524,7 +523,7 @@ impl Engine {
         let mut times = Vec::with_capacity(n);
         for i in 0..n {
             let (t, kind) = self.next_event(i, now);
-            self.ev[i] = kind;
+            self.nb.set_event(i, kind);
             times.push(t);
         }
         self.heap = EventHeap::new(times);
@@ -626,7 +625,7 @@ impl Engine {
                 (win_elapsed_before, win_collisions, self.virial) = (0.0, 0, 0.0);
                 continue;
             }
-            match self.ev[i] {
+            match self.nb.event(i) {
                 Ev::Pair { j, cj } => {
                     let j = j as usize;
                     if self.count[j] != cj {

@@ -1,18 +1,21 @@
-//! Neighbour lists stored flat: one 128-byte block per particle holding its bounding sphere
-//! (centre, radius), the list length and the first [`INLINE`] neighbour ids; the rare longer
-//! lists continue in a per-particle spill vector.
+//! Neighbour lists stored flat: one 128-byte block per particle holding its scheduled event,
+//! its bounding sphere (centre, radius), the list length and the first [`INLINE`] neighbour
+//! ids; the rare longer lists continue in a per-particle spill vector.
 //!
-//! A prediction reads the block of its particle at an address computed from the id (no
-//! pointer to chase, two adjacent cache lines), instead of a `Vec` header, then the list,
-//! then two more arrays for the bounding sphere, as `Vec<Vec<u32>>` did.
+//! Processing an event reads the block of its particle (the event), and predicting the next
+//! one reads it again (bounding sphere, neighbours): one pair of adjacent cache lines at an
+//! address computed from the id, instead of an event array, a `Vec` header, the list and two
+//! arrays for the bounding sphere, as `Vec<Vec<u32>>` did.
 
 use demcon_core::Vec3;
 
-/// Neighbour ids stored in the block itself. Lists at φ ≈ 0.63 hold ~11 ids on average
-/// (Gaussian 0.3, skin 0.4); fewer than 1 % of the particles hold more than 23.
-pub const INLINE: usize = 23;
+use super::Ev;
 
-/// Bounding sphere and neighbour list of one particle (two cache lines).
+/// Neighbour ids stored in the block itself. Lists at φ ≈ 0.63 hold ~11 ids on average
+/// (Gaussian 0.3, skin 0.4); a few % of the particles hold more than 20.
+pub const INLINE: usize = 20;
+
+/// Event, bounding sphere and neighbour list of one particle (two cache lines).
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(64))]
 struct Block {
@@ -20,6 +23,8 @@ struct Block {
     c: Vec3,
     /// Bounding-sphere radius (m).
     rad: f64,
+    /// Scheduled event.
+    ev: Ev,
     /// Number of neighbours (inline and spilled).
     len: u32,
     ids: [u32; INLINE],
@@ -41,6 +46,7 @@ impl NbLists {
                 Block {
                     c: Vec3::zeros(),
                     rad: 0.0,
+                    ev: Ev::Exit,
                     len: 0,
                     ids: [0; INLINE],
                 };
@@ -63,6 +69,18 @@ impl NbLists {
         let b = &mut self.blocks[i];
         b.c = c;
         b.rad = rad;
+    }
+
+    /// Scheduled event of `i`.
+    #[inline]
+    pub fn event(&self, i: usize) -> Ev {
+        self.blocks[i].ev
+    }
+
+    /// Sets the scheduled event of `i`.
+    #[inline]
+    pub fn set_event(&mut self, i: usize, ev: Ev) {
+        self.blocks[i].ev = ev;
     }
 
     /// Number of neighbours of `i`.
@@ -149,6 +167,11 @@ impl NbLists {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn block_is_two_cache_lines() {
+        assert_eq!(std::mem::size_of::<Block>(), 128);
+    }
 
     #[test]
     fn behaves_like_vectors() {
