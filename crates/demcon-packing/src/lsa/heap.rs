@@ -1,12 +1,13 @@
-//! Indexed 4-ary min-heap holding exactly one scheduled event time per particle.
+//! Indexed 8-ary min-heap holding exactly one scheduled event time per particle.
 //!
 //! Keys are `(time, particle id)`, so ties are broken by id and the event order is
 //! deterministic. Only `update` is needed: a particle's entry is re-keyed in place. The
-//! entries carry their time next to the id (16 bytes), so the four children of a node
-//! share one cache line and a sift reads no other array; half the levels of a binary heap.
+//! entries carry their time next to the id (16 bytes) and the eight children of a node fill
+//! one 128-byte aligned group (two adjacent cache lines), so a level of a sift reads one
+//! group and no other array; a third of the levels of a binary heap.
 
 /// Children per node.
-const D: usize = 4;
+const D: usize = 8;
 
 /// One heap entry: scheduled time (time units) and particle id.
 #[derive(Debug, Clone, Copy)]
@@ -23,12 +24,21 @@ impl Entry {
     }
 }
 
+/// The `D` children of one node, aligned to two cache lines.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(128))]
+struct Group([Entry; D]);
+
 /// One entry per particle, ordered by `(time, id)`.
+///
+/// Node `k` (root 0) is stored at slot `k + D − 1`, so the children of `k`, nodes
+/// `Dk + 1 … Dk + D`, are exactly group `k + 1`; the first `D − 1` slots are unused.
 #[derive(Debug, Clone)]
 pub struct EventHeap {
-    /// Heap array.
-    heap: Vec<Entry>,
-    /// Position of each particle in `heap`.
+    groups: Vec<Group>,
+    /// Number of entries.
+    n: usize,
+    /// Node of each particle.
     pos: Vec<u32>,
 }
 
@@ -36,82 +46,100 @@ impl EventHeap {
     /// A heap over particles `0..times.len()` with the given times.
     pub fn new(times: Vec<f64>) -> Self {
         let n = times.len();
+        let empty = Entry {
+            t: f64::INFINITY,
+            id: u32::MAX,
+        };
         let mut h = Self {
-            heap: times
-                .iter()
-                .enumerate()
-                .map(|(i, &t)| Entry { t, id: i as u32 })
-                .collect(),
+            groups: vec![Group([empty; D]); (n + D - 1).div_ceil(D).max(1)],
+            n,
             pos: (0..n as u32).collect(),
         };
+        for (i, &t) in times.iter().enumerate() {
+            h.put(i, Entry { t, id: i as u32 });
+        }
         if n > 1 {
-            for i in (0..=(n - 2) / D).rev() {
-                h.sift_down(i);
+            for k in (0..=(n - 2) / D).rev() {
+                h.sift_down(k);
             }
         }
         h
     }
 
+    #[inline]
+    fn at(&self, k: usize) -> Entry {
+        let s = k + D - 1;
+        self.groups[s / D].0[s % D]
+    }
+
+    #[inline]
+    fn put(&mut self, k: usize, e: Entry) {
+        let s = k + D - 1;
+        self.groups[s / D].0[s % D] = e;
+        self.pos[e.id as usize] = k as u32;
+    }
+
     /// The particle with the earliest event and its time.
     #[inline]
     pub fn top(&self) -> (usize, f64) {
-        let e = self.heap[0];
+        let e = self.at(0);
         (e.id as usize, e.t)
     }
 
     /// Re-keys particle `i` to `time`.
     #[inline]
     pub fn update(&mut self, i: usize, time: f64) {
-        let p = self.pos[i] as usize;
-        let old = self.heap[p].t;
-        self.heap[p].t = time;
+        let k = self.pos[i] as usize;
+        let old = self.at(k).t;
+        let e = Entry {
+            t: time,
+            id: i as u32,
+        };
         if time < old {
-            self.sift_up(p);
+            self.sift_up(k, e);
         } else {
-            self.sift_down(p);
+            let s = k + D - 1;
+            self.groups[s / D].0[s % D] = e;
+            self.sift_down(k);
         }
     }
 
-    fn sift_up(&mut self, mut p: usize) {
-        let item = self.heap[p];
-        while p > 0 {
-            let parent = (p - 1) / D;
-            let q = self.heap[parent];
+    fn sift_up(&mut self, mut k: usize, item: Entry) {
+        while k > 0 {
+            let parent = (k - 1) / D;
+            let q = self.at(parent);
             if !item.less(&q) {
                 break;
             }
-            self.heap[p] = q;
-            self.pos[q.id as usize] = p as u32;
-            p = parent;
+            self.put(k, q);
+            k = parent;
         }
-        self.heap[p] = item;
-        self.pos[item.id as usize] = p as u32;
+        self.put(k, item);
     }
 
-    fn sift_down(&mut self, mut p: usize) {
-        let n = self.heap.len();
-        let item = self.heap[p];
+    fn sift_down(&mut self, mut k: usize) {
+        let item = self.at(k);
         loop {
-            let first = D * p + 1;
-            if first >= n {
+            let first = D * k + 1;
+            if first >= self.n {
                 break;
             }
-            let last = (first + D).min(n);
-            let mut c = first;
-            for k in first + 1..last {
-                if self.heap[k].less(&self.heap[c]) {
-                    c = k;
+            let g = &self.groups[k + 1].0;
+            let count = (self.n - first).min(D);
+            let mut c = 0;
+            for q in 1..count {
+                if g[q].less(&g[c]) {
+                    c = q;
                 }
             }
-            if !self.heap[c].less(&item) {
+            let child = g[c];
+            if !child.less(&item) {
                 break;
             }
-            self.heap[p] = self.heap[c];
-            self.pos[self.heap[p].id as usize] = p as u32;
-            p = c;
+            self.put(k, child);
+            k = first + c;
         }
-        self.heap[p] = item;
-        self.pos[item.id as usize] = p as u32;
+        self.put(k, item);
     }
 }
 
