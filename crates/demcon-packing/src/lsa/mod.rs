@@ -389,11 +389,12 @@ impl Engine {
     fn find_neighbours(&self, i: usize, out: &mut Vec<u32>) {
         out.clear();
         let (ci, ri) = self.nb.sphere(i);
-        self.grid.for_each_near(&ci, |e| {
-            let d = min_image(self.period, e.c - ci);
-            let s = ri + e.rad;
-            if d.norm_squared() < s * s && e.id as usize != i {
-                out.push(e.id);
+        let slack = self.grid.slack();
+        self.grid.for_each_near(&ci, |c, rad, id| {
+            let d = min_image(self.period, c - ci);
+            let s = ri + rad + slack;
+            if d.norm_squared() < s * s && id as usize != i {
+                out.push(id);
             }
         });
     }
