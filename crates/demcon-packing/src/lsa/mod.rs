@@ -70,6 +70,8 @@ struct Engine {
     period: Option<Vec3>,
     p: Vec<P>,
     a_mean: f64,
+    /// Largest radius at the target (m).
+    a_max: f64,
     s0: f64,
     g: f64,
     /// Growth rate after the fast compression stage (equal to `g` once it is over).
@@ -313,6 +315,7 @@ impl Engine {
                 })
                 .collect(),
             a_mean,
+            a_max,
             s0,
             g: params.growth_rate,
             g_final: params.growth_rate,
@@ -333,7 +336,7 @@ impl Engine {
             virial: 0.0,
         };
         for i in 0..n {
-            let (c, rad) = (eng.p[i].x, (eng.p[i].a + skin * a_mean) * s0);
+            let (c, rad) = (eng.p[i].x, eng.bounding_radius(i, s0));
             eng.nb.set_sphere(i, c, rad);
             eng.grid.insert(i, c, rad);
         }
@@ -399,6 +402,16 @@ impl Engine {
         });
     }
 
+    /// Radius of a new bounding sphere of `i` at scale `s` (m): its radius plus the skin,
+    /// `a_i s + skin ā + a_max (1 − s)`. At the target (`s = 1`) the skin is `skin ā`; below it
+    /// the skin takes up the room the largest sphere has not grown into yet, so the spheres
+    /// of the fast, dilute start (which travel far) rebuild their lists less often, while every
+    /// bounding sphere still fits the grid cell (`2 (a_max + skin ā)`).
+    #[inline]
+    fn bounding_radius(&self, i: usize, s: f64) -> f64 {
+        self.p[i].a * s + self.skin * self.a_mean + self.a_max * (1.0 - s).max(0.0)
+    }
+
     /// New bounding sphere and neighbour list for `i` (synchronised at `now`).
     fn rebuild(&mut self, i: usize, now: f64) {
         let mut list = std::mem::take(&mut self.scratch);
@@ -407,7 +420,7 @@ impl Engine {
             self.nb.remove(j as usize, i as u32);
         }
         self.grid.remove(i);
-        let (c, rad) = (self.p[i].x, (self.p[i].a + self.skin * self.a_mean) * self.s(now));
+        let (c, rad) = (self.p[i].x, self.bounding_radius(i, self.s(now)));
         self.nb.set_sphere(i, c, rad);
         self.grid.insert(i, c, rad);
         self.find_neighbours(i, &mut list);
