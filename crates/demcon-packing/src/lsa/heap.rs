@@ -18,9 +18,16 @@ struct Entry {
 }
 
 impl Entry {
+    /// `(time, id)` as one integer: the bits of a non-negative `f64` (infinity included)
+    /// order like the numbers, so comparing keys needs no branch.
+    #[inline]
+    fn key(&self) -> u128 {
+        ((self.t.to_bits() as u128) << 32) | self.id as u128
+    }
+
     #[inline]
     fn less(&self, o: &Entry) -> bool {
-        self.t < o.t || (self.t == o.t && self.id < o.id)
+        self.key() < o.key()
     }
 }
 
@@ -89,6 +96,7 @@ impl EventHeap {
     /// Re-keys particle `i` to `time`.
     #[inline]
     pub fn update(&mut self, i: usize, time: f64) {
+        debug_assert!(time >= 0.0, "event times are non-negative");
         let k = self.pos[i] as usize;
         let old = self.at(k).t;
         let e = Entry {
@@ -126,11 +134,11 @@ impl EventHeap {
             }
             let g = &self.groups[k + 1].0;
             let count = (self.n - first).min(D);
-            let mut c = 0;
-            for q in 1..count {
-                if g[q].less(&g[c]) {
-                    c = q;
-                }
+            let (mut c, mut best) = (0, g[0].key());
+            for (q, e) in g.iter().enumerate().take(count).skip(1) {
+                let k = e.key();
+                c = if k < best { q } else { c };
+                best = best.min(k);
             }
             let child = g[c];
             if !child.less(&item) {
