@@ -12,7 +12,9 @@
 //! radii follow `R_i(t) = a_i s(t)` with `s(t) = s0 + g t`, so the distribution is kept;
 //! `s = 1` is the target. A velocity-rescaling thermostat keeps the growth rate relative
 //! to the thermal speed fixed (growth injects kinetic energy). The collision virial gives
-//! the reduced pressure that detects jamming.
+//! the reduced pressure that detects jamming. Up to `compression_phi` the radii grow at the
+//! faster `compression_growth_rate` (the structure of the dilute start does not survive),
+//! then at the set rate.
 
 pub(crate) mod grid;
 pub(crate) mod heap;

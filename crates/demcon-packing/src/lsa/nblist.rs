@@ -7,6 +7,8 @@
 //! address computed from the id, instead of an event array, a `Vec` header, the list and two
 //! arrays for the bounding sphere, as `Vec<Vec<u32>>` did.
 
+use std::collections::HashMap;
+
 use demcon_core::Vec3;
 
 use super::Ev;
@@ -34,8 +36,9 @@ struct Block {
 #[derive(Debug, Clone)]
 pub struct NbLists {
     blocks: Vec<Block>,
-    /// Neighbours beyond the first [`INLINE`] of each particle.
-    spill: Vec<Vec<u32>>,
+    /// Neighbours beyond the first [`INLINE`], for the few particles that have them
+    /// (looked up by id only, so the map's order never matters).
+    spill: HashMap<u32, Vec<u32>>,
 }
 
 impl NbLists {
@@ -52,7 +55,7 @@ impl NbLists {
                 };
                 n
             ],
-            spill: vec![Vec::new(); n],
+            spill: HashMap::new(),
         }
     }
 
@@ -97,7 +100,7 @@ impl NbLists {
         if len <= INLINE {
             (&b.ids[..len], &[])
         } else {
-            (&b.ids[..], &self.spill[i][..])
+            (&b.ids[..], &self.spill[&(i as u32)][..])
         }
     }
 
@@ -107,7 +110,7 @@ impl NbLists {
         if k < INLINE {
             self.blocks[i].ids[k]
         } else {
-            self.spill[i][k - INLINE]
+            self.spill[&(i as u32)][k - INLINE]
         }
     }
 
@@ -119,7 +122,7 @@ impl NbLists {
         if len < INLINE {
             b.ids[len] = j;
         } else {
-            self.spill[i].push(j);
+            self.spill.entry(i as u32).or_default().push(j);
         }
         b.len += 1;
     }
@@ -132,13 +135,17 @@ impl NbLists {
         };
         let last = self.at(i, len - 1);
         if len > INLINE {
-            self.spill[i].pop();
+            let spill = self.spill.get_mut(&(i as u32)).expect("spilled list");
+            spill.pop();
+            if spill.is_empty() {
+                self.spill.remove(&(i as u32));
+            }
         }
         if k < len - 1 {
             if k < INLINE {
                 self.blocks[i].ids[k] = last;
             } else {
-                self.spill[i][k - INLINE] = last;
+                self.spill.get_mut(&(i as u32)).expect("spilled list")[k - INLINE] = last;
             }
         }
         self.blocks[i].len -= 1;
@@ -151,13 +158,13 @@ impl NbLists {
         out.extend_from_slice(a);
         out.extend_from_slice(b);
         self.blocks[i].len = 0;
-        self.spill[i].clear();
+        self.spill.remove(&(i as u32));
     }
 
     /// Replaces the list of `i` by `list`.
     pub fn set(&mut self, i: usize, list: &[u32]) {
         self.blocks[i].len = 0;
-        self.spill[i].clear();
+        self.spill.remove(&(i as u32));
         for &j in list {
             self.push(i, j);
         }
