@@ -42,10 +42,10 @@ pub const THERMOSTAT_TOLERANCE_RANGE: (f64, f64) = (1e-3, 10.0);
 /// so 10¹² asks φ to within ~10⁻¹² of φ_J, the resolution of the positions.
 pub const MAX_JAM_PRESSURE: f64 = 1e12;
 
-/// Memory used by the packer per particle (bytes): particle state (64), events and heap
-/// (~30), neighbour lists (~100–200), bounding spheres and their grid (~100), placement
-/// grid, output and renumbering (~100). Measured 440 B at φ = 0.35 (maximum resident set
-/// of 2·10⁴ and 2·10⁵ particles), rounded up for the longer lists of dense packings.
+/// Memory used by the packer per particle (bytes): particle state (64), event, bounding
+/// sphere and neighbour list in one block (128), bounding-sphere grid (~35), heap (~20),
+/// placement grid, output and renumbering (~100). Measured 384 B at φ 0.635 (maximum resident
+/// set of 10⁶ particles), rounded up.
 pub const BYTES_PER_PARTICLE: u64 = 600;
 
 /// Memory limit assumed when the available memory is not known (bytes): 64 GiB.
