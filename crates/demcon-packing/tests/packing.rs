@@ -267,10 +267,34 @@ fn bad_input_is_named() {
     });
     assert!(e.contains("periodic box"), "{e}");
     let e = err(PackingParams {
+        compression_phi: 0.7,
+        ..ok.clone()
+    });
+    assert!(e.contains("compression-phi = 0.7"), "{e}");
+    let e = err(PackingParams {
+        compression_growth_rate: 0.0,
+        ..ok.clone()
+    });
+    assert!(e.contains("compression-growth-rate"), "{e}");
+    let e = err(PackingParams {
         growth_rate: f64::NAN,
         ..ok
     });
     assert!(e.contains("growth-rate"), "{e}");
+}
+
+/// The fast compression stage ends on time (a switch to the final growth rate), also when
+/// it is the whole run (target below its end) or off, with no overlap and the target reached.
+#[test]
+fn fast_compression_stage_switches_cleanly() {
+    let c = Container::Box { size: [0.01; 3] };
+    for (target, cphi) in [(0.55, 0.45), (0.4, 0.45), (0.55, 0.0), (0.55, 0.54)] {
+        let mut params = PackingParams::new(c, 800, target, RadiusDistribution::gaussian(0.3));
+        params.compression_phi = cphi;
+        let (p, rep) = pack(&params, 2, None).unwrap();
+        assert_eq!(rep.stop, StopReason::TargetReached, "{target} {cphi}: {rep}");
+        assert!(brute_overlap(&p, &c) < 1e-9, "{target} {cphi}: {rep}");
+    }
 }
 
 /// Regression for the overlaps seen at budget stops and growth rates 0.5 and 1: the

@@ -82,6 +82,12 @@ pub struct PackArgs {
     /// Kinetic-energy rise (fraction) that triggers a thermostat rescale.
     #[arg(long)]
     thermostat_tolerance: Option<f64>,
+    /// Volume fraction up to which the fast compression stage runs (0 turns it off).
+    #[arg(long)]
+    compression_phi: Option<f64>,
+    /// Growth rate of the fast compression stage.
+    #[arg(long)]
+    compression_growth_rate: Option<f64>,
     /// Exit with status 0 even when the target φ was not reached (jammed or out of budget).
     #[arg(long)]
     allow_short: bool,
@@ -167,6 +173,12 @@ pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
     }
     if let Some(t) = a.thermostat_tolerance {
         params.thermostat_tolerance = t;
+    }
+    if let Some(p) = a.compression_phi {
+        params.compression_phi = p;
+    }
+    if let Some(g) = a.compression_growth_rate {
+        params.compression_growth_rate = g;
     }
     params.validate()?;
     params.check_memory(memory_limit())?;

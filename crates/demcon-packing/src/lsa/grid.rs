@@ -136,24 +136,31 @@ impl CellGrid {
     }
 }
 
-/// One sphere stored in a [`SphereGrid`] cell: centre (m), radius (m), particle id.
-#[derive(Debug, Clone, Copy)]
-pub struct Entry {
-    /// Centre (m).
-    pub c: Vec3,
-    /// Radius (m).
-    pub rad: f64,
-    /// Particle id.
-    pub id: u32,
+/// One sphere stored in a [`SphereGrid`] slot: centre relative to the grid's corner and
+/// radius, in single precision (16 bytes; [`SphereGrid::slack`] covers the rounding).
+#[derive(Debug, Clone, Copy, Default)]
+#[repr(C, align(16))]
+struct Slot {
+    c: [f32; 3],
+    rad: f32,
 }
 
-/// Cell grid whose cells store their spheres contiguously (centre, radius, id), so that a
-/// neighbour query reads packed memory instead of chasing list pointers across arrays.
+/// Cell grid of spheres (bounding spheres of the neighbour lists). Each cell owns `cap`
+/// consecutive slots (a row of cells along x is one stretch of memory), the ids in a parallel
+/// array; the rare extra spheres of a full cell go to its spill vector. Positions and radii
+/// are stored in `f32` (a query reads 16 bytes per candidate): callers widen their test by
+/// [`slack`](Self::slack), so no overlapping pair is missed (a pair a hair apart may be
+/// reported too).
 #[derive(Debug, Clone)]
 pub struct SphereGrid {
     index: CellGrid,
-    cells: Vec<Vec<Entry>>,
+    cap: usize,
+    slots: Vec<Slot>,
+    ids: Vec<u32>,
+    len: Vec<u32>,
+    spill: Vec<Vec<(Slot, u32)>>,
     cell_of: Vec<u32>,
+    slack: f64,
 }
 
 impl SphereGrid {
@@ -161,38 +168,105 @@ impl SphereGrid {
     pub fn new(bounds: &Aabb, min_cell: f64, periodic: bool, n_particles: usize, max_cells: usize) -> Self {
         let index = CellGrid::new(bounds, min_cell, periodic, 0, max_cells);
         let n_cells = index.head.len();
+        // Twice the mean occupancy plus a margin, 4 to 16 slots (64–256 bytes).
+        let cap = (2 * n_particles / n_cells + 4).next_power_of_two().clamp(4, 16);
+        let ext = bounds.extent().max();
         Self {
             index,
-            cells: vec![Vec::new(); n_cells],
+            cap,
+            slots: vec![Slot::default(); n_cells * cap],
+            ids: vec![NONE; n_cells * cap],
+            len: vec![0; n_cells],
+            spill: vec![Vec::new(); n_cells],
             cell_of: vec![NONE; n_particles],
+            // f32 rounding of coordinates below `ext` and radii: < 2·10⁻⁷ ext per distance.
+            slack: if ext.is_finite() { 2e-6 * ext } else { 0.0 },
         }
+    }
+
+    /// Widening (m) a query must add to the sum of radii to cover the `f32` storage.
+    #[inline]
+    pub fn slack(&self) -> f64 {
+        self.slack
     }
 
     /// Stores sphere `id` (not in the grid) with centre `c` and radius `rad`.
     pub fn insert(&mut self, id: usize, c: Vec3, rad: f64) {
         let k = self.index.cell_index([0, 1, 2].map(|a| self.index.coord(&c, a)));
-        self.cells[k].push(Entry {
-            c,
-            rad,
-            id: id as u32,
-        });
+        let r = c - self.index.min;
+        let slot = Slot {
+            c: [r.x as f32, r.y as f32, r.z as f32],
+            rad: rad as f32,
+        };
+        let len = self.len[k] as usize;
+        if len < self.cap {
+            self.slots[k * self.cap + len] = slot;
+            self.ids[k * self.cap + len] = id as u32;
+        } else {
+            self.spill[k].push((slot, id as u32));
+        }
+        self.len[k] += 1;
         self.cell_of[id] = k as u32;
     }
 
-    /// Removes sphere `id`.
+    /// Removes sphere `id` (the last sphere of its cell takes its place).
     pub fn remove(&mut self, id: usize) {
-        let cell = &mut self.cells[self.cell_of[id] as usize];
-        if let Some(q) = cell.iter().position(|e| e.id as usize == id) {
-            cell.swap_remove(q);
-        }
+        let k = self.cell_of[id] as usize;
         self.cell_of[id] = NONE;
+        let (cap, len) = (self.cap, self.len[k] as usize);
+        let base = k * cap;
+        let found = (0..len.min(cap))
+            .find(|&q| self.ids[base + q] == id as u32)
+            .or_else(|| {
+                self.spill[k]
+                    .iter()
+                    .position(|e| e.1 == id as u32)
+                    .map(|q| q + cap)
+            });
+        let Some(q) = found else {
+            return;
+        };
+        let last = if len > cap {
+            self.spill[k].pop().expect("spill holds the entries beyond cap")
+        } else {
+            (self.slots[base + len - 1], self.ids[base + len - 1])
+        };
+        if q < len - 1 {
+            if q < cap {
+                self.slots[base + q] = last.0;
+                self.ids[base + q] = last.1;
+            } else {
+                self.spill[k][q - cap] = last;
+            }
+        }
+        self.len[k] -= 1;
     }
 
-    /// Calls `f` for every sphere stored in the cell of `p` and the cells next to it.
+    /// Calls `f(centre, radius, id)` for every sphere stored in the cell of `p` and the
+    /// cells next to it (centre and radius as stored, in `f32` precision).
     #[inline]
-    pub fn for_each_near(&self, p: &Vec3, mut f: impl FnMut(&Entry)) {
-        self.index
-            .for_each_cell_near(p, |k| self.cells[k].iter().for_each(&mut f));
+    pub fn for_each_near(&self, p: &Vec3, mut f: impl FnMut(Vec3, f64, u32)) {
+        let min = self.index.min;
+        let mut visit = |s: &Slot, id: u32| {
+            f(
+                Vec3::new(s.c[0] as f64, s.c[1] as f64, s.c[2] as f64) + min,
+                s.rad as f64,
+                id,
+            )
+        };
+        self.index.for_each_cell_near(p, |k| {
+            let len = self.len[k] as usize;
+            let base = k * self.cap;
+            let m = len.min(self.cap);
+            for (s, &id) in self.slots[base..base + m].iter().zip(&self.ids[base..base + m]) {
+                visit(s, id);
+            }
+            if len > self.cap {
+                for (s, id) in &self.spill[k] {
+                    visit(s, *id);
+                }
+            }
+        });
     }
 }
 
@@ -246,6 +320,63 @@ mod tests {
                 let mut found = 0;
                 g.for_each_near(&Vec3::zeros(), |_| found += 1);
                 assert!(found >= 1);
+            }
+        }
+    }
+
+    /// Insert, remove (also from full cells, through the spill) and query against brute force.
+    #[test]
+    fn sphere_grid_finds_every_overlapping_sphere() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for periodic in [false, true] {
+            let len = 6.0;
+            let b = Aabb {
+                min: Vec3::repeat(-1.0),
+                max: Vec3::repeat(len - 1.0),
+            };
+            let n = 400;
+            let mut g = SphereGrid::new(&b, 1.0, periodic, n, 1 << 20);
+            let mut c: Vec<Vec3> = Vec::new();
+            let mut r: Vec<f64> = Vec::new();
+            for i in 0..n {
+                // Clustered points overfill some cells.
+                let p = if i % 3 == 0 {
+                    Vec3::repeat(0.2) + Vec3::new(rng.random(), rng.random(), rng.random()) * 0.5
+                } else {
+                    b.min + Vec3::new(rng.random(), rng.random(), rng.random()) * len
+                };
+                c.push(p);
+                r.push(0.5 * rng.random::<f64>());
+                g.insert(i, p, r[i]);
+            }
+            let mut alive = vec![true; n];
+            for step in 0..600 {
+                let i = rng.random_range(0..n);
+                if alive[i] {
+                    g.remove(i);
+                } else {
+                    g.insert(i, c[i], r[i]);
+                }
+                alive[i] = !alive[i];
+                let q = rng.random_range(0..n);
+                let mut found = Vec::new();
+                g.for_each_near(&c[q], |_, _, id| found.push(id as usize));
+                found.sort();
+                let n_found = found.len();
+                found.dedup();
+                assert_eq!(found.len(), n_found, "duplicates");
+                for j in 0..n {
+                    let mut d = c[j] - c[q];
+                    if periodic {
+                        d = d.map(|x| x - len * (x / len).round());
+                    }
+                    if alive[j] && d.norm() < r[j] + r[q] {
+                        assert!(found.binary_search(&j).is_ok(), "step {step}: {j} missed");
+                    }
+                    if !alive[j] {
+                        assert!(found.binary_search(&j).is_err(), "step {step}: {j} removed");
+                    }
+                }
             }
         }
     }

@@ -1,99 +1,153 @@
-//! Indexed binary min-heap holding exactly one scheduled event time per particle.
+//! Indexed 8-ary min-heap holding exactly one scheduled event time per particle.
 //!
 //! Keys are `(time, particle id)`, so ties are broken by id and the event order is
-//! deterministic. Only `update` is needed: a particle's entry is re-keyed in place.
+//! deterministic. Only `update` is needed: a particle's entry is re-keyed in place. The
+//! entries carry their time next to the id (16 bytes) and the eight children of a node fill
+//! one 128-byte aligned group (two adjacent cache lines), so a level of a sift reads one
+//! group and no other array; a third of the levels of a binary heap.
+
+/// Children per node.
+const D: usize = 8;
+
+/// One heap entry: scheduled time (time units) and particle id.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(16))]
+struct Entry {
+    t: f64,
+    id: u32,
+}
+
+impl Entry {
+    /// `(time, id)` as one integer: the bits of a non-negative `f64` (infinity included)
+    /// order like the numbers, so comparing keys needs no branch.
+    #[inline]
+    fn key(&self) -> u128 {
+        ((self.t.to_bits() as u128) << 32) | self.id as u128
+    }
+
+    #[inline]
+    fn less(&self, o: &Entry) -> bool {
+        self.key() < o.key()
+    }
+}
+
+/// The `D` children of one node, aligned to two cache lines.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(128))]
+struct Group([Entry; D]);
 
 /// One entry per particle, ordered by `(time, id)`.
+///
+/// Node `k` (root 0) is stored at slot `k + D − 1`, so the children of `k`, nodes
+/// `Dk + 1 … Dk + D`, are exactly group `k + 1`; the first `D − 1` slots are unused.
 #[derive(Debug, Clone)]
 pub struct EventHeap {
-    /// Heap array of particle ids.
-    heap: Vec<u32>,
-    /// Position of each particle in `heap`.
+    groups: Vec<Group>,
+    /// Number of entries.
+    n: usize,
+    /// Node of each particle.
     pos: Vec<u32>,
-    /// Scheduled time of each particle (time units).
-    key: Vec<f64>,
 }
 
 impl EventHeap {
     /// A heap over particles `0..times.len()` with the given times.
     pub fn new(times: Vec<f64>) -> Self {
         let n = times.len();
-        let mut h = Self {
-            heap: (0..n as u32).collect(),
-            pos: (0..n as u32).collect(),
-            key: times,
+        let empty = Entry {
+            t: f64::INFINITY,
+            id: u32::MAX,
         };
-        for i in (0..n / 2).rev() {
-            h.sift_down(i);
+        let mut h = Self {
+            groups: vec![Group([empty; D]); (n + D - 1).div_ceil(D).max(1)],
+            n,
+            pos: (0..n as u32).collect(),
+        };
+        for (i, &t) in times.iter().enumerate() {
+            h.put(i, Entry { t, id: i as u32 });
+        }
+        if n > 1 {
+            for k in (0..=(n - 2) / D).rev() {
+                h.sift_down(k);
+            }
         }
         h
     }
 
     #[inline]
-    fn less(&self, a: u32, b: u32) -> bool {
-        let (ka, kb) = (self.key[a as usize], self.key[b as usize]);
-        ka < kb || (ka == kb && a < b)
+    fn at(&self, k: usize) -> Entry {
+        let s = k + D - 1;
+        self.groups[s / D].0[s % D]
+    }
+
+    #[inline]
+    fn put(&mut self, k: usize, e: Entry) {
+        let s = k + D - 1;
+        self.groups[s / D].0[s % D] = e;
+        self.pos[e.id as usize] = k as u32;
     }
 
     /// The particle with the earliest event and its time.
     #[inline]
     pub fn top(&self) -> (usize, f64) {
-        let i = self.heap[0] as usize;
-        (i, self.key[i])
+        let e = self.at(0);
+        (e.id as usize, e.t)
     }
 
     /// Re-keys particle `i` to `time`.
     #[inline]
     pub fn update(&mut self, i: usize, time: f64) {
-        let old = self.key[i];
-        self.key[i] = time;
-        let p = self.pos[i] as usize;
+        debug_assert!(time >= 0.0, "event times are non-negative");
+        let k = self.pos[i] as usize;
+        let old = self.at(k).t;
+        let e = Entry {
+            t: time,
+            id: i as u32,
+        };
         if time < old {
-            self.sift_up(p);
+            self.sift_up(k, e);
         } else {
-            self.sift_down(p);
+            let s = k + D - 1;
+            self.groups[s / D].0[s % D] = e;
+            self.sift_down(k);
         }
     }
 
-    fn sift_up(&mut self, mut p: usize) {
-        let item = self.heap[p];
-        while p > 0 {
-            let parent = (p - 1) / 2;
-            let q = self.heap[parent];
-            if !self.less(item, q) {
+    fn sift_up(&mut self, mut k: usize, item: Entry) {
+        while k > 0 {
+            let parent = (k - 1) / D;
+            let q = self.at(parent);
+            if !item.less(&q) {
                 break;
             }
-            self.heap[p] = q;
-            self.pos[q as usize] = p as u32;
-            p = parent;
+            self.put(k, q);
+            k = parent;
         }
-        self.heap[p] = item;
-        self.pos[item as usize] = p as u32;
+        self.put(k, item);
     }
 
-    fn sift_down(&mut self, mut p: usize) {
-        let n = self.heap.len();
-        let item = self.heap[p];
+    fn sift_down(&mut self, mut k: usize) {
+        let item = self.at(k);
         loop {
-            let l = 2 * p + 1;
-            if l >= n {
+            let first = D * k + 1;
+            if first >= self.n {
                 break;
             }
-            let r = l + 1;
-            let c = if r < n && self.less(self.heap[r], self.heap[l]) {
-                r
-            } else {
-                l
-            };
-            if !self.less(self.heap[c], item) {
+            let g = &self.groups[k + 1].0;
+            let count = (self.n - first).min(D);
+            let (mut c, mut best) = (0, g[0].key());
+            for (q, e) in g.iter().enumerate().take(count).skip(1) {
+                let k = e.key();
+                c = if k < best { q } else { c };
+                best = best.min(k);
+            }
+            let child = g[c];
+            if !child.less(&item) {
                 break;
             }
-            self.heap[p] = self.heap[c];
-            self.pos[self.heap[p] as usize] = p as u32;
-            p = c;
+            self.put(k, child);
+            k = first + c;
         }
-        self.heap[p] = item;
-        self.pos[item as usize] = p as u32;
+        self.put(k, item);
     }
 }
 

@@ -12,10 +12,13 @@
 //! radii follow `R_i(t) = a_i s(t)` with `s(t) = s0 + g t`, so the distribution is kept;
 //! `s = 1` is the target. A velocity-rescaling thermostat keeps the growth rate relative
 //! to the thermal speed fixed (growth injects kinetic energy). The collision virial gives
-//! the reduced pressure that detects jamming.
+//! the reduced pressure that detects jamming. Up to `compression_phi` the radii grow at the
+//! faster `compression_growth_rate` (the structure of the dilute start does not survive),
+//! then at the set rate.
 
 pub(crate) mod grid;
 pub(crate) mod heap;
+pub(crate) mod nblist;
 pub mod predict;
 
 use std::time::Instant;
@@ -31,17 +34,23 @@ use crate::radius::jamming_estimate;
 use crate::report::{PackingReport, summarize};
 use grid::{CellGrid, SphereGrid};
 use heap::EventHeap;
-use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay, plane_delay};
+use nblist::NbLists;
+use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay_coef, plane_delay};
 
 /// Largest overlap (relative to the smaller radius) accepted in a finished packing before
 /// it is reported as a numerical failure.
 pub const MAX_OVERLAP: f64 = 1e-9;
 
+/// Reduced pressure at which the fast compression stage ends early (dimensionless): well
+/// above the equilibrium fluid at φ = 0.5 (p* ≈ 13), far below jamming.
+const COMPRESSION_MAX_PRESSURE: f64 = 100.0;
+
 /// Wall index of the radial wall of a cylinder or sphere (box walls are `2k` and `2k + 1`).
 const RADIAL: u8 = 6;
 
+/// Kind of a scheduled event.
 #[derive(Debug, Clone, Copy)]
-enum Ev {
+pub(crate) enum Ev {
     Pair { j: u32, cj: u32 },
     Wall(u8),
     Exit,
@@ -63,18 +72,22 @@ struct Engine {
     period: Option<Vec3>,
     p: Vec<P>,
     a_mean: f64,
+    /// Largest radius at the target (m).
+    a_max: f64,
     s0: f64,
     g: f64,
+    /// Growth rate after the fast compression stage (equal to `g` once it is over).
+    g_final: f64,
+    /// Scale `s` at which the fast compression stage ends (`f64::INFINITY` when none).
+    s_switch: f64,
     count: Vec<u32>,
-    ev: Vec<Ev>,
     heap: EventHeap,
-    nb: Vec<Vec<u32>>,
-    /// Bounding-sphere centre of each particle (m).
-    bc: Vec<Vec3>,
-    /// Bounding-sphere radius of each particle (m).
-    brad: Vec<f64>,
+    /// Bounding spheres and neighbour lists.
+    nb: NbLists,
     grid: SphereGrid,
     skin: f64,
+    /// Scratch list for rebuilds.
+    scratch: Vec<u32>,
     ke: f64,
     ke_target: f64,
     // statistics
@@ -304,16 +317,17 @@ impl Engine {
                 })
                 .collect(),
             a_mean,
+            a_max,
             s0,
             g: params.growth_rate,
+            g_final: params.growth_rate,
+            s_switch: f64::INFINITY,
             count: vec![0; n],
-            ev: vec![Ev::Exit; n],
             heap: EventHeap::new(vec![f64::INFINITY; n]),
-            nb: vec![Vec::new(); n],
-            bc: vec![Vec3::zeros(); n],
-            brad: vec![0.0; n],
+            nb: NbLists::new(n),
             grid,
             skin,
+            scratch: Vec::new(),
             ke: ke_target,
             ke_target,
             collisions: 0,
@@ -324,22 +338,27 @@ impl Engine {
             virial: 0.0,
         };
         for i in 0..n {
-            eng.bc[i] = eng.p[i].x;
-            eng.brad[i] = (eng.p[i].a + skin * a_mean) * s0;
-            eng.grid.insert(i, eng.bc[i], eng.brad[i]);
+            let (c, rad) = (eng.p[i].x, eng.bounding_radius(i, s0));
+            eng.nb.set_sphere(i, c, rad);
+            eng.grid.insert(i, c, rad);
         }
-        // Symmetric lists: `nb[i]` already holds the neighbours k < i (pushed while k was
-        // processed); add those above i to both sides. (Taking `nb[i]` as the scratch list,
-        // as an earlier version did, dropped the k < i entries: the lists were one-sided
-        // until each particle's first rebuild, and collisions were missed.)
+        // Symmetric lists: the list of i already holds the neighbours k < i (pushed while k
+        // was processed); add those above i to both sides. (Taking the list of i as the
+        // scratch list, as an earlier version did, dropped the k < i entries: the lists were
+        // one-sided until each particle's first rebuild, and collisions were missed.)
         let mut list = Vec::new();
         for i in 0..n {
             eng.find_neighbours(i, &mut list);
             list.retain(|&j| j as usize > i);
             for &j in &list {
-                eng.nb[j as usize].push(i as u32);
+                eng.nb.push(j as usize, i as u32);
+                eng.nb.push(i, j);
             }
-            eng.nb[i].extend_from_slice(&list);
+        }
+        let s_switch = (params.compression_phi / params.target_phi).cbrt();
+        if params.compression_growth_rate > params.growth_rate && s_switch > s0 && s_switch < 1.0 {
+            eng.g = params.compression_growth_rate;
+            eng.s_switch = s_switch;
         }
         eng.predict_all(0.0);
         Ok(eng)
@@ -374,34 +393,44 @@ impl Engine {
     /// Particles whose bounding spheres overlap that of `i` (written into `out`).
     fn find_neighbours(&self, i: usize, out: &mut Vec<u32>) {
         out.clear();
-        let (ci, ri) = (self.bc[i], self.brad[i]);
-        self.grid.for_each_near(&ci, |e| {
-            let d = min_image(self.period, e.c - ci);
-            let s = ri + e.rad;
-            if d.norm_squared() < s * s && e.id as usize != i {
-                out.push(e.id);
+        let (ci, ri) = self.nb.sphere(i);
+        let slack = self.grid.slack();
+        self.grid.for_each_near(&ci, |c, rad, id| {
+            let d = min_image(self.period, c - ci);
+            let s = ri + rad + slack;
+            if d.norm_squared() < s * s && id as usize != i {
+                out.push(id);
             }
         });
     }
 
+    /// Radius of a new bounding sphere of `i` at scale `s` (m): its radius plus the skin,
+    /// `a_i s + skin ā + a_max (1 − s)`. At the target (`s = 1`) the skin is `skin ā`; below it
+    /// the skin takes up the room the largest sphere has not grown into yet, so the spheres
+    /// of the fast, dilute start (which travel far) rebuild their lists less often, while every
+    /// bounding sphere still fits the grid cell (`2 (a_max + skin ā)`).
+    #[inline]
+    fn bounding_radius(&self, i: usize, s: f64) -> f64 {
+        self.p[i].a * s + self.skin * self.a_mean + self.a_max * (1.0 - s).max(0.0)
+    }
+
     /// New bounding sphere and neighbour list for `i` (synchronised at `now`).
     fn rebuild(&mut self, i: usize, now: f64) {
-        let mut list = std::mem::take(&mut self.nb[i]);
+        let mut list = std::mem::take(&mut self.scratch);
+        self.nb.take(i, &mut list);
         for &j in &list {
-            let l = &mut self.nb[j as usize];
-            if let Some(k) = l.iter().position(|&q| q as usize == i) {
-                l.swap_remove(k);
-            }
+            self.nb.remove(j as usize, i as u32);
         }
         self.grid.remove(i);
-        self.bc[i] = self.p[i].x;
-        self.brad[i] = (self.p[i].a + self.skin * self.a_mean) * self.s(now);
-        self.grid.insert(i, self.bc[i], self.brad[i]);
+        let (c, rad) = (self.p[i].x, self.bounding_radius(i, self.s(now)));
+        self.nb.set_sphere(i, c, rad);
+        self.grid.insert(i, c, rad);
         self.find_neighbours(i, &mut list);
         for &j in &list {
-            self.nb[j as usize].push(i as u32);
+            self.nb.push(j as usize, i as u32);
         }
-        self.nb[i] = list;
+        self.nb.set(i, &list);
+        self.scratch = list;
         self.rebuilds += 1;
     }
 
@@ -415,8 +444,9 @@ impl Engine {
         let ri = ai * s;
         let gi = ai * self.g;
         // Leaving the bounding sphere.
-        let p = min_image(self.period, xi - self.bc[i]);
-        let room = self.brad[i] - ri;
+        let (bc, brad) = self.nb.sphere(i);
+        let p = min_image(self.period, xi - bc);
+        let room = brad - ri;
         let mut best = if room - p.norm() <= 0.0 {
             0.0
         } else {
@@ -449,33 +479,48 @@ impl Engine {
             }
             Container::Periodic { .. } => {}
         }
-        // Neighbours. A pair whose gap polynomial f(τ) = aτ² + 2bτ + c is still positive at
-        // the current best delay, and decreasing up to it, cannot collide earlier: skip the
-        // square root.
-        for &j in &self.nb[i] {
-            let j = j as usize;
-            let pj = &self.p[j];
-            let r = min_image(self.period, pj.x + pj.v * (now - pj.t) - xi);
-            let v = pj.v - vi;
-            let sa = ai + pj.a;
-            let (sigma, gamma) = (sa * s, sa * self.g);
-            let b = r.dot(&v) - sigma * gamma;
-            let c = r.norm_squared() - sigma * sigma;
-            if c > 0.0 {
-                let a = v.norm_squared() - gamma * gamma;
-                if (b >= 0.0 && a >= 0.0)
-                    || ((a * best + 2.0 * b) * best + c > 0.0 && (a <= 0.0 || -b >= a * best))
-                {
-                    continue;
+        // Neighbours, in two passes over chunks of the list: the first only loads and does
+        // arithmetic (no branches), so the loads of all neighbours are in flight at once; the
+        // second decides. A pair whose gap polynomial f(τ) = aτ² + 2bτ + c is still positive
+        // at the current best delay, and decreasing up to it, cannot collide earlier: skip
+        // the square root.
+        let (inline, spilled) = self.nb.get(i);
+        for list in [inline, spilled] {
+            for chunk in list.chunks(nblist::INLINE) {
+                let mut coef = [[0.0; 6]; nblist::INLINE];
+                for (q, &j) in coef.iter_mut().zip(chunk) {
+                    let pj = &self.p[j as usize];
+                    let r = min_image(self.period, pj.x + pj.v * (now - pj.t) - xi);
+                    let v = pj.v - vi;
+                    let sa = ai + pj.a;
+                    let (sigma, gamma) = (sa * s, sa * self.g);
+                    let rv = r.dot(&v);
+                    let r2 = r.norm_squared();
+                    *q = [
+                        v.norm_squared() - gamma * gamma,
+                        rv - sigma * gamma,
+                        r2 - sigma * sigma,
+                        rv,
+                        r2,
+                        gamma,
+                    ];
                 }
-            }
-            let d = pair_delay(&r, &v, sigma, gamma);
-            if d < best {
-                best = d;
-                kind = Ev::Pair {
-                    j: j as u32,
-                    cj: self.count[j],
-                };
+                for (&[a, b, c, rv, r2, gamma], &j) in coef.iter().zip(chunk) {
+                    if c > 0.0
+                        && ((b >= 0.0 && a >= 0.0)
+                            || ((a * best + 2.0 * b) * best + c > 0.0 && (a <= 0.0 || -b >= a * best)))
+                    {
+                        continue;
+                    }
+                    let d = pair_delay_coef(a, b, c, rv, r2, gamma);
+                    if d < best {
+                        best = d;
+                        kind = Ev::Pair {
+                            j,
+                            cj: self.count[j as usize],
+                        };
+                    }
+                }
             }
         }
         (now + best, kind)
@@ -484,7 +529,7 @@ impl Engine {
     #[inline]
     fn predict(&mut self, i: usize, now: f64) {
         let (t, kind) = self.next_event(i, now);
-        self.ev[i] = kind;
+        self.nb.set_event(i, kind);
         self.heap.update(i, t);
     }
 
@@ -494,7 +539,7 @@ impl Engine {
         let mut times = Vec::with_capacity(n);
         for i in 0..n {
             let (t, kind) = self.next_event(i, now);
-            self.ev[i] = kind;
+            self.nb.set_event(i, kind);
             times.push(t);
         }
         self.heap = EventHeap::new(times);
@@ -518,14 +563,15 @@ impl Engine {
     }
 
     /// Synchronises everyone at `now`, restarts the clock at 0 and rescales the velocities to
-    /// the target kinetic energy; recomputes all events.
-    fn thermostat(&mut self, now: f64) {
+    /// the target kinetic energy; continues with growth rate `g`; recomputes all events.
+    fn thermostat(&mut self, now: f64, g: f64) {
         let n = self.p.len();
         for i in 0..n {
             self.advance(i, now);
             self.p[i].t = 0.0;
         }
         self.s0 = self.s(now);
+        self.g = g;
         let ke = 0.5 * self.p.iter().map(|p| p.v.norm_squared()).sum::<f64>();
         if ke > 0.0 {
             let f = (self.ke_target / ke).sqrt();
@@ -534,6 +580,12 @@ impl Engine {
         self.ke = self.ke_target;
         self.rescales += 1;
         self.predict_all(0.0);
+    }
+
+    /// Ends the fast compression stage at `now`: rescale, final growth rate, new events.
+    fn end_compression(&mut self, now: f64) {
+        self.s_switch = f64::INFINITY;
+        self.thermostat(now, self.g_final);
     }
 
     /// The event loop. Returns the stop reason and the last reduced pressure.
@@ -578,10 +630,18 @@ impl Engine {
             }
             let (i, te) = self.heap.top();
             let t_target = (1.0 - self.s0) / self.g;
-            if te >= t_target {
-                return (StopReason::TargetReached, p_red);
+            if te >= t_target.min((self.s_switch - self.s0) / self.g) {
+                if te >= t_target {
+                    return (StopReason::TargetReached, p_red);
+                }
+                // End of the fast compression stage: no event before it, so everyone can be
+                // advanced to it; the pressure window restarts with the final growth rate.
+                let ts = (self.s_switch - self.s0) / self.g;
+                self.end_compression(ts);
+                (win_elapsed_before, win_collisions, self.virial) = (0.0, 0, 0.0);
+                continue;
             }
-            match self.ev[i] {
+            match self.nb.event(i) {
                 Ev::Pair { j, cj } => {
                     let j = j as usize;
                     if self.count[j] != cj {
@@ -640,7 +700,13 @@ impl Engine {
                 } else {
                     win_elapsed_before = dt;
                 }
-                self.thermostat(te);
+                if self.s_switch.is_finite() && p_red >= COMPRESSION_MAX_PRESSURE {
+                    // Fast growth is near its own (looser) jamming point: slow down now.
+                    self.end_compression(te);
+                    (win_elapsed_before, win_collisions, self.virial) = (0.0, 0, 0.0);
+                    continue;
+                }
+                self.thermostat(te, self.g);
                 if p_red >= params.jam_pressure {
                     return (StopReason::Jammed, p_red);
                 }
@@ -690,9 +756,11 @@ mod tests {
         let eng = Engine::start(&params, a, a_mean, &mut rng).unwrap();
         let mut pairs = 0;
         for i in 0..400 {
-            for &j in &eng.nb[i] {
+            let (a, b) = eng.nb.get(i);
+            for &j in a.iter().chain(b) {
+                let (c, d) = eng.nb.get(j as usize);
                 assert!(
-                    eng.nb[j as usize].contains(&(i as u32)),
+                    c.contains(&(i as u32)) || d.contains(&(i as u32)),
                     "{i} lists {j}, not the reverse"
                 );
                 pairs += 1;

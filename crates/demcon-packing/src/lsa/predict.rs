@@ -16,18 +16,32 @@ use demcon_core::Vec3;
 /// Touching or (round-off) overlapping pairs that are closing collide at once (delay 0).
 #[inline]
 pub fn pair_delay(r: &Vec3, v: &Vec3, sigma: f64, gamma: f64) -> f64 {
-    let b = r.dot(v) - sigma * gamma;
-    let c = r.norm_squared() - sigma * sigma;
+    let rv = r.dot(v);
+    let r2 = r.norm_squared();
+    pair_delay_coef(
+        v.norm_squared() - gamma * gamma,
+        rv - sigma * gamma,
+        r2 - sigma * sigma,
+        rv,
+        r2,
+        gamma,
+    )
+}
+
+/// [`pair_delay`] from the coefficients of `aτ² + 2bτ + c = 0`: `a = v² − γ²`,
+/// `b = r·v − σγ`, `c = r² − σ²`, with `rv = r·v`, `r2 = r²` and `gamma` for the closing
+/// test of touching pairs.
+#[inline]
+pub fn pair_delay_coef(a: f64, b: f64, c: f64, rv: f64, r2: f64, gamma: f64) -> f64 {
     if c <= 0.0 {
         // Same closing test as `collide_pair` (n·v < γ), so a collision at once always
         // changes the velocities and cannot be rescheduled at the same instant.
-        return if r.dot(v) < r.norm() * gamma {
+        return if rv < r2.sqrt() * gamma {
             0.0
         } else {
             f64::INFINITY
         };
     }
-    let a = v.norm_squared() - gamma * gamma;
     if b >= 0.0 && a >= 0.0 {
         return f64::INFINITY;
     }
