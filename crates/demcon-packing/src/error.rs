@@ -67,6 +67,15 @@ pub enum PackingError {
         /// The system error.
         source: std::io::Error,
     },
+    /// A file from another code cannot be imported: a file or column is missing, or its
+    /// content is not what that format writes (names the file and what is missing).
+    #[error("{}: {message}", path.display())]
+    Import {
+        /// The file or folder.
+        path: PathBuf,
+        /// What is missing or wrong, and what was expected.
+        message: String,
+    },
     /// A packing file is malformed.
     #[error("{}:{line}: {message}", path.display())]
     Parse {

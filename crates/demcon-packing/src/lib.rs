@@ -1,7 +1,7 @@
 //! Dense random sphere packings for demcon: the Lubachevsky–Stillinger algorithm (LSA)
 //! with radii growing in proportion, in a box, cylinder, sphere or periodic box; radius
 //! distributions; carving of packings by regions; tiling of periodic packings; plain-text
-//! `x y z r` files.
+//! `x y z r` files; imports from PackingGeneration, LIGGGHTS/LAMMPS dumps and YADE.
 //!
 //! ```
 //! use demcon_core::Container;
@@ -25,6 +25,7 @@
 
 mod carve;
 mod error;
+mod import;
 mod lsa;
 mod params;
 mod radius;
@@ -35,6 +36,10 @@ mod xyzr;
 
 pub use carve::carve;
 pub use error::PackingError;
+pub use import::{
+    ImportFormat, ImportedPacking, PACKING_GENERATION_RECORD_BYTES, check_imported, import_packing,
+    read_liggghts_dump, read_packing_generation, read_yade_text,
+};
 pub use lsa::{MAX_OVERLAP, pack, predict};
 pub use params::{
     BYTES_PER_PARTICLE, DEFAULT_MEMORY_LIMIT, GROWTH_RATE_RANGE, LENGTH_RANGE, MAX_COMPRESSION_PHI,
