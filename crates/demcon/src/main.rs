@@ -1,6 +1,7 @@
 //! The `demcon` binary: a thin dispatcher to one module per subcommand.
 
 mod calibrate;
+mod import;
 mod info;
 mod pack;
 mod progress;
@@ -27,6 +28,8 @@ enum Command {
     Tile(tile::TileArgs),
     /// Print the report of a packing file (`x y z r`).
     Info(info::InfoArgs),
+    /// Convert a packing from PackingGeneration, LIGGGHTS/LAMMPS or YADE into a demcon file.
+    Import(import::ImportArgs),
     /// Run a scene file (RON): packing, contacts, thermal and/or electric solve, outputs.
     Run(run::RunArgs),
     /// Calibrate the transmission-surface constant C_t on our own packings (Haddad 2021 §2.1).
@@ -55,6 +58,7 @@ fn main() -> ExitCode {
         Command::Pack(args) => pack::run(*args),
         Command::Tile(args) => tile::run(args),
         Command::Info(args) => info::run(args),
+        Command::Import(args) => import::run(args),
         Command::Run(args) => run::run(args),
         Command::Calibrate(args) => calibrate::run(args),
     };
