@@ -21,6 +21,7 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use demcon_benches::{summary_only, wanted};
 use demcon_core::{Container, Face, Selector, Vec3, morton_order};
 use demcon_electric::{ElectricParams, solve_potential};
 use demcon_graph::{ContactParams, SurfaceModel, conductances, contact_surfaces, detect_contacts};
@@ -34,27 +35,6 @@ use rand_chacha::ChaCha8Rng;
 
 /// Link distance for a mean coordination of 7.5 at unit density: 4/3 π r³ = 7.5.
 const LINK: f64 = 1.2143;
-
-/// Whether criterion's name filter (the first positional argument, a regex; matched here
-/// as `|`-separated plain substrings, a trailing `$` anchoring one at the end, e.g.
-/// `electric_solve/amg-pcg/100000$`) selects `id`, so unselected cases are neither built
-/// nor summarised.
-fn wanted(id: &str) -> bool {
-    let filter = std::env::args()
-        .skip(1)
-        .find(|a| !a.starts_with('-') && a != "--bench");
-    filter.is_none_or(|f| {
-        f.split('|').any(|part| {
-            part.strip_suffix('$')
-                .map_or(id.contains(part), |p| id.ends_with(p))
-        })
-    })
-}
-
-/// Whether only the one-off summaries are wanted (`DEMCON_BENCH_SUMMARY_ONLY=1`).
-fn summary_only() -> bool {
-    std::env::var("DEMCON_BENCH_SUMMARY_ONLY").is_ok_and(|v| v == "1")
-}
 
 /// A packing-like network of `n` nodes: node ids in Morton order, or randomly permuted.
 struct Case {

@@ -1,6 +1,6 @@
 //! Plain-text packing files: one sphere per line, `x y z r` (m), with a `#` header that
 //! carries the container. Files from other generators (YADE, LIGGGHTS, PackingGeneration)
-//! can be imported once written as four columns.
+//! are converted by [`crate::import_packing`] (`demcon import`).
 //!
 //! ```text
 //! # demcon packing: one sphere per line, x y z r (m)

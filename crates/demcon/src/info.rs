@@ -8,7 +8,7 @@ use anyhow::Context;
 use clap::Args;
 use demcon_packing::{check_imported, max_overlap, read_xyzr_file, summarize};
 
-use crate::import::ContainerFlags;
+use crate::container::ContainerFlags;
 
 /// Flags of `demcon info`.
 #[derive(Debug, Args)]

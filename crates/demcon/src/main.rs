@@ -1,6 +1,7 @@
 //! The `demcon` binary: a thin dispatcher to one module per subcommand.
 
 mod calibrate;
+mod container;
 mod import;
 mod info;
 mod pack;

@@ -4,45 +4,24 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
-use clap::{Args, ValueEnum};
-use demcon_core::Container;
+use clap::Args;
 use demcon_packing::{
     MemoryLimit, PackProgress, PackingParams, RadiusDistribution, check_writable, format_xyzr, pack,
     write_atomic_all,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::container::ContainerFlags;
+
 /// Exit status when the target volume fraction was not reached and `--allow-short` was not given.
 pub const EXIT_SHORT: u8 = 3;
-
-/// Container kinds accepted by `--container`.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum ContainerKind {
-    /// Box with hard walls spanning [0, LX]×[0, LY]×[0, LZ] (`--size`).
-    Box,
-    /// Cylinder along z, hard walls (`--radius`, `--length`).
-    Cylinder,
-    /// Sphere centred at the origin, hard wall (`--radius`).
-    Sphere,
-    /// Periodic box [0, LX]×[0, LY]×[0, LZ] (`--size`).
-    Periodic,
-}
 
 /// Flags of `demcon pack`.
 #[derive(Debug, Args)]
 pub struct PackArgs {
-    /// Container kind.
-    #[arg(long, value_enum)]
-    container: ContainerKind,
-    /// Box or periodic box edge lengths LX,LY,LZ (m).
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-    size: Option<Vec<f64>>,
-    /// Cylinder or sphere radius (m).
-    #[arg(long, allow_negative_numbers = true)]
-    radius: Option<f64>,
-    /// Cylinder length along z (m).
-    #[arg(long, allow_negative_numbers = true)]
-    length: Option<f64>,
+    /// The container (required).
+    #[command(flatten)]
+    container: ContainerFlags,
     /// Number of particles.
     #[arg(long, allow_negative_numbers = true)]
     count: i64,
@@ -99,31 +78,6 @@ pub struct PackArgs {
     quiet: bool,
 }
 
-fn container(a: &PackArgs) -> anyhow::Result<Container> {
-    let size = || -> anyhow::Result<[f64; 3]> {
-        match &a.size {
-            Some(s) if s.len() == 3 => Ok([s[0], s[1], s[2]]),
-            Some(s) => bail!("--size needs three lengths LX,LY,LZ (m), got {}", s.len()),
-            None => bail!("--container {:?} needs --size LX,LY,LZ (m)", a.container),
-        }
-    };
-    let need = |v: Option<f64>, flag: &str| {
-        v.with_context(|| format!("--container {:?} needs {flag}", a.container).to_lowercase())
-    };
-    let c = match a.container {
-        ContainerKind::Box => Container::Box { size: size()? },
-        ContainerKind::Periodic => Container::Periodic { size: size()? },
-        ContainerKind::Cylinder => Container::Cylinder {
-            radius: need(a.radius, "--radius R (m)")?,
-            length: need(a.length, "--length L (m)")?,
-        },
-        ContainerKind::Sphere => Container::Sphere {
-            radius: need(a.radius, "--radius R (m)")?,
-        },
-    };
-    Ok(c)
-}
-
 /// The memory available to a new process: `MemAvailable` of `/proc/meminfo` when it can be
 /// read, else the packing crate's fixed limit.
 fn memory_limit() -> MemoryLimit {
@@ -141,7 +95,10 @@ fn memory_limit() -> MemoryLimit {
 
 /// Runs `demcon pack`.
 pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
-    let container = container(&a)?;
+    let container = a
+        .container
+        .container()?
+        .context("--container is required: box, cylinder, sphere or periodic")?;
     if a.count <= 0 {
         bail!("invalid count = {}: must be ≥ 1", a.count);
     }
