@@ -389,36 +389,51 @@ impl<'a> LinearSystem<'a> {
             }
         }
         let (row_ptr, cols) = (self.net.row_ptr(), self.net.cols());
-        let a = Csr::from_rows(
+        let (index, nodes_ref) = (&index, &nodes);
+        // The free neighbours of node p in unknown numbering (sorted: node order is kept),
+        // with their conductances; parallel edges are consecutive.
+        let free_entries = move |p: usize| {
+            (row_ptr[p]..row_ptr[p + 1]).filter_map(move |e| {
+                let j = index[cols[e] as usize];
+                (j != u32::MAX).then_some((j, e))
+            })
+        };
+        let a = Csr::from_row_lengths(
             nodes.len(),
             nodes.len(),
             || (),
+            // Distinct free neighbours, plus the diagonal.
+            |_, k| {
+                let mut last = u32::MAX;
+                1 + free_entries(nodes_ref[k] as usize)
+                    .filter(|&(j, _)| std::mem::replace(&mut last, j) != j)
+                    .count()
+            },
             |_, k, c, v| {
-                let p = nodes[k] as usize;
+                let p = nodes_ref[k] as usize;
+                let mut at = 0usize;
                 let mut diag_done = false;
-                for e in row_ptr[p]..row_ptr[p + 1] {
-                    let j = index[cols[e] as usize];
-                    if j == u32::MAX {
-                        continue;
-                    }
+                for (j, e) in free_entries(p) {
                     if !diag_done && j as usize > k {
-                        c.push(k as u32);
-                        v.push(self.diag[p]);
+                        c[at] = k as u32;
+                        v[at] = self.diag[p];
+                        at += 1;
                         diag_done = true;
                     }
-                    if c.last() == Some(&j) {
-                        if let Some(last) = v.last_mut() {
-                            *last -= self.vals[e];
-                        }
+                    if at > 0 && c[at - 1] == j {
+                        v[at - 1] -= self.vals[e];
                     } else {
-                        c.push(j);
-                        v.push(-self.vals[e]);
+                        c[at] = j;
+                        v[at] = -self.vals[e];
+                        at += 1;
                     }
                 }
                 if !diag_done {
-                    c.push(k as u32);
-                    v.push(self.diag[p]);
+                    c[at] = k as u32;
+                    v[at] = self.diag[p];
+                    at += 1;
                 }
+                debug_assert_eq!(at, c.len());
             },
         );
         (a, nodes)
