@@ -210,6 +210,18 @@ pub struct Solution {
     pub report: SolveReport,
 }
 
+/// Conductances of a [`LinearSystem`] as its products on the whole network read them.
+#[derive(Debug)]
+pub(crate) enum EntryValues {
+    /// One per compressed-row entry, in row order: for the methods whose every iteration
+    /// runs on the whole network (Jacobi-PCG).
+    Entries(Vec<f64>),
+    /// One per edge, read through each entry's edge: half the bytes, for the methods that
+    /// iterate on their own copy of the free block and only form a few residuals here
+    /// (multigrid, MIC, Cholesky).
+    Edges(Vec<f64>),
+}
+
 /// The system (D + K) x = b restricted to the free nodes of `constraints`, with the fixed
 /// values moved to the right-hand side; prepared once, solved for many right-hand sides
 /// (implicit time steps, several load cases).
@@ -219,8 +231,8 @@ pub struct Solution {
 pub struct LinearSystem<'a> {
     pub(crate) net: &'a Network,
     pub(crate) constraints: &'a Constraints,
-    /// Conductance per compressed-row entry (W/K or S).
-    pub(crate) vals: Vec<f64>,
+    /// Conductances (W/K or S) as the products on the whole network read them.
+    pub(crate) values: EntryValues,
     /// Diagonal Σg + D at every node.
     pub(crate) diag: Vec<f64>,
     /// 1/diag at free nodes, 0 elsewhere (Jacobi preconditioner and free mask).
@@ -292,7 +304,15 @@ impl<'a> LinearSystem<'a> {
                 example,
             });
         }
-        let vals = net.entry_values(conductances);
+        let method = params.method.resolve(constraints.n_free());
+        let values = match method {
+            Method::Cg { .. } | Method::FaerCg { .. } | Method::Auto { .. } => {
+                EntryValues::Entries(net.entry_values(conductances))
+            }
+            Method::AmgCg { .. } | Method::IcCg { .. } | Method::Cholesky => {
+                EntryValues::Edges(conductances.to_vec())
+            }
+        };
         let mut diag = net.row_sums(conductances);
         if let Some(d) = shift {
             diag.par_iter_mut()
@@ -308,11 +328,10 @@ impl<'a> LinearSystem<'a> {
             .zip(&free)
             .map(|(&d, &f)| if f && d > 0.0 { 1.0 / d } else { 0.0 })
             .collect();
-        let method = params.method.resolve(constraints.n_free());
         let mut sys = Self {
             net,
             constraints,
-            vals,
+            values,
             diag,
             inv_diag,
             free,
@@ -370,7 +389,7 @@ impl<'a> LinearSystem<'a> {
         let rows = nodes.iter().map(|&p| {
             (row_ptr[p as usize]..row_ptr[p as usize + 1])
                 .filter(move |&e| index[cols[e] as usize] != u32::MAX)
-                .map(move |e| (index[cols[e] as usize] as usize, -self.vals[e]))
+                .map(move |e| (index[cols[e] as usize] as usize, -self.entry_value(e)))
         });
         let diag = nodes.iter().map(|&p| self.diag[p as usize]).collect();
         Ok((Mic::from_rows(diag, rows, MIC_RELAXATION)?, nodes))
@@ -421,10 +440,10 @@ impl<'a> LinearSystem<'a> {
                         diag_done = true;
                     }
                     if at > 0 && c[at - 1] == j {
-                        v[at - 1] -= self.vals[e];
+                        v[at - 1] -= self.entry_value(e);
                     } else {
                         c[at] = j;
-                        v[at] = -self.vals[e];
+                        v[at] = -self.entry_value(e);
                         at += 1;
                     }
                 }
@@ -570,10 +589,8 @@ impl<'a> LinearSystem<'a> {
             .filter(|&i| self.free[i])
             .map(|i| {
                 let (lo, hi) = (self.net.row_ptr()[i], self.net.row_ptr()[i + 1]);
-                let off: f64 = self.net.cols()[lo..hi]
-                    .iter()
-                    .zip(&self.vals[lo..hi])
-                    .map(|(&q, g)| (g * x[q as usize]).abs())
+                let off: f64 = (lo..hi)
+                    .map(|e| (self.entry_value(e) * x[self.net.cols()[e] as usize]).abs())
                     .sum();
                 let t = b[i].abs() + (self.diag[i] * x[i]).abs() + off;
                 t * t
@@ -597,11 +614,31 @@ impl<'a> LinearSystem<'a> {
         });
     }
 
+    /// The conductance of compressed-row entry e (W/K or S).
+    #[inline]
+    pub(crate) fn entry_value(&self, e: usize) -> f64 {
+        match &self.values {
+            EntryValues::Entries(v) => v[e],
+            EntryValues::Edges(g) => g[self.net.entry_edges()[e] as usize],
+        }
+    }
+
     /// (A x)_i for one row.
     #[inline]
     pub(crate) fn row_apply(&self, i: usize, x: &[f64]) -> f64 {
         let (lo, hi) = (self.net.row_ptr()[i], self.net.row_ptr()[i + 1]);
-        let (cols, vals) = (&self.net.cols()[lo..hi], &self.vals[lo..hi]);
+        let cols = &self.net.cols()[lo..hi];
+        let vals = match &self.values {
+            EntryValues::Entries(v) => &v[lo..hi],
+            EntryValues::Edges(g) => {
+                // Entry k to partial sum k mod 4, as below: the same sums in the same order.
+                let mut acc = [0.0f64; 4];
+                for (k, (&q, &e)) in cols.iter().zip(&self.net.entry_edges()[lo..hi]).enumerate() {
+                    acc[k % 4] += g[e as usize] * x[q as usize];
+                }
+                return self.diag[i] * x[i] - ((acc[0] + acc[1]) + (acc[2] + acc[3]));
+            }
+        };
         // Four independent partial sums: a row has ~7 entries, and one accumulator would
         // serialise them on the floating-point add latency. Fixed order: deterministic.
         let mut acc = [0.0f64; 4];
