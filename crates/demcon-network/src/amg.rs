@@ -121,7 +121,8 @@ impl Amg {
                 break;
             }
             let rho = spectral_radius(&a, &dinv);
-            let (ptent, b_c) = tentative(&agg, n_agg, &b);
+            // The fine near-null space is read once here: freed before the products.
+            let (ptent, b_c) = tentative(&agg, n_agg, &std::mem::take(&mut b));
             let p = smooth_prolongator(&a, &dinv, 4.0 / (3.0 * rho), &ptent, &agg);
             drop((agg, ptent, diag));
             // A_c = Pᵀ (A P); each f64 temporary is rounded or dropped as soon as it is no

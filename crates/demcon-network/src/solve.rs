@@ -346,6 +346,9 @@ impl<'a> LinearSystem<'a> {
             Method::AmgCg { .. } => {
                 let (a0, nodes) = sys.free_block();
                 sys.amg = Some((Amg::new(a0)?, nodes));
+                // The setup's temporaries were freed in many sizes: hand what the allocator
+                // keeps resident back to the system before the solve allocates its vectors.
+                demcon_core::release_free_memory();
             }
             Method::IcCg { .. } => sys.mic = Some(sys.incomplete_factor()?),
             Method::Cg { .. } | Method::FaerCg { .. } | Method::Auto { .. } => {}
@@ -497,6 +500,7 @@ impl<'a> LinearSystem<'a> {
         self.constraints.impose(&mut lift);
         let mut r = vec![0.0; n];
         self.residual(rhs, &lift, &mut r);
+        drop(lift);
         let b_norm = dot(&r, &r).sqrt();
         self.check_rhs(&r, b_norm)?;
         if x0.is_some() {
