@@ -121,10 +121,18 @@ impl Amg {
                 break;
             }
             let rho = spectral_radius(&a, &dinv);
-            let (ptent, b_c) = tentative(&agg, n_agg, &b);
+            // The fine near-null space is read once here: freed before the products.
+            let (ptent, b_c) = tentative(&agg, n_agg, &std::mem::take(&mut b));
             let p = smooth_prolongator(&a, &dinv, 4.0 / (3.0 * rho), &ptent, &agg);
+            drop((agg, ptent, diag));
+            // A_c = Pᵀ (A P); each f64 temporary is rounded or dropped as soon as it is no
+            // longer read, so fewer of them coexist at the level's peak.
+            let ap = a.matmul(&p);
             let r = p.transpose();
-            let ac = r.matmul(&a.matmul(&p));
+            let p = p.into_f32();
+            let ac = r.matmul(&ap);
+            drop(ap);
+            let r = r.into_f32();
             let omega = 4.0 / (3.0 * rho);
             let wdinv = dinv.iter().map(|d| omega * d).collect();
             // The first level keeps its f64 values for CG, sharing the structure.
@@ -148,12 +156,7 @@ impl Amg {
             } else {
                 a.into_f32()
             };
-            levels.push(Level {
-                a: a32,
-                wdinv,
-                p: p.into_f32(),
-                r: r.into_f32(),
-            });
+            levels.push(Level { a: a32, wdinv, p, r });
             a = ac;
             b = b_c;
         }
@@ -403,10 +406,18 @@ fn smooth_prolongator(a: &Csr, dinv: &[f64], omega: f64, ptent: &[f64], agg: &[u
         .map(|&k| k as usize + 1)
         .max()
         .unwrap_or(0);
-    Csr::from_rows(
+    // Built in place (count, then fill): P has as many rows as A.
+    Csr::from_row_lengths(
         a.nrows,
         n_agg,
         || Accumulator::new(n_agg),
+        |acc, i| {
+            std::iter::once(i as u32)
+                .chain(a.row(i).0.iter().copied())
+                .map(|j| agg[j as usize])
+                .filter(|&k| k != u32::MAX && acc.mark(i, k))
+                .count()
+        },
         |acc, i, cols, vals| {
             if agg[i] != u32::MAX {
                 acc.add(i, agg[i], ptent[i]);
@@ -419,7 +430,7 @@ fn smooth_prolongator(a: &Csr, dinv: &[f64], omega: f64, ptent: &[f64], agg: &[u
                     acc.add(i, k, s * x * ptent[j as usize]);
                 }
             }
-            acc.drain_sorted(cols, vals);
+            acc.drain_sorted_into(cols, vals);
         },
     )
 }

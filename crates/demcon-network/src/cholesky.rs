@@ -37,7 +37,7 @@ impl Factor {
             for e in net.row_ptr()[p]..net.row_ptr()[p + 1] {
                 let kq = index[net.cols()[e] as usize];
                 if kq != u32::MAX && (kq as usize) < k {
-                    triplets.push(Triplet::new(k, kq as usize, -sys.vals[e]));
+                    triplets.push(Triplet::new(k, kq as usize, -sys.entry_value(e)));
                 }
             }
         }

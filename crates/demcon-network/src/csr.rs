@@ -14,7 +14,8 @@ use crate::par::{CHUNK, MIN_TASK_CHUNKS, chunks_map, ordered_sum, sequential};
 pub(crate) struct Csr<T = f64> {
     pub nrows: usize,
     pub ncols: usize,
-    /// Row starts (u32: half the bytes of usize on every pass; `from_rows` checks the count).
+    /// Row starts (u32: half the bytes of usize on every pass; `from_row_lengths` checks
+    /// the count).
     pub ptr: Vec<u32>,
     pub cols: Vec<u32>,
     pub vals: Vec<T>,
@@ -24,9 +25,6 @@ pub(crate) struct Csr<T = f64> {
 pub(crate) trait Value: Copy + Send + Sync + Into<f64> {}
 impl Value for f64 {}
 impl Value for f32 {}
-
-/// Rows of one chunk built by [`Csr::from_rows`]: columns, values, row lengths.
-type ChunkRows = (Vec<u32>, Vec<f64>, Vec<usize>);
 
 impl<T: Value> Csr<T> {
     /// Number of stored entries.
@@ -134,86 +132,104 @@ impl Csr {
         }
     }
 
-    /// As [`Self::from_rows_reserving`] with no reservation.
+    /// Builds a matrix row by row: `row(scratch, i, cols, vals)` appends the entries of row
+    /// i (sorted unique columns). Each row is built twice (counted, then written in place
+    /// by [`Self::from_row_lengths`]): for tests and small matrices.
+    #[cfg(test)]
     pub fn from_rows<S, I, F>(nrows: usize, ncols: usize, init: I, row: F) -> Self
     where
         I: Fn() -> S + Sync + Send,
         F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) + Sync + Send,
     {
-        Self::from_rows_reserving(nrows, ncols, |_| 0, init, row)
+        let build = |s: &mut S, i: usize| {
+            let (mut c, mut v) = (Vec::new(), Vec::new());
+            row(s, i, &mut c, &mut v);
+            (c, v)
+        };
+        Self::from_row_lengths(
+            nrows,
+            ncols,
+            init,
+            |s, i| build(s, i).0.len(),
+            |s, i, cols, vals| {
+                let (c, v) = build(s, i);
+                cols.copy_from_slice(&c);
+                vals.copy_from_slice(&v);
+            },
+        )
     }
 
-    /// Builds a matrix row by row, rows in parallel chunks of [`CHUNK`]. `row(scratch, i,
-    /// cols, vals)` appends the entries of row i (sorted unique columns); `init` makes a
-    /// scratch state per parallel task (it must not influence the values); `reserve(rows)`
-    /// bounds the entries of a chunk of rows (reserved up front, so rows are never moved
-    /// while they grow; untouched reserved memory costs nothing). The chunks are then copied
-    /// into place in parallel.
-    pub fn from_rows_reserving<S, I, F, R>(nrows: usize, ncols: usize, reserve: R, init: I, row: F) -> Self
+    /// Builds a matrix in place from its row lengths: `len(scratch, i)` is the number of
+    /// entries of row i, then `fill(scratch, i, cols, vals)` writes row i into slices of
+    /// exactly that length (sorted unique columns); `init` makes a scratch state per
+    /// parallel task (it must not influence the values). Rows are counted and filled in
+    /// parallel chunks of [`CHUNK`]. No per-chunk copy exists beside the result, so the
+    /// peak is the matrix itself, for the price of a counting pass.
+    pub fn from_row_lengths<S, I, L, F>(nrows: usize, ncols: usize, init: I, len: L, fill: F) -> Self
     where
         I: Fn() -> S + Sync + Send,
-        F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) + Sync + Send,
-        R: Fn(std::ops::Range<usize>) -> usize + Sync + Send,
+        L: Fn(&mut S, usize) -> usize + Sync + Send,
+        F: Fn(&mut S, usize, &mut [u32], &mut [f64]) + Sync + Send,
     {
-        let n_chunks = nrows.div_ceil(CHUNK);
-        let build = |s: &mut S, c: usize| -> ChunkRows {
-            let (lo, hi) = (c * CHUNK, ((c + 1) * CHUNK).min(nrows));
-            let cap = reserve(lo..hi);
-            let mut cols = Vec::with_capacity(cap);
-            let mut vals = Vec::with_capacity(cap);
-            let mut lens = Vec::with_capacity(hi - lo);
-            for i in lo..hi {
-                let before = cols.len();
-                row(s, i, &mut cols, &mut vals);
-                lens.push(cols.len() - before);
+        let mut lens = vec![0u32; nrows];
+        let count = |s: &mut S, (c, lc): (usize, &mut [u32])| {
+            for (k, l) in lc.iter_mut().enumerate() {
+                *l = len(s, c * CHUNK + k) as u32;
             }
-            (cols, vals, lens)
         };
-        let chunks: Vec<ChunkRows> = if sequential(nrows) {
+        if sequential(nrows) {
             let mut s = init();
-            (0..n_chunks).map(|c| build(&mut s, c)).collect()
+            lens.chunks_mut(CHUNK).enumerate().for_each(|t| count(&mut s, t));
         } else {
-            (0..n_chunks)
-                .into_par_iter()
+            lens.par_chunks_mut(CHUNK)
+                .enumerate()
                 .with_min_len(MIN_TASK_CHUNKS)
-                .map_init(&init, build)
-                .collect()
-        };
-        let nnz: usize = chunks.iter().map(|c| c.0.len()).sum();
-        assert!(
-            u32::try_from(nnz).is_ok(),
-            "{nnz} entries: more than a u32 row pointer holds"
-        );
+                .for_each_init(&init, count);
+        }
         let mut ptr = Vec::with_capacity(nrows + 1);
         ptr.push(0u32);
-        let mut starts = Vec::with_capacity(chunks.len());
-        for (c, _, lens) in &chunks {
-            starts.push(ptr[ptr.len() - 1] as usize);
-            for &l in lens {
-                let last = ptr[ptr.len() - 1];
-                ptr.push(last + l as u32);
-            }
-            debug_assert_eq!(ptr[ptr.len() - 1] as usize, starts[starts.len() - 1] + c.len());
+        let mut total = 0u64;
+        for &l in &lens {
+            total += u64::from(l);
+            assert!(
+                u32::try_from(total).is_ok(),
+                "{total} entries: more than a u32 row pointer holds"
+            );
+            ptr.push(total as u32);
         }
+        drop(lens);
+        let nnz = total as usize;
         let mut cols = vec![0u32; nnz];
         let mut vals = vec![0.0f64; nnz];
-        // Each chunk's slice of the result, in order, filled in parallel.
-        let mut targets = Vec::with_capacity(chunks.len());
+        // Each chunk's rows and its slices of the result.
+        let mut targets = Vec::with_capacity(nrows.div_ceil(CHUNK));
         let (mut rest_c, mut rest_v) = (cols.as_mut_slice(), vals.as_mut_slice());
-        for (c, _, _) in &chunks {
-            let (hc, tc) = rest_c.split_at_mut(c.len());
-            let (hv, tv) = rest_v.split_at_mut(c.len());
-            targets.push((hc, hv));
+        for lo in (0..nrows).step_by(CHUNK) {
+            let hi = (lo + CHUNK).min(nrows);
+            let n = (ptr[hi] - ptr[lo]) as usize;
+            let (hc, tc) = rest_c.split_at_mut(n);
+            let (hv, tv) = rest_v.split_at_mut(n);
+            targets.push((lo..hi, hc, hv));
             rest_c = tc;
             rest_v = tv;
         }
-        targets
-            .into_par_iter()
-            .zip(chunks.into_par_iter())
-            .for_each(|((tc, tv), (c, v, _))| {
-                tc.copy_from_slice(&c);
-                tv.copy_from_slice(&v);
-            });
+        let ptr_ref = &ptr;
+        let fill_chunk = |s: &mut S, (rows, tc, tv): (std::ops::Range<usize>, &mut [u32], &mut [f64])| {
+            let base = ptr_ref[rows.start] as usize;
+            for i in rows {
+                let (lo, hi) = (ptr_ref[i] as usize - base, ptr_ref[i + 1] as usize - base);
+                fill(s, i, &mut tc[lo..hi], &mut tv[lo..hi]);
+            }
+        };
+        if sequential(nrows) {
+            let mut s = init();
+            targets.into_iter().for_each(|t| fill_chunk(&mut s, t));
+        } else {
+            targets
+                .into_par_iter()
+                .with_min_len(MIN_TASK_CHUNKS)
+                .for_each_init(&init, fill_chunk);
+        }
         Self {
             nrows,
             ncols,
@@ -259,18 +275,18 @@ impl Csr {
     pub fn matmul(&self, b: &Csr) -> Self {
         debug_assert_eq!(self.ncols, b.nrows);
         let m = b.ncols;
-        Self::from_rows_reserving(
+        // Built in place: a symbolic pass counts each row's columns, then the numeric pass
+        // writes the rows into the result (no chunk copies beside a large product).
+        Self::from_row_lengths(
             self.nrows,
             m,
-            // At most the sum of the rows of b met, per chunk.
-            |rows| {
-                let (lo, hi) = (self.ptr[rows.start] as usize, self.ptr[rows.end] as usize);
-                self.cols[lo..hi]
-                    .iter()
-                    .map(|&k| (b.ptr[k as usize + 1] - b.ptr[k as usize]) as usize)
+            || Accumulator::new(m),
+            |acc, i| {
+                let (ac, _) = self.row(i);
+                ac.iter()
+                    .map(|&k| b.row(k as usize).0.iter().filter(|&&j| acc.mark(i, j)).count())
                     .sum()
             },
-            || Accumulator::new(m),
             |acc, i, cols, vals| {
                 let (ac, av) = self.row(i);
                 for (&k, &a) in ac.iter().zip(av) {
@@ -279,7 +295,7 @@ impl Csr {
                         acc.add(i, j, a * v);
                     }
                 }
-                acc.drain_sorted(cols, vals);
+                acc.drain_sorted_into(cols, vals);
             },
         )
     }
@@ -315,12 +331,30 @@ impl Accumulator {
         }
     }
 
-    /// Appends the row's entries (sorted columns) and resets.
-    pub fn drain_sorted(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+    /// Marks column j as met in row `row` of a symbolic pass (each row marked once);
+    /// true the first time.
+    #[inline]
+    pub fn mark(&mut self, row: usize, j: u32) -> bool {
+        // The symbolic pass marks with a tag no row index nor the cleared mark takes, so
+        // that the numeric pass of the same row starts afresh.
+        let tag = usize::MAX - 1 - row;
+        let m = &mut self.mark[j as usize];
+        if *m == tag {
+            false
+        } else {
+            *m = tag;
+            true
+        }
+    }
+
+    /// Writes the row's entries (sorted columns) into slices of exactly their count, and
+    /// resets.
+    pub fn drain_sorted_into(&mut self, cols: &mut [u32], vals: &mut [f64]) {
+        debug_assert_eq!(self.touched.len(), cols.len());
         self.touched.sort_unstable();
-        for &j in &self.touched {
-            cols.push(j);
-            vals.push(self.values[j as usize]);
+        for ((&j, c), v) in self.touched.iter().zip(cols.iter_mut()).zip(vals.iter_mut()) {
+            *c = j;
+            *v = self.values[j as usize];
             self.mark[j as usize] = usize::MAX;
         }
         self.touched.clear();

@@ -210,6 +210,18 @@ pub struct Solution {
     pub report: SolveReport,
 }
 
+/// Conductances of a [`LinearSystem`] as its products on the whole network read them.
+#[derive(Debug)]
+pub(crate) enum EntryValues {
+    /// One per compressed-row entry, in row order: for the methods whose every iteration
+    /// runs on the whole network (Jacobi-PCG).
+    Entries(Vec<f64>),
+    /// One per edge, read through each entry's edge: half the bytes, for the methods that
+    /// iterate on their own copy of the free block and only form a few residuals here
+    /// (multigrid, MIC, Cholesky).
+    Edges(Vec<f64>),
+}
+
 /// The system (D + K) x = b restricted to the free nodes of `constraints`, with the fixed
 /// values moved to the right-hand side; prepared once, solved for many right-hand sides
 /// (implicit time steps, several load cases).
@@ -219,8 +231,8 @@ pub struct Solution {
 pub struct LinearSystem<'a> {
     pub(crate) net: &'a Network,
     pub(crate) constraints: &'a Constraints,
-    /// Conductance per compressed-row entry (W/K or S).
-    pub(crate) vals: Vec<f64>,
+    /// Conductances (W/K or S) as the products on the whole network read them.
+    pub(crate) values: EntryValues,
     /// Diagonal Σg + D at every node.
     pub(crate) diag: Vec<f64>,
     /// 1/diag at free nodes, 0 elsewhere (Jacobi preconditioner and free mask).
@@ -292,7 +304,15 @@ impl<'a> LinearSystem<'a> {
                 example,
             });
         }
-        let vals = net.entry_values(conductances);
+        let method = params.method.resolve(constraints.n_free());
+        let values = match method {
+            Method::Cg { .. } | Method::FaerCg { .. } | Method::Auto { .. } => {
+                EntryValues::Entries(net.entry_values(conductances))
+            }
+            Method::AmgCg { .. } | Method::IcCg { .. } | Method::Cholesky => {
+                EntryValues::Edges(conductances.to_vec())
+            }
+        };
         let mut diag = net.row_sums(conductances);
         if let Some(d) = shift {
             diag.par_iter_mut()
@@ -308,11 +328,10 @@ impl<'a> LinearSystem<'a> {
             .zip(&free)
             .map(|(&d, &f)| if f && d > 0.0 { 1.0 / d } else { 0.0 })
             .collect();
-        let method = params.method.resolve(constraints.n_free());
         let mut sys = Self {
             net,
             constraints,
-            vals,
+            values,
             diag,
             inv_diag,
             free,
@@ -327,6 +346,9 @@ impl<'a> LinearSystem<'a> {
             Method::AmgCg { .. } => {
                 let (a0, nodes) = sys.free_block();
                 sys.amg = Some((Amg::new(a0)?, nodes));
+                // The setup's temporaries were freed in many sizes: hand what the allocator
+                // keeps resident back to the system before the solve allocates its vectors.
+                demcon_core::release_free_memory();
             }
             Method::IcCg { .. } => sys.mic = Some(sys.incomplete_factor()?),
             Method::Cg { .. } | Method::FaerCg { .. } | Method::Auto { .. } => {}
@@ -370,7 +392,7 @@ impl<'a> LinearSystem<'a> {
         let rows = nodes.iter().map(|&p| {
             (row_ptr[p as usize]..row_ptr[p as usize + 1])
                 .filter(move |&e| index[cols[e] as usize] != u32::MAX)
-                .map(move |e| (index[cols[e] as usize] as usize, -self.vals[e]))
+                .map(move |e| (index[cols[e] as usize] as usize, -self.entry_value(e)))
         });
         let diag = nodes.iter().map(|&p| self.diag[p as usize]).collect();
         Ok((Mic::from_rows(diag, rows, MIC_RELAXATION)?, nodes))
@@ -389,36 +411,51 @@ impl<'a> LinearSystem<'a> {
             }
         }
         let (row_ptr, cols) = (self.net.row_ptr(), self.net.cols());
-        let a = Csr::from_rows(
+        let (index, nodes_ref) = (&index, &nodes);
+        // The free neighbours of node p in unknown numbering (sorted: node order is kept),
+        // with their conductances; parallel edges are consecutive.
+        let free_entries = move |p: usize| {
+            (row_ptr[p]..row_ptr[p + 1]).filter_map(move |e| {
+                let j = index[cols[e] as usize];
+                (j != u32::MAX).then_some((j, e))
+            })
+        };
+        let a = Csr::from_row_lengths(
             nodes.len(),
             nodes.len(),
             || (),
+            // Distinct free neighbours, plus the diagonal.
+            |_, k| {
+                let mut last = u32::MAX;
+                1 + free_entries(nodes_ref[k] as usize)
+                    .filter(|&(j, _)| std::mem::replace(&mut last, j) != j)
+                    .count()
+            },
             |_, k, c, v| {
-                let p = nodes[k] as usize;
+                let p = nodes_ref[k] as usize;
+                let mut at = 0usize;
                 let mut diag_done = false;
-                for e in row_ptr[p]..row_ptr[p + 1] {
-                    let j = index[cols[e] as usize];
-                    if j == u32::MAX {
-                        continue;
-                    }
+                for (j, e) in free_entries(p) {
                     if !diag_done && j as usize > k {
-                        c.push(k as u32);
-                        v.push(self.diag[p]);
+                        c[at] = k as u32;
+                        v[at] = self.diag[p];
+                        at += 1;
                         diag_done = true;
                     }
-                    if c.last() == Some(&j) {
-                        if let Some(last) = v.last_mut() {
-                            *last -= self.vals[e];
-                        }
+                    if at > 0 && c[at - 1] == j {
+                        v[at - 1] -= self.entry_value(e);
                     } else {
-                        c.push(j);
-                        v.push(-self.vals[e]);
+                        c[at] = j;
+                        v[at] = -self.entry_value(e);
+                        at += 1;
                     }
                 }
                 if !diag_done {
-                    c.push(k as u32);
-                    v.push(self.diag[p]);
+                    c[at] = k as u32;
+                    v[at] = self.diag[p];
+                    at += 1;
                 }
+                debug_assert_eq!(at, c.len());
             },
         );
         (a, nodes)
@@ -463,6 +500,7 @@ impl<'a> LinearSystem<'a> {
         self.constraints.impose(&mut lift);
         let mut r = vec![0.0; n];
         self.residual(rhs, &lift, &mut r);
+        drop(lift);
         let b_norm = dot(&r, &r).sqrt();
         self.check_rhs(&r, b_norm)?;
         if x0.is_some() {
@@ -555,10 +593,8 @@ impl<'a> LinearSystem<'a> {
             .filter(|&i| self.free[i])
             .map(|i| {
                 let (lo, hi) = (self.net.row_ptr()[i], self.net.row_ptr()[i + 1]);
-                let off: f64 = self.net.cols()[lo..hi]
-                    .iter()
-                    .zip(&self.vals[lo..hi])
-                    .map(|(&q, g)| (g * x[q as usize]).abs())
+                let off: f64 = (lo..hi)
+                    .map(|e| (self.entry_value(e) * x[self.net.cols()[e] as usize]).abs())
                     .sum();
                 let t = b[i].abs() + (self.diag[i] * x[i]).abs() + off;
                 t * t
@@ -582,11 +618,31 @@ impl<'a> LinearSystem<'a> {
         });
     }
 
+    /// The conductance of compressed-row entry e (W/K or S).
+    #[inline]
+    pub(crate) fn entry_value(&self, e: usize) -> f64 {
+        match &self.values {
+            EntryValues::Entries(v) => v[e],
+            EntryValues::Edges(g) => g[self.net.entry_edges()[e] as usize],
+        }
+    }
+
     /// (A x)_i for one row.
     #[inline]
     pub(crate) fn row_apply(&self, i: usize, x: &[f64]) -> f64 {
         let (lo, hi) = (self.net.row_ptr()[i], self.net.row_ptr()[i + 1]);
-        let (cols, vals) = (&self.net.cols()[lo..hi], &self.vals[lo..hi]);
+        let cols = &self.net.cols()[lo..hi];
+        let vals = match &self.values {
+            EntryValues::Entries(v) => &v[lo..hi],
+            EntryValues::Edges(g) => {
+                // Entry k to partial sum k mod 4, as below: the same sums in the same order.
+                let mut acc = [0.0f64; 4];
+                for (k, (&q, &e)) in cols.iter().zip(&self.net.entry_edges()[lo..hi]).enumerate() {
+                    acc[k % 4] += g[e as usize] * x[q as usize];
+                }
+                return self.diag[i] * x[i] - ((acc[0] + acc[1]) + (acc[2] + acc[3]));
+            }
+        };
         // Four independent partial sums: a row has ~7 entries, and one accumulator would
         // serialise them on the floating-point add latency. Fixed order: deterministic.
         let mut acc = [0.0f64; 4];
