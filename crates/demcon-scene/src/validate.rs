@@ -154,9 +154,10 @@ fn known_count(p: &PackingConfig, field: &str) -> Result<Option<usize>, SceneErr
     })
 }
 
-/// Memory a run needs per particle (bytes), measured at 10⁶ particles (peak resident size of
-/// whole runs over the particle count, `docs/performance.md`), rounded up: a Laguerre model
-/// carries its cells' facets and wall facets, a contact model only the contact list.
+/// Memory a run needs per particle (bytes): the peak resident size of whole steady runs with
+/// Halo over their particle count, rounded up (`docs/performance.md` §5, 2026-11-24): 1863 B
+/// at 10⁶ and 1829 B at 8·10⁶ with Laguerre cells (the facet graph with its cells' data),
+/// 1196 B at 2·10⁵ with a contact model (Terreros α).
 pub fn run_bytes_per_particle(c: &SceneConfig) -> u64 {
     if matches!(c.surface, SurfaceConfig::Laguerre) {
         RUN_BYTES_PER_PARTICLE_LAGUERRE
@@ -166,9 +167,9 @@ pub fn run_bytes_per_particle(c: &SceneConfig) -> u64 {
 }
 
 /// See [`run_bytes_per_particle`].
-pub const RUN_BYTES_PER_PARTICLE_LAGUERRE: u64 = 1500;
+pub const RUN_BYTES_PER_PARTICLE_LAGUERRE: u64 = 1900;
 /// See [`run_bytes_per_particle`].
-pub const RUN_BYTES_PER_PARTICLE_CONTACTS: u64 = 1200;
+pub const RUN_BYTES_PER_PARTICLE_CONTACTS: u64 = 1300;
 
 /// Refuses a run of `n` particles whose memory estimate ([`run_bytes_per_particle`]) exceeds
 /// the memory available now (`MemAvailable`; no check where it is unknown). `field` names
