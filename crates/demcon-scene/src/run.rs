@@ -1,9 +1,8 @@
 //! The run pipeline, as named stages: packing → phases → tessellation or contacts → network →
 //! thermal setup (surfaces, walls, capacities, boundary conditions) → solve (thermal, electric,
 //! or both coupled) → flux → halo → probes (ETC, probes, profiles). Each stage is timed (wall
-//! time and memory) by [`Stages`];
-//! outputs are written by [`crate::write_outputs`]. The physics lives in `demcon-model`; this
-//! file only sequences it on the scene's [`Problem`].
+//! time and memory) by [`Stages`]; outputs are written by [`crate::write_outputs`]. The
+//! physics lives in `demcon-model`; this file only sequences it on the scene's [`Problem`].
 
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -565,7 +564,6 @@ struct SampledField {
     solved: std::rc::Rc<Vec<f64>>,
 }
 
-/// Flux, Halo, ETC, probes and profiles: only what the outputs ask for.
 /// What the post-processing reads: the model, the scene and the solutions.
 struct PostInputs<'a> {
     model: &'a Model,
@@ -577,7 +575,8 @@ struct PostInputs<'a> {
     el: Option<&'a ElectricRun>,
 }
 
-/// Flux, Halo, ETC, probes and profiles, timed as the stages `flux`, `halo` and `probes`.
+/// Flux, Halo, ETC, probes and profiles (only what the outputs ask for), timed as the stages
+/// `flux`, `halo` and `probes`.
 fn post_process(stages: &mut Stages, inp: &PostInputs<'_>) -> Result<Post, SceneError> {
     let PostInputs {
         model,
