@@ -50,6 +50,25 @@ pub(crate) fn separation(a: &Vec3, b: &Vec3, period: Option<&[f64; 3]>) -> Vec3 
     d
 }
 
+/// Squared distance (m²) from `c` to the packed sphere `x` = (centre, radius), nearest image
+/// when `PERIODIC` (half periods `h`, periods `l`). The same operations as
+/// [`separation`]`(c, x)`, so the same bits, and exactly antisymmetric: the same gap from
+/// either end of a pair.
+#[inline(always)]
+fn packed_distance2<const PERIODIC: bool>(x: &[f64; 4], c: [f64; 3], h: [f64; 3], l: [f64; 3]) -> f64 {
+    let mut d = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
+    if PERIODIC {
+        for k in 0..3 {
+            if d[k] > h[k] {
+                d[k] -= l[k];
+            } else if d[k] < -h[k] {
+                d[k] += l[k];
+            }
+        }
+    }
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+}
+
 /// `x` wrapped into `[0, l)` (m).
 pub(crate) fn wrap(x: f64, l: f64) -> f64 {
     let r = x.rem_euclid(l);
@@ -438,18 +457,7 @@ impl Sweep<'_> {
             for &(lo, hi) in &ranges[..m] {
                 let (lo, hi) = (lo as usize, hi as usize);
                 for (x, &q) in self.packed[lo..hi].iter().zip(&self.order[lo..hi]) {
-                    // The same operations as `separation(cp, x)`, so the same bits.
-                    let mut d = [x[0] - cp.x, x[1] - cp.y, x[2] - cp.z];
-                    if PERIODIC {
-                        for k in 0..3 {
-                            if d[k] > h[k] {
-                                d[k] -= l[k];
-                            } else if d[k] < -h[k] {
-                                d[k] += l[k];
-                            }
-                        }
-                    }
-                    let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                    let d2 = packed_distance2::<PERIODIC>(x, [cp.x, cp.y, cp.z], h, *l);
                     let cut = (rp + x[3]) * self.scale;
                     // `&`, not `&&`: one rarely taken branch.
                     if (d2 <= cut * cut) & (q > p) {
@@ -489,19 +497,7 @@ impl Sweep<'_> {
                     continue;
                 }
                 for (x, &q) in self.packed[lo..hi].iter().zip(&self.order[lo..hi]) {
-                    // As `separation(c_i, x)`: exactly antisymmetric, so the same gap as
-                    // from the other end.
-                    let mut d = [x[0] - cx, x[1] - cy, x[2] - cz];
-                    if PERIODIC {
-                        for k in 0..3 {
-                            if d[k] > h[k] {
-                                d[k] -= l[k];
-                            } else if d[k] < -h[k] {
-                                d[k] += l[k];
-                            }
-                        }
-                    }
-                    let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                    let d2 = packed_distance2::<PERIODIC>(x, [cx, cy, cz], h, *l);
                     let cut = (rp + x[3]) * self.scale;
                     if d2 <= cut * cut {
                         let rel = relative_gap(d2.sqrt(), rp, x[3]);
