@@ -60,4 +60,4 @@ pub use halo::{HaloField, HaloParams, HaloPhases, HaloReport, HaloScale, halo_fl
 pub use probe::{Line, MAX_PROFILE_POINTS, ProbeIndex, ProbeMethod, line_points, probe, profile};
 pub use slice::{Grid, SliceParams, slice_grid};
 pub use stats::{coefficient_of_variation, components, effective_conductivity, magnitudes};
-pub use vtk::{Field, FieldData, write_vtu};
+pub use vtk::{Field, FieldData, Polyhedra, write_lines_vtp, write_polyhedra_vtu, write_pvd, write_vtu};

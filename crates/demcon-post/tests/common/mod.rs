@@ -1,6 +1,8 @@
 //! Test sets shared by the integration tests: seeded lattices of spheres and their contacts.
 #![allow(dead_code)]
 
+pub mod vtk_reader;
+
 use demcon_core::{ParticleSet, Vec3};
 
 /// Deterministic pseudo-random numbers in [0, 1) (SplitMix64).
