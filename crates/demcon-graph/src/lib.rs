@@ -79,7 +79,9 @@ pub use contact::{
 pub use demcon_core::Components;
 pub use error::GraphError;
 pub use interface::{InterfaceRule, conductances, contact_property, interface_value, interface_value_split};
-pub use laguerre::{CellWall, Cells, LaguerreParams, TessellationReport, WallFacet, tessellate};
+pub use laguerre::{
+    CellWall, Cells, LaguerreParams, TessellationReport, WallFacet, cell_polyhedra, tessellate,
+};
 pub use laminate::{
     HalfBond, Laminates, Mix, assign_phase_laminate, contact_property_laminate, inside_fraction,
     interface_normal, laminate_value, plane_cut_fraction, sphere_cut_fraction,

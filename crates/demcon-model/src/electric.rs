@@ -89,6 +89,8 @@ pub struct ElectricRun {
     pub conductances: Vec<f64>,
     /// The face electrodes and their links.
     pub walls: WallContacts,
+    /// The transmission-surface model of the electric network (C_t resolved).
+    pub surface: SurfaceModel,
     /// Joule power per particle (W), η applied.
     pub joule: Vec<f64>,
     /// Summary.
@@ -312,6 +314,7 @@ pub fn solve_electric(
         branch_currents: sol.branch_currents,
         conductances: g,
         walls,
+        surface: sm,
         joule,
     })
 }

@@ -680,9 +680,19 @@ pub struct OutputsConfig {
     /// Per-particle CSV of the final fields.
     #[serde(default)]
     pub particles_csv: bool,
-    /// VTK `.vtu` of the final fields (ParaView).
+    /// The particles' fields for ParaView: `particles.vtu` (steady), or for a transient the
+    /// time series `particles.pvd` with one `particles_<k>.vtu` per output time and the end.
     #[serde(default = "yes")]
     pub vtk: bool,
+    /// The contact network for ParaView: `contacts.vtp`, one line per contact and per wall
+    /// link with its conductance, surface, length, flows and drops (a transient: the series
+    /// `contacts.pvd` of `contacts_<k>.vtp`).
+    #[serde(default)]
+    pub contacts_vtk: bool,
+    /// The Laguerre cells as polyhedra for ParaView: `cells.vtu` (with `surface: Laguerre`
+    /// only; costs about 1 kB per particle on disk).
+    #[serde(default)]
+    pub cells_vtk: bool,
     /// Compute the per-particle heat flux (and write it).
     #[serde(default)]
     pub flux: bool,
@@ -710,6 +720,8 @@ impl Default for OutputsConfig {
             profiles: Vec::new(),
             particles_csv: false,
             vtk: true,
+            contacts_vtk: false,
+            cells_vtk: false,
             flux: false,
             halo: None,
             halo_phases: None,

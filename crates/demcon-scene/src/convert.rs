@@ -499,6 +499,11 @@ pub struct PostPlan {
     pub halo: Option<HaloParams>,
     /// Effective conductivity along this axis.
     pub etc_axis: Option<Axis>,
+    /// The fields of a transient at every output time, for the VTK time series (the flux and
+    /// its Halo recomputed there when asked for).
+    pub series: bool,
+    /// The Laguerre cells as polyhedra (`cells.vtu`).
+    pub cells: bool,
 }
 
 /// The post-processing of the scene.
@@ -536,6 +541,8 @@ pub fn post_plan(o: &OutputsConfig) -> PostPlan {
             ..HaloParams::default()
         }),
         etc_axis: o.etc_axis.map(axis),
+        series: o.vtk || o.contacts_vtk,
+        cells: o.cells_vtk,
     }
 }
 

@@ -6,12 +6,13 @@
 use std::path::Path;
 
 use demcon_core::StageRecord;
-use demcon_post::{Field, write_csv, write_vtu};
+use demcon_core::Vec3;
+use demcon_post::{Field, Polyhedra, write_csv, write_lines_vtp, write_polyhedra_vtu, write_pvd, write_vtu};
 use serde::Serialize;
 use serde_json::json;
 
 use crate::error::SceneError;
-use crate::run::RunResult;
+use crate::run::{RunResult, SeriesEntry};
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> SceneError + '_ {
     move |source| SceneError::Io {
@@ -198,10 +199,56 @@ fn write_files(
     let reset = demcon_core::reset_peak_resident();
     let t0 = std::time::Instant::now();
     let mut written = Vec::new();
-    let fields = ParticleFields::of(r);
-    if outputs.vtk {
-        write_vtu(dir.join("particles.vtu"), &r.model.particles, &fields.vtk())?;
-        written.push("particles.vtu".into());
+    let fields = ParticleFields::at(r, None);
+    match r.t_end {
+        // A transient: the series of the output times before the end, then the end.
+        Some(t_end) => {
+            let times: Vec<Option<&SeriesEntry>> = r.series.iter().map(Some).chain([None]).collect();
+            let time = |e: &Option<&SeriesEntry>| e.map_or(t_end, |e| e.t);
+            if outputs.vtk {
+                let mut entries = Vec::new();
+                for (k, e) in times.iter().enumerate() {
+                    let file = format!("particles_{k:04}.vtu");
+                    let earlier;
+                    let f = match e {
+                        Some(_) => {
+                            earlier = ParticleFields::at(r, *e);
+                            &earlier
+                        }
+                        None => &fields,
+                    };
+                    write_vtu(dir.join(&file), &r.model.particles, &f.vtk())?;
+                    entries.push((time(e), file));
+                }
+                write_pvd(dir.join("particles.pvd"), &entries)?;
+                written.push(format!("particles.pvd ({} times)", entries.len()));
+            }
+            if outputs.contacts_vtk {
+                let network = ContactNetwork::of(r)?;
+                let mut entries = Vec::new();
+                for (k, e) in times.iter().enumerate() {
+                    let file = format!("contacts_{k:04}.vtp");
+                    network.write(r, *e, &dir.join(&file))?;
+                    entries.push((time(e), file));
+                }
+                write_pvd(dir.join("contacts.pvd"), &entries)?;
+                written.push(format!("contacts.pvd ({} times)", entries.len()));
+            }
+        }
+        None => {
+            if outputs.vtk {
+                write_vtu(dir.join("particles.vtu"), &r.model.particles, &fields.vtk())?;
+                written.push("particles.vtu".into());
+            }
+            if outputs.contacts_vtk {
+                ContactNetwork::of(r)?.write(r, None, &dir.join("contacts.vtp"))?;
+                written.push("contacts.vtp".into());
+            }
+        }
+    }
+    if let Some(cells) = &r.cells {
+        write_cells(r, cells, &dir.join("cells.vtu"))?;
+        written.push("cells.vtu".into());
     }
     if outputs.particles_csv {
         fields.write_csv(r, &dir.join("particles.csv"))?;
@@ -248,7 +295,7 @@ fn write_files(
     Ok(written)
 }
 
-/// The per-particle fields of a run, as the VTU and the CSV write them.
+/// The per-particle fields of a run at one time, as the VTU and the CSV write them.
 struct ParticleFields<'a> {
     /// 1 where the particle was solved for, 0 where a solve excluded it.
     solved: Vec<i32>,
@@ -263,7 +310,10 @@ struct ParticleFields<'a> {
 }
 
 impl<'a> ParticleFields<'a> {
-    fn of(r: &'a RunResult) -> Self {
+    /// The fields at the end of the run (`at` = `None`) or at an earlier output time of a
+    /// transient: its temperatures, flux and Halo, and the electric fields when the end's
+    /// solution held then too.
+    fn at(r: &'a RunResult, at: Option<&'a SeriesEntry>) -> Self {
         let m = &r.model;
         let n = m.particles.len();
         let mut solved = vec![1i32; n];
@@ -300,9 +350,10 @@ impl<'a> ParticleFields<'a> {
                 .collect(),
         ));
         if let Some(t) = &r.thermal {
-            scalars.push(("temperature", t.temperatures.clone()));
+            let temps = at.map_or(&t.temperatures, |e| &t.snapshots[e.snapshot].1);
+            scalars.push(("temperature", temps.clone()));
         }
-        if let Some(e) = &r.electric {
+        if let Some(e) = r.electric.as_ref().filter(|_| at.is_none_or(|e| e.electric)) {
             scalars.push(("potential", e.potentials.clone()));
             scalars.push(("joule_power", e.joule.clone()));
             // Current density magnitude from the branch currents, as the flux of eq. 20:
@@ -327,16 +378,17 @@ impl<'a> ParticleFields<'a> {
             scalars.push(("fluctuation_gz", z.clone()));
         }
         let mut vectors: Vec<(&str, &[demcon_core::Vec3])> = Vec::new();
-        if let Some(f) = &r.flux {
+        let (flux, halo) = match at {
+            Some(e) => (e.flux.as_deref(), e.halo.as_ref().map(|(h, cut)| (h, cut))),
+            None => (r.flux.as_deref(), r.halo.as_ref().map(|(h, cut, _)| (h, cut))),
+        };
+        if let Some(f) = flux {
             vectors.push(("heat_flux", f));
         }
-        if let Some((h, _, _)) = &r.halo {
+        if let Some((h, _)) = halo {
             vectors.push(("halo_flux", h));
         }
-        let halo_cut = r
-            .halo
-            .as_ref()
-            .map(|h| h.1.iter().map(|&b| i32::from(b)).collect());
+        let halo_cut = halo.map(|(_, cut)| cut.iter().map(|&b| i32::from(b)).collect());
         Self {
             solved,
             degree,
@@ -397,4 +449,181 @@ impl<'a> ParticleFields<'a> {
         write_csv(path, &header, &cols)?;
         Ok(())
     }
+}
+
+/// What a line of `contacts.vtp` is (its `kind` cell value).
+#[derive(Clone, Copy)]
+#[repr(i32)]
+enum LineKind {
+    /// A contact (or Laguerre facet) between two particles.
+    Contact = 0,
+    /// A particle's link to a face held at a temperature.
+    ThermalWall = 1,
+    /// A particle's link to a face electrode.
+    Electrode = 2,
+}
+
+/// The contact network of a run as `contacts.vtp` draws it: the lines — the contacts, then the
+/// thermal wall links, then the face-electrode links — and their values that do not change in
+/// time. A contact across a periodic boundary ends at the image of its second particle; a wall
+/// link ends where it meets its face (a Laguerre facet's centroid, else the particle's centre
+/// moved by the link's half-length along the face's normal).
+struct ContactNetwork {
+    /// Particle centres, then one end point per line that needs its own (m).
+    points: Vec<Vec3>,
+    lines: Vec<[u32; 2]>,
+    kind: Vec<i32>,
+    /// Centre-to-centre distance, or the link's half-length (m).
+    length: Vec<f64>,
+    /// Transmission surface (m²): the thermal network's, or the electric one's without heat.
+    surface: Vec<f64>,
+    /// Thermal conductance (W/K); 0 on electrode links.
+    thermal: Option<Vec<f64>>,
+    /// Electric conductance (S); 0 on thermal wall links.
+    electric: Option<Vec<f64>>,
+}
+
+impl ContactNetwork {
+    fn of(r: &RunResult) -> Result<Self, SceneError> {
+        let m = &r.model;
+        let g = &m.graph;
+        let (particles, n) = (&m.particles, m.particles.len());
+        let mut points = particles.centres.clone();
+        let mut lines = Vec::with_capacity(g.pairs.len());
+        for (k, &[p, q]) in g.pairs.iter().enumerate() {
+            let end = particles.centres[p as usize] + g.branch(k);
+            let q = if (end - particles.centres[q as usize]).norm() > 1e-9 * particles.radii[p as usize] {
+                points.push(end);
+                (points.len() - 1) as u32
+            } else {
+                q
+            };
+            lines.push([p, q]);
+        }
+        let contacts = lines.len();
+        let mut kind = vec![LineKind::Contact as i32; contacts];
+        let mut length: Vec<f64> = g.geometry.iter().map(|c| c.distance).collect();
+        let degrees = g.degrees();
+        let setup = r.thermal_setup.as_ref();
+        let electric = r.electric.as_ref();
+        let mut surface = match (setup, electric) {
+            (Some(s), _) => s.areas.clone(),
+            (None, Some(e)) => demcon_graph::contact_surfaces(g, particles, &e.surface)?.area,
+            (None, None) => vec![0.0; contacts],
+        };
+        let mut links =
+            |walls: &demcon_graph::WallContacts, sm: &demcon_graph::SurfaceModel, what: LineKind| {
+                let surfaces = walls.surfaces(particles, &degrees, sm);
+                for (k, (&p, s)) in walls.particle.iter().zip(surfaces).enumerate() {
+                    let lever = walls
+                        .lever
+                        .get(k)
+                        .copied()
+                        .unwrap_or(walls.half_length[k] * walls.normal[k]);
+                    points.push(particles.centres[p as usize] + lever);
+                    lines.push([p, (points.len() - 1) as u32]);
+                    kind.push(what as i32);
+                    length.push(walls.half_length[k]);
+                    surface.push(s);
+                }
+                walls.len()
+            };
+        let thermal_links = setup.map_or(0, |s| links(&s.walls, &s.surface, LineKind::ThermalWall));
+        let electrode_links = electric.map_or(0, |e| links(&e.walls, &e.surface, LineKind::Electrode));
+        let thermal = setup.map(|s| {
+            [
+                s.contact_conductances(),
+                s.wall_conductances(),
+                &vec![0.0; electrode_links],
+            ]
+            .concat()
+        });
+        let electric = electric.map(|e| {
+            let (c, w) = e.conductances.split_at(contacts);
+            [c, &vec![0.0; thermal_links], w].concat()
+        });
+        debug_assert!(points.len() >= n);
+        Ok(Self {
+            points,
+            lines,
+            kind,
+            length,
+            surface,
+            thermal,
+            electric,
+        })
+    }
+
+    /// Writes `contacts.vtp` at the end of the run (`at` = `None`) or at an earlier output time:
+    /// heat flow (W, from the line's first end to its second) and temperature drop (K) there;
+    /// current (A, same direction) and Joule power I²/G (W, before the heat fraction η) when
+    /// the end's electric solution held then.
+    fn write(&self, r: &RunResult, at: Option<&SeriesEntry>, path: &Path) -> Result<(), SceneError> {
+        let m = &r.model;
+        let contacts = m.graph.pairs.len();
+        let mut fields = vec![
+            Field::ints("kind", &self.kind),
+            Field::scalars("length", &self.length),
+            Field::scalars("surface", &self.surface),
+        ];
+        let (flow, mut drop): (Vec<f64>, Vec<f64>);
+        if let (Some(g), Some(th), Some(s)) = (&self.thermal, &r.thermal, &r.thermal_setup) {
+            let temps = at.map_or(&th.temperatures, |e| &th.snapshots[e.snapshot].1);
+            let wall = |w: usize| th.wall_temperatures[w];
+            drop = m
+                .graph
+                .pairs
+                .iter()
+                .map(|&[p, q]| temps[p as usize] - temps[q as usize])
+                .collect();
+            for (k, w) in s.walls.wall_of_links().enumerate() {
+                drop.push(temps[s.walls.particle[k] as usize] - wall(w));
+            }
+            drop.resize(self.lines.len(), 0.0);
+            flow = drop.iter().zip(g).map(|(d, g)| d * g).collect();
+            fields.push(Field::scalars("thermal_conductance", g));
+            fields.push(Field::scalars("heat_flow", &flow));
+            fields.push(Field::scalars("temperature_drop", &drop));
+        }
+        let (current, joule): (Vec<f64>, Vec<f64>);
+        if let (Some(g), Some(e)) = (
+            &self.electric,
+            r.electric.as_ref().filter(|_| at.is_none_or(|a| a.electric)),
+        ) {
+            let thermal_links = r.thermal_setup.as_ref().map_or(0, |s| s.walls.len());
+            let (c, w) = e.branch_currents.split_at(contacts);
+            current = [c, &vec![0.0; thermal_links], w].concat();
+            joule = current
+                .iter()
+                .zip(g)
+                .map(|(i, g)| if *g > 0.0 { i * i / g } else { 0.0 })
+                .collect();
+            fields.push(Field::scalars("electric_conductance", g));
+            fields.push(Field::scalars("current", &current));
+            fields.push(Field::scalars("joule_power", &joule));
+        }
+        write_lines_vtp(path, &self.points, &self.lines, &fields)?;
+        Ok(())
+    }
+}
+
+/// Writes `cells.vtu`: the Laguerre cell of every particle as a polyhedron, with the cell data
+/// `particle` (index), `phase`, `volume` (m³, the tessellation's) and the end's `temperature`
+/// (°C) and `potential` (V) when solved.
+fn write_cells(r: &RunResult, cells: &Polyhedra, path: &Path) -> Result<(), SceneError> {
+    let m = &r.model;
+    let id: Vec<i32> = (0..m.particles.len() as i32).collect();
+    let phase: Vec<i32> = m.particles.phases.iter().map(|&p| i32::from(p)).collect();
+    let mut fields = vec![Field::ints("particle", &id), Field::ints("phase", &phase)];
+    if let Some(c) = m.graph.cells.as_deref() {
+        fields.push(Field::scalars("volume", &c.volume));
+    }
+    if let Some(t) = &r.thermal {
+        fields.push(Field::scalars("temperature", &t.temperatures));
+    }
+    if let Some(e) = &r.electric {
+        fields.push(Field::scalars("potential", &e.potentials));
+    }
+    write_polyhedra_vtu(path, cells, &fields)?;
+    Ok(())
 }

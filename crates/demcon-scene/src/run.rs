@@ -166,7 +166,7 @@ pub struct RunResult {
     /// Per-particle physical heat flux (W/m²).
     pub flux: Option<Vec<Vec3>>,
     /// Halo-smoothed flux (W/m²) and whether each particle's Halo is cut by the boundary.
-    pub halo: Option<(Vec<Vec3>, Vec<bool>, HaloReport)>,
+    pub halo: Option<Halo>,
     /// Effective conductivity.
     pub etc: Option<EtcValue>,
     /// Probe readings.
@@ -187,6 +187,29 @@ pub struct RunResult {
     pub resumed: Option<Resumed>,
     /// The effective tensors of a periodic homogenisation.
     pub homogenization: Option<Homogenization>,
+    /// A transient's fields at its output times before the end, for the VTK time series (the
+    /// end's fields are the run's own).
+    pub series: Vec<SeriesEntry>,
+    /// The end time of a transient (s); `None` for a steady run or without thermal physics.
+    pub t_end: Option<f64>,
+    /// The Laguerre cells as polyhedra, when the outputs ask for `cells.vtu`.
+    pub cells: Option<demcon_post::Polyhedra>,
+}
+
+/// A transient's fields at one output time before its end.
+#[derive(Debug, Clone)]
+pub struct SeriesEntry {
+    /// Time (s).
+    pub t: f64,
+    /// Index of the temperatures in [`ThermalRun::snapshots`].
+    pub snapshot: usize,
+    /// Per-particle heat flux (W/m²), when the outputs ask for it.
+    pub flux: Option<Vec<Vec3>>,
+    /// Halo-smoothed flux (W/m²) and whether each particle's Halo is cut by the boundary.
+    pub halo: Option<(Vec<Vec3>, Vec<bool>)>,
+    /// Whether the run's (final) electric solution holds at this time too: true unless the
+    /// potential is re-solved during the transient (`recouple_tolerance`).
+    pub electric: bool,
 }
 
 /// The effective tensors of a periodic homogenisation.
@@ -356,6 +379,7 @@ fn run_stages(
     let mut diagnostics = model_diagnostics(&model);
     if let Some(plan) = &problem.homogenize {
         let h = stages.time("homogenize", || homogenize(&model, plan))?;
+        let cells = cell_polyhedra(&mut stages, &model, &problem)?;
         return Ok(RunResult {
             thermal_setup: None,
             thermal_bcs: None,
@@ -373,6 +397,9 @@ fn run_stages(
             wall_s: t0.elapsed().as_secs_f64(),
             resumed: None,
             homogenization: Some(h),
+            series: Vec::new(),
+            t_end: None,
+            cells,
             model,
         });
     }
@@ -415,6 +442,13 @@ fn run_stages(
         wall_s: t0.elapsed().as_secs_f64(),
         resumed: None,
         homogenization: None,
+        series: post.series,
+        cells: post.cells,
+        t_end: problem
+            .thermal
+            .as_ref()
+            .filter(|t| t.solver.is_transient())
+            .map(|t| t.solver.final_time()),
     })
 }
 
@@ -544,8 +578,10 @@ fn solve(
 
 /// What the post-processing computed.
 struct Post {
+    series: Vec<SeriesEntry>,
+    cells: Option<demcon_post::Polyhedra>,
     flux: Option<Vec<Vec3>>,
-    halo: Option<(Vec<Vec3>, Vec<bool>, HaloReport)>,
+    halo: Option<Halo>,
     etc: Option<EtcValue>,
     probes: Vec<ProbeValue>,
     profiles: Vec<ProfileValues>,
@@ -592,21 +628,108 @@ fn post_process(stages: &mut Stages, inp: &PostInputs<'_>) -> Result<Post, Scene
     };
     let (mut flux, mut halo) = (None, None);
     if let (true, Some(th), Some(s)) = (plan.flux, th, setup) {
-        let d = stages.time("flux", || heat_dipoles(model, s, th))?;
-        flux = Some(
-            d.iter()
-                .zip(&s.rep_volumes)
-                .map(|(d, v)| -d / (2.0 * v))
-                .collect::<Vec<Vec3>>(),
-        );
+        let d = stages.time("flux", || heat_dipoles(model, s, &th.node_temperatures()))?;
+        flux = Some(flux_of(&d, s));
         if let Some(params) = &plan.halo {
-            let h = stages.time("halo", || {
-                halo_flux(&model.particles, &d, &s.rep_volumes, &domain, params)
-            })?;
-            halo = Some((h.flux, h.truncated, h.report));
+            halo = Some(stages.time("halo", || halo_of(model, &d, s, &domain, params))?);
         }
     }
-    stages.time("probes", || probes_and_fields(inp, domain, flux, halo))
+    let mut series = Vec::new();
+    if let (true, Some(th), Some(s)) = (plan.series, th, setup) {
+        let end = problem.thermal.as_ref().map_or(0.0, |t| t.solver.final_time());
+        let before_end = th.snapshots.iter().enumerate().filter(|(_, (t, _))| *t < end);
+        let electric_fixed = problem
+            .electric
+            .as_ref()
+            .is_some_and(|e| e.recouple_tolerance.is_none());
+        series = stages.time("series", || {
+            before_end
+                .map(|(k, (t, temps))| {
+                    let (flux, halo) = match plan.flux {
+                        true => {
+                            let nodes = [&temps[..], &th.wall_temperatures[..]].concat();
+                            let (f, h) = flux_and_halo(model, s, &nodes, plan.halo.as_ref(), &domain)?;
+                            (Some(f), h.map(|(h, cut, _)| (h, cut)))
+                        }
+                        false => (None, None),
+                    };
+                    Ok(SeriesEntry {
+                        t: *t,
+                        snapshot: k,
+                        flux,
+                        halo,
+                        electric: electric_fixed,
+                    })
+                })
+                .collect::<Result<Vec<_>, SceneError>>()
+        })?;
+    }
+    let mut post = stages.time("probes", || probes_and_fields(inp, domain, flux, halo))?;
+    post.series = series;
+    post.cells = cell_polyhedra(stages, model, problem)?;
+    Ok(post)
+}
+
+/// The Laguerre cells of every particle as polyhedra, timed as the stage `cells`, when the
+/// outputs ask for them (validation refuses `cells_vtk` without Laguerre cells).
+fn cell_polyhedra(
+    stages: &mut Stages,
+    model: &Model,
+    problem: &Problem,
+) -> Result<Option<demcon_post::Polyhedra>, SceneError> {
+    let (true, Some(lp)) = (problem.post.cells, &problem.model.laguerre) else {
+        return Ok(None);
+    };
+    let carve = problem.model.carve.as_ref().map(|c| &c.0);
+    stages.time("cells", || {
+        let all: Vec<u32> = (0..model.particles.len() as u32).collect();
+        let cells = demcon_graph::cell_polyhedra(&model.particles, &model.container, carve, lp, &all)?;
+        let mut out = demcon_post::Polyhedra::new();
+        for (verts, faces) in cells {
+            out.push(verts, faces);
+        }
+        Ok(Some(out))
+    })
+}
+
+/// The Halo-smoothed flux (W/m²), whether each particle's Halo is cut by the boundary, and
+/// the report.
+pub type Halo = (Vec<Vec3>, Vec<bool>, HaloReport);
+
+/// The per-particle heat flux (W/m²) of the node temperatures `nodes` (particles, then walls),
+/// and its Halo average when `halo` is given.
+fn flux_and_halo(
+    model: &Model,
+    s: &ThermalSetup,
+    nodes: &[f64],
+    halo: Option<&demcon_post::HaloParams>,
+    domain: &Domain,
+) -> Result<(Vec<Vec3>, Option<Halo>), SceneError> {
+    let d = heat_dipoles(model, s, nodes)?;
+    let halo = halo
+        .map(|params| halo_of(model, &d, s, domain, params))
+        .transpose()?;
+    Ok((flux_of(&d, s), halo))
+}
+
+/// The per-particle heat flux q_p = −D_p / (2 V_p) (W/m²) of the dipoles `d` (W·m).
+fn flux_of(d: &[Vec3], s: &ThermalSetup) -> Vec<Vec3> {
+    d.iter()
+        .zip(&s.rep_volumes)
+        .map(|(d, v)| -d / (2.0 * v))
+        .collect()
+}
+
+/// The Halo average of the flux of the dipoles `d`.
+fn halo_of(
+    model: &Model,
+    d: &[Vec3],
+    s: &ThermalSetup,
+    domain: &Domain,
+    params: &demcon_post::HaloParams,
+) -> Result<Halo, SceneError> {
+    let h = halo_flux(&model.particles, d, &s.rep_volumes, domain, params)?;
+    Ok((h.flux, h.truncated, h.report))
 }
 
 /// ETC, probes and profiles of the post-processing, on the flux and Halo already computed.
@@ -614,7 +737,7 @@ fn probes_and_fields(
     inp: &PostInputs<'_>,
     domain: Domain,
     flux: Option<Vec<Vec3>>,
-    halo: Option<(Vec<Vec3>, Vec<bool>, HaloReport)>,
+    halo: Option<Halo>,
 ) -> Result<Post, SceneError> {
     let PostInputs {
         model,
@@ -682,6 +805,8 @@ fn probes_and_fields(
     let index = ProbeIndex::new(&model.particles, &rep, &domain)?;
     let (probes, profiles) = sample(&index, plan, cfg, &fields)?;
     Ok(Post {
+        series: Vec::new(),
+        cells: None,
         flux,
         halo,
         etc,
@@ -747,7 +872,9 @@ fn sample(
 
 /// Particle dipoles D_p = Σ_q H_pq (T_q − T_p) ℓ_pq of the contacts and the wall links (each
 /// flow acting at its Laguerre facet's centroid with cells).
-fn heat_dipoles(model: &Model, s: &ThermalSetup, th: &ThermalRun) -> Result<Vec<Vec3>, SceneError> {
+/// `nodes`: the temperatures of every node (particles, then walls; °C).
+fn heat_dipoles(model: &Model, s: &ThermalSetup, nodes: &[f64]) -> Result<Vec<Vec3>, SceneError> {
+    let temperatures = &nodes[..model.particles.len()];
     let branches: Vec<Vec3> = (0..model.graph.pairs.len())
         .map(|k| model.graph.branch(k))
         .collect();
@@ -757,18 +884,17 @@ fn heat_dipoles(model: &Model, s: &ThermalSetup, th: &ThermalRun) -> Result<Vec<
             &model.graph.pairs,
             &branches,
             s.contact_conductances(),
-            &th.temperatures,
+            temperatures,
             &cells.centroid,
         )?,
         None => particle_dipoles(
             &model.graph.pairs,
             &branches,
             s.contact_conductances(),
-            &th.temperatures,
+            temperatures,
         )?,
     };
-    s.walls
-        .add_dipoles(s.wall_conductances(), &th.node_temperatures(), &mut d);
+    s.walls.add_dipoles(s.wall_conductances(), nodes, &mut d);
     Ok(d)
 }
 

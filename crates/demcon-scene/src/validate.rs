@@ -503,6 +503,7 @@ fn check_homogenization(c: &SceneConfig, container: Option<&Container>) -> Resul
         ("outputs.profiles", !o.profiles.is_empty()),
         ("outputs.times", !o.times.is_empty()),
         ("outputs.flux", o.flux),
+        ("outputs.contacts_vtk", o.contacts_vtk),
     ];
     if let Some((f, _)) = refused.iter().find(|(_, set)| *set) {
         return Err(SceneError::invalid(
@@ -627,6 +628,17 @@ fn check_electric(
 
 fn check_outputs(c: &SceneConfig, container: Option<&Container>) -> Result<(), SceneError> {
     let o = &c.outputs;
+    if o.cells_vtk && !convert::uses_laguerre(c) {
+        return Err(SceneError::invalid(
+            "outputs.cells_vtk",
+            "true",
+            format!(
+                "cells are drawn from the Laguerre tessellation, which `surface: {:?}` does not build: set \
+                 `surface: Laguerre` or remove cells_vtk (contacts_vtk draws the contact network of any model)",
+                c.surface
+            ),
+        ));
+    }
     if let Some(k) = o.halo
         && !(k.is_finite() && k > 0.0)
     {

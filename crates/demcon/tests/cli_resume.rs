@@ -66,8 +66,29 @@ fn summary_without_timings(dir: &Path) -> serde_json::Value {
     v
 }
 
+/// Every output file of a transient but `summary.json` (the time series included), sorted.
+fn files(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n != "summary.json")
+        .collect();
+    names.sort();
+    names
+}
+
 fn assert_same_outputs(a: &Path, b: &Path) {
-    for name in ["particles.csv", "particles.vtu", "probes.csv"] {
+    let names = files(a);
+    assert_eq!(names, files(b), "the same files");
+    for want in [
+        "particles.csv",
+        "particles.pvd",
+        "particles_0000.vtu",
+        "probes.csv",
+    ] {
+        assert!(names.iter().any(|n| n == want), "{want} written: {names:?}");
+    }
+    for name in &names {
         let (x, y) = (
             std::fs::read(a.join(name)).unwrap(),
             std::fs::read(b.join(name)).unwrap(),

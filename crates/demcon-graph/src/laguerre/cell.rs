@@ -46,6 +46,28 @@ pub(crate) struct Cell {
 }
 
 impl Cell {
+    /// The cell as a polyhedron around the site `x` (m): the vertices its faces use, and the
+    /// faces as loops of indices into them.
+    pub fn polyhedron(&self, x: Vec3) -> super::Polyhedron {
+        let mut local = vec![u32::MAX; self.verts.len()];
+        let mut verts = Vec::new();
+        let faces = (0..self.n_faces())
+            .map(|f| {
+                self.face(f)
+                    .iter()
+                    .map(|&v| {
+                        if local[v as usize] == u32::MAX {
+                            local[v as usize] = verts.len() as u32;
+                            verts.push(x + self.verts[v as usize]);
+                        }
+                        local[v as usize]
+                    })
+                    .collect()
+            })
+            .collect();
+        (verts, faces)
+    }
+
     /// The axis-aligned box `[lo, hi]` (relative to the site, m) with the given face tags in
     /// the order −x, +x, −y, +y, −z, +z.
     pub fn reset_box(&mut self, lo: Vec3, hi: Vec3, tags: [Tag; 6]) {

@@ -420,6 +420,11 @@ struct Setup<'a> {
 }
 
 impl Setup<'_> {
+    /// The error of a failed cell, naming the particle.
+    fn error(&self, p: usize, e: CellFail) -> GraphError {
+        cell_error(p, e, self.pos, self.radii, self.container)
+    }
+
     /// Builds the cell of site `p` into `cell`.
     fn cell(
         &self,
@@ -817,6 +822,69 @@ pub fn tessellate(
     params: &LaguerreParams,
 ) -> Result<ContactGraph, GraphError> {
     let start = Instant::now();
+    with_setup(particles, container, carve, params, |setup| {
+        let results: Vec<Result<CellOut, CellFail>> = (0..particles.len())
+            .into_par_iter()
+            .map_init(
+                || (Cell::default(), Vec::new(), Vec::new()),
+                |(cell, cands, near), p| setup.cell(p, cell, cands, near),
+            )
+            .collect();
+        let mut cells = Vec::with_capacity(particles.len());
+        for (p, r) in results.into_iter().enumerate() {
+            cells.push(r.map_err(|e| setup.error(p, e))?);
+        }
+        let r_mean = particles.radii.iter().sum::<f64>() / particles.len() as f64;
+        assemble(particles, container, carve, cells, params, r_mean, start)
+    })
+}
+
+/// A convex polyhedron: its vertices (m) and its faces as loops of indices into them.
+pub type Polyhedron = (Vec<Vec3>, Vec<Vec<u32>>);
+
+/// The Laguerre cells of the particles `which`, built as [`tessellate`] builds them, as
+/// polyhedra for drawing (`cells.vtu`): each cell's vertices (m; a periodic cell may reach
+/// past the box) and faces (vertex loops, counter-clockwise seen from outside).
+///
+/// Errors: those of [`tessellate`]; an index of `which` out of range.
+pub fn cell_polyhedra(
+    particles: &ParticleSet,
+    container: &Container,
+    carve: Option<&Region>,
+    params: &LaguerreParams,
+    which: &[u32],
+) -> Result<Vec<Polyhedron>, GraphError> {
+    if let Some(&p) = which.iter().find(|&&p| p as usize >= particles.len()) {
+        return Err(CoreError::invalid(
+            "which",
+            p,
+            format!("a particle index (fewer than {})", particles.len()),
+        )
+        .into());
+    }
+    with_setup(particles, container, carve, params, |setup| {
+        which
+            .par_iter()
+            .map_init(
+                || (Cell::default(), Vec::new(), Vec::new()),
+                |(cell, cands, near), &p| {
+                    let p = p as usize;
+                    setup.cell(p, cell, cands, near).map_err(|e| setup.error(p, e))?;
+                    Ok(cell.polyhedron(setup.pos[p]))
+                },
+            )
+            .collect()
+    })
+}
+
+/// Checks the particles, prepares the search grid and hands the cell builder to `f`.
+fn with_setup<R>(
+    particles: &ParticleSet,
+    container: &Container,
+    carve: Option<&Region>,
+    params: &LaguerreParams,
+    f: impl FnOnce(&Setup) -> Result<R, GraphError>,
+) -> Result<R, GraphError> {
     params.validate()?;
     let prepared = prepare(particles, container)?;
     let pos: &[Vec3] = &prepared.pos;
@@ -878,18 +946,7 @@ pub fn tessellate(
         r_max,
         params: *params,
     };
-    let results: Vec<Result<CellOut, CellFail>> = (0..n)
-        .into_par_iter()
-        .map_init(
-            || (Cell::default(), Vec::new(), Vec::new()),
-            |(cell, cands, near), p| setup.cell(p, cell, cands, near),
-        )
-        .collect();
-    let mut cells = Vec::with_capacity(n);
-    for (p, r) in results.into_iter().enumerate() {
-        cells.push(r.map_err(|e| cell_error(p, e, pos, radii, container))?);
-    }
-    assemble(particles, container, carve, cells, params, r_mean, start)
+    f(&setup)
 }
 
 /// The error of a failed cell, naming the particle.
