@@ -1,21 +1,11 @@
-//! PNG charts for the report (plotters, bitmap backend, embedded DejaVu Sans font so no
-//! system font library is needed).
+//! Line charts: curves (lines with markers, or markers only) on linear or log axes, with a
+//! legend — probes against time, profiles along their lines, the report's comparisons.
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
 use plotters::prelude::*;
-use plotters::style::{FontStyle, register_font};
 
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
-
-fn ensure_font() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        // The font is compiled in; registration fails only if it is not a valid TTF.
-        let _ = register_font("sans-serif", FontStyle::Normal, FONT);
-    });
-}
+use crate::{PlotError, with_png};
 
 /// One curve of a chart.
 #[derive(Debug, Clone)]
@@ -110,9 +100,15 @@ fn range(vals: impl Iterator<Item = f64>, scale: Scale) -> (f64, f64) {
     }
 }
 
-/// Draws `chart` to a PNG file of 900 × 600 pixels.
-pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
-    ensure_font();
+/// Draws `chart` to a PNG file of 900 × 600 pixels. Non-finite points are left out (as are
+/// points ≤ 0 on a log axis).
+pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
+    if chart.series.iter().all(|s| s.points.is_empty()) {
+        return Err(PlotError::invalid(
+            format!("chart `{}`", chart.title),
+            "no points to draw",
+        ));
+    }
     let (x0, x1) = range(
         chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
         chart.x_scale,
@@ -121,16 +117,15 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
         chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
         chart.y_scale,
     );
-    let tmp = path.with_extension("tmp.png"); // the image encoder picks the format from the last extension
-    {
+    with_png(path, |tmp| {
         let root = BitMapBackend::new(&tmp, (900, 600)).into_drawing_area();
         root.fill(&WHITE)?;
         macro_rules! body {
             ($ctx:expr) => {{
                 let mut ctx = $ctx;
                 ctx.configure_mesh()
-                    .x_label_formatter(&|v: &f64| crate::outcome::fmt_sig(*v))
-                    .y_label_formatter(&|v: &f64| crate::outcome::fmt_sig(*v))
+                    .x_label_formatter(&|v: &f64| crate::fmt_tick(*v))
+                    .y_label_formatter(&|v: &f64| crate::fmt_tick(*v))
                     .x_desc(chart.x_label.as_str())
                     .y_desc(chart.y_label.as_str())
                     .label_style(("sans-serif", 14))
@@ -178,78 +173,6 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
             }
         }
         root.present()?;
-    }
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
-}
-
-/// A colour map (viridis-like, 5 stops) from t ∈ [0, 1] to RGB.
-pub fn colormap(t: f64) -> RGBColor {
-    const STOPS: [(f64, f64, f64); 5] = [
-        (68.0, 1.0, 84.0),
-        (59.0, 82.0, 139.0),
-        (33.0, 145.0, 140.0),
-        (94.0, 201.0, 98.0),
-        (253.0, 231.0, 37.0),
-    ];
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 } * 4.0;
-    let i = (t.floor() as usize).min(3);
-    let f = t - i as f64;
-    let (a, b) = (STOPS[i], STOPS[i + 1]);
-    let lerp = |x: f64, y: f64| (x + (y - x) * f).round() as u8;
-    RGBColor(lerp(a.0, b.0), lerp(a.1, b.1), lerp(a.2, b.2))
-}
-
-/// Draws a raster (row-major, `nx` × `ny`, `None` = not covered, drawn grey) as a colour
-/// image with a title and the value range, e.g. a slice of T or |q|.
-pub fn draw_raster(
-    title: &str,
-    nx: usize,
-    ny: usize,
-    cells: &[Option<f64>],
-    unit: &str,
-    path: &Path,
-) -> Result<()> {
-    ensure_font();
-    let vals = cells.iter().flatten().copied().filter(|v| v.is_finite());
-    let (lo, hi) = vals.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v), b.max(v))
-    });
-    let tmp = path.with_extension("tmp.png"); // the image encoder picks the format from the last extension
-    {
-        let px = 4u32;
-        let w = nx as u32 * px + 40;
-        let h = ny as u32 * px + 90;
-        let root = BitMapBackend::new(&tmp, (w, h)).into_drawing_area();
-        root.fill(&WHITE)?;
-        root.draw(&Text::new(title.to_string(), (20, 10), ("sans-serif", 16)))?;
-        root.draw(&Text::new(
-            format!(
-                "range {} … {} {unit}",
-                crate::outcome::fmt_sig(lo),
-                crate::outcome::fmt_sig(hi)
-            ),
-            (20, 32),
-            ("sans-serif", 13),
-        ))?;
-        for j in 0..ny {
-            for i in 0..nx {
-                let c = match cells[j * nx + i] {
-                    Some(v) if hi > lo => colormap((v - lo) / (hi - lo)),
-                    Some(_) => colormap(0.5),
-                    None => RGBColor(200, 200, 200),
-                };
-                let x = 20 + i as i32 * px as i32;
-                // Row 0 is the lowest coordinate: draw it at the bottom.
-                let y = 55 + (ny - 1 - j) as i32 * px as i32;
-                root.draw(&Rectangle::new(
-                    [(x, y), (x + px as i32, y + px as i32)],
-                    c.filled(),
-                ))?;
-            }
-        }
-        root.present()?;
-    }
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+        Ok(())
+    })
 }
