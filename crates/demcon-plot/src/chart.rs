@@ -45,6 +45,9 @@ pub enum Scale {
     Linear,
     /// Base-10 logarithmic axis (values must be > 0).
     Log,
+    /// For x only: the series are categories at x = 1, 2, …, each named under its points
+    /// by its label (no legend); e.g. one value per probe at a single time.
+    Categories,
 }
 
 /// A 2-D chart description.
@@ -77,7 +80,7 @@ const COLORS: [RGBColor; 8] = [
 
 fn range(vals: impl Iterator<Item = f64>, scale: Scale) -> (f64, f64) {
     let v: Vec<f64> = vals
-        .filter(|x| x.is_finite() && (scale == Scale::Linear || *x > 0.0))
+        .filter(|x| x.is_finite() && (scale != Scale::Log || *x > 0.0))
         .collect();
     let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -85,7 +88,7 @@ fn range(vals: impl Iterator<Item = f64>, scale: Scale) -> (f64, f64) {
         return (0.0, 1.0);
     }
     match scale {
-        Scale::Linear => {
+        Scale::Linear | Scale::Categories => {
             let pad = if hi > lo {
                 0.05 * (hi - lo)
             } else {
@@ -109,14 +112,41 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
             "no points to draw",
         ));
     }
-    let (x0, x1) = range(
-        chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
-        chart.x_scale,
-    );
+    let (x0, x1) = match chart.x_scale {
+        Scale::Categories => (0.5, chart.series.len() as f64 + 0.5),
+        _ => range(
+            chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
+            chart.x_scale,
+        ),
+    };
+    if chart.y_scale == Scale::Categories {
+        return Err(PlotError::invalid(
+            format!("chart `{}`", chart.title),
+            "categories are for the x axis only",
+        ));
+    }
+    let names: Vec<&str> = chart.series.iter().map(|s| s.label.as_str()).collect();
+    let x_tick = |v: &f64| match chart.x_scale {
+        Scale::Categories => {
+            let k = v.round();
+            if (v - k).abs() < 1e-6 && k >= 1.0 && k as usize <= names.len() {
+                names[k as usize - 1].to_string()
+            } else {
+                String::new()
+            }
+        }
+        _ => crate::fmt_tick(*v),
+    };
     let (y0, y1) = range(
         chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
         chart.y_scale,
     );
+    let legend = legend_position(chart, (x0, x1), (y0, y1));
+    // Categories: one tick per category (0.5 … n + 0.5 with n ticks puts them at 1 … n).
+    let x_ticks = match chart.x_scale {
+        Scale::Categories => chart.series.len(),
+        _ => 10,
+    };
     with_png(path, |tmp| {
         let root = BitMapBackend::new(&tmp, (900, 600)).into_drawing_area();
         root.fill(&WHITE)?;
@@ -124,7 +154,8 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
             ($ctx:expr) => {{
                 let mut ctx = $ctx;
                 ctx.configure_mesh()
-                    .x_label_formatter(&|v: &f64| crate::fmt_tick(*v))
+                    .x_labels(x_ticks)
+                    .x_label_formatter(&x_tick)
                     .y_label_formatter(&|v: &f64| crate::fmt_tick(*v))
                     .x_desc(chart.x_label.as_str())
                     .y_desc(chart.y_label.as_str())
@@ -151,11 +182,14 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
                         ctx.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
                     }
                 }
-                ctx.configure_series_labels()
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .label_font(("sans-serif", 14))
-                    .draw()?;
+                if chart.x_scale != Scale::Categories {
+                    ctx.configure_series_labels()
+                        .position(legend)
+                        .background_style(WHITE.mix(0.85))
+                        .border_style(BLACK)
+                        .label_font(("sans-serif", 14))
+                        .draw()?;
+                }
             }};
         }
         let mut builder = ChartBuilder::on(&root);
@@ -165,9 +199,15 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
             .x_label_area_size(45)
             .y_label_area_size(70);
         match (chart.x_scale, chart.y_scale) {
-            (Scale::Linear, Scale::Linear) => body!(builder.build_cartesian_2d(x0..x1, y0..y1)?),
-            (Scale::Log, Scale::Linear) => body!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)?),
-            (Scale::Linear, Scale::Log) => body!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())?),
+            (Scale::Linear | Scale::Categories, Scale::Linear | Scale::Categories) => {
+                body!(builder.build_cartesian_2d(x0..x1, y0..y1)?)
+            }
+            (Scale::Log, Scale::Linear | Scale::Categories) => {
+                body!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)?)
+            }
+            (Scale::Linear | Scale::Categories, Scale::Log) => {
+                body!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())?)
+            }
             (Scale::Log, Scale::Log) => {
                 body!(builder.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?)
             }
@@ -175,4 +215,59 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
         root.present()?;
         Ok(())
     })
+}
+
+/// The corner (or side) of the plot where the legend covers the fewest points of the curves
+/// (lines sampled between their points), for a legend of the chart's labels.
+fn legend_position(chart: &Chart, (x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> SeriesLabelPosition {
+    let norm = |v: f64, lo: f64, hi: f64, scale: Scale| match scale {
+        Scale::Log => (v.ln() - lo.ln()) / (hi.ln() - lo.ln()),
+        _ => (v - lo) / (hi - lo),
+    };
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    for s in &chart.series {
+        let p: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .map(|&(x, y)| (norm(x, x0, x1, chart.x_scale), norm(y, y0, y1, chart.y_scale)))
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .collect();
+        pts.extend(&p);
+        if !s.markers_only {
+            for w in p.windows(2) {
+                pts.extend((1..20).map(|k| {
+                    let f = k as f64 / 20.0;
+                    (w[0].0 + f * (w[1].0 - w[0].0), w[0].1 + f * (w[1].1 - w[0].1))
+                }));
+            }
+        }
+    }
+    // The legend's size as a fraction of the plotting area (about 800 × 490 pixels).
+    let longest = chart
+        .series
+        .iter()
+        .map(|s| s.label.chars().count())
+        .max()
+        .unwrap_or(0);
+    let w = ((longest as f64 * 7.5 + 50.0) / 800.0).min(0.6);
+    let h = ((chart.series.len() as f64 * 19.0 + 14.0) / 490.0).min(0.9);
+    use SeriesLabelPosition::*;
+    let candidates = [
+        (UpperRight, 1.0 - w, 1.0 - h),
+        (UpperLeft, 0.0, 1.0 - h),
+        (LowerRight, 1.0 - w, 0.0),
+        (LowerLeft, 0.0, 0.0),
+        (MiddleRight, 1.0 - w, 0.5 - h / 2.0),
+        (MiddleLeft, 0.0, 0.5 - h / 2.0),
+    ];
+    let covered = |&(_, bx, by): &(SeriesLabelPosition, f64, f64)| {
+        pts.iter()
+            .filter(|p| p.0 >= bx - 0.02 && p.0 <= bx + w + 0.02 && p.1 >= by - 0.02 && p.1 <= by + h + 0.02)
+            .count()
+    };
+    let best = candidates
+        .iter()
+        .min_by_key(|c| covered(c))
+        .expect("six candidates");
+    best.0.clone()
 }
