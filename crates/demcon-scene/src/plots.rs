@@ -604,9 +604,10 @@ fn plot_slice(
         return Err(input(
             source,
             format!(
-                "the slice position {position} m is outside the particles, [{}, {}] m along {}",
-                b.min[a],
-                b.max[a],
+                "the slice position {} m is outside the particles, [{}, {}] m along {}",
+                demcon_plot::fmt_tick(position),
+                demcon_plot::fmt_tick(b.min[a]),
+                demcon_plot::fmt_tick(b.max[a]),
                 axis_name(axis)
             ),
         ));

@@ -56,7 +56,8 @@ pub fn run(a: PlotArgs) -> anyhow::Result<ExitCode> {
     {
         bail!("invalid --at {at}: must be a finite position (m)");
     }
-    let data = read_run_folder(&a.run).with_context(|| format!("reading the run {}", a.run.display()))?;
+    // The error names the folder or the file.
+    let data = read_run_folder(&a.run)?;
     let params = PlotParams {
         slices: a.slices,
         axis: a.axis.map(|x| match x {
@@ -70,9 +71,9 @@ pub fn run(a: PlotArgs) -> anyhow::Result<ExitCode> {
     let dir = a.out.unwrap_or_else(|| a.run.join("plots"));
     let files = write_plots(&data, &params, &dir).with_context(|| format!("plotting {}", a.run.display()))?;
     for f in &files {
-        let range = f.range.map_or(String::new(), |(lo, hi)| {
-            format!(", colour bar {lo:.6e} … {hi:.6e}")
-        });
+        let range = f
+            .range
+            .map_or(String::new(), |(lo, hi)| format!(", colour bar {lo} … {hi}"));
         println!("{}: {}{range}", dir.join(&f.name).display(), f.what);
     }
     Ok(ExitCode::SUCCESS)
