@@ -178,7 +178,8 @@ pub fn write_run_plots(
 
 /// Reads what plots need from a run's output folder: `summary.json` (which marks it as one,
 /// and gives the ETC axis), `probes.csv`, `profiles.csv`, and the particle fields from
-/// `particles.csv`, else `particles.vtu`. Missing optional files leave their part empty.
+/// `particles.csv`, else `particles.vtu`, else the last of a transient's `particles_<k>.vtu`.
+/// Missing optional files leave their part empty.
 /// Errors name the folder or file: not a run's folder, a file that cannot be read or parsed.
 pub fn read_run_folder(dir: &Path) -> Result<PlotData, SceneError> {
     if !dir.is_dir() {
@@ -218,6 +219,8 @@ pub fn read_run_folder(dir: &Path) -> Result<PlotData, SceneError> {
         Some(read_particles_csv(&csv)?)
     } else if vtu.is_file() {
         Some(read_particles_vtu(&vtu)?)
+    } else if let Some(last) = last_snapshot(dir)? {
+        Some(read_particles_vtu(&last)?)
     } else {
         None
     };
@@ -229,6 +232,26 @@ pub fn read_run_folder(dir: &Path) -> Result<PlotData, SceneError> {
         etc_axis,
         folder: Some(dir.into()),
     })
+}
+
+/// The last of a transient's per-time files `particles_<k>.vtu` (greatest k), if any.
+fn last_snapshot(dir: &Path) -> Result<Option<PathBuf>, SceneError> {
+    let mut best: Option<(u64, PathBuf)> = None;
+    for entry in std::fs::read_dir(dir).map_err(io(dir))? {
+        let path = entry.map_err(io(dir))?.path();
+        let k = path.file_name().and_then(|n| n.to_str()).and_then(|n| {
+            n.strip_prefix("particles_")?
+                .strip_suffix(".vtu")?
+                .parse::<u64>()
+                .ok()
+        });
+        if let Some(k) = k
+            && best.as_ref().is_none_or(|(b, _)| k > *b)
+        {
+            best = Some((k, path));
+        }
+    }
+    Ok(best.map(|(_, p)| p))
 }
 
 /// The text cells of a line of our CSVs: the first cell (a name, which may hold commas) and
@@ -248,25 +271,31 @@ fn number(path: &Path, line: usize, what: &str, cell: &str) -> Result<f64, Scene
         .map_err(|_| input(path, format!("line {line}: {what} `{cell}` is not a number")))
 }
 
-/// `probes.csv`: `probe,field,t_s,value,solved`.
-fn read_probes(path: &Path) -> Result<Vec<ProbeValue>, SceneError> {
+/// The data rows of one of our CSVs (after its header line): line number, the first cell (a
+/// name) and the `n` cells after it; a row of another shape is refused naming `columns`.
+fn rows(path: &Path, n: usize, columns: &str) -> Result<Vec<(usize, String, Vec<String>)>, SceneError> {
     let text = std::fs::read_to_string(path).map_err(io(path))?;
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate().skip(1) {
         if line.trim().is_empty() {
             continue;
         }
-        let (name, c) = split_row(line, 4).ok_or_else(|| {
-            input(
-                path,
-                format!("line {}: expected probe,field,t_s,value,solved", i + 1),
-            )
-        })?;
+        let (name, cells) =
+            split_row(line, n).ok_or_else(|| input(path, format!("line {}: expected {columns}", i + 1)))?;
+        out.push((i + 1, name, cells.into_iter().map(String::from).collect()));
+    }
+    Ok(out)
+}
+
+/// `probes.csv`: `probe,field,t_s,value,solved`.
+fn read_probes(path: &Path) -> Result<Vec<ProbeValue>, SceneError> {
+    let mut out = Vec::new();
+    for (line, name, c) in rows(path, 4, "probe,field,t_s,value,solved")? {
         out.push(ProbeValue {
             name,
-            field: c[0].to_string(),
-            t: number(path, i + 1, "t_s", c[1])?,
-            value: number(path, i + 1, "value", c[2])?,
+            field: c[0].clone(),
+            t: number(path, line, "t_s", &c[1])?,
+            value: number(path, line, "value", &c[2])?,
             solved: c[3].trim() == "1",
         });
     }
@@ -275,25 +304,12 @@ fn read_probes(path: &Path) -> Result<Vec<ProbeValue>, SceneError> {
 
 /// `profiles.csv`: `profile,field,t_s,distance_m,value,solved`, one row per point.
 fn read_profiles(path: &Path) -> Result<Vec<ProfileValues>, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(io(path))?;
     let mut out: Vec<ProfileValues> = Vec::new();
-    for (i, line) in text.lines().enumerate().skip(1) {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let (name, c) = split_row(line, 5).ok_or_else(|| {
-            input(
-                path,
-                format!(
-                    "line {}: expected profile,field,t_s,distance_m,value,solved",
-                    i + 1
-                ),
-            )
-        })?;
-        let t = number(path, i + 1, "t_s", c[1])?;
+    for (line, name, c) in rows(path, 5, "profile,field,t_s,distance_m,value,solved")? {
+        let t = number(path, line, "t_s", &c[1])?;
         let point = (
-            number(path, i + 1, "distance_m", c[2])?,
-            number(path, i + 1, "value", c[3])?,
+            number(path, line, "distance_m", &c[2])?,
+            number(path, line, "value", &c[3])?,
         );
         let solved = c[4].trim() == "1";
         match out.last_mut() {
@@ -303,7 +319,7 @@ fn read_profiles(path: &Path) -> Result<Vec<ProfileValues>, SceneError> {
             }
             _ => out.push(ProfileValues {
                 name,
-                field: c[0].to_string(),
+                field: c[0].clone(),
                 t,
                 points: vec![point],
                 solved: vec![solved],
@@ -337,15 +353,15 @@ fn read_particles_csv(path: &Path) -> Result<ParticleData, SceneError> {
         if ["x", "y", "z", "solved"].contains(&h.as_str()) {
             continue;
         }
-        if let Some(base) = h.strip_suffix("_x") {
-            if let (Some(cy), Some(cz)) = (col(&format!("{base}_y")), col(&format!("{base}_z"))) {
-                let m = (0..c.len())
-                    .map(|i| Vec3::new(c[i], cy[i], cz[i]).norm())
-                    .collect();
-                fields.push((base.to_string(), m));
-                vectors.push(base.to_string());
-                continue;
-            }
+        if let Some(base) = h.strip_suffix("_x")
+            && let (Some(cy), Some(cz)) = (col(&format!("{base}_y")), col(&format!("{base}_z")))
+        {
+            let m = (0..c.len())
+                .map(|i| Vec3::new(c[i], cy[i], cz[i]).norm())
+                .collect();
+            fields.push((base.to_string(), m));
+            vectors.push(base.to_string());
+            continue;
         }
         let is_component = ["_y", "_z"].iter().any(|s| {
             h.strip_suffix(s)
@@ -637,7 +653,7 @@ fn plot_slice(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (&v, _)| {
             (a.min(v), b.max(v))
         });
-    if !(lo <= hi) {
+    if lo > hi || lo.is_nan() {
         return Err(input(
             source,
             format!("no solved particle has a value of `{field}`"),
@@ -689,6 +705,26 @@ mod tests {
         assert_eq!(n, "a,b");
         assert_eq!(c, ["temperature", "0.5", "1e0", "1"]);
         assert!(split_row("a,1,2", 4).is_none());
+    }
+
+    #[test]
+    fn the_last_snapshot_gives_the_particle_fields() {
+        let dir = std::env::temp_dir().join(format!("demcon-scene-plots-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("summary.json"), "{}").unwrap();
+        let p = ParticleSet::new(vec![Vec3::new(0.5, 0.5, 0.5)], vec![0.5]).unwrap();
+        for (k, t) in [(2, 20.0), (10, 30.0), (9, 25.0)] {
+            let t = [t];
+            demcon_post::write_vtu(
+                dir.join(format!("particles_{k}.vtu")),
+                &p,
+                &[demcon_post::Field::scalars("temperature", &t)],
+            )
+            .unwrap();
+        }
+        let d = read_run_folder(&dir).unwrap();
+        assert_eq!(d.particles.unwrap().field("temperature").unwrap(), [30.0]);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
