@@ -65,11 +65,13 @@ pub fn colormap(t: f64) -> RGBColor {
 const EMPTY: RGBColor = RGBColor(200, 200, 200);
 /// The longer side of the picture's plotting area (pixels).
 const SIDE: f64 = 640.0;
+/// The least width of the picture's plotting area (pixels).
+const MIN_WIDTH: u32 = 420;
 /// Width of the colour-bar panel (pixels).
 const BAR_PANEL: u32 = 150;
 
 /// Draws `r` to a PNG: the raster with its axes in mm (cells square, the longer side 640
-/// pixels), and a colour bar on the right spanning `r.range` (or the cells' range).
+/// pixels, a narrow raster centred in a plotting area 420 pixels wide), and a colour bar on the right spanning `r.range` (or the cells' range).
 /// Errors: a shape that does not match the cells, no finite value to colour, a bad range or
 /// cell size, or a drawing or file failure.
 pub fn draw_raster(r: &Raster, path: &Path) -> Result<RasterReport, PlotError> {
@@ -107,16 +109,21 @@ pub fn draw_raster(r: &Raster, path: &Path) -> Result<RasterReport, PlotError> {
     }
     // The picture: cells square, the longer side SIDE pixels, plus label areas.
     let scale = SIDE / r.nx.max(r.ny) as f64;
-    let (pw, ph) = (
+    let (mut pw, ph) = (
         (r.nx as f64 * scale).round() as u32,
         (r.ny as f64 * scale).round() as u32,
     );
+    // A narrow raster is widened with empty margins (cells stay square) so its title fits.
+    let widen = MIN_WIDTH.saturating_sub(pw);
+    pw += widen;
     let (margin, left, bottom, caption) = (15u32, 75u32, 55u32, 25u32);
     let width = margin + left + pw + margin + BAR_PANEL;
     let height = margin + caption + ph + bottom + margin;
     let mm = |m: f64| m * 1e3;
     let (u0, v0) = (mm(r.origin[0]), mm(r.origin[1]));
     let (u1, v1) = (u0 + mm(r.cell) * r.nx as f64, v0 + mm(r.cell) * r.ny as f64);
+    let margin_mm = 0.5 * widen as f64 / scale * mm(r.cell);
+    let (left_mm, right_mm) = (u0 - margin_mm, u1 + margin_mm);
     let colour = |v: f64| {
         if hi > lo {
             colormap((v - lo) / (hi - lo))
@@ -133,10 +140,12 @@ pub fn draw_raster(r: &Raster, path: &Path) -> Result<RasterReport, PlotError> {
             .margin(margin)
             .x_label_area_size(bottom)
             .y_label_area_size(left)
-            .build_cartesian_2d(u0..u1, v0..v1)?;
+            .build_cartesian_2d(left_mm..right_mm, v0..v1)?;
         chart
             .configure_mesh()
             .disable_mesh()
+            .x_labels((pw / 70).max(3) as usize)
+            .y_labels((ph / 50).max(3) as usize)
             .x_label_formatter(&|v: &f64| fmt_tick(*v))
             .y_label_formatter(&|v: &f64| fmt_tick(*v))
             .x_desc(format!("{} (mm)", r.axes[0]))

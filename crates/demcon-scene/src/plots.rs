@@ -6,6 +6,7 @@
 //! Names and units of the fields are those of [`crate::output`]'s files; the drawing is
 //! `demcon-plot`'s.
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use demcon_core::{Axis, ParticleSet, Vec3};
@@ -33,6 +34,10 @@ pub fn field_unit(field: &str) -> Option<&'static str> {
     })
 }
 
+/// The fields of the default slices: the first of temperature and potential the run has, and
+/// the Halo flux when it has one.
+const DEFAULT_SLICES: [&str; 3] = ["temperature", "potential", "halo_flux"];
+
 /// `field (unit)`, or `field` alone when it has no unit.
 fn labelled(field: &str) -> String {
     match field_unit(field) {
@@ -44,9 +49,9 @@ fn labelled(field: &str) -> String {
 /// Per-particle fields of a run: positions, radii, and each field as one value per particle
 /// (a vector field by its magnitude).
 #[derive(Debug, Clone)]
-pub struct ParticleData {
-    /// The particles (m).
-    pub particles: ParticleSet,
+pub struct ParticleData<'a> {
+    /// The particles (m): a run's own, or read from its files.
+    pub particles: Cow<'a, ParticleSet>,
     /// Fields (name, value per particle): scalars, and vectors by their magnitude.
     pub fields: Vec<(String, Vec<f64>)>,
     /// Which fields are magnitudes of vectors.
@@ -57,7 +62,7 @@ pub struct ParticleData {
     pub source: String,
 }
 
-impl ParticleData {
+impl ParticleData<'_> {
     /// The field called `name`.
     pub fn field(&self, name: &str) -> Option<&[f64]> {
         self.fields
@@ -69,13 +74,13 @@ impl ParticleData {
 
 /// What the plots are drawn from.
 #[derive(Debug, Clone, Default)]
-pub struct PlotData {
+pub struct PlotData<'a> {
     /// Probe readings (any order; grouped by field, then probe).
     pub probes: Vec<ProbeValue>,
     /// Profiles (grouped by profile and field, one curve per time).
     pub profiles: Vec<ProfileValues>,
     /// Per-particle fields, when the run kept them.
-    pub particles: Option<ParticleData>,
+    pub particles: Option<ParticleData<'a>>,
     /// The domain of the particles; `None`: the box around the spheres.
     pub domain: Option<Domain>,
     /// The effective-conductivity axis of the run, if any (default slices contain it).
@@ -89,8 +94,9 @@ pub struct PlotData {
 pub struct PlotParams {
     /// Fields to slice; empty: `temperature` (or `potential`), and `halo_flux` when present.
     pub slices: Vec<String>,
-    /// The slice plane's normal; `None`: z, or x when the ETC axis is z (so that the plane
-    /// contains the direction of the gradient).
+    /// The slice plane's normal; `None`: z, or x when the field changes most along z (the ETC
+    /// axis if the run has one, else the steepest axis of the field's least-squares fit), so
+    /// that the plane contains the gradient.
     pub axis: Option<Axis>,
     /// The slice plane's position along its normal (m); `None`: the middle of the domain.
     pub at: Option<f64>,
@@ -134,16 +140,18 @@ fn input(path: &Path, problem: impl Into<String>) -> SceneError {
     }
 }
 
-/// The plot data of a run in memory: its probes, profiles and the fields its files hold.
-pub fn plot_data_of(r: &RunResult, outputs: &OutputsConfig) -> PlotData {
+/// The plot data of a run in memory: its probes, profiles, and the fields the default slices
+/// draw (temperature, potential, |halo_flux|), on the run's own particles.
+pub fn plot_data_of<'a>(r: &'a RunResult, outputs: &OutputsConfig) -> PlotData<'a> {
     let f = ParticleFields::of(r);
     let mut fields: Vec<(String, Vec<f64>)> = f
         .scalars
-        .iter()
-        .map(|(n, v)| (n.to_string(), v.clone()))
+        .into_iter()
+        .filter(|(n, _)| DEFAULT_SLICES.contains(n))
+        .map(|(n, v)| (n.to_string(), v))
         .collect();
     let mut vectors = Vec::new();
-    for (name, v) in &f.vectors {
+    for (name, v) in f.vectors.iter().filter(|(n, _)| DEFAULT_SLICES.contains(n)) {
         fields.push((name.to_string(), v.iter().map(|x| x.norm()).collect()));
         vectors.push(name.to_string());
     }
@@ -151,7 +159,7 @@ pub fn plot_data_of(r: &RunResult, outputs: &OutputsConfig) -> PlotData {
         probes: r.probes.clone(),
         profiles: r.profiles.clone(),
         particles: Some(ParticleData {
-            particles: r.model.particles.clone(),
+            particles: Cow::Borrowed(&r.model.particles),
             fields,
             vectors,
             solved: f.solved.iter().map(|&s| s != 0).collect(),
@@ -181,7 +189,7 @@ pub fn write_run_plots(
 /// `particles.csv`, else `particles.vtu`, else the last of a transient's `particles_<k>.vtu`.
 /// Missing optional files leave their part empty.
 /// Errors name the folder or file: not a run's folder, a file that cannot be read or parsed.
-pub fn read_run_folder(dir: &Path) -> Result<PlotData, SceneError> {
+pub fn read_run_folder(dir: &Path) -> Result<PlotData<'static>, SceneError> {
     if !dir.is_dir() {
         return Err(input(
             dir,
@@ -335,7 +343,7 @@ fn particle_set(path: &Path, centres: Vec<Vec3>, radii: Vec<f64>) -> Result<Part
 }
 
 /// `particles.csv`: `x,y,z,radius,phase,solved`, scalars, vector components `<name>_x|y|z`.
-fn read_particles_csv(path: &Path) -> Result<ParticleData, SceneError> {
+fn read_particles_csv(path: &Path) -> Result<ParticleData<'static>, SceneError> {
     let (header, cols) = read_csv(path)?;
     let col = |name: &str| header.iter().position(|h| h == name).map(|k| &cols[k]);
     let (Some(x), Some(y), Some(z), Some(r)) = (col("x"), col("y"), col("z"), col("radius")) else {
@@ -372,7 +380,7 @@ fn read_particles_csv(path: &Path) -> Result<ParticleData, SceneError> {
         }
     }
     Ok(ParticleData {
-        particles,
+        particles: Cow::Owned(particles),
         fields,
         vectors,
         solved,
@@ -381,7 +389,7 @@ fn read_particles_csv(path: &Path) -> Result<ParticleData, SceneError> {
 }
 
 /// `particles.vtu` (our own format): points, radius, every point array (vectors by magnitude).
-fn read_particles_vtu(path: &Path) -> Result<ParticleData, SceneError> {
+fn read_particles_vtu(path: &Path) -> Result<ParticleData<'static>, SceneError> {
     let d = read_vtu(path)?;
     let radius = d
         .array("radius")
@@ -402,7 +410,7 @@ fn read_particles_vtu(path: &Path) -> Result<ParticleData, SceneError> {
         fields.push((a.name.clone(), a.magnitudes()));
     }
     Ok(ParticleData {
-        particles,
+        particles: Cow::Owned(particles),
         fields,
         vectors,
         solved,
@@ -431,7 +439,11 @@ fn axis_name(a: Axis) -> &'static str {
 /// field, one chart per profile and field, and the slices of `params`. Errors name what is
 /// missing: nothing to plot at all, a slice asked for without particle fields, or a field the
 /// data does not have (the message lists those it has).
-pub fn write_plots(data: &PlotData, params: &PlotParams, dir: &Path) -> Result<Vec<PlotFile>, SceneError> {
+pub fn write_plots(
+    data: &PlotData<'_>,
+    params: &PlotParams,
+    dir: &Path,
+) -> Result<Vec<PlotFile>, SceneError> {
     let here = data.folder.as_deref().unwrap_or(Path::new("the run"));
     let slices = slice_fields(data, params, here)?;
     if data.probes.is_empty() && data.profiles.is_empty() && slices.is_empty() {
@@ -454,7 +466,7 @@ pub fn write_plots(data: &PlotData, params: &PlotParams, dir: &Path) -> Result<V
 }
 
 /// The fields to slice: those asked for (each checked), or the defaults present.
-fn slice_fields(data: &PlotData, params: &PlotParams, here: &Path) -> Result<Vec<String>, SceneError> {
+fn slice_fields(data: &PlotData<'_>, params: &PlotParams, here: &Path) -> Result<Vec<String>, SceneError> {
     let Some(p) = &data.particles else {
         if params.slices.is_empty() {
             return Ok(Vec::new());
@@ -594,11 +606,45 @@ fn plot_profiles(profiles: &[ProfileValues], dir: &Path) -> Result<Vec<PlotFile>
     Ok(files)
 }
 
+/// The axis along which `values` change most over the solved particles: the least-squares
+/// slope along each axis times the particles' extent along it (z on a tie or a constant field).
+fn steepest_axis(particles: &ParticleSet, values: &[f64], solved: &[bool]) -> Axis {
+    let ok: Vec<usize> = (0..values.len())
+        .filter(|&i| solved[i] && values[i].is_finite())
+        .collect();
+    let n = ok.len().max(1) as f64;
+    let mean_v = ok.iter().map(|&i| values[i]).sum::<f64>() / n;
+    let change = |k: usize| {
+        let x: Vec<f64> = ok.iter().map(|&i| particles.centres[i][k]).collect();
+        let mean_x = x.iter().sum::<f64>() / n;
+        let (mut sxv, mut sxx) = (0.0, 0.0);
+        for (xi, &i) in x.iter().zip(&ok) {
+            sxv += (xi - mean_x) * (values[i] - mean_v);
+            sxx += (xi - mean_x) * (xi - mean_x);
+        }
+        let extent = x.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+            - x.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+        if sxx > 0.0 {
+            (sxv / sxx).abs() * extent
+        } else {
+            0.0
+        }
+    };
+    let c = [change(0), change(1), change(2)];
+    if c[0] > c[1] && c[0] > c[2] {
+        Axis::X
+    } else if c[1] > c[2] && c[1] >= c[0] {
+        Axis::Y
+    } else {
+        Axis::Z
+    }
+}
+
 /// The slice of `field` on the plane of `params`; the colour bar spans the field's range
 /// over the solved particles, cells in the pores and on unsolved particles are grey.
 fn plot_slice(
-    data: &PlotData,
-    p: &ParticleData,
+    data: &PlotData<'_>,
+    p: &ParticleData<'_>,
     field: &str,
     params: &PlotParams,
     dir: &Path,
@@ -609,13 +655,24 @@ fn plot_slice(
         Some(d) => d.clone(),
         None => Domain::around(&p.particles)?,
     };
-    let axis = params.axis.unwrap_or(match data.etc_axis {
-        Some(Axis::Z) => Axis::X,
-        _ => Axis::Z,
-    });
+    // The default plane contains the direction along which the field changes most.
+    let along = data
+        .etc_axis
+        .unwrap_or_else(|| steepest_axis(&p.particles, values, &p.solved));
+    let axis = params
+        .axis
+        .unwrap_or(if along == Axis::Z { Axis::X } else { Axis::Z });
     let b = domain.region.bounds();
     let a = axis.index();
-    let position = params.at.unwrap_or(0.5 * (b.min[a] + b.max[a]));
+    let position = params.at.unwrap_or_else(|| {
+        // The middle; a box around spheres centred on 0 is off by rounding: snap it to 0.
+        let mid = 0.5 * (b.min[a] + b.max[a]);
+        if mid.abs() < 1e-4 * (b.max[a] - b.min[a]) {
+            0.0
+        } else {
+            mid
+        }
+    });
     if !(position >= b.min[a] && position <= b.max[a]) {
         return Err(input(
             source,
@@ -683,14 +740,14 @@ fn plot_slice(
             origin: g.origin,
             cell: g.cell,
             axes: g.axes.map(axis_name),
-            bar_label,
+            bar_label: bar_label.clone(),
             range: Some((lo, hi)),
         },
         &dir.join(&name),
     )?;
     Ok(PlotFile {
         name,
-        what: format!("{what}, {plane}"),
+        what: format!("{bar_label}, {plane}"),
         range: Some(rep.range),
     })
 }
@@ -733,5 +790,22 @@ mod tests {
         assert_eq!(labelled("halo_flux_magnitude"), "halo_flux_magnitude (W/m²)");
         assert_eq!(labelled("coordination"), "coordination");
         assert_eq!(file_part("y axis/1"), "y-axis-1");
+    }
+
+    #[test]
+    fn the_steepest_axis_follows_the_field() {
+        let centres: Vec<Vec3> = (0..27)
+            .map(|i| Vec3::new((i % 3) as f64, ((i / 3) % 3) as f64, (i / 9) as f64))
+            .collect();
+        let p = ParticleSet::new(centres.clone(), vec![0.4; 27]).unwrap();
+        let all = vec![true; 27];
+        for (k, axis) in [(0, Axis::X), (1, Axis::Y), (2, Axis::Z)] {
+            let v: Vec<f64> = centres
+                .iter()
+                .map(|c| 3.0 * c[k] + 0.1 * c[(k + 1) % 3])
+                .collect();
+            assert_eq!(steepest_axis(&p, &v, &all), axis);
+        }
+        assert_eq!(steepest_axis(&p, &[1.0; 27], &all), Axis::Z);
     }
 }
