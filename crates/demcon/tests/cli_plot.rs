@@ -23,6 +23,11 @@ const FULL: &str = r#"probes: [(name: "low", point: (0.5, 0.25, 0.5)), (name: "h
 
 /// Runs the scene with `outputs` into `dir/out`; returns the output folder.
 fn run(dir: &Path, outputs: &str) -> std::path::PathBuf {
+    run_with_output(dir, outputs).0
+}
+
+/// Runs the scene with `outputs` into `dir/out`; returns the output folder and what it printed.
+fn run_with_output(dir: &Path, outputs: &str) -> (std::path::PathBuf, String) {
     let scene = dir.join("s.ron");
     std::fs::write(&scene, SCENE.replace("OUTPUTS", outputs)).unwrap();
     let out = dir.join("out");
@@ -34,7 +39,7 @@ fn run(dir: &Path, outputs: &str) -> std::path::PathBuf {
         "--quiet",
     ]);
     assert!(o.status.success(), "{}", text(&o));
-    out
+    (out, text(&o))
 }
 
 /// Width and height of a PNG (decoding it whole: a damaged file fails).
@@ -161,8 +166,11 @@ fn plots_refuse_folders_without_what_they_need() {
     assert!(err.contains("no summary.json") && err.contains("empty"), "{err}");
     assert!(!empty.join("plots").exists());
 
-    // A run with nothing to plot: no probes, no profiles, no particle files.
-    let out = run(&d, "vtk: false");
+    // A run with no probes, no profiles, no particle files: asked to plot itself, it slices
+    // its fields in memory; its folder has nothing `demcon plot` can draw.
+    let (out, said) = run_with_output(&d, "vtk: false, plots: true");
+    assert!(said.contains("plots/"), "{said}");
+    assert!(png_size(&out.join("plots/slice_temperature_z.png")).0 > 0);
     let o = demcon(&["plot", out.to_str().unwrap()]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
