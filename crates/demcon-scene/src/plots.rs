@@ -481,10 +481,9 @@ fn slice_fields(data: &PlotData<'_>, params: &PlotParams, here: &Path) -> Result
         ));
     };
     if params.slices.is_empty() {
-        let main = ["temperature", "potential"]
-            .into_iter()
-            .find(|f| p.field(f).is_some());
-        let halo = p.field("halo_flux").map(|_| "halo_flux");
+        let [t, v, h] = DEFAULT_SLICES;
+        let main = [t, v].into_iter().find(|f| p.field(f).is_some());
+        let halo = p.field(h).map(|_| h);
         return Ok(main.into_iter().chain(halo).map(String::from).collect());
     }
     for f in &params.slices {

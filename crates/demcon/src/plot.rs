@@ -29,14 +29,14 @@ pub struct PlotArgs {
     /// temperature (or potential), and halo_flux when the run has it.
     #[arg(long = "slice", value_name = "FIELD")]
     slices: Vec<String>,
-    /// Normal of the slice plane (default: z, or x when the run's ETC axis is z).
+    /// Normal of the slice plane (default: z, or x when the field changes most along z).
     #[arg(long, value_enum)]
     axis: Option<AxisArg>,
     /// Position of the slice plane along its normal (m; default: the middle of the particles).
     #[arg(long, value_name = "POS_M")]
     at: Option<f64>,
     /// Cells along the longer side of a slice.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = PlotParams::default().resolution)]
     resolution: usize,
     /// Folder for the PNGs (default: OUT/plots).
     #[arg(long)]

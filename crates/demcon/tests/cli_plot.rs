@@ -103,6 +103,8 @@ fn a_run_plots_itself_and_demcon_plot_draws_its_folder() {
         assert!(w >= 600 && h >= 400, "{name}: {w} × {h}");
     }
     assert_eq!(png_size(&out.join("plots/probes_temperature.png")), (900, 600));
+    // A slice of the cube: 200 × 200 square cells on 640 × 640 pixels, the axes and the colour bar.
+    assert_eq!(png_size(&out.join("plots/slice_temperature_z.png")), (895, 750));
 
     // `demcon plot` from the CSV files into another folder: the same charts.
     let other = d.join("charts");
