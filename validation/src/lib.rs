@@ -13,7 +13,6 @@
 
 pub mod analytic;
 pub mod cases;
-pub mod chart;
 pub mod outcome;
 pub mod refs;
 pub mod report;

@@ -25,9 +25,10 @@ const LAYERS: &[(&str, u32)] = &[
     // Layer 2 (siblings): thermal | electric.
     ("demcon-thermal", 3),
     ("demcon-electric", 3),
-    // Layer 3 (siblings): model | post.
+    // Layer 3 (siblings): model | post | plot.
     ("demcon-model", 4),
     ("demcon-post", 4),
+    ("demcon-plot", 4),
     ("demcon-scene", 5),
     // Layer 5 (siblings): the CLI | the validation cases.
     ("demcon", 6),
@@ -45,7 +46,7 @@ fn layer_name(rank: u32) -> &'static str {
         1 => "layer 0 (packing | graph, on core)",
         2 => "layer 1 (network)",
         3 => "layer 2 (thermal | electric)",
-        4 => "layer 3 (model | post)",
+        4 => "layer 3 (model | post | plot)",
         5 => "layer 4 (scene)",
         6 => "layer 5 (CLI | validation)",
         _ => "tools (xtask | benches)",

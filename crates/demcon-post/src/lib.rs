@@ -1,6 +1,7 @@
 //! Post-processing of demcon particle fields: per-particle flux (Haddad 2021 eq. 20 with the
 //! physical sign), Halo smoothing (eqs. 22–23), coefficient of variation, effective
-//! conductivity, probes, profiles, slices, and VTK (`.vtu`) and CSV writers.
+//! conductivity, probes, profiles, slices, and VTK (`.vtu`) and CSV writers (and their readers,
+//! for tools that open a run's files: `read_vtu`, `read_csv`).
 //!
 //! Everything takes plain data, so this crate depends on no solver: contact pairs
 //! `&[[u32; 2]]`, branch vectors `ℓ_pq = x_q − x_p` (m, minimum image if periodic),
@@ -51,6 +52,7 @@ mod probe;
 mod slice;
 mod stats;
 mod vtk;
+mod vtu_read;
 
 pub use csv::{read_csv, write_csv};
 pub use domain::{Domain, Plane};
@@ -61,3 +63,4 @@ pub use probe::{Line, MAX_PROFILE_POINTS, ProbeIndex, ProbeMethod, line_points, 
 pub use slice::{Grid, SliceParams, slice_grid};
 pub use stats::{coefficient_of_variation, components, effective_conductivity, magnitudes};
 pub use vtk::{Field, FieldData, Polyhedra, write_lines_vtp, write_polyhedra_vtu, write_pvd, write_vtu};
+pub use vtu_read::{VtuArray, VtuData, read_vtu};

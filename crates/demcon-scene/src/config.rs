@@ -706,6 +706,10 @@ pub struct OutputsConfig {
     /// Effective conductivity along this axis from a steady run (fixed temperatures on its two faces).
     #[serde(default)]
     pub etc_axis: Option<AxisConfig>,
+    /// PNG charts in `plots/` of the output folder: probes against time, profiles, and
+    /// slices of the final fields (what `demcon plot` draws from the folder).
+    #[serde(default)]
+    pub plots: bool,
 }
 
 fn yes() -> bool {
@@ -726,6 +730,7 @@ impl Default for OutputsConfig {
             halo: None,
             halo_phases: None,
             etc_axis: None,
+            plots: false,
         }
     }
 }

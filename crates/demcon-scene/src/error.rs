@@ -68,6 +68,18 @@ pub enum SceneError {
         /// The checkpoint file.
         path: PathBuf,
     },
+    /// A run's output folder (or one of its files) lacks what a plot needs, or holds a file
+    /// that cannot be read.
+    #[error("{}: {problem}", path.display())]
+    PlotInput {
+        /// The folder or file.
+        path: PathBuf,
+        /// What is missing or wrong, and what would provide it.
+        problem: String,
+    },
+    /// Drawing a chart failed.
+    #[error("plot: {0}")]
+    Plot(demcon_plot::PlotError),
     /// Packing failed (or stopped short without `allow_short`).
     #[error("packing: {0}")]
     Packing(String),
@@ -126,7 +138,8 @@ from_lower!(
     Solve(demcon_network::SolveError),
     Thermal(demcon_thermal::ThermalError),
     Electric(demcon_electric::ElectricError),
-    Post(demcon_post::PostError)
+    Post(demcon_post::PostError),
+    Plot(demcon_plot::PlotError)
 );
 
 impl SceneError {

@@ -39,6 +39,7 @@ pub mod config;
 pub mod convert;
 mod error;
 pub mod output;
+pub mod plots;
 pub mod run;
 pub mod validate;
 

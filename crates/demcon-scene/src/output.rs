@@ -280,6 +280,13 @@ fn write_files(
         write_atomic(&dir.join("profiles.csv"), s.as_bytes())?;
         written.push("profiles.csv".into());
     }
+    if outputs.plots {
+        // Plots are a convenience: a failure is reported in the list, not fatal to the run.
+        match crate::plots::write_run_plots(r, outputs, &dir.join("plots")) {
+            Ok(_) => written.push("plots/".into()),
+            Err(e) => written.push(format!("no plots ({e})")),
+        }
+    }
     let (rss_bytes, peak_rss_bytes) = demcon_core::resident_bytes();
     let mut stages = r.stages.records().to_vec();
     stages.push(StageRecord {
@@ -296,15 +303,15 @@ fn write_files(
 }
 
 /// The per-particle fields of a run at one time, as the VTU and the CSV write them.
-struct ParticleFields<'a> {
+pub(crate) struct ParticleFields<'a> {
     /// 1 where the particle was solved for, 0 where a solve excluded it.
-    solved: Vec<i32>,
+    pub(crate) solved: Vec<i32>,
     /// Contacts per particle.
     degree: Vec<i32>,
     /// Scalar fields (name, value per particle).
-    scalars: Vec<(&'static str, Vec<f64>)>,
+    pub(crate) scalars: Vec<(&'static str, Vec<f64>)>,
     /// Vector fields (name, value per particle).
-    vectors: Vec<(&'static str, &'a [demcon_core::Vec3])>,
+    pub(crate) vectors: Vec<(&'static str, &'a [demcon_core::Vec3])>,
     /// 1 where the particle's Halo is cut by the boundary.
     halo_cut: Option<Vec<i32>>,
 }
@@ -313,7 +320,7 @@ impl<'a> ParticleFields<'a> {
     /// The fields at the end of the run (`at` = `None`) or at an earlier output time of a
     /// transient: its temperatures, flux and Halo, and the electric fields when the end's
     /// solution held then too.
-    fn at(r: &'a RunResult, at: Option<&'a SeriesEntry>) -> Self {
+    pub(crate) fn at(r: &'a RunResult, at: Option<&'a SeriesEntry>) -> Self {
         let m = &r.model;
         let n = m.particles.len();
         let mut solved = vec![1i32; n];

@@ -504,6 +504,8 @@ fn check_homogenization(c: &SceneConfig, container: Option<&Container>) -> Resul
         ("outputs.times", !o.times.is_empty()),
         ("outputs.flux", o.flux),
         ("outputs.contacts_vtk", o.contacts_vtk),
+        // Its plots would have nothing to draw: no probes, profiles, temperature or potential.
+        ("outputs.plots", o.plots),
     ];
     if let Some((f, _)) = refused.iter().find(|(_, set)| *set) {
         return Err(SceneError::invalid(

@@ -102,6 +102,11 @@ fn what_a_homogenisation_cannot_take_is_refused_by_name() {
             "tensor",
         ),
         (
+            text(PERIODIC, THERMAL_H, "None", "plots: true"),
+            "outputs.plots",
+            "tensor",
+        ),
+        (
             text(
                 PERIODIC,
                 THERMAL_H,

@@ -5,6 +5,7 @@ mod container;
 mod import;
 mod info;
 mod pack;
+mod plot;
 mod progress;
 mod run;
 mod tile;
@@ -35,6 +36,8 @@ enum Command {
     Run(run::RunArgs),
     /// Calibrate the transmission-surface constant C_t on our own packings (Haddad 2021 §2.1).
     Calibrate(calibrate::CalibrateArgs),
+    /// Draw PNG charts of a run's output folder: probes, profiles, slices of particle fields.
+    Plot(plot::PlotArgs),
 }
 
 /// Sets the size of the global worker pool (default: all cores).
@@ -62,6 +65,7 @@ fn main() -> ExitCode {
         Command::Import(args) => import::run(args),
         Command::Run(args) => run::run(args),
         Command::Calibrate(args) => calibrate::run(args),
+        Command::Plot(args) => plot::run(args),
     };
     match result {
         Ok(code) => code,

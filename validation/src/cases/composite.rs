@@ -15,7 +15,7 @@ use demcon_post::{
 use demcon_scene::config::*;
 
 use super::common::*;
-use crate::chart::draw_raster;
+use demcon_plot::{Raster, draw_raster};
 
 /// Cube edge (m).
 pub const L: f64 = 0.1;
@@ -516,14 +516,15 @@ pub fn nearest_truncated(r: &RunResult, point: Vec3) -> bool {
 
 /// Draws a slice of a particle field on the plane `axis = position` (m): each cell shows the
 /// particle whose section covers it (`slice_grid`); cells in the gaps between sections
-/// take the value of the particle with the nearest centre. Returns the covered fraction.
+/// take the value of the particle with the nearest centre. Axes in mm, a colour bar labelled
+/// `quantity` (the field and its unit, e.g. `T (°C)`). Returns the covered fraction.
 pub fn slice_picture(
     r: &RunResult,
     values: &[f64],
     axis: Axis,
     position: f64,
     title: &str,
-    unit: &str,
+    quantity: &str,
     path: &Path,
 ) -> anyhow::Result<f64> {
     let p = &r.model.particles;
@@ -553,7 +554,21 @@ pub fn slice_picture(
             }));
         }
     }
-    draw_raster(title, g.shape[0], g.shape[1], &cells, unit, path)?;
+    let names = g.axes.map(|a| ["x", "y", "z"][a.index()]);
+    draw_raster(
+        &Raster {
+            title: title.into(),
+            nx: g.shape[0],
+            ny: g.shape[1],
+            cells: &cells,
+            origin: g.origin,
+            cell: g.cell,
+            axes: names,
+            bar_label: quantity.into(),
+            range: None,
+        },
+        path,
+    )?;
     Ok(g.coverage())
 }
 

@@ -12,9 +12,9 @@ use serde_json::{Map, Value};
 
 use super::common::*;
 use super::transient::{slab, sphere};
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// The two problems.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

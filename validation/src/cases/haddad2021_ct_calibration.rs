@@ -19,9 +19,9 @@ use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 fn scene(n: usize, seed: u64) -> SceneConfig {
     thermal_scene(

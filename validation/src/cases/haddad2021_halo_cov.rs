@@ -35,9 +35,9 @@ use serde_json::{Map, Value};
 
 use super::common::*;
 use super::composite::{L, T_COLD, T_HOT, slab_scene};
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Conductivity (W/(m·K)).
 const LAMBDA: f64 = 33.0;

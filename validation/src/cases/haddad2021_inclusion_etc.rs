@@ -53,9 +53,9 @@ use serde_json::{Map, Value};
 use super::common::*;
 use super::composite::*;
 use crate::analytic::maxwell;
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Matrix conductivity λ_m (W/(m·K)).
 const LAMBDA_M: f64 = 33.0;

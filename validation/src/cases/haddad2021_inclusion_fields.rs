@@ -480,7 +480,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
             "T on Z = 0.5L, N = {} (Haddad 2021 Fig. 15a)",
             r.model.particles.len()
         ),
-        "°C",
+        "T (°C)",
         &ctx.out.join("inclusion-fields-T.png"),
     )?;
     slice_picture(
@@ -492,7 +492,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
             "|q| (Halo k = 11) on Z = 0.5L, N = {} (Haddad 2021 Fig. 16a)",
             r.model.particles.len()
         ),
-        "W/m²",
+        "|q| (W/m²)",
         &ctx.out.join("inclusion-fields-q.png"),
     )?;
     out.charts.push("inclusion-fields-T.png".into());

@@ -34,9 +34,9 @@ use serde_json::{Map, Value};
 use super::common::*;
 use super::composite::*;
 use crate::analytic::{maxwell, third_order};
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Upper bound of the ETC excess of our walled, face-heated sample over the periodic FFT
 /// reference on the same microstructure, from the reference's own notes (fixed temperatures

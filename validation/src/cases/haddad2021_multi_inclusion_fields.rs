@@ -263,7 +263,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         Axis::X,
         0.5 * L,
         &format!("|q| (Halo k = 11) on X = 0.5L, f = 0.2, N = {np} (Haddad 2021 Fig. 18)"),
-        "W/m²",
+        "|q| (W/m²)",
         &ctx.out.join("multi-inclusion-fields-q.png"),
     )?;
     slice_picture(
@@ -272,7 +272,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         Axis::X,
         0.5 * L,
         &format!("T on X = 0.5L, f = 0.2, N = {np}"),
-        "°C",
+        "T (°C)",
         &ctx.out.join("multi-inclusion-fields-T.png"),
     )?;
     out.charts.push("multi-inclusion-fields-q.png".into());

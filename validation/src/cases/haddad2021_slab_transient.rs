@@ -27,9 +27,9 @@ use super::transient::slab::{
     L, SlabErrors, analytic, explicit, implicit, measure as errors_of, scene, scene_calibrated,
     scene_laguerre, scene_particle_bc,
 };
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// The paper's error at 10⁵ particles, the papers' models' tolerance in both modes.
 const TOL: f64 = 0.007;

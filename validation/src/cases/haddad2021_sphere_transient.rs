@@ -34,9 +34,9 @@ use super::transient::sphere::{
     A_AL, R, SphereErrors, explicit, implicit, measure as errors_of, scene, scene_calibrated, scene_laguerre,
 };
 use crate::analytic::{sphere_centre_temperature, sphere_temperature};
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// The corrected eq. 19 centre temperature (°C) at `t` (s).
 fn centre_analytic(t: f64) -> f64 {

@@ -41,9 +41,9 @@ use serde_json::{Map, Value};
 use super::common::*;
 use super::cylinder::*;
 use crate::analytic::uniform_resistance;
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// A line of the paper's Table 3.
 struct PaperRow {

@@ -47,9 +47,9 @@ use serde_json::Value;
 use super::common::*;
 use super::cylinder::*;
 use crate::analytic::kohlrausch_max_rise;
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Potential difference (V) between the end faces, as the FEM reference.
 pub const V0: f64 = 0.01;

@@ -39,9 +39,9 @@ use demcon_scene::config::*;
 
 use super::common::*;
 use super::cylinder::*;
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// ρ_e temperature coefficient β (1/K).
 const BETA: f64 = 4e-3;

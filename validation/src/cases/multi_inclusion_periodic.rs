@@ -35,9 +35,9 @@ use serde_json::Value;
 
 use super::common::*;
 use super::composite::epoxy_silica;
-use crate::chart::{Chart, Scale, Series, draw};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Edge of the periodic cell (m); the reference's unit-cell coordinates are scaled by it.
 const CELL: f64 = 0.01;
