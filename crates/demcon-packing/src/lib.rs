@@ -42,9 +42,9 @@ pub use import::{
 };
 pub use lsa::{MAX_OVERLAP, pack, predict};
 pub use params::{
-    BYTES_PER_PARTICLE, DEFAULT_MEMORY_LIMIT, GROWTH_RATE_RANGE, LENGTH_RANGE, MAX_COMPRESSION_PHI,
-    MAX_COUNT, MAX_JAM_PRESSURE, MAX_PHI_ABOVE_JAMMING, MIN_PHI, MemoryLimit, NEIGHBOUR_SKIN_RANGE,
-    PackProgress, PackingParams, StopReason, THERMOSTAT_TOLERANCE_RANGE,
+    BYTES_PER_PARTICLE, DEFAULT_MEMORY_LIMIT, EVENT_RATE_BOUND, GROWTH_RATE_RANGE, LENGTH_RANGE,
+    MAX_COMPRESSION_PHI, MAX_COUNT, MAX_JAM_PRESSURE, MAX_PHI_ABOVE_JAMMING, MIN_PHI, MemoryLimit,
+    NEIGHBOUR_SKIN_RANGE, PackProgress, PackingParams, StopReason, THERMOSTAT_TOLERANCE_RANGE, min_events,
 };
 pub use radius::{DEFAULT_TRUNCATION_SIGMAS, MIN_RATIO_FLOOR, RadiusDistribution, jamming_estimate};
 pub use report::{PackingReport, PackingSummary, RadiusSummary, bulk_phi, max_overlap, summarize};

@@ -4,8 +4,8 @@
 
 use demcon_core::{Axis, Container, ParticleSet, Region, Vec3, morton_order};
 use demcon_packing::{
-    PackingError, PackingParams, RadiusDistribution, StopReason, carve, pack, read_xyzr, read_xyzr_file,
-    write_xyzr,
+    PackingError, PackingParams, RadiusDistribution, StopReason, carve, min_events, pack, read_xyzr,
+    read_xyzr_file, write_xyzr,
 };
 
 /// Largest overlap between spheres (all pairs, nearest periodic image) or with a wall,
@@ -205,6 +205,39 @@ fn budgets_stop_the_run_and_say_so() {
     assert!(rep.packing.phi < 0.64 && rep.packing.phi > 0.2);
     assert!(brute_overlap(&p, &c) < 1e-9);
     assert!(rep.to_string().contains("event budget"));
+    // The library keeps any budget (the CLI refuses one below `min_events`): a time budget
+    // of a nanosecond stops at the first check.
+    params.max_events = u64::MAX;
+    params.max_wall_s = 1e-9;
+    let (p, rep) = pack(&params, 1, None).unwrap();
+    assert_eq!(rep.stop, StopReason::TimeBudget);
+    assert!(brute_overlap(&p, &c) < 1e-9);
+    assert!(rep.to_string().contains("time budget"));
+}
+
+#[test]
+fn min_events_is_below_what_packings_take() {
+    assert_eq!(min_events(1000, 0.0), 0);
+    assert!(min_events(1000, 0.6) > min_events(1000, 0.5));
+    assert_eq!(
+        min_events(1000, 0.7),
+        min_events(1000, 0.62),
+        "held past the last measured φ"
+    );
+    for (c, phi) in [
+        (Container::Box { size: [1.0; 3] }, 0.55),
+        (Container::Periodic { size: [1.0; 3] }, 0.6),
+    ] {
+        let params = PackingParams::new(c, 1000, phi, RadiusDistribution::gaussian(0.3));
+        let (_, rep) = pack(&params, 3, None).unwrap();
+        assert!(rep.reached_target(), "{rep}");
+        assert!(
+            rep.events >= min_events(1000, phi),
+            "{} events at φ {phi}, floor {}",
+            rep.events,
+            min_events(1000, phi)
+        );
+    }
 }
 
 #[test]

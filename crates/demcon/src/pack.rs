@@ -116,10 +116,32 @@ pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
     if let Some(g) = a.growth_rate {
         params.growth_rate = g;
     }
+    // A budget that cannot reach the target is refused before any work.
+    let floor = demcon_packing::min_events(a.count as usize, a.phi);
+    let how = "at least half the fewest events per particle measured for this φ, docs/packing.md \"Budgets\"";
     if let Some(m) = a.max_events {
+        if m < floor {
+            bail!(
+                "invalid max-events = {m}: {} particles need at least {floor} events to reach φ = {} ({how}); \
+                 raise --max-events or lower --phi",
+                a.count,
+                a.phi
+            );
+        }
         params.max_events = m;
     }
     if let Some(t) = a.max_time {
+        let floor_s = floor as f64 / demcon_packing::EVENT_RATE_BOUND;
+        if t < floor_s {
+            bail!(
+                "invalid max-time = {t} s: {} particles need at least {floor} events to reach φ = {}, \
+                 {floor_s:.3e} s at {:.1e} events/s, twice the fastest rate measured ({how}); raise --max-time \
+                 or lower --phi",
+                a.count,
+                a.phi,
+                demcon_packing::EVENT_RATE_BOUND
+            );
+        }
         params.max_wall_s = t;
     }
     if let Some(p) = a.jam_pressure {

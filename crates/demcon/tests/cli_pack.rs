@@ -91,18 +91,38 @@ fn budget_stops_exit_3_and_say_which_budget() {
     let d = common::scratch("clipack", "budget");
     let out = d.join("p.xyzr");
     let o_s = out.to_str().unwrap();
-    for (flags, want) in [
-        (["--max-events", "100"], "event budget"),
-        (["--max-time", "1e-9"], "time budget"),
-    ] {
-        let o = pack(o_s, &flags);
-        assert_eq!(o.status.code(), Some(3), "{}", text(&o));
-        assert!(text(&o).contains(want), "{}", text(&o));
-        assert!(!text(&o).contains("overlap by"), "{}", text(&o));
-    }
+    // Above the floor (at least the events 300 particles need to reach 0.6, halved), still
+    // short of what they take: the run stops on its budget.
+    let floor = demcon_packing::min_events(300, 0.6);
+    let budget = (floor + 1).to_string();
+    let o = pack(o_s, &["--phi", "0.6", "--max-events", &budget]);
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    assert!(text(&o).contains("event budget"), "{}", text(&o));
+    assert!(!text(&o).contains("overlap by"), "{}", text(&o));
     for g in ["0.5", "1"] {
         let o = pack(o_s, &["--growth-rate", g, "--allow-short"]);
         assert!(o.status.success(), "{}", text(&o));
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn budgets_that_cannot_reach_the_target_are_refused_before_packing() {
+    let d = common::scratch("clipack", "budget-floor");
+    let out = d.join("p.xyzr");
+    let o_s = out.to_str().unwrap();
+    for (flags, want) in [
+        (["--max-events", "100"], "invalid max-events = 100"),
+        (["--max-time", "1e-9"], "invalid max-time = 0.000000001 s"),
+    ] {
+        let o = pack(o_s, &flags);
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        let msg = text(&o);
+        assert!(
+            msg.contains(want) && msg.contains("--phi") && msg.contains("Budgets"),
+            "{msg}"
+        );
+        assert!(!out.exists(), "nothing packed or written");
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
