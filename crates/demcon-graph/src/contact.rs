@@ -262,6 +262,39 @@ impl ContactGraph {
     }
 }
 
+impl ContactGraph {
+    /// The graph without the contacts `k` for which `remove[k]` is set (cut by a crack, or
+    /// broken bonds): same particles, the other contacts in their order with their geometry
+    /// (and facets), the report's counts (components, rattlers) updated.
+    ///
+    /// Errors: `remove` not one flag per contact.
+    pub fn without(&self, remove: &[bool]) -> Result<ContactGraph, GraphError> {
+        crate::error::same_len("remove", remove.len(), self.len(), "contact")?;
+        let keep = |k: &usize| !remove[*k];
+        let pairs = (0..self.len()).filter(keep).map(|k| self.pairs[k]).collect();
+        let geometry = (0..self.len()).filter(keep).map(|k| self.geometry[k]).collect();
+        let cells = self.cells.as_ref().map(|c| {
+            Box::new(Cells {
+                facet_area: (0..self.len()).filter(keep).map(|k| c.facet_area[k]).collect(),
+                split: (0..self.len()).filter(keep).map(|k| c.split[k]).collect(),
+                centroid: (0..self.len()).filter(keep).map(|k| c.centroid[k]).collect(),
+                volume: c.volume.clone(),
+                walls: c.walls.clone(),
+                report: c.report.clone(),
+            })
+        });
+        let mut graph = ContactGraph {
+            n_particles: self.n_particles,
+            pairs,
+            geometry,
+            report: self.report.clone(),
+            cells,
+        };
+        summarise(&mut graph);
+        Ok(graph)
+    }
+}
+
 /// Fills the report's counts and diagnostics from the graph (all but the search fields).
 pub(crate) fn summarise(graph: &mut ContactGraph) {
     let degrees = graph.degrees();

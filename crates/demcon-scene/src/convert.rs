@@ -272,6 +272,7 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
         phase_rule: phase_rule(cfg.phase_rule),
         contacts: contact_params(&cfg.contacts)?,
         laguerre: uses_laguerre(cfg).then(LaguerreParams::default),
+        defects: Default::default(),
         seed: cfg.seed,
     })
 }

@@ -1,0 +1,653 @@
+//! Imperfect interfaces, cracks, damage and broken bonds: what a discrete model is for.
+//!
+//! - **Interface resistance** between two phases ([`InterfaceResistance`]): a contact (or
+//!   Laguerre facet) whose centre-to-centre segment crosses the interface between phases a and
+//!   b gets the extra series resistance 1/(h S) thermally (h in W/(m²·K)) and r_c/S
+//!   electrically (r_c in Ω·m²), S its transmission surface:
+//!   1/G = h_p/(λ_p S) + h_q/(λ_q S) + 1/(h S). The phase rule decides where the segment
+//!   crosses: by centre, when p and q differ; with the segment rule, wherever a half-bond
+//!   crosses its particle's interface plane (so a contact between two particles of the same
+//!   phase, one of them cut, may cross it, and a wall link may too). The path along the
+//!   segment is read as four phases — p's centre, the end of p's half-bond, the end of q's,
+//!   q's centre — and every change adds one interface resistance. Its position along the
+//!   segment does not change a series conductance; only whether (and how often) it is crossed
+//!   does. The laminate rule has no position on the segment: it is read by centre. Unlisted
+//!   pairs stay perfect.
+//! - **Cracks** ([`Crack`]): every contact whose segment crosses the crack's surface
+//!   ([`demcon_graph::CrackShape`], minimum-image segment and periodic images in a periodic
+//!   box) is cut — removed from the graph and the network, in both physics — or, for a filled
+//!   crack (`gap_conductance`), given the series resistance 1/(h_gap S) (and r_gap/S
+//!   electrically, which a filled crack must give when the scene is electric). Wall links whose
+//!   segment (centre to face) a crack crosses are treated the same way. A cluster that a crack
+//!   separates from every boundary value is a floating cluster like any other (excluded and
+//!   reported, or refused, by the scene's `floating` policy).
+//! - **Damage** ([`Damage`]): the conductances (both physics) of the contacts whose branch
+//!   midpoint lies in the region are multiplied by the factor, in (0, 1]; overlapping regions
+//!   multiply. A contact is "in" a region by its midpoint (the minimum-image midpoint, wrapped
+//!   into the cell, in a periodic box): the one point of a contact that belongs to neither
+//!   particle. A wall link is in it by the midpoint of its half-bond.
+//! - **Broken bonds** (`cut_pairs`): particle index pairs (0-based, in the order of the
+//!   packing before carving: the order of an imported file) cut like an open crack, e.g. the
+//!   broken bonds of a mechanical DEM run. Pairs that are not contacts of the graph are counted
+//!   in the report; an index out of range is an error.
+//!
+//! Per-contact marks ([`Defects::marks`], bits [`MARK_INTERFACE`], [`MARK_DAMAGED`],
+//! [`MARK_FILLED_CRACK`]) and the cut contacts ([`Defects::cut`]) are kept for the output
+//! writers; [`Defects::crack_face`] lists the particles on a crack face.
+
+use std::collections::HashMap;
+
+use demcon_core::{Container, ParticleSet, Region, Vec3};
+use demcon_graph::{
+    ContactGraph, CrackShape, HalfBond, Laminates, Mix, WallContacts, crossed_contacts, first_crossing,
+};
+use serde::Serialize;
+
+use crate::error::ModelError;
+
+/// A contact crossing the interface between the two phases.
+pub const MARK_INTERFACE: u8 = 1;
+/// A contact whose conductances a damage region scales.
+pub const MARK_DAMAGED: u8 = 2;
+/// A contact crossed by a filled crack (kept, with the gap's series resistance).
+pub const MARK_FILLED_CRACK: u8 = 4;
+
+/// The interface between two phases, with its conductances.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InterfaceResistance {
+    /// The two phases (indices into the material table; order does not matter).
+    pub phases: [u16; 2],
+    /// Thermal interface conductance h (W/(m²·K)), > 0.
+    pub conductance: f64,
+    /// Electric interface resistance r_c (Ω·m²), ≥ 0; `None`: electrically perfect.
+    pub electric_resistance: Option<f64>,
+}
+
+/// A crack surface.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Crack {
+    /// Its surface.
+    pub shape: CrackShape,
+    /// `None`: an open crack (insulating, the contacts are cut). `Some(h)`: a filled crack of
+    /// conductance h per area (W/(m²·K)), > 0.
+    pub gap_conductance: Option<f64>,
+    /// The filled crack's electric resistance per area (Ω·m²), ≥ 0; needed by an electric
+    /// solve when `gap_conductance` is set.
+    pub gap_electric_resistance: Option<f64>,
+}
+
+/// Conductances scaled in a region.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Damage {
+    /// The region (a contact is in it by its branch midpoint).
+    pub region: Region,
+    /// Factor on the conductances, in (0, 1].
+    pub factor: f64,
+}
+
+/// Interfaces, cracks, damage and broken bonds to apply to a model.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct DefectSpec {
+    /// Interface resistances between phase pairs.
+    pub interfaces: Vec<InterfaceResistance>,
+    /// Crack surfaces.
+    pub cracks: Vec<Crack>,
+    /// Damage regions.
+    pub damage: Vec<Damage>,
+    /// Broken bonds: particle index pairs (before carving).
+    pub cut_pairs: Vec<[u32; 2]>,
+}
+
+impl DefectSpec {
+    /// Nothing to apply.
+    pub fn is_empty(&self) -> bool {
+        self.interfaces.is_empty()
+            && self.cracks.is_empty()
+            && self.damage.is_empty()
+            && self.cut_pairs.is_empty()
+    }
+
+    /// Checks every value; errors name the scene fields (`interfaces[i]…`, `cracks[i]…`,
+    /// `damage[i].factor`). `n_phases` is the number of materials.
+    pub fn validate(&self, n_phases: usize) -> Result<(), ModelError> {
+        for (i, it) in self.interfaces.iter().enumerate() {
+            for (j, &ph) in it.phases.iter().enumerate() {
+                if ph as usize >= n_phases {
+                    return Err(ModelError::invalid(
+                        &format!("interfaces[{i}].between[{j}]"),
+                        ph,
+                        format!("a phase of the material table (0..{n_phases})"),
+                    ));
+                }
+            }
+            if it.phases[0] == it.phases[1] {
+                return Err(ModelError::invalid(
+                    &format!("interfaces[{i}].between"),
+                    format!("({}, {})", it.phases[0], it.phases[1]),
+                    "two different materials",
+                ));
+            }
+            positive(
+                &format!("interfaces[{i}].conductance"),
+                it.conductance,
+                "W/(m²·K)",
+            )?;
+            if let Some(r) = it.electric_resistance {
+                non_negative(&format!("interfaces[{i}].electric_resistance"), r, "Ω·m²")?;
+            }
+        }
+        for (i, c) in self.cracks.iter().enumerate() {
+            c.shape
+                .validate(&format!("cracks[{i}]"))
+                .map_err(|e| ModelError::at(&format!("cracks[{i}]"), e))?;
+            if let Some(h) = c.gap_conductance {
+                positive(&format!("cracks[{i}].gap_conductance"), h, "W/(m²·K)")?;
+            }
+            if let Some(r) = c.gap_electric_resistance {
+                non_negative(&format!("cracks[{i}].gap_electric_resistance"), r, "Ω·m²")?;
+            }
+        }
+        for (i, d) in self.damage.iter().enumerate() {
+            if !(d.factor.is_finite() && d.factor > 0.0 && d.factor <= 1.0) {
+                return Err(ModelError::invalid(
+                    &format!("damage[{i}].factor"),
+                    d.factor,
+                    "a factor in (0, 1] (0 would cut the contacts: use a crack or cut_contacts)",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The interface resistances (thermal m²·K/W, electric Ω·m²) per phase pair, row-major
+    /// over `n_phases` × `n_phases`.
+    fn table(&self, n_phases: usize) -> Vec<Option<(f64, f64)>> {
+        let mut t = vec![None; n_phases * n_phases];
+        for it in &self.interfaces {
+            let [a, b] = it.phases.map(usize::from);
+            let r = (1.0 / it.conductance, it.electric_resistance.unwrap_or(0.0));
+            t[a * n_phases + b] = Some(r);
+            t[b * n_phases + a] = Some(r);
+        }
+        t
+    }
+}
+
+fn positive(field: &str, v: f64, unit: &str) -> Result<(), ModelError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(ModelError::invalid(
+            field,
+            v,
+            format!("a finite number > 0 ({unit})"),
+        ))
+    }
+}
+
+fn non_negative(field: &str, v: f64, unit: &str) -> Result<(), ModelError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(ModelError::invalid(
+            field,
+            v,
+            format!("a finite number ≥ 0 ({unit})"),
+        ))
+    }
+}
+
+/// Why a contact was cut.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum CutCause {
+    /// An open crack (index into the spec's cracks) crosses its segment at `point` (m).
+    Crack {
+        /// The crack.
+        crack: u32,
+        /// Where the segment crosses it (m).
+        point: [f64; 3],
+    },
+    /// A broken bond of the `cut_pairs` list.
+    Broken,
+}
+
+/// A contact removed from the model's graph.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CutContact {
+    /// The two particles (current ids, p < q).
+    pub pair: [u32; 2],
+    /// Why.
+    pub cause: CutCause,
+}
+
+/// What applying the defects did.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct DefectReport {
+    /// Contacts cut by open cracks.
+    pub cut_by_cracks: usize,
+    /// Contacts crossed by filled cracks (kept with the gap resistance).
+    pub filled_crack_contacts: usize,
+    /// Broken bonds cut (pairs of `cut_pairs` that were contacts).
+    pub broken_bonds: usize,
+    /// Pairs of `cut_pairs` that are not contacts of the graph (or lost a particle to carving).
+    pub broken_not_contacts: usize,
+    /// Contacts in a damage region.
+    pub damaged_contacts: usize,
+    /// Contacts crossing a listed interface (at build time; re-phasing updates it).
+    pub interface_contacts: usize,
+    /// Particles on a crack face (an end of a contact crossed by a crack).
+    pub crack_face_particles: usize,
+    /// Connected components of the graph once the contacts are cut.
+    pub components_after_cuts: usize,
+    /// Findings for the user (a crack that crosses no contact: outside the domain?).
+    pub warnings: Vec<String>,
+}
+
+/// The defects applied to a model: the spec, per-contact values and marks, the cut contacts.
+#[derive(Debug, Clone, Default)]
+pub struct Defects {
+    /// What was asked for.
+    pub spec: DefectSpec,
+    /// Per contact of the model's graph: [`MARK_INTERFACE`] | [`MARK_DAMAGED`] |
+    /// [`MARK_FILLED_CRACK`] bits (0 for a plain contact).
+    pub marks: Vec<u8>,
+    /// Per contact: the damage factor (empty when no damage region: all 1).
+    pub damage: Vec<f64>,
+    /// Per contact: the thermal series resistance per area of the filled cracks it crosses
+    /// (m²·K/W; empty when none).
+    pub gap_thermal: Vec<f64>,
+    /// Per contact: the electric series resistance per area of the filled cracks it crosses
+    /// (Ω·m²; empty when none).
+    pub gap_electric: Vec<f64>,
+    /// Contacts removed from the graph (open cracks, broken bonds).
+    pub cut: Vec<CutContact>,
+    /// Particles on a crack face, ascending.
+    pub crack_face: Vec<u32>,
+    /// What was done.
+    pub report: DefectReport,
+}
+
+impl Defects {
+    /// Whether the segment a → b (m) crosses a crack (open or filled; periodic images in a
+    /// periodic `container`): the Halo does not average across it.
+    pub fn crack_between(&self, a: &Vec3, b: &Vec3, container: &Container) -> bool {
+        self.spec
+            .cracks
+            .iter()
+            .any(|c| c.shape.crossing_periodic(a, b, container.period()).is_some())
+    }
+
+    /// Any crack at all?
+    pub fn has_cracks(&self) -> bool {
+        !self.spec.cracks.is_empty()
+    }
+}
+
+/// Applies `spec` to a freshly built graph: cuts the contacts crossed by open cracks and the
+/// broken bonds, records the filled cracks' gaps, the damage factors and the marks.
+/// `kept_ids` maps current particle ids to those before carving (`None`: no carving), and
+/// `n_before` is the particle count before carving (the range of `cut_pairs`), `n_phases`
+/// the number of materials.
+pub(crate) fn apply_defects(
+    graph: ContactGraph,
+    particles: &ParticleSet,
+    container: &Container,
+    mixes: &[Mix],
+    spec: &DefectSpec,
+    kept_ids: Option<&[u32]>,
+    n_before: usize,
+    n_phases: usize,
+) -> Result<(ContactGraph, Defects), ModelError> {
+    let m = graph.len();
+    let mut report = DefectReport::default();
+    // Broken bonds, mapped to current ids.
+    let mut remove = vec![false; m];
+    let mut cause: Vec<Option<CutCause>> = vec![None; m];
+    if !spec.cut_pairs.is_empty() {
+        let mut new_id = vec![u32::MAX; n_before];
+        match kept_ids {
+            Some(ids) => ids
+                .iter()
+                .enumerate()
+                .for_each(|(k, &i)| new_id[i as usize] = k as u32),
+            None => new_id.iter_mut().enumerate().for_each(|(k, v)| *v = k as u32),
+        }
+        let index: HashMap<[u32; 2], usize> =
+            graph.pairs.iter().enumerate().map(|(k, &pq)| (pq, k)).collect();
+        for (i, &[a, b]) in spec.cut_pairs.iter().enumerate() {
+            for (j, x) in [a, b].into_iter().enumerate() {
+                if x as usize >= n_before {
+                    return Err(ModelError::invalid(
+                        &format!("cut_contacts[{i}][{j}]"),
+                        x,
+                        format!("a particle index of the packing (0..{n_before})"),
+                    ));
+                }
+            }
+            let (p, q) = (new_id[a as usize], new_id[b as usize]);
+            let key = [p.min(q), p.max(q)];
+            match index.get(&key) {
+                Some(&k) if p != u32::MAX && q != u32::MAX && p != q => {
+                    if !remove[k] {
+                        report.broken_bonds += 1;
+                    }
+                    remove[k] = true;
+                    cause[k] = Some(CutCause::Broken);
+                }
+                _ => report.broken_not_contacts += 1,
+            }
+        }
+    }
+    // Cracks.
+    let shapes: Vec<CrackShape> = spec.cracks.iter().map(|c| c.shape.clone()).collect();
+    let crossed = crossed_contacts(&graph, particles, container, &shapes);
+    let mut gap_thermal = Vec::new();
+    let mut gap_electric = Vec::new();
+    let mut marks = vec![0u8; m];
+    let mut face = vec![false; particles.len()];
+    let mut crack_hits = vec![0usize; shapes.len()];
+    for (k, x) in crossed.iter().enumerate() {
+        let Some(x) = x else { continue };
+        crack_hits[x.crack as usize] += 1;
+        let [p, q] = graph.pairs[k];
+        face[p as usize] = true;
+        face[q as usize] = true;
+        let crack = &spec.cracks[x.crack as usize];
+        match crack.gap_conductance {
+            None => {
+                if !remove[k] {
+                    report.cut_by_cracks += 1;
+                }
+                remove[k] = true;
+                cause[k].get_or_insert(CutCause::Crack {
+                    crack: x.crack,
+                    point: [x.point.x, x.point.y, x.point.z],
+                });
+            }
+            Some(h) => {
+                if gap_thermal.is_empty() {
+                    gap_thermal = vec![0.0; m];
+                    gap_electric = vec![0.0; m];
+                }
+                gap_thermal[k] += 1.0 / h;
+                gap_electric[k] += crack.gap_electric_resistance.unwrap_or(0.0);
+                marks[k] |= MARK_FILLED_CRACK;
+                report.filled_crack_contacts += 1;
+            }
+        }
+    }
+    for (i, &hits) in crack_hits.iter().enumerate() {
+        if hits == 0 {
+            report.warnings.push(format!(
+                "cracks[{i}] crosses no contact (outside the domain, or smaller than a particle)"
+            ));
+        }
+    }
+    // Damage, by the branch midpoint.
+    let mut damage = Vec::new();
+    if !spec.damage.is_empty() {
+        damage = vec![1.0; m];
+        for k in 0..m {
+            let p = graph.pairs[k][0] as usize;
+            let mid = wrap(container, particles.centres[p] + 0.5 * graph.branch(k));
+            for d in &spec.damage {
+                if d.region.contains_point(&mid) {
+                    damage[k] *= d.factor;
+                    marks[k] |= MARK_DAMAGED;
+                }
+            }
+        }
+        report.damaged_contacts = marks.iter().filter(|&&b| b & MARK_DAMAGED != 0).count();
+    }
+    let cut: Vec<CutContact> = (0..m)
+        .filter(|&k| remove[k])
+        .map(|k| CutContact {
+            pair: graph.pairs[k],
+            cause: cause[k].unwrap_or(CutCause::Broken),
+        })
+        .collect();
+    let keep = |v: Vec<f64>| -> Vec<f64> {
+        if v.is_empty() {
+            v
+        } else {
+            (0..m).filter(|&k| !remove[k]).map(|k| v[k]).collect()
+        }
+    };
+    let (gap_thermal, gap_electric, damage) = (keep(gap_thermal), keep(gap_electric), keep(damage));
+    let marks: Vec<u8> = (0..m).filter(|&k| !remove[k]).map(|k| marks[k]).collect();
+    let graph = if cut.is_empty() {
+        graph
+    } else {
+        graph.without(&remove)?
+    };
+    report.components_after_cuts = graph.report.n_components;
+    let crack_face: Vec<u32> = (0..face.len() as u32).filter(|&p| face[p as usize]).collect();
+    report.crack_face_particles = crack_face.len();
+    let mut defects = Defects {
+        spec: spec.clone(),
+        marks,
+        damage,
+        gap_thermal,
+        gap_electric,
+        cut,
+        crack_face,
+        report,
+    };
+    update_interface_marks(&mut defects, &graph, &particles.phases, mixes, n_phases);
+    Ok((graph, defects))
+}
+
+/// A point wrapped into a periodic container's cell (unchanged otherwise).
+fn wrap(container: &Container, x: Vec3) -> Vec3 {
+    match container.period() {
+        None => x,
+        Some(l) => {
+            let min = container.bounds().min;
+            Vec3::from_fn(|i, _| min[i] + (x[i] - min[i]).rem_euclid(l[i]))
+        }
+    }
+}
+
+/// The phase at the end of particle `p`'s half-bond along the unit vector `e` over `length`
+/// (m): the other phase when the segment rule sees it cross the particle's interface plane,
+/// else the phase of its centre.
+fn end_phase(lam: &Laminates<'_>, phases: &[u16], p: usize, e: &Vec3, length: f64) -> u16 {
+    match lam.get(p) {
+        Some(m) if m.half_bond == HalfBond::Segment && m.segment_fraction(e, length) > 0.0 => m.other_phase,
+        _ => phases[p],
+    }
+}
+
+/// Sum of the interface resistances (thermal m²·K/W, electric Ω·m²) along a path of phases,
+/// and the number of listed interfaces crossed.
+fn path_resistance(table: &[Option<(f64, f64)>], n: usize, path: &[u16]) -> (f64, f64, u32) {
+    let mut r = (0.0, 0.0, 0);
+    for w in path.windows(2) {
+        if w[0] != w[1]
+            && let Some(Some((t, e))) = table.get(w[0] as usize * n + w[1] as usize)
+        {
+            r.0 += t;
+            r.1 += e;
+            r.2 += 1;
+        }
+    }
+    r
+}
+
+/// The interface resistances of contact `k` (thermal m²·K/W, electric Ω·m², count).
+fn contact_interface(
+    graph: &ContactGraph,
+    phases: &[u16],
+    lam: &Laminates<'_>,
+    table: &[Option<(f64, f64)>],
+    n: usize,
+    k: usize,
+) -> (f64, f64, u32) {
+    let [p, q] = graph.pairs[k].map(|x| x as usize);
+    let g = &graph.geometry[k];
+    let w = graph.split(k);
+    let path = [
+        phases[p],
+        end_phase(lam, phases, p, &g.normal, w * g.distance),
+        end_phase(lam, phases, q, &(-g.normal), (1.0 - w) * g.distance),
+        phases[q],
+    ];
+    path_resistance(table, n, &path)
+}
+
+/// Sets the [`MARK_INTERFACE`] bits (and the report's count) from the current phases.
+pub(crate) fn update_interface_marks(
+    defects: &mut Defects,
+    graph: &ContactGraph,
+    phases: &[u16],
+    mixes: &[Mix],
+    n_phases: usize,
+) {
+    if defects.marks.len() != graph.len() {
+        defects.marks = vec![0; graph.len()];
+    }
+    let table = defects.spec.table(n_phases);
+    let lam = Laminates::new(phases.len(), mixes);
+    let mut count = 0;
+    for k in 0..graph.len() {
+        let crossed = !defects.spec.interfaces.is_empty()
+            && contact_interface(graph, phases, &lam, &table, n_phases, k).2 > 0;
+        if crossed {
+            defects.marks[k] |= MARK_INTERFACE;
+            count += 1;
+        } else {
+            defects.marks[k] &= !MARK_INTERFACE;
+        }
+    }
+    defects.report.interface_contacts = count;
+}
+
+/// Which network a conductance belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Physics {
+    /// Heat: interface 1/h, gap 1/h_gap.
+    Thermal,
+    /// Current: interface r_c, gap r_gap.
+    Electric,
+}
+
+/// Adds the interface and filled-crack series resistances per area to contact conductances
+/// `g` (W/K or S) of surfaces `areas` (m²) and applies the damage factors:
+/// G = f / (1/G₀ + (Σ r_interface + r_gap)/S).
+pub(crate) fn apply_to_contacts(
+    defects: &Defects,
+    graph: &ContactGraph,
+    phases: &[u16],
+    mixes: &[Mix],
+    n_phases: usize,
+    areas: &[f64],
+    g: &mut [f64],
+    physics: Physics,
+) {
+    let table = defects.spec.table(n_phases);
+    let lam = Laminates::new(phases.len(), mixes);
+    let gap = match physics {
+        Physics::Thermal => &defects.gap_thermal,
+        Physics::Electric => &defects.gap_electric,
+    };
+    let interfaces = !defects.spec.interfaces.is_empty();
+    for k in 0..g.len() {
+        let mut r = gap.get(k).copied().unwrap_or(0.0);
+        if interfaces {
+            let (t, e, _) = contact_interface(graph, phases, &lam, &table, n_phases, k);
+            r += match physics {
+                Physics::Thermal => t,
+                Physics::Electric => e,
+            };
+        }
+        if r > 0.0 && g[k] > 0.0 && areas[k] > 0.0 {
+            g[k] = 1.0 / (1.0 / g[k] + r / areas[k]);
+        }
+        if let Some(f) = defects.damage.get(k) {
+            g[k] *= f;
+        }
+    }
+}
+
+/// Drops the wall links an open crack cuts (segment from the centre to the face).
+pub(crate) fn cut_wall_links(
+    defects: &Defects,
+    walls: &mut WallContacts,
+    particles: &ParticleSet,
+    container: &Container,
+) {
+    let open: Vec<CrackShape> = defects
+        .spec
+        .cracks
+        .iter()
+        .filter(|c| c.gap_conductance.is_none())
+        .map(|c| c.shape.clone())
+        .collect();
+    if open.is_empty() {
+        return;
+    }
+    let period = container.period();
+    let cut: Vec<bool> = (0..walls.len())
+        .map(|k| {
+            let a = particles.centres[walls.particle[k] as usize];
+            let b = a + walls.half_length[k] * walls.normal[k];
+            first_crossing(&open, &a, &b, period).is_some()
+        })
+        .collect();
+    walls.retain_links(|k| !cut[k]);
+}
+
+/// The wall-link counterpart of [`apply_to_contacts`]: the interface a half-bond crosses
+/// inside its particle (segment rule), filled cracks on the link's segment, damage by the
+/// half-bond's midpoint.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn apply_to_walls(
+    defects: &Defects,
+    walls: &WallContacts,
+    particles: &ParticleSet,
+    container: &Container,
+    mixes: &[Mix],
+    n_phases: usize,
+    surfaces: &[f64],
+    g: &mut [f64],
+    physics: Physics,
+) {
+    let spec = &defects.spec;
+    if spec.interfaces.is_empty() && spec.cracks.is_empty() && spec.damage.is_empty() {
+        return;
+    }
+    let table = spec.table(n_phases);
+    let lam = Laminates::new(particles.len(), mixes);
+    let period = container.period();
+    for k in 0..walls.len() {
+        let p = walls.particle[k] as usize;
+        let (n, h) = (walls.normal[k], walls.half_length[k]);
+        let a = particles.centres[p];
+        let b = a + h * n;
+        let path = [particles.phases[p], end_phase(&lam, &particles.phases, p, &n, h)];
+        let (t, e, _) = path_resistance(&table, n_phases, &path);
+        let mut r = match physics {
+            Physics::Thermal => t,
+            Physics::Electric => e,
+        };
+        for c in &spec.cracks {
+            if let Some(hg) = c.gap_conductance
+                && c.shape.crossing_periodic(&a, &b, period).is_some()
+            {
+                r += match physics {
+                    Physics::Thermal => 1.0 / hg,
+                    Physics::Electric => c.gap_electric_resistance.unwrap_or(0.0),
+                };
+            }
+        }
+        if r > 0.0 && g[k] > 0.0 && surfaces[k] > 0.0 {
+            g[k] = 1.0 / (1.0 / g[k] + r / surfaces[k]);
+        }
+        let mid = wrap(container, a + 0.5 * h * n);
+        for d in &spec.damage {
+            if d.region.contains_point(&mid) {
+                g[k] *= d.factor;
+            }
+        }
+    }
+}
