@@ -137,9 +137,18 @@ impl DefectSpec {
             }
         }
         for (i, c) in self.cracks.iter().enumerate() {
-            c.shape
-                .validate(&format!("cracks[{i}]"))
-                .map_err(|e| ModelError::at(&format!("cracks[{i}]"), e))?;
+            c.shape.validate(&format!("cracks[{i}]")).map_err(|e| match e {
+                demcon_core::CoreError::InvalidParameter {
+                    field,
+                    value,
+                    allowed,
+                } => ModelError::Invalid {
+                    field,
+                    value,
+                    allowed,
+                },
+                other => ModelError::at(&format!("cracks[{i}]"), other),
+            })?;
             if let Some(h) = c.gap_conductance {
                 positive(&format!("cracks[{i}].gap_conductance"), h, "W/(m²·K)")?;
             }
