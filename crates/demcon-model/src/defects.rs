@@ -10,9 +10,13 @@
 //!   phase, one of them cut, may cross it, and a wall link may too). The path along the
 //!   segment is read as four phases — p's centre, the end of p's half-bond, the end of q's,
 //!   q's centre — and every change adds one interface resistance. Its position along the
-//!   segment does not change a series conductance; only whether (and how often) it is crossed
-//!   does. The laminate rule has no position on the segment: it is read by centre. Unlisted
-//!   pairs stay perfect.
+//!   segment does not change a series conductance; whether (and how often) it is crossed does,
+//!   and so does its orientation: a crossing inside a cut particle (segment rule) is divided
+//!   by |e·n| (e the branch, n the interface normal of the particle's plane), which makes a
+//!   Laguerre network exact for plane interfaces wherever they cut the cells
+//!   (`path_resistance`); a change at the facet (by centre) has the facet as the interface
+//!   (|e·n| = 1). The laminate rule has no position on the segment: it is read by centre.
+//!   Unlisted pairs stay perfect.
 //! - **Cracks** ([`Crack`]): every contact whose segment crosses the crack's surface
 //!   ([`demcon_graph::CrackShape`], minimum-image segment and periodic images in a periodic
 //!   box) is cut — removed from the graph and the network, in both physics — or, for a filled
@@ -457,26 +461,55 @@ fn wrap(container: &Container, x: Vec3) -> Vec3 {
     }
 }
 
+/// Smallest |e·n| an interface crossing is divided by (a branch almost along the interface).
+const MIN_CROSSING_COSINE: f64 = 1e-3;
+
 /// The phase at the end of particle `p`'s half-bond along the unit vector `e` over `length`
-/// (m): the other phase when the segment rule sees it cross the particle's interface plane,
-/// else the phase of its centre.
-fn end_phase(lam: &Laminates<'_>, phases: &[u16], p: usize, e: &Vec3, length: f64) -> u16 {
+/// (m), and |e·n| of the interface plane it crosses: the other phase when the segment rule
+/// sees it cross the particle's interface plane (one of its two planes: the one whose part
+/// beyond is longer, as [`Mix::segment_fraction`] reads it), else the phase of its centre
+/// (and 1).
+fn end_phase(lam: &Laminates<'_>, phases: &[u16], p: usize, e: &Vec3, length: f64) -> (u16, f64) {
     match lam.get(p) {
-        Some(m) if m.half_bond == HalfBond::Segment && m.segment_fraction(e, length) > 0.0 => m.other_phase,
-        _ => phases[p],
+        Some(m) if m.half_bond == HalfBond::Segment && m.segment_fraction(e, length) > 0.0 => {
+            let beyond = |n: &Vec3, offset: f64| {
+                let k = e.dot(n);
+                if k <= 0.0 {
+                    0.0
+                } else {
+                    (1.0 - offset / (k * length)).clamp(0.0, 1.0)
+                }
+            };
+            let normal = match &m.second {
+                Some((n, off)) if beyond(n, *off) > beyond(&m.normal, m.offset) => *n,
+                _ => m.normal,
+            };
+            (m.other_phase, e.dot(&normal).abs())
+        }
+        _ => (phases[p], 1.0),
     }
 }
 
-/// Sum of the interface resistances (thermal m²·K/W, electric Ω·m²) along a path of phases,
-/// and the number of listed interfaces crossed.
-fn path_resistance(table: &[Option<(f64, f64)>], n: usize, path: &[u16]) -> (f64, f64, u32) {
+/// Sum of the interface resistances (thermal m²·K/W, electric Ω·m²) over the steps (from
+/// phase, to phase, |e·n| of the crossing) of a path, each divided by its |e·n|, and the
+/// number of listed interfaces crossed.
+///
+/// Why |e·n|: a branch of direction e crossing a plane interface of normal n carries, in the
+/// continuum, the flux q (e·n) S through its facet, while the temperature jump across the
+/// interface is q/h: the branch reproduces both (with the series rule for the bulk parts) only
+/// when the interface term of its resistance is 1/(h S |e·n|). A Laguerre network with the
+/// segment rule is then exact for a layered body with interface resistances, wherever the
+/// planes cut the cells (the network's own consistency argument: Σ S e = 0 per cell). By
+/// centre, the facet between two cells is the interface (|e·n| = 1).
+fn path_resistance(table: &[Option<(f64, f64)>], n: usize, steps: &[(u16, u16, f64)]) -> (f64, f64, u32) {
     let mut r = (0.0, 0.0, 0);
-    for w in path.windows(2) {
-        if w[0] != w[1]
-            && let Some(Some((t, e))) = table.get(w[0] as usize * n + w[1] as usize)
+    for &(a, b, cos) in steps {
+        if a != b
+            && let Some(Some((t, e))) = table.get(a as usize * n + b as usize)
         {
-            r.0 += t;
-            r.1 += e;
+            let c = cos.max(MIN_CROSSING_COSINE);
+            r.0 += t / c;
+            r.1 += e / c;
             r.2 += 1;
         }
     }
@@ -495,13 +528,15 @@ fn contact_interface(
     let [p, q] = graph.pairs[k].map(|x| x as usize);
     let g = &graph.geometry[k];
     let w = graph.split(k);
-    let path = [
-        phases[p],
-        end_phase(lam, phases, p, &g.normal, w * g.distance),
-        end_phase(lam, phases, q, &(-g.normal), (1.0 - w) * g.distance),
-        phases[q],
+    let (end_p, cos_p) = end_phase(lam, phases, p, &g.normal, w * g.distance);
+    let (end_q, cos_q) = end_phase(lam, phases, q, &(-g.normal), (1.0 - w) * g.distance);
+    // p's half-bond, the facet (the interface itself when the phases change there), q's.
+    let steps = [
+        (phases[p], end_p, cos_p),
+        (end_p, end_q, 1.0),
+        (end_q, phases[q], cos_q),
     ];
-    path_resistance(table, n, &path)
+    path_resistance(table, n, &steps)
 }
 
 /// Sets the [`MARK_INTERFACE`] bits (and the report's count) from the current phases.
@@ -633,8 +668,8 @@ pub(crate) fn apply_to_walls(
         let (n, h) = (walls.normal[k], walls.half_length[k]);
         let a = particles.centres[p];
         let b = a + h * n;
-        let path = [particles.phases[p], end_phase(&lam, &particles.phases, p, &n, h)];
-        let (t, e, _) = path_resistance(&table, n_phases, &path);
+        let (end, cos) = end_phase(&lam, &particles.phases, p, &n, h);
+        let (t, e, _) = path_resistance(&table, n_phases, &[(particles.phases[p], end, cos)]);
         let mut r = match physics {
             Physics::Thermal => t,
             Physics::Electric => e,

@@ -353,6 +353,14 @@ pub fn set_phases_like(model: &mut Model, cfg: &SceneConfig) -> anyhow::Result<(
     Ok(())
 }
 
+/// Sets the thermal conductance h (W/(m²·K); ∞ makes them perfect) of every listed interface
+/// of a built model: a sweep over h on one network, without rebuilding it.
+pub fn set_interface_conductance(model: &mut Model, h: f64) {
+    for i in &mut model.defects.spec.interfaces {
+        i.conductance = h;
+    }
+}
+
 /// Runs the physics of `cfg` on a clone of `model`.
 pub fn run_with(cfg: &SceneConfig, model: &Model) -> anyhow::Result<RunResult> {
     Scene::from_config(cfg.clone(), PathBuf::new())?;

@@ -23,6 +23,7 @@ pub mod hubert2017_cylinder_resistance;
 pub mod hubert2017_notch_joule;
 pub mod hubert2017_solver_timing;
 pub mod joule_transient;
+pub mod layered_interface;
 pub mod multi_inclusion_periodic;
 pub mod packing_stress;
 
@@ -95,6 +96,11 @@ pub fn registry() -> Vec<Case> {
             id: "multi-inclusion-fields",
             about: "Haddad 2021 §5.2: f = 0.2, T and Halo |q| at A–D beside Table 3; flux slice",
             run: haddad2021_multi_inclusion_fields::run,
+        },
+        Case {
+            id: "layered-interface",
+            about: "issue 14: layered cube with interface conductance h (10 %, 50 % of the resistance) vs L/(Σ t/λ + n/h); error against N",
+            run: layered_interface::run,
         },
         Case {
             id: "notch-joule",
