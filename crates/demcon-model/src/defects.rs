@@ -536,6 +536,12 @@ fn contact_interface(
         (end_p, end_q, 1.0),
         (end_q, phases[q], cos_q),
     ];
+    if phases[p] != end_p && end_p != end_q && end_q != phases[q] {
+        // Both half-bonds cross their own particle's plane and the phases change at the facet
+        // too (a → b → a → b): two tangent planes of a curved interface, each placing the one
+        // crossing in its own half. One crossing, with their mean cosine.
+        return path_resistance(table, n, &[(phases[p], phases[q], 0.5 * (cos_p + cos_q))]);
+    }
     path_resistance(table, n, &steps)
 }
 

@@ -52,7 +52,7 @@ pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogeniz
 pub use model::{
     CarveRule, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed, PhaseRule,
     PhaseSpec, TessellationSummary, build_model, build_model_staged, place_inclusions, set_region_phases,
-    spheres_region,
+    spheres_region, with_defects,
 };
 pub use thermal::{
     CtSpec, ExtraSourceUpdate, ExtraSources, FixedSet, FixedTarget, SurfaceSpec, ThermalBc, ThermalBcs,

@@ -683,3 +683,48 @@ pub fn set_region_phases(model: &mut Model, regions: &[(Region, u16)], rule: Pha
         r.interface_contacts = model.defects.report.interface_contacts;
     }
 }
+
+/// The model with the defects of `spec` (interfaces, cracks, damage, broken bonds by current
+/// particle ids) applied to its graph, without packing or tessellating again: for studies of
+/// cracks or interfaces on one packing and network. The network structure is rebuilt without
+/// the cut contacts; the report's contact summary and `defects` are updated.
+///
+/// Errors: a value `spec` refuses, or a model that already has defects (build it without).
+pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelError> {
+    let n_phases = model.materials.materials.len();
+    spec.validate(n_phases)?;
+    if !model.defects.spec.is_empty() {
+        return Err(ModelError::invalid(
+            "defects",
+            "a model with defects",
+            "apply defects to a model built without any",
+        ));
+    }
+    let n = model.particles.len();
+    let (graph, defects) = apply_defects(
+        model.graph.clone(),
+        &model.particles,
+        &model.container,
+        &model.mixes,
+        spec,
+        None,
+        n,
+        n_phases,
+    )?;
+    let network = Network::new(n, &graph.pairs)?;
+    let mut report = model.report.clone();
+    report.contacts = ContactSummary::from(&graph.report);
+    report.defects = (!spec.is_empty()).then(|| defects.report.clone());
+    Ok(Model {
+        particles: model.particles.clone(),
+        container: model.container,
+        domain_volume: model.domain_volume,
+        phi: model.phi,
+        materials: model.materials.clone(),
+        mixes: model.mixes.clone(),
+        graph,
+        network,
+        defects,
+        report,
+    })
+}

@@ -8,6 +8,7 @@ pub mod cylinder;
 pub mod transient;
 
 // The cases.
+pub mod crack_penny;
 pub mod haddad2021_cost_accuracy;
 pub mod haddad2021_ct_calibration;
 pub mod haddad2021_halo_cov;
@@ -22,6 +23,7 @@ pub mod homogeneous_exactness;
 pub mod hubert2017_cylinder_resistance;
 pub mod hubert2017_notch_joule;
 pub mod hubert2017_solver_timing;
+pub mod inclusion_interface;
 pub mod joule_transient;
 pub mod layered_interface;
 pub mod multi_inclusion_periodic;
@@ -101,6 +103,16 @@ pub fn registry() -> Vec<Case> {
             id: "layered-interface",
             about: "issue 14: layered cube with interface conductance h (10 %, 50 % of the resistance) vs L/(Σ t/λ + n/h); error against N",
             run: layered_interface::run,
+        },
+        Case {
+            id: "inclusion-interface",
+            about: "issue 14: Haddad §4 single inclusion with an interface conductance (a_K/a = 0.1, 1, 10; contrasts 5, 0.1) vs Hasselman–Johnson",
+            run: inclusion_interface::run,
+        },
+        Case {
+            id: "crack-penny",
+            about: "issue 14: insulating penny crack (a/L = 1/8, 1/6, 1/4) in a cube, jump profile vs (4q/πλ)√(a² − r²); a through-section crack passes no heat",
+            run: crack_penny::run,
         },
         Case {
             id: "notch-joule",
