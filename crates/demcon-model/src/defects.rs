@@ -48,6 +48,7 @@ use demcon_graph::{
 use serde::Serialize;
 
 use crate::error::ModelError;
+use crate::model::Model;
 
 /// A contact crossing the interface between the two phases.
 pub const MARK_INTERFACE: u8 = 1;
@@ -296,21 +297,28 @@ impl Defects {
     }
 }
 
+/// How the particle ids of `cut_pairs` map to the model's: `kept_ids[k]` is the id before
+/// carving of the model's particle k (`None`: no carving), `n_before` the particle count
+/// before carving (the range of `cut_pairs`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Numbering<'a> {
+    pub kept_ids: Option<&'a [u32]>,
+    pub n_before: usize,
+}
+
 /// Applies `spec` to a freshly built graph: cuts the contacts crossed by open cracks and the
 /// broken bonds, records the filled cracks' gaps, the damage factors and the marks.
-/// `kept_ids` maps current particle ids to those before carving (`None`: no carving), and
-/// `n_before` is the particle count before carving (the range of `cut_pairs`), `n_phases`
-/// the number of materials.
+/// `numbering` maps the ids of `cut_pairs`, `n_phases` is the number of materials.
 pub(crate) fn apply_defects(
     graph: ContactGraph,
     particles: &ParticleSet,
     container: &Container,
     mixes: &[Mix],
     spec: &DefectSpec,
-    kept_ids: Option<&[u32]>,
-    n_before: usize,
+    numbering: Numbering<'_>,
     n_phases: usize,
 ) -> Result<(ContactGraph, Defects), ModelError> {
+    let Numbering { kept_ids, n_before } = numbering;
     let m = graph.len();
     let mut report = DefectReport::default();
     // Broken bonds, mapped to current ids.
@@ -584,16 +592,14 @@ pub(crate) enum Physics {
 /// Adds the interface and filled-crack series resistances per area to contact conductances
 /// `g` (W/K or S) of surfaces `areas` (m²) and applies the damage factors:
 /// G = f / (1/G₀ + (Σ r_interface + r_gap)/S).
-pub(crate) fn apply_to_contacts(
-    defects: &Defects,
-    graph: &ContactGraph,
-    phases: &[u16],
-    mixes: &[Mix],
-    n_phases: usize,
-    areas: &[f64],
-    g: &mut [f64],
-    physics: Physics,
-) {
+pub(crate) fn apply_to_contacts(model: &Model, areas: &[f64], g: &mut [f64], physics: Physics) {
+    let (defects, graph, phases, mixes) = (
+        &model.defects,
+        &model.graph,
+        &model.particles.phases,
+        &model.mixes,
+    );
+    let n_phases = model.materials.materials.len();
     let table = defects.spec.table(n_phases);
     let lam = Laminates::new(phases.len(), mixes);
     let gap = match physics {
@@ -650,18 +656,16 @@ pub(crate) fn cut_wall_links(
 /// The wall-link counterpart of [`apply_to_contacts`]: the interface a half-bond crosses
 /// inside its particle (segment rule), filled cracks on the link's segment, damage by the
 /// half-bond's midpoint.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn apply_to_walls(
-    defects: &Defects,
+    model: &Model,
     walls: &WallContacts,
-    particles: &ParticleSet,
-    container: &Container,
-    mixes: &[Mix],
-    n_phases: usize,
     surfaces: &[f64],
     g: &mut [f64],
     physics: Physics,
 ) {
+    let (defects, particles, container, mixes) =
+        (&model.defects, &model.particles, &model.container, &model.mixes);
+    let n_phases = model.materials.materials.len();
     let spec = &defects.spec;
     if spec.interfaces.is_empty() && spec.cracks.is_empty() && spec.damage.is_empty() {
         return;

@@ -235,16 +235,7 @@ fn contact_conductances(
             interface_value_split(sp, sq, w, rule) * a / geo.distance
         })
         .collect();
-    apply_to_contacts(
-        &model.defects,
-        &model.graph,
-        &model.particles.phases,
-        &model.mixes,
-        model.materials.materials.len(),
-        &s.area,
-        &mut g,
-        Physics::Electric,
-    );
+    apply_to_contacts(model, &s.area, &mut g, Physics::Electric);
     Ok(g)
 }
 
@@ -268,17 +259,7 @@ pub fn solve_electric(
     let walls = model.wall_contacts(&faces, "electric.electrodes")?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
     let mut wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
-    apply_to_walls(
-        &model.defects,
-        &walls,
-        &model.particles,
-        &model.container,
-        &model.mixes,
-        model.materials.materials.len(),
-        &wall_s,
-        &mut wall_g,
-        Physics::Electric,
-    );
+    apply_to_walls(model, &walls, &wall_s, &mut wall_g, Physics::Electric);
     let m = g.len();
     let (ext, g) = network_with_walls(model, &walls, g, wall_g)?;
     let net = ext.as_ref().unwrap_or(&model.network);

@@ -14,7 +14,8 @@ use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReaso
 use serde::Serialize;
 
 use crate::defects::{
-    CutContact, DefectReport, DefectSpec, Defects, apply_defects, cut_wall_links, update_interface_marks,
+    CutContact, DefectReport, DefectSpec, Defects, Numbering, apply_defects, cut_wall_links,
+    update_interface_marks,
 };
 use crate::error::ModelError;
 
@@ -380,8 +381,10 @@ pub fn build_model_staged(
                 &container,
                 &mixes,
                 &params.defects,
-                kept_ids.as_deref(),
-                n_before,
+                Numbering {
+                    kept_ids: kept_ids.as_deref(),
+                    n_before,
+                },
                 n_phases,
             )
         })?
@@ -707,8 +710,10 @@ pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelErro
         &model.container,
         &model.mixes,
         spec,
-        None,
-        n,
+        Numbering {
+            kept_ids: None,
+            n_before: n,
+        },
         n_phases,
     )?;
     let network = Network::new(n, &graph.pairs)?;

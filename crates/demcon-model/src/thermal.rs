@@ -312,17 +312,7 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
     let walls = model.wall_contacts(&faces, "thermal.bcs")?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
     let mut wall_g = walls.conductances(&wall_s, |p, e, h| lam.half_bond(p, phases, &lam_phase, e, h));
-    apply_to_walls(
-        &model.defects,
-        &walls,
-        &model.particles,
-        &model.container,
-        &model.mixes,
-        lam_phase.len(),
-        &wall_s,
-        &mut wall_g,
-        Physics::Thermal,
-    );
+    apply_to_walls(model, &walls, &wall_s, &mut wall_g, Physics::Thermal);
     let (network, g) = network_with_walls(model, &walls, g, wall_g)?;
     caps.resize(caps.len() + walls.n_walls(), 1.0);
     let paper_dt = match sm {
@@ -364,16 +354,7 @@ fn contact_values(
         interface,
     )?;
     let mut g = conductances(&model.graph, &s.area, &lambda)?;
-    apply_to_contacts(
-        &model.defects,
-        &model.graph,
-        &model.particles.phases,
-        &model.mixes,
-        lam_phase.len(),
-        &s.area,
-        &mut g,
-        Physics::Thermal,
-    );
+    apply_to_contacts(model, &s.area, &mut g, Physics::Thermal);
     Ok((s, lambda, g))
 }
 
