@@ -257,7 +257,7 @@ pub fn solve_electric(
     let g = contact_conductances(model, &sm, problem.interface, &sigma)?;
     let (faces, _) = problem.face_electrodes();
     let walls = model.wall_contacts(&faces, "electric.electrodes")?;
-    let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
+    let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), &sm);
     let mut wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
     apply_to_walls(model, &walls, &wall_s, &mut wall_g, Physics::Electric);
     let m = g.len();

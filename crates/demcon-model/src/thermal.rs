@@ -310,7 +310,7 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
     };
     let mut caps = capacities(&vols, &c, &rho, rv)?;
     let walls = model.wall_contacts(&faces, "thermal.bcs")?;
-    let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
+    let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), &sm);
     let mut wall_g = walls.conductances(&wall_s, |p, e, h| lam.half_bond(p, phases, &lam_phase, e, h));
     apply_to_walls(model, &walls, &wall_s, &mut wall_g, Physics::Thermal);
     let (network, g) = network_with_walls(model, &walls, g, wall_g)?;

@@ -461,3 +461,31 @@ fn periodic_cracks_and_determinism_on_a_random_packing() {
         ha.report.tensor
     );
 }
+
+#[test]
+fn a_cut_leaves_the_surfaces_of_the_other_contacts_unchanged() {
+    // Terreros α reads the neighbour count: it must be the packing's, cut contacts included,
+    // or a crack would widen the surfaces of every contact of its face particles.
+    let crack = DefectSpec {
+        cracks: vec![Crack {
+            shape: plane_y(3.0),
+            gap_conductance: None,
+            gap_electric_resistance: None,
+        }],
+        ..DefectSpec::default()
+    };
+    let plain = lattice([3, 6, 3], None, PhaseRule::Centre, false, DefectSpec::default()).unwrap();
+    let cut = lattice([3, 6, 3], None, PhaseRule::Centre, false, crack).unwrap();
+    let mut problem = steady(false, FloatingPolicy::Fail);
+    problem.surface = SurfaceSpec::TerrerosAlpha;
+    let a = thermal_setup(&plain, &problem).unwrap();
+    let b = thermal_setup(&cut, &problem).unwrap();
+    let area_of = |m: &Model, s: &ThermalSetup, pair: [u32; 2]| {
+        let k = m.graph.pairs.iter().position(|&p| p == pair).unwrap();
+        s.areas[k]
+    };
+    for &pair in &cut.graph.pairs {
+        assert_eq!(area_of(&plain, &a, pair), area_of(&cut, &b, pair));
+    }
+    assert_eq!(a.wall_conductances(), b.wall_conductances());
+}

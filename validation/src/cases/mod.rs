@@ -8,6 +8,7 @@ pub mod cylinder;
 pub mod transient;
 
 // The cases.
+pub mod crack_density;
 pub mod crack_penny;
 pub mod haddad2021_cost_accuracy;
 pub mod haddad2021_ct_calibration;
@@ -113,6 +114,11 @@ pub fn registry() -> Vec<Case> {
             id: "crack-penny",
             about: "issue 14: insulating penny crack (a/L = 1/8, 1/6, 1/4) in a cube, jump profile vs (4q/πλ)√(a² − r²); a through-section crack passes no heat",
             run: crack_penny::run,
+        },
+        Case {
+            id: "crack-density",
+            about: "issue 14: periodic cells with 8 and 27 penny cracks, aligned and random, λ against 1 − (8/3)ρ and 1 − (8/9)ρ (reported)",
+            run: crack_density::run,
         },
         Case {
             id: "notch-joule",
