@@ -173,7 +173,7 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
         let t0 = tensor(&cfg_s, base)?;
         let lambda_hom = (t0[0][0] + t0[1][1] + t0[2][2]) / 3.0;
         for m in GRIDS {
-            let mut with = |aligned: bool| -> anyhow::Result<([[f64; 3]; 3], usize)> {
+            let with = |aligned: bool| -> anyhow::Result<([[f64; 3]; 3], usize)> {
                 let mut c = cfg_s.clone();
                 c.cracks = cracks(m, aligned, seed);
                 let cracked = with_scene_defects(base, &c)?;
