@@ -489,3 +489,26 @@ fn a_cut_leaves_the_surfaces_of_the_other_contacts_unchanged() {
     }
     assert_eq!(a.wall_conductances(), b.wall_conductances());
 }
+
+#[test]
+fn a_crack_between_the_face_and_the_first_layer_cuts_the_wall_links() {
+    // The plane y = 0.25 lies between the face y = 0 and the centres of the first layer: it
+    // cuts no contact, only the 9 wall links of YMin, so no heat flows.
+    for laguerre in [true, false] {
+        let defects = DefectSpec {
+            cracks: vec![Crack {
+                shape: plane_y(0.25),
+                gap_conductance: None,
+                gap_electric_resistance: None,
+            }],
+            ..DefectSpec::default()
+        };
+        let m = lattice([3, 6, 3], None, PhaseRule::Centre, laguerre, defects).unwrap();
+        assert!(m.cut_contacts().is_empty());
+        let problem = steady(laguerre, FloatingPolicy::Fail);
+        let setup = thermal_setup(&m, &problem).unwrap();
+        assert_eq!(setup.walls.len(), 9);
+        assert!(setup.walls.links(0).is_empty());
+        assert!(heat_flow(&m, FloatingPolicy::Fail).unwrap().abs() < 1e-12);
+    }
+}

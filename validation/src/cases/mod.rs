@@ -27,6 +27,7 @@ pub mod hubert2017_solver_timing;
 pub mod inclusion_interface;
 pub mod joule_transient;
 pub mod layered_interface;
+pub mod ligament_holm;
 pub mod multi_inclusion_periodic;
 pub mod packing_stress;
 
@@ -119,6 +120,11 @@ pub fn registry() -> Vec<Case> {
             id: "crack-density",
             about: "issue 14: periodic cells with 8 and 27 penny cracks, aligned and random, λ against 1 − (8/3)ρ and 1 − (8/9)ρ (reported)",
             run: crack_density::run,
+        },
+        Case {
+            id: "ligament-holm",
+            about: "issue 14: cylinder cut at mid-length leaving a ligament (a/b = 1/4, 1/2), constriction R vs Holm ρ_e/(2a) (reported)",
+            run: ligament_holm::run,
         },
         Case {
             id: "notch-joule",
