@@ -233,3 +233,27 @@ fn a_crack_outside_the_domain_is_reported_not_refused() {
         r.diagnostics
     );
 }
+
+#[test]
+fn the_example_scene_runs_shrunk() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cracked-inclusion.ron");
+    let mut s = Scene::load(&path).unwrap();
+    if let demcon_scene::config::PackingConfig::Generate { count, phi, .. } = &mut s.config.packing {
+        *count = 3000;
+        *phi = 0.64 - 0.5 * 3000f64.powf(-1.0 / 3.0);
+    }
+    s.config.outputs.vtk = false;
+    let r = run(&s, &RunOptions::default()).unwrap();
+    let d = r.model.report.defects.as_ref().unwrap();
+    assert!(d.cut_by_cracks > 0 && d.interface_contacts > 0 && d.damaged_contacts > 0, "{d:?}");
+    assert_eq!(d.broken_bonds + d.broken_not_contacts, 4);
+    // The two probes sit on either side of the crack: a jump between them.
+    let t = |name: &str| {
+        r.probes
+            .iter()
+            .find(|p| p.name == name && p.field == "temperature")
+            .unwrap()
+            .value
+    };
+    assert!(t("above-crack") > t("below-crack"));
+}
