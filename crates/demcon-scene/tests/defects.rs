@@ -245,7 +245,10 @@ fn the_example_scene_runs_shrunk() {
     s.config.outputs.vtk = false;
     let r = run(&s, &RunOptions::default()).unwrap();
     let d = r.model.report.defects.as_ref().unwrap();
-    assert!(d.cut_by_cracks > 0 && d.interface_contacts > 0 && d.damaged_contacts > 0, "{d:?}");
+    assert!(
+        d.cut_by_cracks > 0 && d.interface_contacts > 0 && d.damaged_contacts > 0,
+        "{d:?}"
+    );
     assert_eq!(d.broken_bonds + d.broken_not_contacts, 4);
     // The two probes sit on either side of the crack: a jump between them.
     let t = |name: &str| {
