@@ -359,42 +359,64 @@ pub(crate) fn apply_defects(
             }
         }
     }
-    // Cracks.
-    let shapes: Vec<CrackShape> = spec.cracks.iter().map(|c| c.shape.clone()).collect();
-    let crossed = crossed_contacts(&graph, particles, container, &shapes);
+    // Cracks: the open ones cut (the first that a segment crosses is named), then each filled
+    // one adds its gap on every segment it crosses (a segment crossing an open crack is cut
+    // whatever filled cracks it also crosses; two filled cracks add up).
     let mut gap_thermal = Vec::new();
     let mut gap_electric = Vec::new();
     let mut marks = vec![0u8; m];
     let mut face = vec![false; particles.len()];
-    let mut crack_hits = vec![0usize; shapes.len()];
-    for (k, x) in crossed.iter().enumerate() {
+    let mut crack_hits = vec![0usize; spec.cracks.len()];
+    let open: Vec<usize> = (0..spec.cracks.len())
+        .filter(|&i| spec.cracks[i].gap_conductance.is_none())
+        .collect();
+    let shapes: Vec<CrackShape> = open.iter().map(|&i| spec.cracks[i].shape.clone()).collect();
+    for (k, x) in crossed_contacts(&graph, particles, container, &shapes)
+        .iter()
+        .enumerate()
+    {
         let Some(x) = x else { continue };
-        crack_hits[x.crack as usize] += 1;
+        let crack = open[x.crack as usize];
+        crack_hits[crack] += 1;
         let [p, q] = graph.pairs[k];
         face[p as usize] = true;
         face[q as usize] = true;
-        let crack = &spec.cracks[x.crack as usize];
-        match crack.gap_conductance {
-            None => {
-                if !remove[k] {
-                    report.cut_by_cracks += 1;
-                }
-                remove[k] = true;
-                cause[k].get_or_insert(CutCause::Crack {
-                    crack: x.crack,
-                    point: [x.point.x, x.point.y, x.point.z],
-                });
+        if !remove[k] {
+            report.cut_by_cracks += 1;
+        }
+        remove[k] = true;
+        cause[k].get_or_insert(CutCause::Crack {
+            crack: crack as u32,
+            point: [x.point.x, x.point.y, x.point.z],
+        });
+    }
+    for (i, crack) in spec.cracks.iter().enumerate() {
+        let Some(h) = crack.gap_conductance else { continue };
+        let shape = [crack.shape.clone()];
+        for (k, x) in crossed_contacts(&graph, particles, container, &shape)
+            .iter()
+            .enumerate()
+        {
+            if x.is_none() {
+                continue;
             }
-            Some(h) => {
-                if gap_thermal.is_empty() {
-                    gap_thermal = vec![0.0; m];
-                    gap_electric = vec![0.0; m];
-                }
-                gap_thermal[k] += 1.0 / h;
-                gap_electric[k] += crack.gap_electric_resistance.unwrap_or(0.0);
-                marks[k] |= MARK_FILLED_CRACK;
+            crack_hits[i] += 1;
+            let [p, q] = graph.pairs[k];
+            face[p as usize] = true;
+            face[q as usize] = true;
+            if remove[k] {
+                continue;
+            }
+            if gap_thermal.is_empty() {
+                gap_thermal = vec![0.0; m];
+                gap_electric = vec![0.0; m];
+            }
+            gap_thermal[k] += 1.0 / h;
+            gap_electric[k] += crack.gap_electric_resistance.unwrap_or(0.0);
+            if marks[k] & MARK_FILLED_CRACK == 0 {
                 report.filled_crack_contacts += 1;
             }
+            marks[k] |= MARK_FILLED_CRACK;
         }
     }
     for (i, &hits) in crack_hits.iter().enumerate() {

@@ -512,3 +512,51 @@ fn a_crack_between_the_face_and_the_first_layer_cuts_the_wall_links() {
         assert!(heat_flow(&m, FloatingPolicy::Fail).unwrap().abs() < 1e-12);
     }
 }
+
+#[test]
+fn an_open_crack_cuts_whatever_filled_cracks_the_segment_also_crosses() {
+    // A filled crack listed first at y = 2.9 and an open one at y = 3.0: the branches between
+    // the layers y = 2.5 and 3.5 cross both and are cut; nothing flows.
+    let defects = DefectSpec {
+        cracks: vec![
+            Crack {
+                shape: plane_y(2.9),
+                gap_conductance: Some(1.0),
+                gap_electric_resistance: None,
+            },
+            Crack {
+                shape: plane_y(3.0),
+                gap_conductance: None,
+                gap_electric_resistance: None,
+            },
+        ],
+        ..DefectSpec::default()
+    };
+    let m = lattice([3, 6, 3], None, PhaseRule::Centre, true, defects).unwrap();
+    assert_eq!(m.cut_contacts().len(), 9);
+    assert!(
+        m.cut_contacts()
+            .iter()
+            .all(|c| matches!(c.cause, CutCause::Crack { crack: 1, .. }))
+    );
+    assert!(heat_flow(&m, FloatingPolicy::Fail).unwrap().abs() < 1e-12);
+    // Two filled cracks on the same branches add their gaps.
+    let (h1, h2) = (4.0, 6.0);
+    let defects = DefectSpec {
+        cracks: [(2.9, h1), (3.0, h2)]
+            .map(|(y, h)| Crack {
+                shape: plane_y(y),
+                gap_conductance: Some(h),
+                gap_electric_resistance: None,
+            })
+            .to_vec(),
+        ..DefectSpec::default()
+    };
+    let m = lattice([3, 6, 3], None, PhaseRule::Centre, true, defects).unwrap();
+    let q = heat_flow(&m, FloatingPolicy::Fail).unwrap();
+    assert_relative_eq!(
+        q,
+        9.0 / (6.0 / LAMBDA[0] + 1.0 / h1 + 1.0 / h2),
+        max_relative = 1e-9
+    );
+}
