@@ -14,9 +14,11 @@
 //!   and so does its orientation: a crossing inside a cut particle (segment rule) is divided
 //!   by |e·n| (e the branch, n the interface normal of the particle's plane), which makes a
 //!   Laguerre network exact for plane interfaces wherever they cut the cells
-//!   (`path_resistance`); a change at the facet (by centre) has the facet as the interface
-//!   (|e·n| = 1). The laminate rule has no position on the segment: it is read by centre.
-//!   Unlisted pairs stay perfect.
+//!   (`path_resistance`); a change at the facet (by centre, or a crossing the segment rule's
+//!   sphere test missed) takes n from the phases themselves: the facets between the phases
+//!   around p and q form a staircase whose Σ S e is the interface's area times its normal
+//!   (`phase_normals`). The laminate rule has no position on the segment: it is read by
+//!   centre. Unlisted pairs stay perfect.
 //! - **Cracks** ([`Crack`]): every contact whose segment crosses the crack's surface
 //!   ([`demcon_graph::CrackShape`], minimum-image segment and periodic images in a periodic
 //!   box) is cut — removed from the graph and the network, in both physics — or, for a filled
@@ -546,7 +548,27 @@ fn path_resistance(table: &[Option<(f64, f64)>], n: usize, steps: &[(u16, u16, f
     r
 }
 
+/// The interface normal read from the phases by centre, per particle: u_p = Σ S e over its
+/// contacts to particles of another phase (e from p towards them, S the transmission surface,
+/// m²). Over a plane interface the facets between the phases form a staircase whose Σ S e is
+/// the plane's area times its normal (the closure of the cells on one side), so u_p − u_q
+/// estimates the interface normal at a contact (p, q) between the phases.
+fn phase_normals(graph: &ContactGraph, phases: &[u16], areas: &[f64]) -> Vec<Vec3> {
+    let mut u = vec![Vec3::zeros(); phases.len()];
+    for (k, &[p, q]) in graph.pairs.iter().enumerate() {
+        let (p, q) = (p as usize, q as usize);
+        if phases[p] != phases[q] {
+            let v = areas[k] * graph.geometry[k].normal;
+            u[p] += v;
+            u[q] -= v;
+        }
+    }
+    u
+}
+
 /// The interface resistances of contact `k` (thermal m²·K/W, electric Ω·m², count).
+/// `normals` ([`phase_normals`]) give the |e·n| of a crossing at the facet (the centre
+/// reading); without them it is 1.
 fn contact_interface(
     graph: &ContactGraph,
     phases: &[u16],
@@ -554,16 +576,29 @@ fn contact_interface(
     table: &[Option<(f64, f64)>],
     n: usize,
     k: usize,
+    normals: Option<&[Vec3]>,
 ) -> (f64, f64, u32) {
     let [p, q] = graph.pairs[k].map(|x| x as usize);
     let g = &graph.geometry[k];
     let w = graph.split(k);
     let (end_p, cos_p) = end_phase(lam, phases, p, &g.normal, w * g.distance);
     let (end_q, cos_q) = end_phase(lam, phases, q, &(-g.normal), (1.0 - w) * g.distance);
+    let cos_facet = match normals {
+        Some(u) if end_p != end_q => {
+            let v = u[p] - u[q];
+            let norm = v.norm();
+            if norm > 0.0 {
+                (g.normal.dot(&v) / norm).abs()
+            } else {
+                1.0
+            }
+        }
+        _ => 1.0,
+    };
     // p's half-bond, the facet (the interface itself when the phases change there), q's.
     let steps = [
         (phases[p], end_p, cos_p),
-        (end_p, end_q, 1.0),
+        (end_p, end_q, cos_facet),
         (end_q, phases[q], cos_q),
     ];
     if phases[p] != end_p && end_p != end_q && end_q != phases[q] {
@@ -591,7 +626,7 @@ pub(crate) fn update_interface_marks(
     let mut count = 0;
     for k in 0..graph.len() {
         let crossed = !defects.spec.interfaces.is_empty()
-            && contact_interface(graph, phases, &lam, &table, n_phases, k).2 > 0;
+            && contact_interface(graph, phases, &lam, &table, n_phases, k, None).2 > 0;
         if crossed {
             defects.marks[k] |= MARK_INTERFACE;
             count += 1;
@@ -629,10 +664,11 @@ pub(crate) fn apply_to_contacts(model: &Model, areas: &[f64], g: &mut [f64], phy
         Physics::Electric => &defects.gap_electric,
     };
     let interfaces = !defects.spec.interfaces.is_empty();
+    let normals = interfaces.then(|| phase_normals(graph, phases, areas));
     for k in 0..g.len() {
         let mut r = gap.get(k).copied().unwrap_or(0.0);
         if interfaces {
-            let (t, e, _) = contact_interface(graph, phases, &lam, &table, n_phases, k);
+            let (t, e, _) = contact_interface(graph, phases, &lam, &table, n_phases, k, normals.as_deref());
             r += match physics {
                 Physics::Thermal => t,
                 Physics::Electric => e,

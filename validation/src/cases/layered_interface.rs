@@ -15,8 +15,8 @@
 //! cell's half-bonds see the interface plane where it lies, and its crossing is divided by
 //! |e·n|, which makes the network exact for plane interfaces cutting the spheres — see
 //! `demcon_model::defects`), Laguerre cells with the centre rule (the interface on the facets
-//! between cells of different phases: a staircase), Terreros α and calibrated C_t with the
-//! segment rule. ≥ 3 packings per N; error = λ_e/λ_ref − 1, mean and max of |·| over them.
+//! between cells of different phases: a staircase, its normal read from the phases), Terreros
+//! α and calibrated C_t with the segment rule. ≥ 3 packings per N; error = λ_e/λ_ref − 1, mean and max of |·| over them.
 //!
 //! Tolerance, fixed before any number was seen: Laguerre-segment ≤ 0.5 % at the largest N
 //! for every share. Why not 10⁻⁹: the segment rule gives a particle a mix only when the plane
