@@ -657,6 +657,9 @@ pub(crate) fn apply_to_contacts(model: &Model, areas: &[f64], g: &mut [f64], phy
         &model.mixes,
     );
     let n_phases = model.materials.materials.len();
+    if defects.spec.interfaces.is_empty() && defects.gap_thermal.is_empty() && defects.damage.is_empty() {
+        return;
+    }
     let table = defects.spec.table(n_phases);
     let lam = Laminates::new(phases.len(), mixes);
     let gap = match physics {
