@@ -82,6 +82,17 @@ pub fn maxwell(lm: f64, li: f64, f: f64) -> f64 {
     (1.0 + 2.0 * b * f) / (1.0 - b * f)
 }
 
+/// Hasselman & Johnson (J. Compos. Mater. 21, 1987) λ_e/λ_m for spheres of conductivity `li`
+/// at volume fraction `f` in a matrix `lm`, with an interface conductance h written as the
+/// Kapitza radius over the sphere radius, α = λ_m/(h a):
+/// [li(1 + 2α) + 2lm + 2f(li(1 − α) − lm)] / [li(1 + 2α) + 2lm − f(li(1 − α) − lm)].
+/// α = 0 is [`maxwell`]; it equals Maxwell with li replaced by li/(1 + α li/lm).
+pub fn hasselman_johnson(lm: f64, li: f64, f: f64, alpha: f64) -> f64 {
+    let a = li * (1.0 + 2.0 * alpha) + 2.0 * lm;
+    let b = li * (1.0 - alpha) - lm;
+    (a + 2.0 * f * b) / (a - f * b)
+}
+
 /// Torquato third-order estimate λ_e/λ_m for impenetrable spheres, with
 /// ζ₂ = 0.21068 f − 0.04693 f² (Miller & Torquato 1990, equilibrium hard spheres).
 pub fn third_order(lm: f64, li: f64, f: f64) -> f64 {
@@ -107,6 +118,18 @@ pub fn kohlrausch_max_rise(v0: f64, rho_e: f64, lambda: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hasselman_johnson_is_maxwell_of_the_equivalent_sphere() {
+        let (lm, f) = (2.0, 0.155);
+        for li in [0.2, 10.0] {
+            assert!((hasselman_johnson(lm, li, f, 0.0) - maxwell(lm, li, f)).abs() < 1e-14);
+            for alpha in [0.1, 1.0, 10.0] {
+                let eq = li / (1.0 + alpha * li / lm);
+                assert!((hasselman_johnson(lm, li, f, alpha) - maxwell(lm, eq, f)).abs() < 1e-14);
+            }
+        }
+    }
     use approx::assert_abs_diff_eq;
 
     const A_SLAB: f64 = 33.0 / (7800.0 * 0.9);

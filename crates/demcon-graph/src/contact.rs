@@ -159,6 +159,9 @@ pub struct ContactGraph {
     /// The cells, when the graph is the facet graph of a Laguerre tessellation
     /// ([`crate::tessellate`]); `None` for contacts found by a gap tolerance.
     pub cells: Option<Box<Cells>>,
+    /// Contacts of each particle removed by [`ContactGraph::without`] (cracks, broken bonds);
+    /// empty when none was. [`ContactGraph::surface_degrees`] counts them back.
+    pub cut_degrees: Vec<u32>,
 }
 
 impl ContactGraph {
@@ -172,6 +175,17 @@ impl ContactGraph {
             d[q as usize].fetch_add(1, Relaxed);
         });
         d.into_iter().map(AtomicU32::into_inner).collect()
+    }
+
+    /// The neighbour counts a surface model reads (Terreros α(n)): the contacts of the packing,
+    /// those cut by cracks or broken bonds included — a broken bond does not change the share
+    /// of its particle's surface each intact contact stands for.
+    pub fn surface_degrees(&self) -> Vec<u32> {
+        let mut d = self.degrees();
+        for (x, c) in d.iter_mut().zip(&self.cut_degrees) {
+            *x += c;
+        }
+        d
     }
 
     /// Mean coordination number Z = 2·contacts/N (contacts per particle); 0 for no particle.
@@ -256,6 +270,56 @@ impl ContactGraph {
             geometry,
             report: self.report.clone(),
             cells,
+            cut_degrees: if self.cut_degrees.is_empty() {
+                Vec::new()
+            } else {
+                keep.iter().map(|&i| self.cut_degrees[i as usize]).collect()
+            },
+        };
+        summarise(&mut graph);
+        Ok(graph)
+    }
+}
+
+impl ContactGraph {
+    /// The graph without the contacts `k` for which `remove[k]` is set (cut by a crack, or
+    /// broken bonds): same particles, the other contacts in their order with their geometry
+    /// (and facets), the report's counts (components, rattlers) updated.
+    ///
+    /// Errors: `remove` not one flag per contact.
+    pub fn without(&self, remove: &[bool]) -> Result<ContactGraph, GraphError> {
+        crate::error::same_len("remove", remove.len(), self.len(), "contact")?;
+        let keep = |k: &usize| !remove[*k];
+        let pairs = (0..self.len()).filter(keep).map(|k| self.pairs[k]).collect();
+        let geometry = (0..self.len()).filter(keep).map(|k| self.geometry[k]).collect();
+        let cells = self.cells.as_ref().map(|c| {
+            Box::new(Cells {
+                facet_area: (0..self.len()).filter(keep).map(|k| c.facet_area[k]).collect(),
+                split: (0..self.len()).filter(keep).map(|k| c.split[k]).collect(),
+                centroid: (0..self.len()).filter(keep).map(|k| c.centroid[k]).collect(),
+                volume: c.volume.clone(),
+                walls: c.walls.clone(),
+                report: c.report.clone(),
+            })
+        });
+        let mut cut_degrees = if self.cut_degrees.is_empty() {
+            vec![0; self.n_particles]
+        } else {
+            self.cut_degrees.clone()
+        };
+        for (k, &[p, q]) in self.pairs.iter().enumerate() {
+            if remove[k] {
+                cut_degrees[p as usize] += 1;
+                cut_degrees[q as usize] += 1;
+            }
+        }
+        let mut graph = ContactGraph {
+            n_particles: self.n_particles,
+            pairs,
+            geometry,
+            report: self.report.clone(),
+            cells,
+            cut_degrees,
         };
         summarise(&mut graph);
         Ok(graph)
@@ -680,6 +744,7 @@ pub fn detect_contacts(
             diagnostics: Vec::new(),
         },
         cells: None,
+        cut_degrees: Vec::new(),
     };
     if overshoot {
         diagnostics.push(Diagnostic::CoordinationOvershoot {

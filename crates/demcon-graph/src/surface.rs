@@ -83,7 +83,7 @@ pub fn contact_surfaces(
             clamped: 0,
         },
         SurfaceModel::TerrerosAlpha => {
-            let degrees = graph.degrees();
+            let degrees = graph.surface_degrees();
             let alpha: Vec<f64> = degrees.iter().map(|&n| terreros_alpha(n).alpha).collect();
             let clamped = degrees.iter().filter(|&&n| terreros_alpha(n).clamped).count();
             let area = graph
@@ -131,7 +131,7 @@ pub fn representative_volumes(
             (0..n).map(|i| particles.volume(i) / phi).collect()
         }
         SurfaceModel::TerrerosAlpha => graph
-            .degrees()
+            .surface_degrees()
             .iter()
             .enumerate()
             .map(|(i, &d)| particles.volume(i) / terreros_alpha(d).volume_fraction)

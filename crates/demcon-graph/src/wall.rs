@@ -134,6 +134,35 @@ impl WallContacts {
         Ok(w)
     }
 
+    /// Keeps only the links `k` for which `keep(k)` holds (e.g. drops the links a crack cuts);
+    /// the walls stay, in their order, possibly with no link left.
+    pub fn retain_links(&mut self, keep: impl Fn(usize) -> bool) {
+        let kept: Vec<usize> = (0..self.len()).filter(|&k| keep(k)).collect();
+        if kept.len() == self.len() {
+            return;
+        }
+        let mut starts = vec![0];
+        for w in 0..self.n_walls() {
+            let r = self.links(w);
+            starts.push(starts[w] + kept.iter().filter(|k| r.contains(k)).count());
+        }
+        let pick = |v: &[Vec3]| -> Vec<Vec3> {
+            if v.is_empty() {
+                Vec::new()
+            } else {
+                kept.iter().map(|&k| v[k]).collect()
+            }
+        };
+        self.particle = kept.iter().map(|&k| self.particle[k]).collect();
+        self.half_length = kept.iter().map(|&k| self.half_length[k]).collect();
+        self.normal = pick(&self.normal);
+        self.lever = pick(&self.lever);
+        if !self.facet_area.is_empty() {
+            self.facet_area = kept.iter().map(|&k| self.facet_area[k]).collect();
+        }
+        self.starts = starts;
+    }
+
     /// No wall at all.
     pub fn is_empty(&self) -> bool {
         self.faces.is_empty()

@@ -229,7 +229,7 @@ fn calibrate_walls(
         }
     };
     let walls = model.wall_contacts(&faces, "thermal.bcs")?;
-    let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), sm);
+    let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), sm);
     let wall_g = walls.conductances(&wall_s, |_, _, _| 1.0);
     let (net, g) = network_with_walls(model, &walls, g, wall_g)?;
     let net = net.as_ref().unwrap_or(&model.network);

@@ -9,6 +9,7 @@ use demcon_network::FloatingPolicy;
 use serde::Serialize;
 
 use crate::calibrate::calibrate_ct;
+use crate::defects::{Physics, apply_to_contacts, apply_to_walls};
 use crate::error::ModelError;
 use crate::model::Model;
 use crate::thermal::{CtSpec, SurfaceSpec, network_with_walls};
@@ -219,7 +220,7 @@ fn contact_conductances(
     sigma: &ParticleConductivities,
 ) -> Result<Vec<f64>, ModelError> {
     let s = contact_surfaces(&model.graph, &model.particles, sm)?;
-    Ok(model
+    let mut g: Vec<f64> = model
         .graph
         .pairs
         .iter()
@@ -235,7 +236,9 @@ fn contact_conductances(
             );
             interface_value_split(sp, sq, w, rule) * a / geo.distance
         })
-        .collect())
+        .collect();
+    apply_to_contacts(model, &s.area, &mut g, Physics::Electric);
+    Ok(g)
 }
 
 /// Solves the potential with the problem's electrodes; `temperatures` (°C) feed ρ_e(T).
@@ -256,8 +259,9 @@ pub fn solve_electric(
     let g = contact_conductances(model, &sm, problem.interface, &sigma)?;
     let (faces, _) = problem.face_electrodes();
     let walls = model.wall_contacts(&faces, "electric.electrodes")?;
-    let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
-    let wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
+    let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), &sm);
+    let mut wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
+    apply_to_walls(model, &walls, &wall_s, &mut wall_g, Physics::Electric);
     let m = g.len();
     let (ext, g) = network_with_walls(model, &walls, g, wall_g)?;
     let net = ext.as_ref().unwrap_or(&model.network);

@@ -7,6 +7,9 @@
 //! - [`thermal`]: a [`ThermalProblem`] → [`thermal_setup`] (surfaces, conductances, wall links,
 //!   capacities) → [`thermal_bcs`] (resolved boundary conditions and sources) →
 //!   [`solve_thermal`] (explicit, implicit or steady).
+//! - [`defects`]: imperfect interfaces, cracks, damage and broken bonds ([`DefectSpec`] in
+//!   [`ModelParams`], applied by [`build_model`]: cut contacts leave the graph, the others
+//!   carry series resistances and factors that both physics' conductances apply).
 //! - [`calibrate`]: C_t on the model's own packing ([`calibrate_ct_with`]).
 //! - [`electric`]: an [`ElectricProblem`] → [`solve_electric`] (conductances with ρ_e(T),
 //!   electrodes on particles or faces, Joule power).
@@ -26,6 +29,7 @@
 pub mod calibrate;
 pub mod checkpoint;
 pub mod couple;
+pub mod defects;
 pub mod electric;
 mod error;
 pub mod homogenize;
@@ -35,6 +39,10 @@ pub mod thermal;
 pub use calibrate::{CalibrationBc, CtCalibration, calibrate_ct, calibrate_ct_with};
 pub use checkpoint::{CheckpointSink, Checkpointing, CouplingState, RunCheckpoint};
 pub use couple::{Coupled, couple, couple_checkpointed};
+pub use defects::{
+    Crack, CutCause, CutContact, Damage, DefectReport, DefectSpec, Defects, InterfaceResistance,
+    MARK_DAMAGED, MARK_FILLED_CRACK, MARK_INTERFACE,
+};
 pub use electric::{
     ElectricProblem, ElectricReport, ElectricRun, Electrode, ElectrodeAt, electric_conductances,
     electric_surface_model, particle_conductivities, solve_electric,
@@ -44,7 +52,7 @@ pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogeniz
 pub use model::{
     CarveRule, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed, PhaseRule,
     PhaseSpec, TessellationSummary, build_model, build_model_staged, place_inclusions, set_region_phases,
-    spheres_region,
+    spheres_region, with_defects,
 };
 pub use thermal::{
     CtSpec, ExtraSourceUpdate, ExtraSources, FixedSet, FixedTarget, SurfaceSpec, ThermalBc, ThermalBcs,

@@ -13,6 +13,10 @@ use demcon_network::Network;
 use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReason, carve, pack};
 use serde::Serialize;
 
+use crate::defects::{
+    CutContact, DefectReport, DefectSpec, Defects, Numbering, apply_defects, cut_wall_links,
+    update_interface_marks,
+};
 use crate::error::ModelError;
 
 /// Everything the solvers need that does not depend on the physics.
@@ -35,6 +39,9 @@ pub struct Model {
     pub graph: ContactGraph,
     /// Laplacian structure over the contacts.
     pub network: Network,
+    /// Interfaces, cracks, damage and broken bonds applied to the graph (cut contacts are
+    /// not in `graph`; see [`crate::defects`]).
+    pub defects: Defects,
     /// What the build did.
     pub report: ModelReport,
 }
@@ -50,9 +57,34 @@ impl Model {
 
     /// The wall links of `faces` on this model's graph (the cells' wall facets, or the
     /// particles touching each face); errors are named `context` (e.g. `thermal.bcs`).
+    /// The links an open crack crosses (centre to face) are dropped.
     pub fn wall_contacts(&self, faces: &[Face], context: &str) -> Result<WallContacts, ModelError> {
-        WallContacts::for_graph(&self.graph, &self.particles, &self.container, faces, context)
-            .map_err(|e| ModelError::at(context, e))
+        let mut walls =
+            WallContacts::for_graph(&self.graph, &self.particles, &self.container, faces, context)
+                .map_err(|e| ModelError::at(context, e))?;
+        cut_wall_links(&self.defects, &mut walls, &self.particles, &self.container);
+        Ok(walls)
+    }
+
+    /// Per contact of [`Model::graph`], its marks for the output writers: a bit set of
+    /// [`crate::defects::MARK_INTERFACE`] (crosses a listed phase interface: the series
+    /// resistance applies), [`crate::defects::MARK_DAMAGED`] (in a damage region) and
+    /// [`crate::defects::MARK_FILLED_CRACK`] (crossed by a filled crack); 0 for a plain
+    /// contact. Cut contacts are not in the graph: see [`Model::cut_contacts`].
+    pub fn contact_marks(&self) -> &[u8] {
+        &self.defects.marks
+    }
+
+    /// The contacts removed from the graph by open cracks and broken bonds (pairs of particle
+    /// ids, and why), for the output writers.
+    pub fn cut_contacts(&self) -> &[CutContact] {
+        &self.defects.cut
+    }
+
+    /// The particles on a crack face (an end of a contact a crack crosses, open or filled),
+    /// ascending.
+    pub fn crack_face_particles(&self) -> &[u32] {
+        &self.defects.crack_face
     }
 
     /// The laminate mixes indexed by particle.
@@ -83,6 +115,8 @@ pub struct ModelReport {
     pub contacts: ContactSummary,
     /// The Laguerre tessellation, when the graph is one.
     pub tessellation: Option<TessellationSummary>,
+    /// Interfaces, cracks, damage and broken bonds, when the model has any.
+    pub defects: Option<DefectReport>,
     /// Wall time of each stage (s): packing, contacts, network.
     pub pack_s: f64,
     /// Contact detection (s).
@@ -263,6 +297,8 @@ pub struct ModelParams {
     /// When set, the graph is the Laguerre tessellation's facet graph (the Laguerre surface
     /// model needs it) instead of contacts found by a gap tolerance.
     pub laguerre: Option<LaguerreParams>,
+    /// Interface resistances, cracks, damage regions and broken bonds (none by default).
+    pub defects: DefectSpec,
     /// Seed (inclusion placement).
     pub seed: u64,
 }
@@ -287,11 +323,15 @@ pub fn build_model_staged(
         pack_s,
     } = packed;
     let materials = params.materials.clone();
+    let n_phases = materials.materials.len();
+    params.defects.validate(n_phases)?;
+    let n_before = particles.len();
+    let mut kept_ids = None;
     let (domain_volume, carved_away, mixes, inclusions, phase_fractions) = stages.time("phases", || {
         let mut domain_volume = container.volume();
         let mut carved_away = 0;
         if let Some((region, rule)) = &params.carve {
-            let (kept, _) = match rule {
+            let (kept, ids) = match rule {
                 CarveRule::WholeSphere => carve(&particles, region),
                 CarveRule::Centre => particles.retain(|i| region.contains_point(&particles.centres[i])),
             };
@@ -304,6 +344,7 @@ pub fn build_model_staged(
                 ));
             }
             particles = kept;
+            kept_ids = Some(ids);
             domain_volume = region.volume(256);
         }
         let mut mixes = Vec::new();
@@ -323,6 +364,31 @@ pub fn build_model_staged(
     };
     let contacts_s = t1.elapsed().as_secs_f64();
     check_connected(&graph, particles.len())?;
+    let (graph, defects) = if params.defects.is_empty() {
+        let marks = vec![0; graph.len()];
+        (
+            graph,
+            Defects {
+                marks,
+                ..Defects::default()
+            },
+        )
+    } else {
+        stages.time("defects", || {
+            apply_defects(
+                graph,
+                &particles,
+                &container,
+                &mixes,
+                &params.defects,
+                Numbering {
+                    kept_ids: kept_ids.as_deref(),
+                    n_before,
+                },
+                n_phases,
+            )
+        })?
+    };
     let t2 = Instant::now();
     let network = stages.time("network", || Network::new(particles.len(), &graph.pairs))?;
     let network_s = t2.elapsed().as_secs_f64();
@@ -345,6 +411,7 @@ pub fn build_model_staged(
                 .cells
                 .as_deref()
                 .map(|c| TessellationSummary::from(&c.report)),
+            defects: (!params.defects.is_empty()).then(|| defects.report.clone()),
             pack_s,
             contacts_s,
             network_s,
@@ -357,6 +424,7 @@ pub fn build_model_staged(
         mixes,
         graph,
         network,
+        defects,
     })
 }
 
@@ -607,4 +675,61 @@ pub fn set_region_phases(model: &mut Model, regions: &[(Region, u16)], rule: Pha
     model.report.phase_counts = counts;
     model.report.phase_fractions = model.laminates().phase_fractions(&model.particles, n_phases);
     model.report.mixed_particles = model.mixes.len();
+    update_interface_marks(
+        &mut model.defects,
+        &model.graph,
+        &model.particles.phases,
+        &model.mixes,
+        n_phases,
+    );
+    if let Some(r) = model.report.defects.as_mut() {
+        r.interface_contacts = model.defects.report.interface_contacts;
+    }
+}
+
+/// The model with the defects of `spec` (interfaces, cracks, damage, broken bonds by current
+/// particle ids) applied to its graph, without packing or tessellating again: for studies of
+/// cracks or interfaces on one packing and network. The network structure is rebuilt without
+/// the cut contacts; the report's contact summary and `defects` are updated.
+///
+/// Errors: a value `spec` refuses, or a model that already has defects (build it without).
+pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelError> {
+    let n_phases = model.materials.materials.len();
+    spec.validate(n_phases)?;
+    if !model.defects.spec.is_empty() {
+        return Err(ModelError::invalid(
+            "defects",
+            "a model with defects",
+            "apply defects to a model built without any",
+        ));
+    }
+    let n = model.particles.len();
+    let (graph, defects) = apply_defects(
+        model.graph.clone(),
+        &model.particles,
+        &model.container,
+        &model.mixes,
+        spec,
+        Numbering {
+            kept_ids: None,
+            n_before: n,
+        },
+        n_phases,
+    )?;
+    let network = Network::new(n, &graph.pairs)?;
+    let mut report = model.report.clone();
+    report.contacts = ContactSummary::from(&graph.report);
+    report.defects = (!spec.is_empty()).then(|| defects.report.clone());
+    Ok(Model {
+        particles: model.particles.clone(),
+        container: model.container,
+        domain_volume: model.domain_volume,
+        phi: model.phi,
+        materials: model.materials.clone(),
+        mixes: model.mixes.clone(),
+        graph,
+        network,
+        defects,
+        report,
+    })
 }

@@ -19,6 +19,7 @@ use serde::Serialize;
 
 use crate::calibrate::{CalibrationBc, CtCalibration, calibrate_ct_with};
 use crate::checkpoint::{Checkpointing, RunCheckpoint, not_resumable};
+use crate::defects::{Physics, apply_to_contacts, apply_to_walls};
 use crate::error::ModelError;
 use crate::model::Model;
 
@@ -309,8 +310,9 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
     };
     let mut caps = capacities(&vols, &c, &rho, rv)?;
     let walls = model.wall_contacts(&faces, "thermal.bcs")?;
-    let wall_s = walls.surfaces(&model.particles, &model.graph.degrees(), &sm);
-    let wall_g = walls.conductances(&wall_s, |p, e, h| lam.half_bond(p, phases, &lam_phase, e, h));
+    let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), &sm);
+    let mut wall_g = walls.conductances(&wall_s, |p, e, h| lam.half_bond(p, phases, &lam_phase, e, h));
+    apply_to_walls(model, &walls, &wall_s, &mut wall_g, Physics::Thermal);
     let (network, g) = network_with_walls(model, &walls, g, wall_g)?;
     caps.resize(caps.len() + walls.n_walls(), 1.0);
     let paper_dt = match sm {
@@ -335,7 +337,8 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
 }
 
 /// Surfaces, contact conductivities (interface rule applied) and conductances H = λ S / d
-/// (W/K) of the contacts under `sm`.
+/// (W/K) of the contacts under `sm`, with the model's interface and filled-crack resistances
+/// in series and its damage factors ([`crate::defects`]).
 fn contact_values(
     model: &Model,
     sm: &SurfaceModel,
@@ -350,7 +353,8 @@ fn contact_values(
         &model.mixes,
         interface,
     )?;
-    let g = conductances(&model.graph, &s.area, &lambda)?;
+    let mut g = conductances(&model.graph, &s.area, &lambda)?;
+    apply_to_contacts(model, &s.area, &mut g, Physics::Thermal);
     Ok((s, lambda, g))
 }
 

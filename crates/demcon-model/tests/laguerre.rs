@@ -30,6 +30,7 @@ fn model(container: Container, n: usize, seed: u64) -> Model {
         phase_rule: PhaseRule::Centre,
         contacts: ContactParams::default(),
         laguerre: Some(LaguerreParams::default()),
+        defects: Default::default(),
         seed,
     };
     build_model(packed, &params).unwrap()
@@ -164,6 +165,7 @@ fn mixing_the_laguerre_surface_with_a_contact_graph_is_refused() {
         phase_rule: PhaseRule::Centre,
         contacts: ContactParams::relative(0.01),
         laguerre: None,
+        defects: Default::default(),
         seed: 1,
     };
     let m = build_model(packed, &params).unwrap();

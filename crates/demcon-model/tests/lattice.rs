@@ -89,6 +89,7 @@ fn calibration_with_walls_finds_four_over_pi_on_the_lattice() {
             phase_rule: PhaseRule::Centre,
             contacts: demcon_graph::ContactParams::relative(0.01),
             laguerre: None,
+            defects: Default::default(),
             seed: 1,
         },
     )

@@ -58,7 +58,9 @@ pub use csv::{read_csv, write_csv};
 pub use domain::{Domain, Plane};
 pub use error::PostError;
 pub use flux::{PlaneFlow, flow_across_plane, particle_dipoles, particle_dipoles_levers, particle_flux};
-pub use halo::{HaloField, HaloParams, HaloPhases, HaloReport, HaloScale, halo_flux};
+pub use halo::{
+    HaloBlock, HaloField, HaloParams, HaloPhases, HaloReport, HaloScale, halo_flux, halo_flux_blocked,
+};
 pub use probe::{Line, MAX_PROFILE_POINTS, ProbeIndex, ProbeMethod, line_points, probe, profile};
 pub use slice::{Grid, SliceParams, slice_grid};
 pub use stats::{coefficient_of_variation, components, effective_conductivity, magnitudes};

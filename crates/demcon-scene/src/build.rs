@@ -115,7 +115,10 @@ pub fn build_model_staged(
     progress: Option<&dyn Fn(&demcon_packing::PackProgress)>,
     stages: &mut Stages,
 ) -> Result<Model, SceneError> {
-    let params = convert::model_params(cfg)?;
+    let mut params = convert::model_params(cfg)?;
+    if let Some(CutContactsConfig::File(path)) = &cfg.cut_contacts {
+        params.defects.cut_pairs = read_cut_pairs(&base_dir.join(path))?;
+    }
     let t0 = Instant::now();
     let (particles, container, report, imported_from) =
         stages.time("packing", || make_particles(cfg, base_dir, progress))?;
@@ -128,4 +131,46 @@ pub fn build_model_staged(
         pack_s: t0.elapsed().as_secs_f64(),
     };
     Ok(demcon_model::build_model_staged(packed, &params, stages)?)
+}
+
+/// Reads a list of broken bonds: one pair of 0-based particle indices per line, separated by
+/// blanks or a comma; blank lines and `#` comments are skipped. Errors name the file, the line
+/// and what is wrong (indices are range-checked against the packing by the model build).
+pub fn read_cut_pairs(path: &Path) -> Result<Vec<[u32; 2]>, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut pairs = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let body = line.split('#').next().unwrap_or("").trim();
+        if body.is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = body
+            .split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|f| !f.is_empty())
+            .collect();
+        let bad = || {
+            SceneError::invalid(
+                "cut_contacts",
+                format!("{}:{}: {body:?}", path.display(), i + 1),
+                "each line must hold two particle indices (integers ≥ 0, below 2³²), e.g. `12 345`",
+            )
+        };
+        if fields.len() != 2 {
+            return Err(bad());
+        }
+        let a: u32 = fields[0].parse().map_err(|_| bad())?;
+        let b: u32 = fields[1].parse().map_err(|_| bad())?;
+        if a == b {
+            return Err(SceneError::invalid(
+                "cut_contacts",
+                format!("{}:{}: {body:?}", path.display(), i + 1),
+                "a bond joins two different particles",
+            ));
+        }
+        pairs.push([a, b]);
+    }
+    Ok(pairs)
 }

@@ -93,7 +93,8 @@ pub struct Fingerprint {
     pub sections: Vec<(String, u64)>,
     /// Particles of the built model.
     pub n_particles: u64,
-    /// FNV-1a 64 of the built model's centres, radii, phases (exact bits) and container.
+    /// FNV-1a 64 of the built model's centres, radii, phases (exact bits), container and cut
+    /// contacts.
     pub packing: u64,
 }
 
@@ -149,6 +150,13 @@ impl Fingerprint {
             h.write(&ph.to_le_bytes());
         }
         h.write(format!("{:?}", model.container).as_bytes());
+        // The contacts cut by cracks and broken bonds (a changed `cut_contacts` file changes
+        // them while the scene's text does not); nothing is added for a model without any, so
+        // the fingerprints of such models are unchanged.
+        for c in model.cut_contacts() {
+            h.write(&c.pair[0].to_le_bytes());
+            h.write(&c.pair[1].to_le_bytes());
+        }
         self.n_particles = p.len() as u64;
         self.packing = h.finish();
         self

@@ -41,6 +41,18 @@ pub struct SceneConfig {
     /// Conductivity of contacts between two phases.
     #[serde(default)]
     pub interface: InterfaceConfig,
+    /// Interface resistances between pairs of materials (Kapitza): unlisted pairs stay perfect.
+    #[serde(default)]
+    pub interfaces: Vec<InterfaceResistanceConfig>,
+    /// Crack surfaces cutting the contacts their segment crosses (open or filled).
+    #[serde(default)]
+    pub cracks: Vec<CrackConfig>,
+    /// Regions whose contacts' conductances are scaled by a factor in (0, 1].
+    #[serde(default)]
+    pub damage: Vec<DamageConfig>,
+    /// Broken bonds imported from a mechanical DEM run (particle index pairs).
+    #[serde(default)]
+    pub cut_contacts: Option<CutContactsConfig>,
     /// What to do with particle clusters connected to no fixed value.
     #[serde(default)]
     pub floating: FloatingConfig,
@@ -374,6 +386,71 @@ pub enum PhaseConfig {
         /// Centres (m), inside the container's bounding box.
         centres: Vec<(f64, f64, f64)>,
     },
+}
+
+/// An imperfect interface between two materials:
+/// `(between: ("epoxy", "silica"), conductance: 1.0e6, electric_resistance: Some(1.0e-9))`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct InterfaceResistanceConfig {
+    /// The two material names.
+    pub between: (String, String),
+    /// Thermal interface conductance h (W/(m²·K)), > 0: series resistance 1/(h S).
+    pub conductance: f64,
+    /// Electric interface resistance r_c (Ω·m²), ≥ 0: series resistance r_c/S; `None`:
+    /// electrically perfect.
+    #[serde(default)]
+    pub electric_resistance: Option<f64>,
+}
+
+/// A crack surface: `Disc(centre, normal, radius)` or `Polygon(points)`; open (insulating) by
+/// default, filled with `gap_conductance: Some(h)` (W/(m²·K)).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+pub enum CrackConfig {
+    /// A flat disc (penny crack).
+    Disc {
+        /// Centre (m).
+        centre: (f64, f64, f64),
+        /// Normal (any non-zero length).
+        normal: (f64, f64, f64),
+        /// Radius (m), > 0.
+        radius: f64,
+        /// Filled crack: conductance per area (W/(m²·K)), > 0; `None`: open, insulating.
+        #[serde(default)]
+        gap_conductance: Option<f64>,
+        /// Filled crack: electric resistance per area (Ω·m²), ≥ 0 (needed by an electric scene).
+        #[serde(default)]
+        gap_electric_resistance: Option<f64>,
+    },
+    /// A plane polygon (vertices in order, at least 3).
+    Polygon {
+        /// Vertices (m).
+        points: Vec<(f64, f64, f64)>,
+        /// Filled crack: conductance per area (W/(m²·K)), > 0; `None`: open, insulating.
+        #[serde(default)]
+        gap_conductance: Option<f64>,
+        /// Filled crack: electric resistance per area (Ω·m²), ≥ 0 (needed by an electric scene).
+        #[serde(default)]
+        gap_electric_resistance: Option<f64>,
+    },
+}
+
+/// A damaged region: `(region: Sphere(..), factor: 0.3)`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DamageConfig {
+    /// The region; a contact is in it by the midpoint of its branch.
+    pub region: RegionConfig,
+    /// Factor on the conductances (both physics), in (0, 1].
+    pub factor: f64,
+}
+
+/// Broken bonds to cut.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+pub enum CutContactsConfig {
+    /// A text file (relative to the scene) of particle index pairs, one pair per line
+    /// (`i j` or `i, j`, 0-based, in the packing's order before carving); `#` starts a comment.
+    File(String),
 }
 
 /// Contact conductivity between two phases.

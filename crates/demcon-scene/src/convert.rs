@@ -4,10 +4,11 @@
 //! `validate.rs`; this file only translates.
 
 use demcon_core::{Axis, Container, CoreError, Face, Material, MaterialTable, Region, Selector, Vec3};
-use demcon_graph::{ContactParams, InterfaceRule, LaguerreParams};
+use demcon_graph::{ContactParams, CrackShape, InterfaceRule, LaguerreParams};
 use demcon_model::{
-    CarveRule, CtSpec, ElectricProblem, Electrode, ElectrodeAt, ModelParams, PhaseRule, PhaseSpec,
-    SurfaceSpec, ThermalBc, ThermalProblem, ThermalSolver, TimeStepSpec, VolumeSource,
+    CarveRule, Crack, CtSpec, Damage, DefectSpec, ElectricProblem, Electrode, ElectrodeAt,
+    InterfaceResistance, ModelParams, PhaseRule, PhaseSpec, SurfaceSpec, ThermalBc, ThermalProblem,
+    ThermalSolver, TimeStepSpec, VolumeSource,
 };
 use demcon_network::{FloatingPolicy, Method, SolveParams};
 use demcon_post::{HaloParams, HaloPhases, Line, ProbeMethod};
@@ -265,6 +266,7 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
             }
         });
     }
+    let defects = defect_spec(cfg, &materials)?;
     Ok(ModelParams {
         materials,
         carve,
@@ -272,7 +274,82 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
         phase_rule: phase_rule(cfg.phase_rule),
         contacts: contact_params(&cfg.contacts)?,
         laguerre: uses_laguerre(cfg).then(LaguerreParams::default),
+        defects,
         seed: cfg.seed,
+    })
+}
+
+/// The phase of a material named at `field`: `interfaces[0].between[1]: unknown material
+/// "epoxi"; known: epoxy, silica`.
+fn named_phase(materials: &MaterialTable, name: &str, field: &str) -> Result<u16, SceneError> {
+    materials.phase_of(name).map_err(|_| {
+        let names: Vec<&str> = materials.materials.iter().map(|m| m.name.as_str()).collect();
+        SceneError::invalid(
+            field,
+            format!("\"{name}\""),
+            format!("unknown material; known: {}", names.join(", ")),
+        )
+    })
+}
+
+/// Interfaces, cracks and damage regions of the scene (the broken bonds of `cut_contacts` are
+/// read from their file by the build). Values are checked by [`DefectSpec::validate`] in
+/// `validate.rs`; this only resolves names and converts.
+pub fn defect_spec(cfg: &SceneConfig, materials: &MaterialTable) -> Result<DefectSpec, SceneError> {
+    let mut interfaces = Vec::with_capacity(cfg.interfaces.len());
+    for (i, it) in cfg.interfaces.iter().enumerate() {
+        let a = named_phase(materials, &it.between.0, &format!("interfaces[{i}].between[0]"))?;
+        let b = named_phase(materials, &it.between.1, &format!("interfaces[{i}].between[1]"))?;
+        interfaces.push(InterfaceResistance {
+            phases: [a, b],
+            conductance: it.conductance,
+            electric_resistance: it.electric_resistance,
+        });
+    }
+    let cracks = cfg
+        .cracks
+        .iter()
+        .map(|c| match c {
+            CrackConfig::Disc {
+                centre,
+                normal,
+                radius,
+                gap_conductance,
+                gap_electric_resistance,
+            } => Crack {
+                shape: CrackShape::Disc {
+                    centre: v3(*centre),
+                    normal: v3(*normal),
+                    radius: *radius,
+                },
+                gap_conductance: *gap_conductance,
+                gap_electric_resistance: *gap_electric_resistance,
+            },
+            CrackConfig::Polygon {
+                points,
+                gap_conductance,
+                gap_electric_resistance,
+            } => Crack {
+                shape: CrackShape::Polygon {
+                    points: points.iter().map(|&p| v3(p)).collect(),
+                },
+                gap_conductance: *gap_conductance,
+                gap_electric_resistance: *gap_electric_resistance,
+            },
+        })
+        .collect();
+    let mut damage = Vec::with_capacity(cfg.damage.len());
+    for (i, d) in cfg.damage.iter().enumerate() {
+        damage.push(Damage {
+            region: region(&d.region, &format!("damage[{i}].region"))?,
+            factor: d.factor,
+        });
+    }
+    Ok(DefectSpec {
+        interfaces,
+        cracks,
+        damage,
+        cut_pairs: Vec::new(),
     })
 }
 

@@ -15,7 +15,9 @@ use demcon_model::{
     ThermalProblem, ThermalRun, ThermalSetup, couple_checkpointed, homogenize_electric, homogenize_thermal,
     solve_electric, solve_thermal_checkpointed, thermal_bcs, thermal_setup,
 };
-use demcon_post::{Domain, HaloReport, ProbeIndex, halo_flux, particle_dipoles, particle_dipoles_levers};
+use demcon_post::{
+    Domain, HaloReport, ProbeIndex, halo_flux_blocked, particle_dipoles, particle_dipoles_levers,
+};
 use demcon_thermal::CheckpointEvery;
 use serde::Serialize;
 
@@ -471,6 +473,21 @@ fn model_diagnostics(model: &Model) -> Vec<String> {
     if model.report.carved_away > 0 {
         d.push(format!("{} particles carved away", model.report.carved_away));
     }
+    if let Some(r) = &model.report.defects {
+        if r.cut_by_cracks + r.broken_bonds > 0 {
+            d.push(format!(
+                "{} contacts cut by cracks, {} broken bonds cut ({} components once cut)",
+                r.cut_by_cracks, r.broken_bonds, r.components_after_cuts
+            ));
+        }
+        if r.broken_not_contacts > 0 {
+            d.push(format!(
+                "{} pairs of cut_contacts are not contacts of the model (ignored)",
+                r.broken_not_contacts
+            ));
+        }
+        d.extend(r.warnings.iter().cloned());
+    }
     d
 }
 
@@ -728,7 +745,11 @@ fn halo_of(
     domain: &Domain,
     params: &demcon_post::HaloParams,
 ) -> Result<Halo, SceneError> {
-    let h = halo_flux(&model.particles, d, &s.rep_volumes, domain, params)?;
+    // A Halo does not average across a crack (the flux jumps there, as across a phase
+    // interface): members behind a crack are left out.
+    let block = |a: &Vec3, b: &Vec3| model.defects.crack_between(a, b, &model.container);
+    let blocked: Option<demcon_post::HaloBlock<'_>> = model.defects.has_cracks().then_some(&block);
+    let h = halo_flux_blocked(&model.particles, d, &s.rep_volumes, domain, params, blocked)?;
     Ok((h.flux, h.truncated, h.report))
 }
 

@@ -24,6 +24,7 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
         check_run_memory(n, c, field)?;
     }
     check_contacts(&c.contacts)?;
+    check_defects(c, base_dir)?;
     check_linear_solver(&c.linear_solver)?;
     check_probes(c, container.as_ref())?;
     if c.thermal.is_none() && c.electric.is_none() {
@@ -706,6 +707,64 @@ fn check_outputs(c: &SceneConfig, container: Option<&Container>) -> Result<(), S
                 "outputs.etc_axis",
                 format!("{ax:?}"),
                 "the container has no flat faces normal to this axis",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Interfaces, cracks, damage and the broken-bond file: every value (field paths from
+/// [`demcon_model::DefectSpec::validate`]), an interface pair listed twice, a filled crack
+/// without its electric resistance in an electric scene, and the file of `cut_contacts` read
+/// and its indices checked against the packing's count when it is known.
+fn check_defects(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
+    let materials = convert::materials(&c.materials)?;
+    let spec = convert::defect_spec(c, &materials)?;
+    spec.validate(materials.materials.len())?;
+    for (i, it) in spec.interfaces.iter().enumerate() {
+        let same = |o: &demcon_model::InterfaceResistance| {
+            o.phases == it.phases || o.phases == [it.phases[1], it.phases[0]]
+        };
+        if let Some(j) = spec.interfaces[..i].iter().position(same) {
+            return Err(SceneError::invalid(
+                &format!("interfaces[{i}].between"),
+                format!(
+                    "({:?}, {:?})",
+                    c.interfaces[i].between.0, c.interfaces[i].between.1
+                ),
+                format!("each pair of materials once (already listed as interfaces[{j}])"),
+            ));
+        }
+    }
+    if c.electric.is_some()
+        && let Some(i) = spec
+            .cracks
+            .iter()
+            .position(|k| k.gap_conductance.is_some() && k.gap_electric_resistance.is_none())
+    {
+        return Err(SceneError::invalid(
+            &format!("cracks[{i}].gap_electric_resistance"),
+            "None",
+            "a filled crack (gap_conductance) in an electric scene needs its electric resistance per area \
+             (Ω·m², ≥ 0); leave gap_conductance None for an open, insulating crack",
+        ));
+    }
+    if let Some(CutContactsConfig::File(path)) = &c.cut_contacts {
+        let pairs = crate::build::read_cut_pairs(&base_dir.join(path))?;
+        if let Some(n) = known_count(&c.packing, "packing")?
+            && let Some((k, j, x)) = pairs
+                .iter()
+                .enumerate()
+                .flat_map(|(k, p)| [(k, 0, p[0]), (k, 1, p[1])])
+                .find(|&(_, _, x)| x as usize >= n)
+        {
+            return Err(SceneError::invalid(
+                &format!("cut_contacts[{k}][{j}]"),
+                x,
+                format!(
+                    "a particle index of the packing (0..{n}) (pair {} of {path})",
+                    k + 1
+                ),
             ));
         }
     }

@@ -9,7 +9,8 @@ use demcon_scene::config::*;
 use demcon_scene::{Scene, build_model, run_on_model};
 
 pub use demcon_model::{
-    CalibrationBc, FixedSet, ThermalBcs, calibrate_ct, calibrate_ct_with, place_inclusions,
+    CalibrationBc, CutCause, CutContact, FixedSet, ThermalBcs, calibrate_ct, calibrate_ct_with,
+    place_inclusions,
 };
 pub use demcon_scene::convert::region as scene_region;
 pub use demcon_scene::{Model, RunResult, SceneConfig, SceneError, write_outputs};
@@ -302,6 +303,10 @@ pub fn thermal_scene(
         phases: Vec::new(),
         phase_rule: PhaseRuleConfig::Centre,
         interface: InterfaceConfig::Harmonic,
+        interfaces: Vec::new(),
+        cracks: Vec::new(),
+        damage: Vec::new(),
+        cut_contacts: None,
         floating: FloatingConfig::Exclude,
         linear_solver: Default::default(),
         thermal: Some(thermal),
@@ -347,6 +352,22 @@ pub fn set_phases_like(model: &mut Model, cfg: &SceneConfig) -> anyhow::Result<(
     }
     set_region_phases(model, &regions, cfg.phase_rule);
     Ok(())
+}
+
+/// Sets the thermal conductance h (W/(m²·K); ∞ makes them perfect) of every listed interface
+/// of a built model: a sweep over h on one network, without rebuilding it.
+pub fn set_interface_conductance(model: &mut Model, h: f64) {
+    for i in &mut model.defects.spec.interfaces {
+        i.conductance = h;
+    }
+}
+
+/// `model` with the interfaces, cracks and damage regions of `cfg` applied to its graph
+/// (no packing or tessellation again; `model` must have none): [`demcon_model::with_defects`].
+pub fn with_scene_defects(model: &Model, cfg: &SceneConfig) -> anyhow::Result<Model> {
+    let materials = demcon_scene::convert::materials(&cfg.materials)?;
+    let spec = demcon_scene::convert::defect_spec(cfg, &materials)?;
+    Ok(demcon_model::with_defects(model, &spec)?)
 }
 
 /// Runs the physics of `cfg` on a clone of `model`.

@@ -117,6 +117,10 @@ fn lattice_scene(
         materials: vec![steel_beta()],
         phases: Vec::new(),
         interface: InterfaceConfig::Harmonic,
+        interfaces: Vec::new(),
+        cracks: Vec::new(),
+        damage: Vec::new(),
+        cut_contacts: None,
         floating: FloatingConfig::Fail,
         linear_solver: Default::default(),
         thermal: Some(ThermalConfig {

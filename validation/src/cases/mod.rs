@@ -8,6 +8,8 @@ pub mod cylinder;
 pub mod transient;
 
 // The cases.
+pub mod crack_density;
+pub mod crack_penny;
 pub mod haddad2021_cost_accuracy;
 pub mod haddad2021_ct_calibration;
 pub mod haddad2021_halo_cov;
@@ -22,7 +24,10 @@ pub mod homogeneous_exactness;
 pub mod hubert2017_cylinder_resistance;
 pub mod hubert2017_notch_joule;
 pub mod hubert2017_solver_timing;
+pub mod inclusion_interface;
 pub mod joule_transient;
+pub mod layered_interface;
+pub mod ligament_holm;
 pub mod multi_inclusion_periodic;
 pub mod packing_stress;
 
@@ -95,6 +100,31 @@ pub fn registry() -> Vec<Case> {
             id: "multi-inclusion-fields",
             about: "Haddad 2021 §5.2: f = 0.2, T and Halo |q| at A–D beside Table 3; flux slice",
             run: haddad2021_multi_inclusion_fields::run,
+        },
+        Case {
+            id: "layered-interface",
+            about: "issue 14: layered cube with interface conductance h (10 %, 50 % of the resistance) vs L/(Σ t/λ + n/h); error against N",
+            run: layered_interface::run,
+        },
+        Case {
+            id: "inclusion-interface",
+            about: "issue 14: Haddad §4 single inclusion with an interface conductance (a_K/a = 0.1, 1, 10; contrasts 5, 0.1) vs Hasselman–Johnson",
+            run: inclusion_interface::run,
+        },
+        Case {
+            id: "crack-penny",
+            about: "issue 14: insulating penny crack (a/L = 1/8, 1/6, 1/4) in a cube, jump profile vs (4q/πλ)√(a² − r²); a through-section crack passes no heat",
+            run: crack_penny::run,
+        },
+        Case {
+            id: "crack-density",
+            about: "issue 14: periodic cells with 8 and 27 penny cracks, aligned and random, λ against 1 − (8/3)ρ and 1 − (8/9)ρ (reported)",
+            run: crack_density::run,
+        },
+        Case {
+            id: "ligament-holm",
+            about: "issue 14: cylinder cut at mid-length leaving a ligament (a/b = 1/4, 1/2), constriction R vs Holm ρ_e/(2a) (reported)",
+            run: ligament_holm::run,
         },
         Case {
             id: "notch-joule",

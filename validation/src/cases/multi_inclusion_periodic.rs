@@ -176,6 +176,10 @@ fn scene(r: &Realisation, n: usize, seed: u64, m: &PeriodicModel) -> SceneConfig
         }],
         phase_rule: m.rule,
         interface: InterfaceConfig::Harmonic,
+        interfaces: Vec::new(),
+        cracks: Vec::new(),
+        damage: Vec::new(),
+        cut_contacts: None,
         floating: FloatingConfig::default(),
         linear_solver: LinearSolverConfig::default(),
         thermal: Some(ThermalConfig {

@@ -1230,6 +1230,7 @@ fn assemble(
                 wall_s: 0.0,
             },
         })),
+        cut_degrees: Vec::new(),
     };
     debug_assert_eq!(graph.pairs.len(), n_pairs);
     summarise(&mut graph);

@@ -38,6 +38,7 @@ pub fn lattice(nx: usize, ny: usize, nz: usize, materials: Vec<Material>) -> Mod
         phase_rule: PhaseRule::Centre,
         contacts: ContactParams::relative(0.01),
         laguerre: None,
+        defects: Default::default(),
         seed: 1,
     };
     build_model(packed, &params).unwrap()

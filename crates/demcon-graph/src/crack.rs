@@ -1,0 +1,411 @@
+//! Crack surfaces and the contacts they cut: a contact (or Laguerre facet) is crossed by a
+//! crack when its centre-to-centre segment x_p → x_p + d_pq e_pq (the minimum-image branch in
+//! a periodic box) passes through the crack's surface.
+//!
+//! Shapes: a disc (centre, unit normal, radius) or a plane polygon (its points in order,
+//! convex or not, closed implicitly). The crossing test is half-open, so that a centre lying
+//! exactly on the crack's plane is on one definite side: with s = n·(x − c) the signed distance
+//! of a point to the plane, the segment a → b crosses when (s_a > 0) ≠ (s_b > 0) and the point
+//! where it meets the plane lies inside the shape (boundary included). Two particles whose
+//! centres both lie on the plane are never separated.
+//!
+//! In a periodic box the crack is repeated with the cell: the segment is tested against the 27
+//! images of the crack that can reach it.
+
+use demcon_core::{Container, CoreError, ParticleSet, Vec3};
+use rayon::prelude::*;
+
+use crate::ContactGraph;
+
+/// The surface of a crack (m).
+#[derive(Debug, Clone, PartialEq)]
+pub enum CrackShape {
+    /// A flat disc (a penny crack).
+    Disc {
+        /// Centre (m).
+        centre: Vec3,
+        /// Normal (any length > 0; normalised by the tests).
+        normal: Vec3,
+        /// Radius (m), > 0.
+        radius: f64,
+    },
+    /// A plane polygon, its vertices in order (at least 3, not collinear, in one plane).
+    Polygon {
+        /// Vertices (m).
+        points: Vec<Vec3>,
+    },
+}
+
+/// Relative tolerance of the planarity of a polygon, on its largest extent.
+const PLANARITY_TOLERANCE: f64 = 1e-6;
+
+impl CrackShape {
+    /// Checks the shape; errors name `field` (e.g. `cracks[2]`): a radius not finite and > 0,
+    /// a zero or non-finite normal, a polygon of fewer than 3 points, with non-finite points,
+    /// of zero area (collinear or repeated points) or not plane.
+    pub fn validate(&self, field: &str) -> Result<(), CoreError> {
+        let finite = |v: &Vec3| v.iter().all(|x| x.is_finite());
+        match self {
+            CrackShape::Disc {
+                centre,
+                normal,
+                radius,
+            } => {
+                if !finite(centre) {
+                    return Err(CoreError::invalid(
+                        format!("{field}.centre"),
+                        fmt(centre),
+                        "finite coordinates (m)",
+                    ));
+                }
+                if !(finite(normal) && normal.norm() > 0.0) {
+                    return Err(CoreError::invalid(
+                        format!("{field}.normal"),
+                        fmt(normal),
+                        "a finite, non-zero vector",
+                    ));
+                }
+                if !(radius.is_finite() && *radius > 0.0) {
+                    return Err(CoreError::invalid(
+                        format!("{field}.radius"),
+                        radius,
+                        "a finite number > 0 (m)",
+                    ));
+                }
+            }
+            CrackShape::Polygon { points } => {
+                if points.len() < 3 {
+                    return Err(CoreError::invalid(
+                        format!("{field}.points"),
+                        format!("{} points", points.len()),
+                        "at least 3 points",
+                    ));
+                }
+                if let Some(k) = points.iter().position(|p| !finite(p)) {
+                    return Err(CoreError::invalid(
+                        format!("{field}.points[{k}]"),
+                        fmt(&points[k]),
+                        "finite coordinates (m)",
+                    ));
+                }
+                let (n, area, extent) = polygon_frame(points);
+                if !(area > 1e-12 * extent * extent && area > 0.0) {
+                    return Err(CoreError::invalid(
+                        format!("{field}.points"),
+                        format!("area {area:e} m²"),
+                        "a polygon of non-zero area (its points are collinear or repeated)",
+                    ));
+                }
+                let c = points[0];
+                if let Some(k) = points
+                    .iter()
+                    .position(|p| n.dot(&(p - c)).abs() > PLANARITY_TOLERANCE * extent)
+                {
+                    return Err(CoreError::invalid(
+                        format!("{field}.points[{k}]"),
+                        fmt(&points[k]),
+                        format!(
+                            "in the plane of the other points (it lies {:e} m off it)",
+                            n.dot(&(points[k] - c)).abs()
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A point of the crack's plane and its unit normal.
+    pub fn plane(&self) -> (Vec3, Vec3) {
+        match self {
+            CrackShape::Disc { centre, normal, .. } => (*centre, normal.normalize()),
+            CrackShape::Polygon { points } => (points[0], polygon_frame(points).0),
+        }
+    }
+
+    /// A ball holding the crack (centre, radius in m).
+    pub fn bounding_ball(&self) -> (Vec3, f64) {
+        match self {
+            CrackShape::Disc { centre, radius, .. } => (*centre, *radius),
+            CrackShape::Polygon { points } => {
+                let c = points.iter().sum::<Vec3>() / points.len() as f64;
+                let r = points.iter().map(|p| (p - c).norm()).fold(0.0, f64::max);
+                (c, r)
+            }
+        }
+    }
+
+    /// Where the segment a → b (m) crosses the crack (the half-open rule of the module doc),
+    /// or `None`.
+    pub fn crossing(&self, a: &Vec3, b: &Vec3) -> Option<Vec3> {
+        let (c, n) = self.plane();
+        let (sa, sb) = (n.dot(&(a - c)), n.dot(&(b - c)));
+        if (sa > 0.0) == (sb > 0.0) {
+            return None;
+        }
+        let t = sa / (sa - sb);
+        let x = a + (b - a) * t;
+        let inside = match self {
+            CrackShape::Disc { centre, radius, .. } => {
+                let r = x - centre;
+                // Distance in the plane (x lies on it up to round-off).
+                (r - n * n.dot(&r)).norm_squared() <= radius * radius
+            }
+            CrackShape::Polygon { points } => point_in_polygon(points, &n, &x),
+        };
+        inside.then_some(x)
+    }
+
+    /// Whether the crack, or one of its periodic images when `period` (m) is given, crosses
+    /// the segment a → b; the crossing point (in the frame of the segment).
+    pub fn crossing_periodic(&self, a: &Vec3, b: &Vec3, period: Option<[f64; 3]>) -> Option<Vec3> {
+        let (bc, br) = self.bounding_ball();
+        let near = |shift: &Vec3| segment_ball_distance(a, b, &(bc + shift)) <= br;
+        match period {
+            None => near(&Vec3::zeros()).then(|| self.crossing(a, b)).flatten(),
+            Some(l) => {
+                for i in [0.0, -1.0, 1.0] {
+                    for j in [0.0, -1.0, 1.0] {
+                        for k in [0.0, -1.0, 1.0] {
+                            let s = Vec3::new(i * l[0], j * l[1], k * l[2]);
+                            if near(&s)
+                                && let Some(x) = self.crossing(&(a - s), &(b - s))
+                            {
+                                return Some(x + s);
+                            }
+                        }
+                    }
+                }
+                None
+            }
+        }
+    }
+}
+
+fn fmt(v: &Vec3) -> String {
+    format!("({:e}, {:e}, {:e})", v.x, v.y, v.z)
+}
+
+/// Unit normal (Newell's method; zero for a degenerate polygon), area (m²) and largest
+/// extent (m) of a polygon.
+fn polygon_frame(points: &[Vec3]) -> (Vec3, f64, f64) {
+    let mut n = Vec3::zeros();
+    for (k, p) in points.iter().enumerate() {
+        let q = points[(k + 1) % points.len()];
+        n += p.cross(&q);
+    }
+    let area = 0.5 * n.norm();
+    let extent = points
+        .iter()
+        .flat_map(|p| points.iter().map(move |q| (p - q).norm()))
+        .fold(0.0, f64::max);
+    let unit = if area > 0.0 { n / n.norm() } else { Vec3::zeros() };
+    (unit, area, extent)
+}
+
+/// Whether `x` (on the polygon's plane, unit normal `n`) lies inside the polygon: the
+/// crossing number in the projection that drops the normal's largest component.
+fn point_in_polygon(points: &[Vec3], n: &Vec3, x: &Vec3) -> bool {
+    let drop = n.iamax();
+    let (u, v) = ((drop + 1) % 3, (drop + 2) % 3);
+    let (px, py) = (x[u], x[v]);
+    let mut inside = false;
+    let m = points.len();
+    for k in 0..m {
+        let (a, b) = (points[k], points[(k + 1) % m]);
+        let (ax, ay, bx, by) = (a[u], a[v], b[u], b[v]);
+        if (ay > py) != (by > py) {
+            let xc = ax + (py - ay) / (by - ay) * (bx - ax);
+            if px < xc {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+/// Distance (m) from the point `c` to the segment a → b.
+fn segment_ball_distance(a: &Vec3, b: &Vec3, c: &Vec3) -> f64 {
+    let ab = b - a;
+    let l2 = ab.norm_squared();
+    let t = if l2 > 0.0 {
+        (ab.dot(&(c - a)) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + ab * t - c).norm()
+}
+
+/// A contact crossed by a crack.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CrackCrossing {
+    /// The first crack (index into the list given) that the contact's segment crosses.
+    pub crack: u32,
+    /// Where it crosses (m), on the segment from p's centre.
+    pub point: Vec3,
+}
+
+/// For every contact of `graph`, the first of `cracks` its centre-to-centre segment crosses
+/// (the minimum-image branch from p; every periodic image of a crack in a periodic
+/// `container`). Runs in parallel; the result does not depend on the thread count.
+pub fn crossed_contacts(
+    graph: &ContactGraph,
+    particles: &ParticleSet,
+    container: &Container,
+    cracks: &[CrackShape],
+) -> Vec<Option<CrackCrossing>> {
+    if cracks.is_empty() {
+        return vec![None; graph.len()];
+    }
+    let period = container.period();
+    (0..graph.len())
+        .into_par_iter()
+        .with_min_len(1024)
+        .map(|k| {
+            let p = graph.pairs[k][0] as usize;
+            let a = particles.centres[p];
+            let b = a + graph.branch(k);
+            first_crossing(cracks, &a, &b, period)
+        })
+        .collect()
+}
+
+/// The first of `cracks` the segment a → b crosses (periodic images when `period` is given).
+pub fn first_crossing(
+    cracks: &[CrackShape],
+    a: &Vec3,
+    b: &Vec3,
+    period: Option<[f64; 3]>,
+) -> Option<CrackCrossing> {
+    cracks.iter().enumerate().find_map(|(i, c)| {
+        c.crossing_periodic(a, b, period).map(|point| CrackCrossing {
+            crack: i as u32,
+            point,
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(x: f64, y: f64, z: f64) -> Vec3 {
+        Vec3::new(x, y, z)
+    }
+
+    #[test]
+    fn segment_and_disc() {
+        let d = CrackShape::Disc {
+            centre: v(0.0, 0.0, 0.0),
+            normal: v(0.0, 0.0, 2.0),
+            radius: 1.0,
+        };
+        assert!(d.validate("c").is_ok());
+        let x = d.crossing(&v(0.5, 0.0, -1.0), &v(0.5, 0.0, 3.0)).unwrap();
+        assert!((x - v(0.5, 0.0, 0.0)).norm() < 1e-15);
+        // Outside the rim, parallel to the plane, not reaching it.
+        assert!(d.crossing(&v(1.1, 0.0, -1.0), &v(1.1, 0.0, 1.0)).is_none());
+        assert!(d.crossing(&v(0.0, 0.0, 0.5), &v(0.5, 0.0, 0.5)).is_none());
+        assert!(d.crossing(&v(0.0, 0.0, 0.5), &v(0.0, 0.0, 0.1)).is_none());
+        // Half-open: a centre on the plane is on the negative side.
+        assert!(d.crossing(&v(0.0, 0.0, 0.0), &v(0.0, 0.0, 1.0)).is_some());
+        assert!(d.crossing(&v(0.0, 0.0, 0.0), &v(0.0, 0.0, -1.0)).is_none());
+        assert!(d.crossing(&v(0.0, 0.0, 0.0), &v(0.3, 0.0, 0.0)).is_none());
+        // Oblique segment through the rim region.
+        let x = d.crossing(&v(-2.0, 0.0, -1.0), &v(0.0, 0.0, 1.0)).unwrap();
+        assert!((x - v(-1.0, 0.0, 0.0)).norm() < 1e-15);
+    }
+
+    #[test]
+    fn segment_and_polygon_convex_and_not() {
+        // An L-shaped polygon in the plane x = 0.5.
+        let l = CrackShape::Polygon {
+            points: vec![
+                v(0.5, 0.0, 0.0),
+                v(0.5, 2.0, 0.0),
+                v(0.5, 2.0, 1.0),
+                v(0.5, 1.0, 1.0),
+                v(0.5, 1.0, 2.0),
+                v(0.5, 0.0, 2.0),
+            ],
+        };
+        assert!(l.validate("c").is_ok());
+        let cross = |y: f64, z: f64| l.crossing(&v(0.0, y, z), &v(1.0, y, z)).is_some();
+        assert!(cross(0.5, 0.5));
+        assert!(cross(1.5, 0.5));
+        assert!(cross(0.5, 1.5));
+        assert!(!cross(1.5, 1.5)); // the notch of the L
+        assert!(!cross(2.5, 0.5));
+        // Reverse direction crosses too.
+        assert!(l.crossing(&v(1.0, 0.5, 0.5), &v(0.0, 0.5, 0.5)).is_some());
+    }
+
+    #[test]
+    fn bad_shapes_are_refused() {
+        let zero = CrackShape::Disc {
+            centre: v(0.0, 0.0, 0.0),
+            normal: v(0.0, 0.0, 1.0),
+            radius: 0.0,
+        };
+        assert!(
+            zero.validate("cracks[0]")
+                .unwrap_err()
+                .to_string()
+                .contains("cracks[0].radius")
+        );
+        let flat = CrackShape::Disc {
+            centre: v(0.0, 0.0, 0.0),
+            normal: v(0.0, 0.0, 0.0),
+            radius: 1.0,
+        };
+        assert!(flat.validate("c").unwrap_err().to_string().contains("c.normal"));
+        let line = CrackShape::Polygon {
+            points: vec![v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(2.0, 0.0, 0.0)],
+        };
+        assert!(
+            line.validate("c")
+                .unwrap_err()
+                .to_string()
+                .contains("non-zero area")
+        );
+        let two = CrackShape::Polygon {
+            points: vec![v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0)],
+        };
+        assert!(two.validate("c").is_err());
+        let warped = CrackShape::Polygon {
+            points: vec![
+                v(0.0, 0.0, 0.0),
+                v(1.0, 0.0, 0.0),
+                v(1.0, 1.0, 0.1),
+                v(0.0, 1.0, 0.0),
+            ],
+        };
+        assert!(
+            warped
+                .validate("c")
+                .unwrap_err()
+                .to_string()
+                .contains("in the plane")
+        );
+    }
+
+    #[test]
+    fn periodic_images_cut_wrapping_segments() {
+        // A disc at x = 0.05 in a unit periodic cell; the segment from x = 0.95 to 1.1 (its
+        // minimum image across the boundary) crosses the image at x = 1.05.
+        let d = CrackShape::Disc {
+            centre: v(0.05, 0.5, 0.5),
+            normal: v(1.0, 0.0, 0.0),
+            radius: 0.2,
+        };
+        let (a, b) = (v(0.95, 0.5, 0.5), v(1.1, 0.5, 0.5));
+        assert!(d.crossing_periodic(&a, &b, None).is_none());
+        let x = d.crossing_periodic(&a, &b, Some([1.0; 3])).unwrap();
+        assert!((x - v(1.05, 0.5, 0.5)).norm() < 1e-14);
+        // A disc whose image would be hit only along y does not cut a segment along x.
+        assert!(
+            d.crossing_periodic(&v(0.0, 0.95, 0.5), &v(0.0, 1.05, 0.5), Some([1.0; 3]))
+                .is_none()
+        );
+    }
+}

@@ -1,0 +1,768 @@
+//! Imperfect interfaces, cracks, damage and broken bonds: what a discrete model is for.
+//!
+//! - **Interface resistance** between two phases ([`InterfaceResistance`]): a contact (or
+//!   Laguerre facet) whose centre-to-centre segment crosses the interface between phases a and
+//!   b gets the extra series resistance 1/(h S) thermally (h in W/(m²·K)) and r_c/S
+//!   electrically (r_c in Ω·m²), S its transmission surface:
+//!   1/G = h_p/(λ_p S) + h_q/(λ_q S) + 1/(h S). The phase rule decides where the segment
+//!   crosses: by centre, when p and q differ; with the segment rule, wherever a half-bond
+//!   crosses its particle's interface plane (so a contact between two particles of the same
+//!   phase, one of them cut, may cross it, and a wall link may too). The path along the
+//!   segment is read as four phases — p's centre, the end of p's half-bond, the end of q's,
+//!   q's centre — and every change adds one interface resistance. Its position along the
+//!   segment does not change a series conductance; whether (and how often) it is crossed does,
+//!   and so does its orientation: a crossing inside a cut particle (segment rule) is divided
+//!   by |e·n| (e the branch, n the interface normal of the particle's plane), which makes a
+//!   Laguerre network exact for plane interfaces wherever they cut the cells
+//!   (`path_resistance`); a change at the facet (by centre, or a crossing the segment rule's
+//!   sphere test missed) takes n from the phases themselves: the facets between the phases
+//!   around p and q form a staircase whose Σ S e is the interface's area times its normal
+//!   (`phase_normals`). The laminate rule has no position on the segment: it is read by
+//!   centre. Unlisted pairs stay perfect.
+//! - **Cracks** ([`Crack`]): every contact whose segment crosses the crack's surface
+//!   ([`demcon_graph::CrackShape`], minimum-image segment and periodic images in a periodic
+//!   box) is cut — removed from the graph and the network, in both physics — or, for a filled
+//!   crack (`gap_conductance`), given the series resistance 1/(h_gap S) (and r_gap/S
+//!   electrically, which a filled crack must give when the scene is electric). Wall links whose
+//!   segment (centre to face) a crack crosses are treated the same way. A cluster that a crack
+//!   separates from every boundary value is a floating cluster like any other (excluded and
+//!   reported, or refused, by the scene's `floating` policy).
+//! - **Damage** ([`Damage`]): the conductances (both physics) of the contacts whose branch
+//!   midpoint lies in the region are multiplied by the factor, in (0, 1]; overlapping regions
+//!   multiply. A contact is "in" a region by its midpoint (the minimum-image midpoint, wrapped
+//!   into the cell, in a periodic box): the one point of a contact that belongs to neither
+//!   particle. A wall link is in it by the midpoint of its half-bond.
+//! - **Broken bonds** (`cut_pairs`): particle index pairs (0-based, in the order of the
+//!   packing before carving: the order of an imported file) cut like an open crack, e.g. the
+//!   broken bonds of a mechanical DEM run. Pairs that are not contacts of the graph are counted
+//!   in the report; an index out of range is an error.
+//!
+//! Per-contact marks ([`Defects::marks`], bits [`MARK_INTERFACE`], [`MARK_DAMAGED`],
+//! [`MARK_FILLED_CRACK`]) and the cut contacts ([`Defects::cut`]) are kept for the output
+//! writers; [`Defects::crack_face`] lists the particles on a crack face.
+
+use std::collections::HashMap;
+
+use demcon_core::{Container, ParticleSet, Region, Vec3};
+use demcon_graph::{
+    ContactGraph, CrackShape, HalfBond, Laminates, Mix, WallContacts, crossed_contacts, first_crossing,
+};
+use serde::Serialize;
+
+use crate::error::ModelError;
+use crate::model::Model;
+
+/// A contact crossing the interface between the two phases.
+pub const MARK_INTERFACE: u8 = 1;
+/// A contact whose conductances a damage region scales.
+pub const MARK_DAMAGED: u8 = 2;
+/// A contact crossed by a filled crack (kept, with the gap's series resistance).
+pub const MARK_FILLED_CRACK: u8 = 4;
+
+/// The interface between two phases, with its conductances.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InterfaceResistance {
+    /// The two phases (indices into the material table; order does not matter).
+    pub phases: [u16; 2],
+    /// Thermal interface conductance h (W/(m²·K)), > 0.
+    pub conductance: f64,
+    /// Electric interface resistance r_c (Ω·m²), ≥ 0; `None`: electrically perfect.
+    pub electric_resistance: Option<f64>,
+}
+
+/// A crack surface.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Crack {
+    /// Its surface.
+    pub shape: CrackShape,
+    /// `None`: an open crack (insulating, the contacts are cut). `Some(h)`: a filled crack of
+    /// conductance h per area (W/(m²·K)), > 0.
+    pub gap_conductance: Option<f64>,
+    /// The filled crack's electric resistance per area (Ω·m²), ≥ 0; needed by an electric
+    /// solve when `gap_conductance` is set.
+    pub gap_electric_resistance: Option<f64>,
+}
+
+/// Conductances scaled in a region.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Damage {
+    /// The region (a contact is in it by its branch midpoint).
+    pub region: Region,
+    /// Factor on the conductances, in (0, 1].
+    pub factor: f64,
+}
+
+/// Interfaces, cracks, damage and broken bonds to apply to a model.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct DefectSpec {
+    /// Interface resistances between phase pairs.
+    pub interfaces: Vec<InterfaceResistance>,
+    /// Crack surfaces.
+    pub cracks: Vec<Crack>,
+    /// Damage regions.
+    pub damage: Vec<Damage>,
+    /// Broken bonds: particle index pairs (before carving).
+    pub cut_pairs: Vec<[u32; 2]>,
+}
+
+impl DefectSpec {
+    /// Nothing to apply.
+    pub fn is_empty(&self) -> bool {
+        self.interfaces.is_empty()
+            && self.cracks.is_empty()
+            && self.damage.is_empty()
+            && self.cut_pairs.is_empty()
+    }
+
+    /// Checks every value; errors name the scene fields (`interfaces[i]…`, `cracks[i]…`,
+    /// `damage[i].factor`). `n_phases` is the number of materials.
+    pub fn validate(&self, n_phases: usize) -> Result<(), ModelError> {
+        for (i, it) in self.interfaces.iter().enumerate() {
+            for (j, &ph) in it.phases.iter().enumerate() {
+                if ph as usize >= n_phases {
+                    return Err(ModelError::invalid(
+                        &format!("interfaces[{i}].between[{j}]"),
+                        ph,
+                        format!("a phase of the material table (0..{n_phases})"),
+                    ));
+                }
+            }
+            if it.phases[0] == it.phases[1] {
+                return Err(ModelError::invalid(
+                    &format!("interfaces[{i}].between"),
+                    format!("({}, {})", it.phases[0], it.phases[1]),
+                    "two different materials",
+                ));
+            }
+            positive(
+                &format!("interfaces[{i}].conductance"),
+                it.conductance,
+                "W/(m²·K)",
+            )?;
+            if let Some(r) = it.electric_resistance {
+                non_negative(&format!("interfaces[{i}].electric_resistance"), r, "Ω·m²")?;
+            }
+        }
+        for (i, c) in self.cracks.iter().enumerate() {
+            c.shape.validate(&format!("cracks[{i}]")).map_err(|e| match e {
+                demcon_core::CoreError::InvalidParameter {
+                    field,
+                    value,
+                    allowed,
+                } => ModelError::Invalid {
+                    field,
+                    value,
+                    allowed,
+                },
+                other => ModelError::at(&format!("cracks[{i}]"), other),
+            })?;
+            if let Some(h) = c.gap_conductance {
+                positive(&format!("cracks[{i}].gap_conductance"), h, "W/(m²·K)")?;
+            }
+            if let Some(r) = c.gap_electric_resistance {
+                non_negative(&format!("cracks[{i}].gap_electric_resistance"), r, "Ω·m²")?;
+            }
+        }
+        for (i, d) in self.damage.iter().enumerate() {
+            if !(d.factor.is_finite() && d.factor > 0.0 && d.factor <= 1.0) {
+                return Err(ModelError::invalid(
+                    &format!("damage[{i}].factor"),
+                    d.factor,
+                    "a factor in (0, 1] (0 would cut the contacts: use a crack or cut_contacts)",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The interface resistances (thermal m²·K/W, electric Ω·m²) per phase pair, row-major
+    /// over `n_phases` × `n_phases`.
+    fn table(&self, n_phases: usize) -> Vec<Option<(f64, f64)>> {
+        let mut t = vec![None; n_phases * n_phases];
+        for it in &self.interfaces {
+            let [a, b] = it.phases.map(usize::from);
+            let r = (1.0 / it.conductance, it.electric_resistance.unwrap_or(0.0));
+            t[a * n_phases + b] = Some(r);
+            t[b * n_phases + a] = Some(r);
+        }
+        t
+    }
+}
+
+fn positive(field: &str, v: f64, unit: &str) -> Result<(), ModelError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(ModelError::invalid(
+            field,
+            v,
+            format!("a finite number > 0 ({unit})"),
+        ))
+    }
+}
+
+fn non_negative(field: &str, v: f64, unit: &str) -> Result<(), ModelError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(ModelError::invalid(
+            field,
+            v,
+            format!("a finite number ≥ 0 ({unit})"),
+        ))
+    }
+}
+
+/// Why a contact was cut.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum CutCause {
+    /// An open crack (index into the spec's cracks) crosses its segment at `point` (m).
+    Crack {
+        /// The crack.
+        crack: u32,
+        /// Where the segment crosses it (m).
+        point: [f64; 3],
+    },
+    /// A broken bond of the `cut_pairs` list.
+    Broken,
+}
+
+/// A contact removed from the model's graph.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CutContact {
+    /// The two particles (current ids, p < q).
+    pub pair: [u32; 2],
+    /// Why.
+    pub cause: CutCause,
+}
+
+/// What applying the defects did.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct DefectReport {
+    /// Contacts cut by open cracks.
+    pub cut_by_cracks: usize,
+    /// Contacts crossed by filled cracks (kept with the gap resistance).
+    pub filled_crack_contacts: usize,
+    /// Broken bonds cut (pairs of `cut_pairs` that were contacts).
+    pub broken_bonds: usize,
+    /// Pairs of `cut_pairs` that are not contacts of the graph (or lost a particle to carving).
+    pub broken_not_contacts: usize,
+    /// Contacts in a damage region.
+    pub damaged_contacts: usize,
+    /// Contacts crossing a listed interface (at build time; re-phasing updates it).
+    pub interface_contacts: usize,
+    /// Particles on a crack face (an end of a contact crossed by a crack).
+    pub crack_face_particles: usize,
+    /// Connected components of the graph once the contacts are cut.
+    pub components_after_cuts: usize,
+    /// Findings for the user (a crack that crosses no contact: outside the domain?).
+    pub warnings: Vec<String>,
+}
+
+/// The defects applied to a model: the spec, per-contact values and marks, the cut contacts.
+#[derive(Debug, Clone, Default)]
+pub struct Defects {
+    /// What was asked for.
+    pub spec: DefectSpec,
+    /// Per contact of the model's graph: [`MARK_INTERFACE`] | [`MARK_DAMAGED`] |
+    /// [`MARK_FILLED_CRACK`] bits (0 for a plain contact).
+    pub marks: Vec<u8>,
+    /// Per contact: the damage factor (empty when no damage region: all 1).
+    pub damage: Vec<f64>,
+    /// Per contact: the thermal series resistance per area of the filled cracks it crosses
+    /// (m²·K/W; empty when none).
+    pub gap_thermal: Vec<f64>,
+    /// Per contact: the electric series resistance per area of the filled cracks it crosses
+    /// (Ω·m²; empty when none).
+    pub gap_electric: Vec<f64>,
+    /// Contacts removed from the graph (open cracks, broken bonds).
+    pub cut: Vec<CutContact>,
+    /// Particles on a crack face, ascending.
+    pub crack_face: Vec<u32>,
+    /// What was done.
+    pub report: DefectReport,
+}
+
+impl Defects {
+    /// Whether the segment a → b (m) crosses a crack (open or filled; periodic images in a
+    /// periodic `container`): the Halo does not average across it.
+    pub fn crack_between(&self, a: &Vec3, b: &Vec3, container: &Container) -> bool {
+        self.spec
+            .cracks
+            .iter()
+            .any(|c| c.shape.crossing_periodic(a, b, container.period()).is_some())
+    }
+
+    /// Any crack at all?
+    pub fn has_cracks(&self) -> bool {
+        !self.spec.cracks.is_empty()
+    }
+}
+
+/// How the particle ids of `cut_pairs` map to the model's: `kept_ids[k]` is the id before
+/// carving of the model's particle k (`None`: no carving), `n_before` the particle count
+/// before carving (the range of `cut_pairs`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Numbering<'a> {
+    pub kept_ids: Option<&'a [u32]>,
+    pub n_before: usize,
+}
+
+/// Applies `spec` to a freshly built graph: cuts the contacts crossed by open cracks and the
+/// broken bonds, records the filled cracks' gaps, the damage factors and the marks.
+/// `numbering` maps the ids of `cut_pairs`, `n_phases` is the number of materials.
+pub(crate) fn apply_defects(
+    graph: ContactGraph,
+    particles: &ParticleSet,
+    container: &Container,
+    mixes: &[Mix],
+    spec: &DefectSpec,
+    numbering: Numbering<'_>,
+    n_phases: usize,
+) -> Result<(ContactGraph, Defects), ModelError> {
+    let Numbering { kept_ids, n_before } = numbering;
+    let m = graph.len();
+    let mut report = DefectReport::default();
+    // Broken bonds, mapped to current ids.
+    let mut remove = vec![false; m];
+    let mut cause: Vec<Option<CutCause>> = vec![None; m];
+    if !spec.cut_pairs.is_empty() {
+        let mut new_id = vec![u32::MAX; n_before];
+        match kept_ids {
+            Some(ids) => ids
+                .iter()
+                .enumerate()
+                .for_each(|(k, &i)| new_id[i as usize] = k as u32),
+            None => new_id.iter_mut().enumerate().for_each(|(k, v)| *v = k as u32),
+        }
+        let index: HashMap<[u32; 2], usize> =
+            graph.pairs.iter().enumerate().map(|(k, &pq)| (pq, k)).collect();
+        for (i, &[a, b]) in spec.cut_pairs.iter().enumerate() {
+            for (j, x) in [a, b].into_iter().enumerate() {
+                if x as usize >= n_before {
+                    return Err(ModelError::invalid(
+                        &format!("cut_contacts[{i}][{j}]"),
+                        x,
+                        format!("a particle index of the packing (0..{n_before})"),
+                    ));
+                }
+            }
+            let (p, q) = (new_id[a as usize], new_id[b as usize]);
+            let key = [p.min(q), p.max(q)];
+            match index.get(&key) {
+                Some(&k) if p != u32::MAX && q != u32::MAX && p != q => {
+                    if !remove[k] {
+                        report.broken_bonds += 1;
+                    }
+                    remove[k] = true;
+                    cause[k] = Some(CutCause::Broken);
+                }
+                _ => report.broken_not_contacts += 1,
+            }
+        }
+    }
+    // Cracks: the open ones cut (the first that a segment crosses is named), then each filled
+    // one adds its gap on every segment it crosses (a segment crossing an open crack is cut
+    // whatever filled cracks it also crosses; two filled cracks add up).
+    let mut gap_thermal = Vec::new();
+    let mut gap_electric = Vec::new();
+    let mut marks = vec![0u8; m];
+    let mut face = vec![false; particles.len()];
+    let mut crack_hits = vec![0usize; spec.cracks.len()];
+    let open: Vec<usize> = (0..spec.cracks.len())
+        .filter(|&i| spec.cracks[i].gap_conductance.is_none())
+        .collect();
+    let shapes: Vec<CrackShape> = open.iter().map(|&i| spec.cracks[i].shape.clone()).collect();
+    for (k, x) in crossed_contacts(&graph, particles, container, &shapes)
+        .iter()
+        .enumerate()
+    {
+        let Some(x) = x else { continue };
+        let crack = open[x.crack as usize];
+        crack_hits[crack] += 1;
+        let [p, q] = graph.pairs[k];
+        face[p as usize] = true;
+        face[q as usize] = true;
+        if !remove[k] {
+            report.cut_by_cracks += 1;
+        }
+        remove[k] = true;
+        cause[k].get_or_insert(CutCause::Crack {
+            crack: crack as u32,
+            point: [x.point.x, x.point.y, x.point.z],
+        });
+    }
+    for (i, crack) in spec.cracks.iter().enumerate() {
+        let Some(h) = crack.gap_conductance else { continue };
+        let shape = [crack.shape.clone()];
+        for (k, x) in crossed_contacts(&graph, particles, container, &shape)
+            .iter()
+            .enumerate()
+        {
+            if x.is_none() {
+                continue;
+            }
+            crack_hits[i] += 1;
+            let [p, q] = graph.pairs[k];
+            face[p as usize] = true;
+            face[q as usize] = true;
+            if remove[k] {
+                continue;
+            }
+            if gap_thermal.is_empty() {
+                gap_thermal = vec![0.0; m];
+                gap_electric = vec![0.0; m];
+            }
+            gap_thermal[k] += 1.0 / h;
+            gap_electric[k] += crack.gap_electric_resistance.unwrap_or(0.0);
+            if marks[k] & MARK_FILLED_CRACK == 0 {
+                report.filled_crack_contacts += 1;
+            }
+            marks[k] |= MARK_FILLED_CRACK;
+        }
+    }
+    for (i, &hits) in crack_hits.iter().enumerate() {
+        if hits == 0 {
+            report.warnings.push(format!(
+                "cracks[{i}] crosses no contact (outside the domain, or smaller than a particle)"
+            ));
+        }
+    }
+    // Damage, by the branch midpoint.
+    let mut damage = Vec::new();
+    if !spec.damage.is_empty() {
+        damage = vec![1.0; m];
+        for k in 0..m {
+            let p = graph.pairs[k][0] as usize;
+            let mid = wrap(container, particles.centres[p] + 0.5 * graph.branch(k));
+            for d in &spec.damage {
+                if d.region.contains_point(&mid) {
+                    damage[k] *= d.factor;
+                    marks[k] |= MARK_DAMAGED;
+                }
+            }
+        }
+        report.damaged_contacts = marks.iter().filter(|&&b| b & MARK_DAMAGED != 0).count();
+    }
+    let cut: Vec<CutContact> = (0..m)
+        .filter(|&k| remove[k])
+        .map(|k| CutContact {
+            pair: graph.pairs[k],
+            cause: cause[k].unwrap_or(CutCause::Broken),
+        })
+        .collect();
+    let keep = |v: Vec<f64>| -> Vec<f64> {
+        if v.is_empty() {
+            v
+        } else {
+            (0..m).filter(|&k| !remove[k]).map(|k| v[k]).collect()
+        }
+    };
+    let (gap_thermal, gap_electric, damage) = (keep(gap_thermal), keep(gap_electric), keep(damage));
+    let marks: Vec<u8> = (0..m).filter(|&k| !remove[k]).map(|k| marks[k]).collect();
+    let graph = if cut.is_empty() {
+        graph
+    } else {
+        graph.without(&remove)?
+    };
+    report.components_after_cuts = graph.report.n_components;
+    let crack_face: Vec<u32> = (0..face.len() as u32).filter(|&p| face[p as usize]).collect();
+    report.crack_face_particles = crack_face.len();
+    let mut defects = Defects {
+        spec: spec.clone(),
+        marks,
+        damage,
+        gap_thermal,
+        gap_electric,
+        cut,
+        crack_face,
+        report,
+    };
+    update_interface_marks(&mut defects, &graph, &particles.phases, mixes, n_phases);
+    Ok((graph, defects))
+}
+
+/// A point wrapped into a periodic container's cell (unchanged otherwise).
+fn wrap(container: &Container, x: Vec3) -> Vec3 {
+    match container.period() {
+        None => x,
+        Some(l) => {
+            let min = container.bounds().min;
+            Vec3::from_fn(|i, _| min[i] + (x[i] - min[i]).rem_euclid(l[i]))
+        }
+    }
+}
+
+/// Smallest |e·n| an interface crossing is divided by (a branch almost along the interface).
+const MIN_CROSSING_COSINE: f64 = 1e-3;
+
+/// The phase at the end of particle `p`'s half-bond along the unit vector `e` over `length`
+/// (m), and |e·n| of the interface plane it crosses: the other phase when the segment rule
+/// sees it cross the particle's interface plane (one of its two planes: the one whose part
+/// beyond is longer, as [`Mix::segment_fraction`] reads it), else the phase of its centre
+/// (and 1).
+fn end_phase(lam: &Laminates<'_>, phases: &[u16], p: usize, e: &Vec3, length: f64) -> (u16, f64) {
+    match lam.get(p) {
+        Some(m) if m.half_bond == HalfBond::Segment && m.segment_fraction(e, length) > 0.0 => {
+            let beyond = |n: &Vec3, offset: f64| {
+                let k = e.dot(n);
+                if k <= 0.0 {
+                    0.0
+                } else {
+                    (1.0 - offset / (k * length)).clamp(0.0, 1.0)
+                }
+            };
+            let normal = match &m.second {
+                Some((n, off)) if beyond(n, *off) > beyond(&m.normal, m.offset) => *n,
+                _ => m.normal,
+            };
+            (m.other_phase, e.dot(&normal).abs())
+        }
+        _ => (phases[p], 1.0),
+    }
+}
+
+/// Sum of the interface resistances (thermal m²·K/W, electric Ω·m²) over the steps (from
+/// phase, to phase, |e·n| of the crossing) of a path, each divided by its |e·n|, and the
+/// number of listed interfaces crossed.
+///
+/// Why |e·n|: a branch of direction e crossing a plane interface of normal n carries, in the
+/// continuum, the flux q (e·n) S through its facet, while the temperature jump across the
+/// interface is q/h: the branch reproduces both (with the series rule for the bulk parts) only
+/// when the interface term of its resistance is 1/(h S |e·n|). A Laguerre network with the
+/// segment rule is then exact for a layered body with interface resistances, wherever the
+/// planes cut the cells (the network's own consistency argument: Σ S e = 0 per cell). By
+/// centre, the facet between two cells is the interface (|e·n| = 1).
+fn path_resistance(table: &[Option<(f64, f64)>], n: usize, steps: &[(u16, u16, f64)]) -> (f64, f64, u32) {
+    let mut r = (0.0, 0.0, 0);
+    for &(a, b, cos) in steps {
+        if a != b
+            && let Some(Some((t, e))) = table.get(a as usize * n + b as usize)
+        {
+            let c = cos.max(MIN_CROSSING_COSINE);
+            r.0 += t / c;
+            r.1 += e / c;
+            r.2 += 1;
+        }
+    }
+    r
+}
+
+/// The interface normal read from the phases by centre, per particle: u_p = Σ S e over its
+/// contacts to particles of another phase (e from p towards them, S the transmission surface,
+/// m²). Over a plane interface the facets between the phases form a staircase whose Σ S e is
+/// the plane's area times its normal (the closure of the cells on one side), so u_p − u_q
+/// estimates the interface normal at a contact (p, q) between the phases.
+fn phase_normals(graph: &ContactGraph, phases: &[u16], areas: &[f64]) -> Vec<Vec3> {
+    let mut u = vec![Vec3::zeros(); phases.len()];
+    for (k, &[p, q]) in graph.pairs.iter().enumerate() {
+        let (p, q) = (p as usize, q as usize);
+        if phases[p] != phases[q] {
+            let v = areas[k] * graph.geometry[k].normal;
+            u[p] += v;
+            u[q] -= v;
+        }
+    }
+    u
+}
+
+/// The interface resistances of contact `k` (thermal m²·K/W, electric Ω·m², count).
+/// `normals` ([`phase_normals`]) give the |e·n| of a crossing at the facet (the centre
+/// reading); without them it is 1.
+fn contact_interface(
+    graph: &ContactGraph,
+    phases: &[u16],
+    lam: &Laminates<'_>,
+    table: &[Option<(f64, f64)>],
+    n: usize,
+    k: usize,
+    normals: Option<&[Vec3]>,
+) -> (f64, f64, u32) {
+    let [p, q] = graph.pairs[k].map(|x| x as usize);
+    let g = &graph.geometry[k];
+    let w = graph.split(k);
+    let (end_p, cos_p) = end_phase(lam, phases, p, &g.normal, w * g.distance);
+    let (end_q, cos_q) = end_phase(lam, phases, q, &(-g.normal), (1.0 - w) * g.distance);
+    let cos_facet = match normals {
+        Some(u) if end_p != end_q => {
+            let v = u[p] - u[q];
+            let norm = v.norm();
+            if norm > 0.0 {
+                (g.normal.dot(&v) / norm).abs()
+            } else {
+                1.0
+            }
+        }
+        _ => 1.0,
+    };
+    // p's half-bond, the facet (the interface itself when the phases change there), q's.
+    let steps = [
+        (phases[p], end_p, cos_p),
+        (end_p, end_q, cos_facet),
+        (end_q, phases[q], cos_q),
+    ];
+    if phases[p] != end_p && end_p != end_q && end_q != phases[q] {
+        // Both half-bonds cross their own particle's plane and the phases change at the facet
+        // too (a → b → a → b): two tangent planes of a curved interface, each placing the one
+        // crossing in its own half. One crossing, with their mean cosine.
+        return path_resistance(table, n, &[(phases[p], phases[q], 0.5 * (cos_p + cos_q))]);
+    }
+    path_resistance(table, n, &steps)
+}
+
+/// Sets the [`MARK_INTERFACE`] bits (and the report's count) from the current phases.
+pub(crate) fn update_interface_marks(
+    defects: &mut Defects,
+    graph: &ContactGraph,
+    phases: &[u16],
+    mixes: &[Mix],
+    n_phases: usize,
+) {
+    if defects.marks.len() != graph.len() {
+        defects.marks = vec![0; graph.len()];
+    }
+    let table = defects.spec.table(n_phases);
+    let lam = Laminates::new(phases.len(), mixes);
+    let mut count = 0;
+    for k in 0..graph.len() {
+        let crossed = !defects.spec.interfaces.is_empty()
+            && contact_interface(graph, phases, &lam, &table, n_phases, k, None).2 > 0;
+        if crossed {
+            defects.marks[k] |= MARK_INTERFACE;
+            count += 1;
+        } else {
+            defects.marks[k] &= !MARK_INTERFACE;
+        }
+    }
+    defects.report.interface_contacts = count;
+}
+
+/// Which network a conductance belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Physics {
+    /// Heat: interface 1/h, gap 1/h_gap.
+    Thermal,
+    /// Current: interface r_c, gap r_gap.
+    Electric,
+}
+
+/// Adds the interface and filled-crack series resistances per area to contact conductances
+/// `g` (W/K or S) of surfaces `areas` (m²) and applies the damage factors:
+/// G = f / (1/G₀ + (Σ r_interface + r_gap)/S).
+pub(crate) fn apply_to_contacts(model: &Model, areas: &[f64], g: &mut [f64], physics: Physics) {
+    let (defects, graph, phases, mixes) = (
+        &model.defects,
+        &model.graph,
+        &model.particles.phases,
+        &model.mixes,
+    );
+    let n_phases = model.materials.materials.len();
+    if defects.spec.interfaces.is_empty() && defects.gap_thermal.is_empty() && defects.damage.is_empty() {
+        return;
+    }
+    let table = defects.spec.table(n_phases);
+    let lam = Laminates::new(phases.len(), mixes);
+    let gap = match physics {
+        Physics::Thermal => &defects.gap_thermal,
+        Physics::Electric => &defects.gap_electric,
+    };
+    let interfaces = !defects.spec.interfaces.is_empty();
+    let normals = interfaces.then(|| phase_normals(graph, phases, areas));
+    for k in 0..g.len() {
+        let mut r = gap.get(k).copied().unwrap_or(0.0);
+        if interfaces {
+            let (t, e, _) = contact_interface(graph, phases, &lam, &table, n_phases, k, normals.as_deref());
+            r += match physics {
+                Physics::Thermal => t,
+                Physics::Electric => e,
+            };
+        }
+        if r > 0.0 && g[k] > 0.0 && areas[k] > 0.0 {
+            g[k] = 1.0 / (1.0 / g[k] + r / areas[k]);
+        }
+        if let Some(f) = defects.damage.get(k) {
+            g[k] *= f;
+        }
+    }
+}
+
+/// Drops the wall links an open crack cuts (segment from the centre to the face).
+pub(crate) fn cut_wall_links(
+    defects: &Defects,
+    walls: &mut WallContacts,
+    particles: &ParticleSet,
+    container: &Container,
+) {
+    let open: Vec<CrackShape> = defects
+        .spec
+        .cracks
+        .iter()
+        .filter(|c| c.gap_conductance.is_none())
+        .map(|c| c.shape.clone())
+        .collect();
+    if open.is_empty() {
+        return;
+    }
+    let period = container.period();
+    let cut: Vec<bool> = (0..walls.len())
+        .map(|k| {
+            let a = particles.centres[walls.particle[k] as usize];
+            let b = a + walls.half_length[k] * walls.normal[k];
+            first_crossing(&open, &a, &b, period).is_some()
+        })
+        .collect();
+    walls.retain_links(|k| !cut[k]);
+}
+
+/// The wall-link counterpart of [`apply_to_contacts`]: the interface a half-bond crosses
+/// inside its particle (segment rule), filled cracks on the link's segment, damage by the
+/// half-bond's midpoint.
+pub(crate) fn apply_to_walls(
+    model: &Model,
+    walls: &WallContacts,
+    surfaces: &[f64],
+    g: &mut [f64],
+    physics: Physics,
+) {
+    let (defects, particles, container, mixes) =
+        (&model.defects, &model.particles, &model.container, &model.mixes);
+    let n_phases = model.materials.materials.len();
+    let spec = &defects.spec;
+    if spec.interfaces.is_empty() && spec.cracks.is_empty() && spec.damage.is_empty() {
+        return;
+    }
+    let table = spec.table(n_phases);
+    let lam = Laminates::new(particles.len(), mixes);
+    let period = container.period();
+    for k in 0..walls.len() {
+        let p = walls.particle[k] as usize;
+        let (n, h) = (walls.normal[k], walls.half_length[k]);
+        let a = particles.centres[p];
+        let b = a + h * n;
+        let (end, cos) = end_phase(&lam, &particles.phases, p, &n, h);
+        let (t, e, _) = path_resistance(&table, n_phases, &[(particles.phases[p], end, cos)]);
+        let mut r = match physics {
+            Physics::Thermal => t,
+            Physics::Electric => e,
+        };
+        for c in &spec.cracks {
+            if let Some(hg) = c.gap_conductance
+                && c.shape.crossing_periodic(&a, &b, period).is_some()
+            {
+                r += match physics {
+                    Physics::Thermal => 1.0 / hg,
+                    Physics::Electric => c.gap_electric_resistance.unwrap_or(0.0),
+                };
+            }
+        }
+        if r > 0.0 && g[k] > 0.0 && surfaces[k] > 0.0 {
+            g[k] = 1.0 / (1.0 / g[k] + r / surfaces[k]);
+        }
+        let mid = wrap(container, a + 0.5 * h * n);
+        for d in &spec.damage {
+            if d.region.contains_point(&mid) {
+                g[k] *= d.factor;
+            }
+        }
+    }
+}
