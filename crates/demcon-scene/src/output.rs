@@ -314,6 +314,9 @@ pub(crate) struct ParticleFields<'a> {
     pub(crate) vectors: Vec<(&'static str, &'a [demcon_core::Vec3])>,
     /// 1 where the particle's Halo is cut by the boundary.
     halo_cut: Option<Vec<i32>>,
+    /// 1 where the particle is on a crack face (an end of a contact a crack crosses), when the
+    /// model has cracks.
+    crack_face: Option<Vec<i32>>,
 }
 
 impl<'a> ParticleFields<'a> {
@@ -396,12 +399,19 @@ impl<'a> ParticleFields<'a> {
             vectors.push(("halo_flux", h));
         }
         let halo_cut = halo.map(|(_, cut)| cut.iter().map(|&b| i32::from(b)).collect());
+        let on_crack = m.crack_face_particles();
+        let crack_face = (!on_crack.is_empty()).then(|| {
+            let mut f = vec![0i32; n];
+            on_crack.iter().for_each(|&p| f[p as usize] = 1);
+            f
+        });
         Self {
             solved,
             degree,
             scalars,
             vectors,
             halo_cut,
+            crack_face,
         }
     }
 
@@ -419,6 +429,9 @@ impl<'a> ParticleFields<'a> {
         }
         if let Some(c) = &self.halo_cut {
             fields.push(Field::ints("halo_truncated", c));
+        }
+        if let Some(c) = &self.crack_face {
+            fields.push(Field::ints("crack_face", c));
         }
         fields
     }
@@ -468,11 +481,15 @@ enum LineKind {
     ThermalWall = 1,
     /// A particle's link to a face electrode.
     Electrode = 2,
+    /// A contact an open crack cut (no longer in the network).
+    CutByCrack = 3,
+    /// A broken bond of `cut_contacts` (no longer in the network).
+    BrokenBond = 4,
 }
 
 /// The contact network of a run as `contacts.vtp` draws it: the lines — the contacts, then the
-/// thermal wall links, then the face-electrode links — and their values that do not change in
-/// time. A contact across a periodic boundary ends at the image of its second particle; a wall
+/// thermal wall links, then the face-electrode links, then the contacts cracks and broken bonds
+/// removed — and their values that do not change in time. A contact across a periodic boundary ends at the image of its second particle; a wall
 /// link ends where it meets its face (a Laguerre facet's centroid, else the particle's centre
 /// moved by the link's half-length along the face's normal).
 struct ContactNetwork {
@@ -480,6 +497,9 @@ struct ContactNetwork {
     points: Vec<Vec3>,
     lines: Vec<[u32; 2]>,
     kind: Vec<i32>,
+    /// The contact's marks (`demcon_model::defects::MARK_*`: interface 1, damaged 2, filled
+    /// crack 4); 0 on the other lines.
+    marks: Vec<i32>,
     /// Centre-to-centre distance, or the link's half-length (m).
     length: Vec<f64>,
     /// Transmission surface (m²): the thermal network's, or the electric one's without heat.
@@ -537,23 +557,54 @@ impl ContactNetwork {
             };
         let thermal_links = setup.map_or(0, |s| links(&s.walls, &s.surface, LineKind::ThermalWall));
         let electrode_links = electric.map_or(0, |e| links(&e.walls, &e.surface, LineKind::Electrode));
+        // The contacts removed by open cracks and broken bonds: drawn, conducting nothing (their
+        // temperature drop is the jump across the crack).
+        let cut = m.cut_contacts();
+        for c in cut {
+            let [p, q] = c.pair;
+            let mut d = particles.centres[q as usize] - particles.centres[p as usize];
+            if let Some(period) = m.container.period() {
+                for k in 0..3 {
+                    d[k] -= period[k] * (d[k] / period[k]).round();
+                }
+            }
+            let end = particles.centres[p as usize] + d;
+            let q = if d == particles.centres[q as usize] - particles.centres[p as usize] {
+                q
+            } else {
+                points.push(end);
+                (points.len() - 1) as u32
+            };
+            lines.push([p, q]);
+            kind.push(match c.cause {
+                demcon_model::CutCause::Crack { .. } => LineKind::CutByCrack as i32,
+                demcon_model::CutCause::Broken => LineKind::BrokenBond as i32,
+            });
+            length.push(d.norm());
+            surface.push(0.0);
+        }
+        let zeros = |k: usize| vec![0.0; k];
         let thermal = setup.map(|s| {
             [
                 s.contact_conductances(),
                 s.wall_conductances(),
-                &vec![0.0; electrode_links],
+                &zeros(electrode_links),
+                &zeros(cut.len()),
             ]
             .concat()
         });
         let electric = electric.map(|e| {
             let (c, w) = e.conductances.split_at(contacts);
-            [c, &vec![0.0; thermal_links], w].concat()
+            [c, &zeros(thermal_links), w, &zeros(cut.len())].concat()
         });
+        let mut marks: Vec<i32> = m.contact_marks().iter().map(|&b| i32::from(b)).collect();
+        marks.resize(lines.len(), 0);
         debug_assert!(points.len() >= n);
         Ok(Self {
             points,
             lines,
             kind,
+            marks,
             length,
             surface,
             thermal,
@@ -570,6 +621,7 @@ impl ContactNetwork {
         let contacts = m.graph.pairs.len();
         let mut fields = vec![
             Field::ints("kind", &self.kind),
+            Field::ints("marks", &self.marks),
             Field::scalars("length", &self.length),
             Field::scalars("surface", &self.surface),
         ];
@@ -586,7 +638,13 @@ impl ContactNetwork {
             for (k, w) in s.walls.wall_of_links().enumerate() {
                 drop.push(temps[s.walls.particle[k] as usize] - wall(w));
             }
-            drop.resize(self.lines.len(), 0.0);
+            let electrode_links = r.electric.as_ref().map_or(0, |e| e.walls.len());
+            drop.resize(drop.len() + electrode_links, 0.0);
+            drop.extend(
+                m.cut_contacts()
+                    .iter()
+                    .map(|c| temps[c.pair[0] as usize] - temps[c.pair[1] as usize]),
+            );
             flow = drop.iter().zip(g).map(|(d, g)| d * g).collect();
             fields.push(Field::scalars("thermal_conductance", g));
             fields.push(Field::scalars("heat_flow", &flow));
@@ -599,7 +657,13 @@ impl ContactNetwork {
         ) {
             let thermal_links = r.thermal_setup.as_ref().map_or(0, |s| s.walls.len());
             let (c, w) = e.branch_currents.split_at(contacts);
-            current = [c, &vec![0.0; thermal_links], w].concat();
+            current = [
+                c,
+                &vec![0.0; thermal_links],
+                w,
+                &vec![0.0; m.cut_contacts().len()],
+            ]
+            .concat();
             joule = current
                 .iter()
                 .zip(g)

@@ -16,12 +16,18 @@ use vtk_reader::{values, vtk_read};
 /// A 1 cm steel cube of 600 particles with Laguerre cells, a steady or transient heat problem
 /// (YMin at 20 °C, YMax at 30 °C) and a one-way electric one (0.01 V across z).
 fn scene(solver: &str, times: &str) -> Scene {
+    scene_with(solver, times, "")
+}
+
+/// [`scene`] with extra top-level fields (cracks, damage…).
+fn scene_with(solver: &str, times: &str, extra: &str) -> Scene {
     let text = format!(
         r#"(
     name: "vtk-outputs",
     seed: 3,
     packing: Generate(container: Box(size: (0.01, 0.01, 0.01)), count: 600, phi: 0.55, radius_cov: 0.3),
     surface: Laguerre,
+    {extra}
     materials: [(name: "steel", conductivity: 15.0, density: 7900.0, specific_heat: 500.0, resistivity: 0.73e-6)],
     thermal: (
         initial_temperature: 20.0,
@@ -68,7 +74,7 @@ fn check_contacts(c: &Value, r: &RunResult) {
     let s = r.thermal_setup.as_ref().unwrap();
     let e = r.electric.as_ref().unwrap();
     let contacts = m.graph.pairs.len();
-    let lines = contacts + s.walls.len() + e.walls.len();
+    let lines = contacts + s.walls.len() + e.walls.len() + m.cut_contacts().len();
     assert_eq!(c["cells"], lines);
     assert_eq!(c["cell_types"], serde_json::json!([3]));
     let cd = &c["cell_data"];
@@ -98,7 +104,12 @@ fn check_contacts(c: &Value, r: &RunResult) {
         e.report.joule_w
     );
     let current = values(cd, "current");
-    let electrodes: f64 = current[lines - e.walls.len()..].iter().map(|i| i.abs()).sum();
+    let electrodes: f64 = current
+        .iter()
+        .zip(&kind)
+        .filter(|(_, k)| **k == 2.0)
+        .map(|(i, _)| i.abs())
+        .sum();
     assert!(
         close(electrodes, 2.0 * e.report.current_in, 1e-6),
         "electrode links carry {electrodes} A, twice the current in {}",
@@ -247,5 +258,57 @@ fn cells_need_laguerre_cells() {
     assert!(
         msg.contains("outputs.cells_vtk") && msg.contains("Laguerre"),
         "{msg}"
+    );
+}
+
+#[test]
+fn cracks_and_damage_are_marked_in_the_network_and_on_the_particles() {
+    let s = scene_with(
+        "Steady",
+        "[]",
+        "cracks: [Disc(centre: (0.005, 0.005, 0.005), normal: (0.0, 1.0, 0.0), radius: 0.003)],\n    \
+         damage: [(region: Sphere(centre: (0.005, 0.005, 0.002), radius: 0.002), factor: 0.5)],",
+    );
+    let (r, dir) = run_and_write(&s, "cracked");
+    let m = &r.model;
+    let cut = m.cut_contacts().len();
+    assert!(cut > 0, "the disc cuts contacts");
+    let Some(c) = vtk_read(&dir.join("contacts.vtp")) else {
+        return;
+    };
+    check_contacts(&c, &r);
+    let cd = &c["cell_data"];
+    let (kind, marks) = (values(cd, "kind"), values(cd, "marks"));
+    assert_eq!(kind.iter().filter(|&&k| k == 3.0).count(), cut, "cut lines");
+    let damaged = m.contact_marks().iter().filter(|&&b| b & 2 != 0).count();
+    assert!(damaged > 0);
+    assert_eq!(marks.iter().filter(|&&b| b as i32 & 2 != 0).count(), damaged);
+    // A cut line conducts nothing; its temperature drop is the jump across the crack, hot
+    // (y = L) side above: from the lower particle to the upper one the drop is negative.
+    let (flow, drop) = (values(cd, "heat_flow"), values(cd, "temperature_drop"));
+    let n_lines = kind.len();
+    let cut_lines = n_lines - cut..n_lines;
+    assert!(flow[cut_lines.clone()].iter().all(|&f| f == 0.0));
+    let jump: f64 = m
+        .cut_contacts()
+        .iter()
+        .zip(&drop[cut_lines])
+        .map(|(c, d)| {
+            let dy = m.particles.centres[c.pair[1] as usize].y - m.particles.centres[c.pair[0] as usize].y;
+            if dy > 0.0 { -d } else { *d }
+        })
+        .sum::<f64>()
+        / cut as f64;
+    assert!(
+        jump > 0.0,
+        "the mean jump across the crack, upper minus lower: {jump} K"
+    );
+    let Some(p) = vtk_read(&dir.join("particles.vtu")) else {
+        return;
+    };
+    let face = values(&p["point_data"], "crack_face");
+    assert_eq!(
+        face.iter().filter(|&&f| f == 1.0).count(),
+        m.crack_face_particles().len()
     );
 }
