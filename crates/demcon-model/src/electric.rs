@@ -260,7 +260,7 @@ pub fn solve_electric(
     let wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
     let m = g.len();
     let (ext, g) = network_with_walls(model, &walls, g, wall_g)?;
-    let net = ext.as_ref().unwrap_or(&model.network);
+    let net = ext.as_ref().unwrap_or_else(|| model.network());
     let mut next_wall = 0..walls.n_walls();
     let mut electrodes = Vec::new();
     for (i, e) in problem.electrodes.iter().enumerate() {

@@ -231,7 +231,7 @@ pub struct ThermalSetup {
 impl ThermalSetup {
     /// The thermal network: the model's, or the one extended with wall nodes.
     pub fn network<'a>(&'a self, model: &'a Model) -> &'a Network {
-        self.network.as_ref().unwrap_or(&model.network)
+        self.network.as_ref().unwrap_or_else(|| model.network())
     }
 
     /// The contact conductances (W/K), without the wall links.
