@@ -351,18 +351,26 @@ impl Csr {
         const GALERKIN_CHUNK: usize = 256;
         debug_assert_eq!(self.ncols, a.nrows);
         let (nc, m) = (self.nrows, p.ncols);
-        // Row of A P within the current block, by row of A P (written before it is read).
+        // Row of A P within the current block, by row of A P (written before it is read),
+        // and the last block (counted from 1) that read each row of A P.
         let mut local = vec![u32::MAX; a.nrows];
+        let mut seen = vec![0u32; a.nrows];
         let mut ptr = Vec::with_capacity(nc + 1);
         ptr.push(0u32);
-        // Grown block by block: a large vector is reallocated by remapping its pages, so
-        // the growth copies nothing and the untouched capacity is not resident.
+        // Grown block by block (amortised doubling; the result is a fraction of A P).
         let (mut cols, mut vals) = (Vec::new(), Vec::new());
-        for c0 in (0..nc).step_by(block) {
+        // Parallel tasks per block: a few per thread (each makes its own accumulator).
+        let tasks = 2 * rayon::current_num_threads().max(1);
+        for (b, c0) in (0..nc).step_by(block).enumerate() {
             let c1 = (c0 + block).min(nc);
-            let mut rows: Vec<u32> = self.cols[self.ptr[c0] as usize..self.ptr[c1] as usize].to_vec();
-            rows.par_sort_unstable();
-            rows.dedup();
+            let stamp = b as u32 + 1;
+            let mut rows = Vec::new();
+            for &k in &self.cols[self.ptr[c0] as usize..self.ptr[c1] as usize] {
+                if std::mem::replace(&mut seen[k as usize], stamp) != stamp {
+                    rows.push(k);
+                }
+            }
+            rows.sort_unstable();
             for (x, &k) in rows.iter().enumerate() {
                 local[k as usize] = x as u32;
             }
@@ -373,7 +381,7 @@ impl Csr {
                 c1 - c0,
                 m,
                 GALERKIN_CHUNK,
-                1,
+                (c1 - c0).div_ceil(GALERKIN_CHUNK).div_ceil(tasks),
                 || Accumulator::new(m),
                 |acc, i| {
                     let (rc, _) = self.row(c0 + i);
