@@ -1,5 +1,6 @@
 //! Contact detection: from a packing to the contact graph with each contact's geometry
-//! (d_pq, unit normal p→q, gap, R_m), the tolerance used and a report.
+//! (d_pq, unit normal p→q; the gap and R_m follow from the radii), the tolerance used and a
+//! report.
 
 use std::borrow::Cow;
 use std::time::Instant;
@@ -93,16 +94,15 @@ impl ContactParams {
 }
 
 /// Geometry of one contact, computed once; thermal and electric models only read it.
+/// The gap and the mean radius are not stored (a Laguerre graph reads neither, and they cost
+/// 16 B per facet, 0.11 kB per particle): [`ContactGraph::gap`] and
+/// [`ContactGraph::mean_radius`] compute them from the radii, bit for bit as detection did.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ContactGeometry {
     /// Centre distance d_pq (m), minimum image in a periodic box.
     pub distance: f64,
     /// Unit normal from p to q (dimensionless).
     pub normal: Vec3,
-    /// Gap g_pq = d_pq − R_p − R_q (m); negative for overlapping spheres.
-    pub gap: f64,
-    /// Mean radius R_m = (R_p + R_q)/2 (m).
-    pub mean_radius: f64,
 }
 
 /// A non-fatal finding of contact detection (the variants `Rattlers`, `SingleContact`,
@@ -208,6 +208,20 @@ impl ContactGraph {
         g.normal * g.distance
     }
 
+    /// Gap of contact `k`, g_pq = d_pq − R_p − R_q (m), for the radii of the graph's
+    /// particles; negative for overlapping spheres.
+    pub fn gap(&self, k: usize, radii: &[f64]) -> f64 {
+        let [p, q] = self.pairs[k];
+        self.geometry[k].distance - radii[p as usize] - radii[q as usize]
+    }
+
+    /// Mean radius of contact `k`, R_m = (R_p + R_q)/2 (m), for the radii of the graph's
+    /// particles.
+    pub fn mean_radius(&self, k: usize, radii: &[f64]) -> f64 {
+        let [p, q] = self.pairs[k];
+        0.5 * (radii[p as usize] + radii[q as usize])
+    }
+
     /// Where contact `k`'s branch is split between its two particles: h_p/d_pq from p (the
     /// Laguerre facet's position), or 0.5 for contacts without cells.
     pub fn split(&self, k: usize) -> f64 {
@@ -227,8 +241,10 @@ impl ContactGraph {
     /// The graph restricted to the particles `keep` (ascending, unique ids), renumbered
     /// 0, 1, … in that order — the same numbering as [`ParticleSet::retain`] or
     /// [`ParticleSet::permuted`] with these ids. Contacts with a removed end are dropped;
-    /// the report is kept, with its counts updated.
-    pub fn induced(&self, keep: &[u32]) -> Result<ContactGraph, GraphError> {
+    /// the report is kept, with its counts updated (`radii`: of the graph's particles, for
+    /// the overlaps).
+    pub fn induced(&self, keep: &[u32], radii: &[f64]) -> Result<ContactGraph, GraphError> {
+        crate::error::same_len("radii", radii.len(), self.n_particles, "particle")?;
         if let Some(w) = keep.windows(2).position(|w| w[0] >= w[1]) {
             return Err(CoreError::invalid(
                 format!("keep[{}]", w + 1),
@@ -276,7 +292,8 @@ impl ContactGraph {
                 keep.iter().map(|&i| self.cut_degrees[i as usize]).collect()
             },
         };
-        summarise(&mut graph);
+        let radii: Vec<f64> = keep.iter().map(|&i| radii[i as usize]).collect();
+        summarise(&mut graph, &radii);
         Ok(graph)
     }
 }
@@ -286,9 +303,12 @@ impl ContactGraph {
     /// broken bonds): same particles, the other contacts in their order with their geometry
     /// (and facets), the report's counts (components, rattlers) updated.
     ///
-    /// Errors: `remove` not one flag per contact.
-    pub fn without(&self, remove: &[bool]) -> Result<ContactGraph, GraphError> {
+    /// `radii`: the particles' (m), for the report.
+    ///
+    /// Errors: `remove` not one flag per contact, `radii` not one per particle.
+    pub fn without(&self, remove: &[bool], radii: &[f64]) -> Result<ContactGraph, GraphError> {
         crate::error::same_len("remove", remove.len(), self.len(), "contact")?;
+        crate::error::same_len("radii", radii.len(), self.n_particles, "particle")?;
         let keep = |k: &usize| !remove[*k];
         let pairs = (0..self.len()).filter(keep).map(|k| self.pairs[k]).collect();
         let geometry = (0..self.len()).filter(keep).map(|k| self.geometry[k]).collect();
@@ -321,15 +341,25 @@ impl ContactGraph {
             cells,
             cut_degrees,
         };
-        summarise(&mut graph);
+        summarise(&mut graph, radii);
         Ok(graph)
     }
 }
 
-/// Fills the report's counts and diagnostics from the graph (all but the search fields).
-pub(crate) fn summarise(graph: &mut ContactGraph) {
+/// Fills the report's counts and diagnostics from the graph (all but the search fields);
+/// `radii` of the graph's particles.
+pub(crate) fn summarise(graph: &mut ContactGraph, radii: &[f64]) {
     let degrees = graph.degrees();
     let comps = graph.components();
+    // Count and largest overlap: integer sums and a maximum, so any reduction order gives
+    // the same result.
+    let g = &*graph;
+    let (overlaps, max_rel) = (0..g.len())
+        .into_par_iter()
+        .map(|k| (k, g.gap(k, radii)))
+        .filter(|&(_, gap)| gap < 0.0)
+        .map(|(k, gap)| (1usize, -gap / (2.0 * g.mean_radius(k, radii))))
+        .reduce(|| (0, 0.0f64), |a, b| (a.0 + b.0, a.1.max(b.1)));
     let r = &mut graph.report;
     r.coordination = if graph.n_particles == 0 {
         0.0
@@ -342,14 +372,7 @@ pub(crate) fn summarise(graph: &mut ContactGraph) {
         .collect();
     r.under_two_contacts = degrees.iter().filter(|&&d| d < 2).count();
     let single = degrees.iter().filter(|&&d| d == 1).count();
-    // Count and largest overlap: integer sums and a maximum, so any reduction order gives
-    // the same result.
-    let (overlaps, max_rel) = graph
-        .geometry
-        .par_iter()
-        .filter(|g| g.gap < 0.0)
-        .map(|g| (1usize, -g.gap / (2.0 * g.mean_radius)))
-        .reduce(|| (0, 0.0f64), |a, b| (a.0 + b.0, a.1.max(b.1)));
+
     r.overlaps = overlaps;
     r.n_components = comps.count();
     r.largest_component = comps.largest();
@@ -717,8 +740,6 @@ pub fn detect_contacts(
             ContactGeometry {
                 distance,
                 normal: sep / distance,
-                gap: distance - radii[p] - radii[q],
-                mean_radius: 0.5 * (radii[p] + radii[q]),
             }
         })
         .collect();
@@ -753,7 +774,7 @@ pub fn detect_contacts(
         });
     }
     graph.report.diagnostics = diagnostics;
-    summarise(&mut graph);
+    summarise(&mut graph, radii);
     graph.report.wall_time_s = start.elapsed().as_secs_f64();
     Ok(graph)
 }

@@ -4,7 +4,7 @@
 //!
 //! Flow: [`detect_contacts`] (a relative gap tolerance, or the tolerance that reaches a
 //! target mean coordination Z, 7.5 by default) → [`ContactGraph`] with one
-//! [`ContactGeometry`] per contact (d_pq, unit normal p→q, gap, R_m) and a
+//! [`ContactGeometry`] per contact (d_pq, unit normal p→q; gap and R_m from the radii) and a
 //! [`ContactReport`] (ε, Z, rattlers, components, cost, diagnostics) →
 //! [`contact_surfaces`] under a [`SurfaceModel`] (calibrated C_t·π·R_m², or Terreros α) →
 //! [`contact_property`] per contact with an [`InterfaceRule`] → [`conductances`]

@@ -75,10 +75,8 @@ pub fn contact_surfaces(
     let r = &particles.radii;
     Ok(match *model {
         SurfaceModel::Calibrated { c_t } => Surfaces {
-            area: graph
-                .geometry
-                .iter()
-                .map(|g| surface_calibrated(c_t, g.mean_radius))
+            area: (0..graph.len())
+                .map(|k| surface_calibrated(c_t, graph.mean_radius(k, r)))
                 .collect(),
             clamped: 0,
         },

@@ -28,9 +28,10 @@ fn check_against_brute_force(p: &ParticleSet, container: &Container, eps: f64) {
             assert!((geo.normal.norm() - 1.0).abs() < 1e-14);
             let [a, b] = g.pairs[k];
             let (ra, rb) = (p.radii[a as usize], p.radii[b as usize]);
-            assert!((geo.gap - (d - ra - rb)).abs() < 1e-12);
-            assert!((geo.mean_radius - 0.5 * (ra + rb)).abs() < 1e-15);
-            assert!(geo.gap <= eps * (ra + rb) * (1.0 + 1e-12));
+            let gap = g.gap(k, &p.radii);
+            assert!((gap - (d - ra - rb)).abs() < 1e-12);
+            assert!((g.mean_radius(k, &p.radii) - 0.5 * (ra + rb)).abs() < 1e-15);
+            assert!(gap <= eps * (ra + rb) * (1.0 + 1e-12));
         }
         assert_eq!(g.report.search, search);
         assert_eq!(g.report.epsilon, eps);
@@ -97,7 +98,7 @@ fn periodic_contacts_use_the_minimum_image() {
             "{:?}",
             geo.normal
         );
-        assert!(geo.gap.abs() < 1e-12);
+        assert!(g.gap(0, &set.radii).abs() < 1e-12);
         assert!((g.branch(0) - Vec3::new(-0.2, 0.0, 0.0)).norm() < 1e-12);
     }
     // In a walled box the same spheres are 1.8 m apart: no contact, two rattlers.
@@ -133,10 +134,8 @@ fn target_coordination_is_reached_exactly() {
             assert_eq!(again.pairs, g.pairs);
             // And one fewer contact would fall short: every contact's relative gap ≤ ε, and
             // ε lies below the first excluded pair's gap.
-            let max_in = g
-                .geometry
-                .iter()
-                .map(|c| c.gap / (2.0 * c.mean_radius))
+            let max_in = (0..g.len())
+                .map(|k| g.gap(k, &p.radii) / (2.0 * g.mean_radius(k, &p.radii)))
                 .fold(f64::NEG_INFINITY, f64::max);
             assert!(max_in <= g.report.epsilon);
             assert!(2.0 * (g.len() - 1) as f64 / n < target);
@@ -249,11 +248,11 @@ fn rattlers_and_components_on_a_hand_built_set() {
     assert_eq!(comps.labels, vec![0, 0, 0, 1, 1, 2]);
     assert_eq!(comps.sizes, vec![3, 2, 1]);
     // Dropping the rattler and the pair leaves one component.
-    let core = g.induced(&comps.members(0)).unwrap();
+    let core = g.induced(&comps.members(0), &p.radii).unwrap();
     assert_eq!(core.pairs, vec![[0, 1], [1, 2]]);
     assert_eq!((core.report.n_components, core.report.rattlers.len()), (1, 0));
-    assert!(g.induced(&[2, 1]).is_err());
-    assert!(g.induced(&[0, 6]).is_err());
+    assert!(g.induced(&[2, 1], &p.radii).is_err());
+    assert!(g.induced(&[0, 6], &p.radii).is_err());
 }
 
 #[test]
@@ -266,7 +265,7 @@ fn overlaps_are_contacts_and_reported() {
     )
     .unwrap();
     assert_eq!(g.pairs, vec![[0, 1]]);
-    assert!((g.geometry[0].gap + 0.1).abs() < 1e-12);
+    assert!((g.gap(0, &p.radii) + 0.1).abs() < 1e-12);
     assert_eq!(g.report.overlaps, 1);
     match g
         .report

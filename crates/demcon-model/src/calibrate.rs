@@ -71,7 +71,7 @@ fn calibrate_periodic(model: &Model, volume: f64) -> Result<CtCalibration, Model
     )?;
     let g = conductances(&model.graph, &s.area, &vec![1.0; model.graph.len()])?;
     let branches: Vec<_> = (0..model.graph.len()).map(|k| model.graph.branch(k)).collect();
-    let h = homogenize(&model.network, &g, &branches, volume, &default_solve_params())?;
+    let h = homogenize(model.network(), &g, &branches, volume, &default_solve_params())?;
     let lambda_e = h.diagonal().iter().sum::<f64>() / 3.0;
     let c_t = 1.0 / lambda_e;
     Ok(CtCalibration {
@@ -124,9 +124,9 @@ fn calibrate_particles(model: &Model, axis: Option<Axis>, g: Vec<f64>) -> Result
     let (method, fixed_ids, sources, lam_e, lam_e_centres);
     let q = 1.0; // W/m³ of solid (sphere) or W/m² (flux)
     let solve = |fixed: &[u32], src: &[f64]| {
-        let constraints = resolve_fixed(&model.network, &[(fixed.to_vec(), 0.0)], FloatingPolicy::Exclude)?;
+        let constraints = resolve_fixed(model.network(), &[(fixed.to_vec(), 0.0)], FloatingPolicy::Exclude)?;
         Ok::<_, ModelError>(solve_steady_temperature(
-            &model.network,
+            model.network(),
             &g,
             &constraints,
             src,
@@ -232,7 +232,7 @@ fn calibrate_walls(
     let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), sm);
     let wall_g = walls.conductances(&wall_s, |_, _, _| 1.0);
     let (net, g) = network_with_walls(model, &walls, g, wall_g)?;
-    let net = net.as_ref().unwrap_or(&model.network);
+    let net = net.as_ref().unwrap_or_else(|| model.network());
     let mut src: Vec<f64> = sources;
     src.resize(net.n_nodes(), 0.0);
     let sets: Vec<(Vec<u32>, f64)> = (0..walls.n_walls())

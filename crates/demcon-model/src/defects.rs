@@ -463,7 +463,7 @@ pub(crate) fn apply_defects(
     let graph = if cut.is_empty() {
         graph
     } else {
-        graph.without(&remove)?
+        graph.without(&remove, &particles.radii)?
     };
     report.components_after_cuts = graph.report.n_components;
     let crack_face: Vec<u32> = (0..face.len() as u32).filter(|&p| face[p as usize]).collect();

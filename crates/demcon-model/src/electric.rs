@@ -264,7 +264,7 @@ pub fn solve_electric(
     apply_to_walls(model, &walls, &wall_s, &mut wall_g, Physics::Electric);
     let m = g.len();
     let (ext, g) = network_with_walls(model, &walls, g, wall_g)?;
-    let net = ext.as_ref().unwrap_or(&model.network);
+    let net = ext.as_ref().unwrap_or_else(|| model.network());
     let mut next_wall = 0..walls.n_walls();
     let mut electrodes = Vec::new();
     for (i, e) in problem.electrodes.iter().enumerate() {

@@ -122,7 +122,7 @@ fn tensor(
 ) -> Result<HomogenizeRun, ModelError> {
     let start = Instant::now();
     let branches: Vec<_> = (0..model.graph.len()).map(|k| model.graph.branch(k)).collect();
-    let h = homogenize(&model.network, g, &branches, volume, solve)?;
+    let h = homogenize(model.network(), g, &branches, volume, solve)?;
     let report = TensorReport::from(&h, start.elapsed().as_secs_f64());
     Ok(HomogenizeRun {
         report,

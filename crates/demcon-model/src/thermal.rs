@@ -209,8 +209,9 @@ pub struct ThermalSetup {
     pub surface: SurfaceModel,
     /// Calibration, when C_t was `Auto`.
     pub calibration: Option<CtCalibration>,
-    /// Transmission surface per contact (m²).
-    pub areas: Vec<f64>,
+    /// Transmission surface per contact (m²) ([`ThermalSetup::areas`]); empty under the
+    /// Laguerre model, whose surfaces are the model's facet areas (not copied: 8 B per facet).
+    areas: Vec<f64>,
     /// Contact conductivity λ per contact (W/(m·K)), interface rule applied.
     pub contact_lambda: Vec<f64>,
     /// Conductances (W/K): H = λ S / d per contact, then the wall links.
@@ -230,19 +231,28 @@ pub struct ThermalSetup {
 }
 
 impl ThermalSetup {
+    /// Transmission surface per contact (m²): the Laguerre facet areas of `model`, or the
+    /// surfaces of the contact model.
+    pub fn areas<'a>(&'a self, model: &'a Model) -> &'a [f64] {
+        match (&self.surface, model.graph.cells.as_deref()) {
+            (SurfaceModel::Laguerre, Some(cells)) => &cells.facet_area,
+            _ => &self.areas,
+        }
+    }
+
     /// The thermal network: the model's, or the one extended with wall nodes.
     pub fn network<'a>(&'a self, model: &'a Model) -> &'a Network {
-        self.network.as_ref().unwrap_or(&model.network)
+        self.network.as_ref().unwrap_or_else(|| model.network())
     }
 
     /// The contact conductances (W/K), without the wall links.
     pub fn contact_conductances(&self) -> &[f64] {
-        &self.conductances[..self.areas.len()]
+        &self.conductances[..self.conductances.len() - self.walls.len()]
     }
 
     /// The wall-link conductances (W/K), in the order of [`WallContacts`]' links.
     pub fn wall_conductances(&self) -> &[f64] {
-        &self.conductances[self.areas.len()..]
+        &self.conductances[self.conductances.len() - self.walls.len()..]
     }
 }
 
@@ -324,7 +334,12 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
     Ok(ThermalSetup {
         surface: sm,
         calibration,
-        areas: s.area,
+        // The Laguerre surfaces are the facet areas: `areas` reads them from the model.
+        areas: if matches!(sm, SurfaceModel::Laguerre) {
+            Vec::new()
+        } else {
+            s.area
+        },
         contact_lambda,
         conductances: g,
         walls,

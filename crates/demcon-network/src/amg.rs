@@ -7,7 +7,8 @@
 //! that interpolates the near-null space (the constant vector on the finest level)
 //! piecewise on aggregates, normalised per aggregate; the prolongator smoothed by one damped
 //! Jacobi step P = (I − ω D⁻¹A) P_tent with ω = 4/(3 ρ(D⁻¹A)); the Galerkin operator
-//! A_c = Pᵀ A P by two sparse products. Coarsening stops below [`MAX_COARSE`] unknowns,
+//! A_c = Pᵀ (A P), formed in blocks of A_c's rows so that A P is never stored whole
+//! ([`Csr::galerkin`]). Coarsening stops below [`MAX_COARSE`] unknowns,
 //! where a dense Cholesky factor solves exactly. The cycle is a symmetric V(1,1) with
 //! damped-Jacobi smoothing, so the preconditioner is symmetric positive definite and CG
 //! applies. Every step is sequential or uses fixed row chunks with ordered sums: results do
@@ -125,13 +126,11 @@ impl Amg {
             let (ptent, b_c) = tentative(&agg, n_agg, &std::mem::take(&mut b));
             let p = smooth_prolongator(&a, &dinv, 4.0 / (3.0 * rho), &ptent, &agg);
             drop((agg, ptent, diag));
-            // A_c = Pᵀ (A P); each f64 temporary is rounded or dropped as soon as it is no
-            // longer read, so fewer of them coexist at the level's peak.
-            let ap = a.matmul(&p);
+            // A_c = Pᵀ (A P), in blocks of A_c's rows: A P is never stored whole. Each f64
+            // temporary is rounded as soon as it is no longer read.
             let r = p.transpose();
+            let ac = r.galerkin(&a, &p);
             let p = p.into_f32();
-            let ac = r.matmul(&ap);
-            drop(ap);
             let r = r.into_f32();
             let omega = 4.0 / (3.0 * rho);
             let wdinv = dinv.iter().map(|d| omega * d).collect();

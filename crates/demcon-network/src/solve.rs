@@ -212,14 +212,14 @@ pub struct Solution {
 
 /// Conductances of a [`LinearSystem`] as its products on the whole network read them.
 #[derive(Debug)]
-pub(crate) enum EntryValues {
+pub(crate) enum EntryValues<'a> {
     /// One per compressed-row entry, in row order: for the methods whose every iteration
     /// runs on the whole network (Jacobi-PCG).
     Entries(Vec<f64>),
     /// One per edge, read through each entry's edge: half the bytes, for the methods that
     /// iterate on their own copy of the free block and only form a few residuals here
-    /// (multigrid, MIC, Cholesky).
-    Edges(Vec<f64>),
+    /// (multigrid, MIC, Cholesky). Borrowed from the caller: no copy beside its vector.
+    Edges(&'a [f64]),
 }
 
 /// The system (D + K) x = b restricted to the free nodes of `constraints`, with the fixed
@@ -232,7 +232,7 @@ pub struct LinearSystem<'a> {
     pub(crate) net: &'a Network,
     pub(crate) constraints: &'a Constraints,
     /// Conductances (W/K or S) as the products on the whole network read them.
-    pub(crate) values: EntryValues,
+    pub(crate) values: EntryValues<'a>,
     /// Diagonal Σg + D at every node.
     pub(crate) diag: Vec<f64>,
     /// 1/diag at free nodes, 0 elsewhere (Jacobi preconditioner and free mask).
@@ -262,7 +262,7 @@ impl<'a> LinearSystem<'a> {
     /// no positive shift (the system would be singular); factorisation failures.
     pub fn new(
         net: &'a Network,
-        conductances: &[f64],
+        conductances: &'a [f64],
         shift: Option<&[f64]>,
         constraints: &'a Constraints,
         params: &SolveParams,
@@ -309,9 +309,7 @@ impl<'a> LinearSystem<'a> {
             Method::Cg { .. } | Method::FaerCg { .. } | Method::Auto { .. } => {
                 EntryValues::Entries(net.entry_values(conductances))
             }
-            Method::AmgCg { .. } | Method::IcCg { .. } | Method::Cholesky => {
-                EntryValues::Edges(conductances.to_vec())
-            }
+            Method::AmgCg { .. } | Method::IcCg { .. } | Method::Cholesky => EntryValues::Edges(conductances),
         };
         let mut diag = net.row_sums(conductances);
         if let Some(d) = shift {

@@ -277,7 +277,8 @@ fn auto_picks_mic_for_small_and_multigrid_for_large_systems() {
         FloatingPolicy::Fail,
     )
     .unwrap();
-    let sys = LinearSystem::new(&chain, &vec![1.0; n - 1], None, &ends, &auto).unwrap();
+    let g = vec![1.0; n - 1];
+    let sys = LinearSystem::new(&chain, &g, None, &ends, &auto).unwrap();
     assert!(matches!(sys.method(), Method::AmgCg { .. }));
     let sol = sys.solve(&vec![0.0; n], None).unwrap();
     assert_eq!(sol.report.method, "amg-pcg");

@@ -534,7 +534,7 @@ impl ContactNetwork {
         let setup = r.thermal_setup.as_ref();
         let electric = r.electric.as_ref();
         let mut surface = match (setup, electric) {
-            (Some(s), _) => s.areas.clone(),
+            (Some(s), _) => s.areas(m).to_vec(),
             (None, Some(e)) => demcon_graph::contact_surfaces(g, particles, &e.surface)?.area,
             (None, None) => vec![0.0; contacts],
         };

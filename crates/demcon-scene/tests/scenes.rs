@@ -17,7 +17,7 @@ fn every_example_scene_loads() {
         if path.extension().and_then(|e| e.to_str()) == Some("ron") {
             match Scene::load(&path) {
                 Ok(_) => {}
-                // The paper-scale scene needs ~15 GB: on a smaller machine its refusal must be
+                // The paper-scale scene needs ~12 GB: on a smaller machine its refusal must be
                 // the memory estimate's, and nothing else.
                 Err(e) if e.to_string().contains("bytes per particle") => {
                     assert!(

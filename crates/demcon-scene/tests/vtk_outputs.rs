@@ -96,7 +96,7 @@ fn check_contacts(c: &Value, r: &RunResult) {
     }
     assert_eq!(&g[..contacts], s.contact_conductances());
     let area = values(cd, "surface");
-    assert_eq!(&area[..contacts], s.areas.as_slice());
+    assert_eq!(&area[..contacts], s.areas(m));
     let joule: f64 = values(cd, "joule_power").iter().sum();
     assert!(
         close(joule, e.report.joule_w, 1e-9),

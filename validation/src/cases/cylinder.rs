@@ -6,7 +6,6 @@
 
 use demcon_core::{Face, Selector};
 use demcon_graph::{ContactParams, detect_contacts};
-use demcon_network::Network;
 use demcon_scene::config::*;
 
 use super::common::*;
@@ -210,7 +209,6 @@ pub fn effective_length(model: &Model, lo: &[u32], hi: &[u32]) -> f64 {
 
 /// `model` with a new contact graph (and network), its report updated.
 fn with_graph(model: &Model, graph: demcon_graph::ContactGraph) -> anyhow::Result<Model> {
-    let network = Network::new(graph.n_particles, &graph.pairs)?;
     let mut m = model.clone();
     let c = &mut m.report.contacts;
     c.epsilon = graph.report.epsilon;
@@ -221,8 +219,7 @@ fn with_graph(model: &Model, graph: demcon_graph::ContactGraph) -> anyhow::Resul
     c.n_components = graph.report.n_components;
     c.largest_component = graph.report.largest_component;
     c.diagnostics = graph.report.diagnostics.iter().map(|d| d.to_string()).collect();
-    m.graph = graph;
-    m.network = network;
+    m.set_graph(graph)?;
     Ok(m)
 }
 

@@ -53,10 +53,10 @@ fn time_method(
     let (mut solve, mut total) = (Vec::with_capacity(reps), Vec::with_capacity(reps));
     let mut last = None;
     // One warm-up call (page faults, allocator), not counted.
-    solve_potential(&model.network, g, electrodes, &params)?;
+    solve_potential(model.network(), g, electrodes, &params)?;
     for _ in 0..reps {
         let t0 = Instant::now();
-        let sol = solve_potential(&model.network, g, electrodes, &params)?;
+        let sol = solve_potential(model.network(), g, electrodes, &params)?;
         total.push(1e3 * t0.elapsed().as_secs_f64());
         solve.push(1e3 * (sol.report.wall_s + sol.report.setup_s));
         last = Some(sol);

@@ -1121,8 +1121,6 @@ fn assemble(
                     ge[k] = ContactGeometry {
                         distance: d,
                         normal: disp / d,
-                        gap: d - rp - rq,
-                        mean_radius: 0.5 * (rp + rq),
                     };
                     fa[k] = area;
                     ce[k] = c;
@@ -1233,7 +1231,7 @@ fn assemble(
         cut_degrees: Vec::new(),
     };
     debug_assert_eq!(graph.pairs.len(), n_pairs);
-    summarise(&mut graph);
+    summarise(&mut graph, radii);
     let wall_s = start.elapsed().as_secs_f64();
     graph.report.wall_time_s = wall_s;
     if let Some(c) = graph.cells.as_mut() {
