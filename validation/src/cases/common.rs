@@ -15,6 +15,32 @@ pub use demcon_model::{
 pub use demcon_scene::convert::region as scene_region;
 pub use demcon_scene::{Model, RunResult, SceneConfig, SceneError, write_outputs};
 
+/// A surface model read with a phase rule: the models the interface cases run side by side.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RuleVariant {
+    /// Transmission-surface model.
+    pub surface: Surface,
+    /// Where the interface lies in a cut particle.
+    pub rule: PhaseRuleConfig,
+}
+
+impl RuleVariant {
+    /// The model `surface` with the phase rule `rule`.
+    pub const fn new(surface: Surface, rule: PhaseRuleConfig) -> Self {
+        Self { surface, rule }
+    }
+
+    /// Its id: the surface's, `sep`, the rule's (`centre`, `laminate`, `segment`).
+    pub fn id(self, sep: &str) -> String {
+        let rule = match self.rule {
+            PhaseRuleConfig::Centre => "centre",
+            PhaseRuleConfig::Laminate => "laminate",
+            PhaseRuleConfig::Segment => "segment",
+        };
+        format!("{}{sep}{rule}", self.surface.id())
+    }
+}
+
 /// The three transmission-surface models every case runs side by side (DESIGN.md §1, §3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Surface {

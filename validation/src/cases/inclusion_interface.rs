@@ -25,6 +25,7 @@
 use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
+use super::common::RuleVariant as Variant;
 use super::common::*;
 use super::composite::{F_SINGLE, L, centred_inclusion, slab_scene, with_conductivities};
 use crate::analytic::hasselman_johnson;
@@ -54,38 +55,18 @@ fn conductance(alpha: f64) -> f64 {
     }
 }
 
-/// A model variant.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct Variant {
-    surface: Surface,
-    rule: PhaseRuleConfig,
-}
+/// The models run side by side (a surface model with a phase rule), the headline first.
+const VARIANTS: [Variant; 3] = [
+    Variant::new(Surface::Laguerre, PhaseRuleConfig::Segment),
+    Variant::new(Surface::Laguerre, PhaseRuleConfig::Centre),
+    Variant::new(Surface::Terreros, PhaseRuleConfig::Segment),
+];
+/// The headline model.
+const HEADLINE: Variant = VARIANTS[0];
 
-impl Variant {
-    const ALL: [Variant; 3] = [
-        Variant {
-            surface: Surface::Laguerre,
-            rule: PhaseRuleConfig::Segment,
-        },
-        Variant {
-            surface: Surface::Laguerre,
-            rule: PhaseRuleConfig::Centre,
-        },
-        Variant {
-            surface: Surface::Terreros,
-            rule: PhaseRuleConfig::Segment,
-        },
-    ];
-    const HEADLINE: Variant = Variant::ALL[0];
-
-    fn id(self) -> String {
-        let rule = match self.rule {
-            PhaseRuleConfig::Centre => "centre",
-            PhaseRuleConfig::Laminate => "laminate",
-            PhaseRuleConfig::Segment => "segment",
-        };
-        format!("{}-wall-{rule}", self.surface.id())
-    }
+/// A model's id in the JSON and the report.
+fn variant_id(v: Variant) -> String {
+    v.id("-wall-")
 }
 
 /// The scene: the inclusion cube, walls, the interface listed (h set per α on the model).
@@ -184,7 +165,7 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     let cells_segment = laguerre_model(&segment, &contacts)?;
     let cells_centre = laguerre_model(&scene(n, seed, PhaseRuleConfig::Centre), &contacts)?;
     let mut runs = Vec::new();
-    for v in Variant::ALL {
+    for v in VARIANTS {
         let base = match (v.surface, v.rule) {
             (Surface::Laguerre, PhaseRuleConfig::Segment) => &cells_segment,
             (Surface::Laguerre, _) => &cells_centre,
@@ -230,7 +211,7 @@ fn compare(ladder: &[usize], packings: &[PackingRun], tol: f64, out: &mut CaseOu
     let largest = *ladder.last().expect("a ladder");
     let at = |n: usize| packings.iter().filter(move |p| p.n_target == n);
     let mut by_model = Map::new();
-    for v in Variant::ALL {
+    for v in VARIANTS {
         let mut by_n = Map::new();
         for &n in ladder {
             let mut cells = Map::new();
@@ -242,10 +223,10 @@ fn compare(ladder: &[usize], packings: &[PackingRun], tol: f64, out: &mut CaseOu
             }
             by_n.insert(n.to_string(), Value::Object(cells));
         }
-        by_model.insert(v.id(), Value::Object(by_n));
+        by_model.insert(variant_id(v), Value::Object(by_n));
     }
     out.metric("abs_rel_error_vs_hj_by_model", Value::Object(by_model));
-    let e = Spread::of(at(largest).map(|p| p.run(Variant::HEADLINE).worst_interface()));
+    let e = Spread::of(at(largest).map(|p| p.run(HEADLINE).worst_interface()));
     out.metric("max_rel_error_vs_hj", e.json());
     out.compare(Comparison::at_most(
         &format!(
@@ -275,7 +256,7 @@ fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
     let lines: Vec<Line> = packings
         .iter()
         .flat_map(|p| {
-            Variant::ALL
+            VARIANTS
                 .iter()
                 .flat_map(move |&v| (0..CONTRASTS.len()).map(move |i| Line { p, v, i }))
         })
@@ -284,7 +265,7 @@ fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
         Columns::new()
             .column("N", |l: &Line| l.p.n.to_string())
             .column("packing", |l| (l.p.k + 1).to_string())
-            .column("model", |l| l.v.id())
+            .column("model", |l| variant_id(l.v))
             .column("λ_i/λ_m", |l| CONTRASTS[l.i].to_string())
             .columns_for(
                 0..ALPHAS.len(),

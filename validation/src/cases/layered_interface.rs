@@ -31,6 +31,7 @@ use std::time::Instant;
 use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
+use super::common::RuleVariant as Variant;
 use super::common::*;
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
@@ -73,42 +74,19 @@ fn reference(share: f64) -> f64 {
     L / (bulk_resistance() / (1.0 - share))
 }
 
-/// A model variant: surface and phase rule.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct Variant {
-    surface: Surface,
-    rule: PhaseRuleConfig,
-}
+/// The models run side by side (a surface model with a phase rule), the headline first.
+const VARIANTS: [Variant; 4] = [
+    Variant::new(Surface::Laguerre, PhaseRuleConfig::Segment),
+    Variant::new(Surface::Laguerre, PhaseRuleConfig::Centre),
+    Variant::new(Surface::Terreros, PhaseRuleConfig::Segment),
+    Variant::new(Surface::Calibrated, PhaseRuleConfig::Segment),
+];
+/// The headline model.
+const HEADLINE: Variant = VARIANTS[0];
 
-impl Variant {
-    const ALL: [Variant; 4] = [
-        Variant {
-            surface: Surface::Laguerre,
-            rule: PhaseRuleConfig::Segment,
-        },
-        Variant {
-            surface: Surface::Laguerre,
-            rule: PhaseRuleConfig::Centre,
-        },
-        Variant {
-            surface: Surface::Terreros,
-            rule: PhaseRuleConfig::Segment,
-        },
-        Variant {
-            surface: Surface::Calibrated,
-            rule: PhaseRuleConfig::Segment,
-        },
-    ];
-    const HEADLINE: Variant = Variant::ALL[0];
-
-    fn id(self) -> String {
-        let rule = match self.rule {
-            PhaseRuleConfig::Centre => "centre",
-            PhaseRuleConfig::Laminate => "laminate",
-            PhaseRuleConfig::Segment => "segment",
-        };
-        format!("{}-{rule}", self.surface.id())
-    }
+/// A model's id in the JSON and the report.
+fn variant_id(v: Variant) -> String {
+    v.id("-")
 }
 
 /// The scene: the layered cube, walls on YMin/YMax, an interface of conductance 1 (set per
@@ -213,7 +191,7 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     let cells_segment = laguerre_model(&segment, &contacts)?;
     let cells_centre = laguerre_model(&scene(n, seed, PhaseRuleConfig::Centre), &contacts)?;
     let mut runs = Vec::new();
-    for v in Variant::ALL {
+    for v in VARIANTS {
         let base = match (v.surface, v.rule) {
             (Surface::Laguerre, PhaseRuleConfig::Segment) => &cells_segment,
             (Surface::Laguerre, _) => &cells_centre,
@@ -270,7 +248,7 @@ fn share_key(share: f64) -> String {
 /// Metrics (per variant, share and N) and the headline check at the largest N.
 fn compare(ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
     let mut by_model = Map::new();
-    for v in Variant::ALL {
+    for v in VARIANTS {
         let mut shares = Map::new();
         for (s, &share) in SHARES.iter().enumerate() {
             let by_n: Map<String, Value> = ladder
@@ -279,12 +257,12 @@ fn compare(ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
                 .collect();
             shares.insert(share_key(share), Value::Object(by_n));
         }
-        by_model.insert(v.id(), Value::Object(shares));
+        by_model.insert(variant_id(v), Value::Object(shares));
     }
     out.metric("abs_rel_error_by_model", Value::Object(by_model));
     let largest = *ladder.last().expect("a ladder");
     for (s, &share) in SHARES.iter().enumerate() {
-        let e = spread(packings, largest, Variant::HEADLINE, s);
+        let e = spread(packings, largest, HEADLINE, s);
         out.metric(&format!("max_rel_error_{}", share_key(share)), e.max);
         out.compare(Comparison::at_most(
             &format!(
@@ -328,7 +306,7 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
     let lines: Vec<Summary> = ladder
         .iter()
         .flat_map(|&n| {
-            Variant::ALL.iter().map(move |&v| Summary {
+            VARIANTS.iter().map(move |&v| Summary {
                 n,
                 variant: v,
                 spreads: (0..SHARES.len()).map(|s| spread(packings, n, v, s)).collect(),
@@ -344,7 +322,7 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
     out.tables.push(
         Columns::new()
             .column("N", |l: &Summary| l.n.to_string())
-            .column("model", |l| l.variant.id())
+            .column("model", |l| variant_id(l.variant))
             .columns_for(
                 0..SHARES.len(),
                 |s| format!("|λ_e/λ_ref − 1|, interfaces {:.0} % (mean / max)", 100.0 * SHARES[*s]),
@@ -370,8 +348,8 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
             .column("cut particles", |p| p.cut.to_string())
             .column("crossing facets", |p| p.crossing.to_string())
             .columns_for(
-                Variant::ALL,
-                |v| format!("{} (signed, per share)", v.id()),
+                VARIANTS,
+                |v| format!("{} (signed, per share)", variant_id(*v)),
                 |v, p: &&PackingRun| {
                     p.run(*v)
                         .errors
