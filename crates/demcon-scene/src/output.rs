@@ -1,5 +1,7 @@
-//! Files of a run: `summary.json`, `probes.csv`, `profiles.csv`, `particles.csv` and
-//! `particles.vtu` (ParaView), written as one folder that replaces the previous run's whole.
+//! Files of a run: `summary.json`, `probes.csv`, `profiles.csv`, `particles.csv`, the VTK
+//! files for ParaView (`particles.vtu`, or a transient's `particles.pvd` series; the contact
+//! network `contacts.vtp`/`.pvd`; the Laguerre cells `cells.vtu`) and the plots, written as
+//! one folder that replaces the previous run's whole (`docs/outputs.md`).
 //! Values that are not results (particles excluded from a solve) are never written as NaN: a
 //! `solved` column flags them.
 
