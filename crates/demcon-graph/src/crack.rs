@@ -182,6 +182,101 @@ impl CrackShape {
     }
 }
 
+/// Smallest |e·n| (e the branch, n the crack's normal) used to project a facet onto a crack's
+/// plane: a branch nearly in the plane would stretch its footprint without bound.
+const MIN_OBLIQUITY: f64 = 0.2;
+/// Rings and angles of the equal-area sample of a facet's disc ([`CrackShape::blocked_fraction`]).
+const FOOTPRINT_RINGS: usize = 6;
+const FOOTPRINT_ANGLES: usize = 12;
+
+impl CrackShape {
+    /// Whether the point `x` of the crack's plane (unit normal `n`) lies inside the shape.
+    fn contains_planar(&self, n: &Vec3, x: &Vec3) -> bool {
+        match self {
+            CrackShape::Disc { centre, radius, .. } => {
+                let r = x - centre;
+                (r - n * n.dot(&r)).norm_squared() <= radius * radius
+            }
+            CrackShape::Polygon { points } => point_in_polygon(points, n, x),
+        }
+    }
+
+    /// The fraction of a contact's facet that the crack covers, seen along the branch a → b
+    /// (m): the facet is read as a disc of radius `rho` (m, the radius of its area) centred at
+    /// `centre` (m), normal to the branch, and each point of it conducts along a tube parallel
+    /// to the branch; a tube is blocked where it meets the crack's plane inside the shape. So
+    /// the fraction is the part of the facet's footprint on the plane (the disc projected along
+    /// the branch: an ellipse) that lies inside the crack, sampled at 72 equal-area points.
+    /// 0 when the branch does not cross the crack's plane (the half-open rule of the module
+    /// doc). With `rho` = 0 it is the segment rule: 1 when [`CrackShape::crossing`] finds a
+    /// crossing, else 0.
+    pub fn blocked_fraction(&self, a: &Vec3, b: &Vec3, centre: &Vec3, rho: f64) -> f64 {
+        let (c, n) = self.plane();
+        let (sa, sb) = (n.dot(&(a - c)), n.dot(&(b - c)));
+        if (sa > 0.0) == (sb > 0.0) {
+            return 0.0;
+        }
+        if rho <= 0.0 {
+            return if self.crossing(a, b).is_some() { 1.0 } else { 0.0 };
+        }
+        let e = (b - a).normalize();
+        let ne = n.dot(&e);
+        let slope = ne.signum() * ne.abs().max(MIN_OBLIQUITY);
+        // An orthonormal pair across the branch.
+        let helper = if e.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+        let s1 = e.cross(&helper).normalize();
+        let s2 = e.cross(&s1);
+        let mut inside = 0usize;
+        for i in 0..FOOTPRINT_RINGS {
+            let r = rho * ((i as f64 + 0.5) / FOOTPRINT_RINGS as f64).sqrt();
+            for j in 0..FOOTPRINT_ANGLES {
+                let t = std::f64::consts::TAU * (j as f64 + 0.5 * (i % 2) as f64) / FOOTPRINT_ANGLES as f64;
+                let y = centre + (s1 * t.cos() + s2 * t.sin()) * r;
+                let x = y - e * (n.dot(&(y - c)) / slope);
+                if self.contains_planar(&n, &x) {
+                    inside += 1;
+                }
+            }
+        }
+        inside as f64 / (FOOTPRINT_RINGS * FOOTPRINT_ANGLES) as f64
+    }
+
+    /// [`CrackShape::blocked_fraction`] over the crack and its periodic images when `period`
+    /// (m) is given (the images' fractions add up, at most 1).
+    pub fn blocked_fraction_periodic(
+        &self,
+        a: &Vec3,
+        b: &Vec3,
+        centre: &Vec3,
+        rho: f64,
+        period: Option<[f64; 3]>,
+    ) -> f64 {
+        let (bc, br) = self.bounding_ball();
+        let reach = br + rho * (1.0 + 1.0 / MIN_OBLIQUITY);
+        let at = |s: &Vec3| {
+            if segment_ball_distance(a, b, &(bc + s)) > reach {
+                0.0
+            } else {
+                self.blocked_fraction(&(a - s), &(b - s), &(centre - s), rho)
+            }
+        };
+        match period {
+            None => at(&Vec3::zeros()),
+            Some(l) => {
+                let mut sum = 0.0;
+                for i in [0.0, -1.0, 1.0] {
+                    for j in [0.0, -1.0, 1.0] {
+                        for k in [0.0, -1.0, 1.0] {
+                            sum += at(&Vec3::new(i * l[0], j * l[1], k * l[2]));
+                        }
+                    }
+                }
+                sum.min(1.0)
+            }
+        }
+    }
+}
+
 fn fmt(v: &Vec3) -> String {
     format!("({:e}, {:e}, {:e})", v.x, v.y, v.z)
 }
@@ -270,6 +365,78 @@ pub fn crossed_contacts(
         .collect()
 }
 
+/// A contact whose facet a crack covers in part or in whole ([`blocked_contacts`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CrackCover {
+    /// The first crack (index into the list given) that covers part of the facet.
+    pub crack: u32,
+    /// The covered fraction of the facet, in (0, 1] (the cracks' fractions add up, at most 1).
+    pub fraction: f64,
+    /// Where the branch meets that crack's plane (m), on the segment from p's centre.
+    pub point: Vec3,
+}
+
+/// For every contact of `graph`, how much of its facet `cracks` cover
+/// ([`CrackShape::blocked_fraction`]): the facet of a Laguerre graph is the disc of its area
+/// around its centroid; a graph without cells has no facet, and the segment rule decides
+/// (covered wholly when its segment crosses a crack, [`crossed_contacts`]). Runs in parallel;
+/// the result does not depend on the thread count.
+pub fn blocked_contacts(
+    graph: &ContactGraph,
+    particles: &ParticleSet,
+    container: &Container,
+    cracks: &[CrackShape],
+) -> Vec<Option<CrackCover>> {
+    let Some(cells) = graph.cells.as_deref() else {
+        return crossed_contacts(graph, particles, container, cracks)
+            .into_iter()
+            .map(|x| {
+                x.map(|x| CrackCover {
+                    crack: x.crack,
+                    fraction: 1.0,
+                    point: x.point,
+                })
+            })
+            .collect();
+    };
+    if cracks.is_empty() {
+        return vec![None; graph.len()];
+    }
+    let period = container.period();
+    (0..graph.len())
+        .into_par_iter()
+        .with_min_len(1024)
+        .map(|k| {
+            let p = graph.pairs[k][0] as usize;
+            let a = particles.centres[p];
+            let b = a + graph.branch(k);
+            let centre = a + cells.centroid[k];
+            let rho = (cells.facet_area[k] / std::f64::consts::PI).sqrt();
+            let mut cover: Option<CrackCover> = None;
+            for (i, c) in cracks.iter().enumerate() {
+                let f = c.blocked_fraction_periodic(&a, &b, &centre, rho, period);
+                if f <= 0.0 {
+                    continue;
+                }
+                match cover.as_mut() {
+                    Some(x) => x.fraction = (x.fraction + f).min(1.0),
+                    None => {
+                        let (o, n) = c.plane();
+                        let (sa, sb) = (n.dot(&(a - o)), n.dot(&(b - o)));
+                        let t = if sa != sb { sa / (sa - sb) } else { 0.5 };
+                        cover = Some(CrackCover {
+                            crack: i as u32,
+                            fraction: f,
+                            point: a + (b - a) * t.clamp(0.0, 1.0),
+                        });
+                    }
+                }
+            }
+            cover
+        })
+        .collect()
+}
+
 /// The first of `cracks` the segment a → b crosses (periodic images when `period` is given).
 pub fn first_crossing(
     cracks: &[CrackShape],
@@ -314,6 +481,57 @@ mod tests {
         // Oblique segment through the rim region.
         let x = d.crossing(&v(-2.0, 0.0, -1.0), &v(0.0, 0.0, 1.0)).unwrap();
         assert!((x - v(-1.0, 0.0, 0.0)).norm() < 1e-15);
+    }
+
+    #[test]
+    fn blocked_fraction_of_a_facet() {
+        let d = CrackShape::Disc {
+            centre: v(0.0, 0.0, 0.0),
+            normal: v(0.0, 0.0, 1.0),
+            radius: 1.0,
+        };
+        let f =
+            |x: f64, rho: f64| d.blocked_fraction(&v(x, 0.0, -0.5), &v(x, 0.0, 0.5), &v(x, 0.0, 0.0), rho);
+        // Inside, far from the rim: covered wholly; far outside: not at all.
+        assert_eq!(f(0.0, 0.3), 1.0);
+        assert_eq!(f(1.5, 0.3), 0.0);
+        // Across the rim: about half, less when the facet's centre is outside.
+        let half = f(1.0, 0.3);
+        assert!((0.4..0.6).contains(&half), "{half}");
+        let less = f(1.15, 0.3);
+        assert!(0.0 < less && less < half, "{less}");
+        // A branch that does not reach the plane is not blocked.
+        assert_eq!(
+            d.blocked_fraction(&v(0.0, 0.0, 0.1), &v(0.0, 0.0, 0.5), &v(0.0, 0.0, 0.3), 0.3),
+            0.0
+        );
+        // Without a facet it is the segment rule.
+        for x in [0.0, 0.99, 1.01, 1.5] {
+            let seg = d.crossing(&v(x, 0.0, -0.5), &v(x, 0.0, 0.5)).is_some();
+            assert_eq!(f(x, 0.0), if seg { 1.0 } else { 0.0 });
+        }
+        // An oblique branch through the middle is covered wholly; its footprint is stretched
+        // along the branch's direction in the plane, so at the rim it is cut more along x
+        // than a normal branch would be at the same distance.
+        let oblique = |x: f64| {
+            d.blocked_fraction(
+                &v(x - 0.5, 0.0, -0.5),
+                &v(x + 0.5, 0.0, 0.5),
+                &v(x, 0.0, 0.0),
+                0.3,
+            )
+        };
+        assert_eq!(oblique(0.0), 1.0);
+        assert!(oblique(1.3) > f(1.3, 0.3), "{} {}", oblique(1.3), f(1.3, 0.3));
+        // Periodic images add up: the same disc one period away covers the facet wholly.
+        let p = d.blocked_fraction_periodic(
+            &v(4.0, 0.0, -0.5),
+            &v(4.0, 0.0, 0.5),
+            &v(4.0, 0.0, 0.0),
+            0.3,
+            Some([4.0; 3]),
+        );
+        assert_eq!(p, 1.0);
     }
 
     #[test]

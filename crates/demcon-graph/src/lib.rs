@@ -77,7 +77,7 @@ pub use contact::{
     ContactGeometry, ContactGraph, ContactParams, ContactReport, ContactTolerance, CoordinationPoint,
     Diagnostic, coordination_curve, detect_contacts,
 };
-pub use crack::{CrackCrossing, CrackShape, crossed_contacts, first_crossing};
+pub use crack::{CrackCover, CrackCrossing, CrackShape, blocked_contacts, crossed_contacts, first_crossing};
 pub use demcon_core::Components;
 pub use error::GraphError;
 pub use interface::{InterfaceRule, conductances, contact_property, interface_value, interface_value_split};

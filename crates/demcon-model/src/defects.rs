@@ -21,7 +21,12 @@
 //!   centre. Unlisted pairs stay perfect.
 //! - **Cracks** ([`Crack`]): every contact whose segment crosses the crack's surface
 //!   ([`demcon_graph::CrackShape`], minimum-image segment and periodic images in a periodic
-//!   box) is cut — removed from the graph and the network, in both physics — or, for a filled
+//!   box) is cut — removed from the graph and the network, in both physics. On a Laguerre
+//!   graph an open crack cuts by the part of each facet it covers
+//!   ([`demcon_graph::blocked_contacts`]: the facet's disc projected along the branch onto the
+//!   crack's plane): a facet covered wholly is cut, one covered in part keeps the open part of
+//!   its conductances ([`MARK_PARTLY_CUT`]), so the crack's edge is not rounded to whole
+//!   facets (`whole_facet_cuts` restores the segment rule). Or, for a filled
 //!   crack (`gap_conductance`), given the series resistance 1/(h_gap S) (and r_gap/S
 //!   electrically, which a filled crack must give when the scene is electric). Wall links whose
 //!   segment (centre to face) a crack crosses are treated the same way. A cluster that a crack
@@ -38,14 +43,15 @@
 //!   in the report; an index out of range is an error.
 //!
 //! Per-contact marks ([`Defects::marks`], bits [`MARK_INTERFACE`], [`MARK_DAMAGED`],
-//! [`MARK_FILLED_CRACK`]) and the cut contacts ([`Defects::cut`]) are kept for the output
+//! [`MARK_FILLED_CRACK`], [`MARK_PARTLY_CUT`]) and the cut contacts ([`Defects::cut`]) are kept for the output
 //! writers; [`Defects::crack_face`] lists the particles on a crack face.
 
 use std::collections::HashMap;
 
 use demcon_core::{Container, ParticleSet, Region, Vec3};
 use demcon_graph::{
-    ContactGraph, CrackShape, HalfBond, Laminates, Mix, WallContacts, crossed_contacts, first_crossing,
+    ContactGraph, CrackCover, CrackShape, HalfBond, Laminates, Mix, WallContacts, blocked_contacts,
+    crossed_contacts, first_crossing,
 };
 use serde::Serialize;
 
@@ -58,6 +64,9 @@ pub const MARK_INTERFACE: u8 = 1;
 pub const MARK_DAMAGED: u8 = 2;
 /// A contact crossed by a filled crack (kept, with the gap's series resistance).
 pub const MARK_FILLED_CRACK: u8 = 4;
+/// A Laguerre facet an open crack covers in part (kept, its conductances scaled by the open
+/// part).
+pub const MARK_PARTLY_CUT: u8 = 8;
 
 /// The interface between two phases, with its conductances.
 #[derive(Debug, Clone, PartialEq)]
@@ -103,6 +112,10 @@ pub struct DefectSpec {
     pub damage: Vec<Damage>,
     /// Broken bonds: particle index pairs (before carving).
     pub cut_pairs: Vec<[u32; 2]>,
+    /// Open cracks cut a Laguerre facet only where its segment crosses them, whole or not at
+    /// all (the segment rule of the contact models), instead of by the covered part of the
+    /// facet. For comparisons; `false` by default.
+    pub whole_facet_cuts: bool,
 }
 
 impl DefectSpec {
@@ -241,6 +254,8 @@ pub struct CutContact {
 pub struct DefectReport {
     /// Contacts cut by open cracks.
     pub cut_by_cracks: usize,
+    /// Laguerre facets open cracks cover in part (kept, scaled by the open part).
+    pub partly_cut_by_cracks: usize,
     /// Contacts crossed by filled cracks (kept with the gap resistance).
     pub filled_crack_contacts: usize,
     /// Broken bonds cut (pairs of `cut_pairs` that were contacts).
@@ -267,7 +282,8 @@ pub struct Defects {
     /// Per contact of the model's graph: [`MARK_INTERFACE`] | [`MARK_DAMAGED`] |
     /// [`MARK_FILLED_CRACK`] bits (0 for a plain contact).
     pub marks: Vec<u8>,
-    /// Per contact: the damage factor (empty when no damage region: all 1).
+    /// Per contact: the factor on its conductances, the damage regions' factors times the open
+    /// part of a facet an open crack covers in part (empty when neither: all 1).
     pub damage: Vec<f64>,
     /// Per contact: the thermal series resistance per area of the filled cracks it crosses
     /// (m²·K/W; empty when none).
@@ -373,16 +389,38 @@ pub(crate) fn apply_defects(
         .filter(|&i| spec.cracks[i].gap_conductance.is_none())
         .collect();
     let shapes: Vec<CrackShape> = open.iter().map(|&i| spec.cracks[i].shape.clone()).collect();
-    for (k, x) in crossed_contacts(&graph, particles, container, &shapes)
-        .iter()
-        .enumerate()
-    {
+    let covers = if spec.whole_facet_cuts {
+        crossed_contacts(&graph, particles, container, &shapes)
+            .into_iter()
+            .map(|x| {
+                x.map(|x| CrackCover {
+                    crack: x.crack,
+                    fraction: 1.0,
+                    point: x.point,
+                })
+            })
+            .collect()
+    } else {
+        blocked_contacts(&graph, particles, container, &shapes)
+    };
+    // The open part of each facet an open crack covers in part (empty when none).
+    let mut open_part = Vec::new();
+    for (k, x) in covers.iter().enumerate() {
         let Some(x) = x else { continue };
         let crack = open[x.crack as usize];
         crack_hits[crack] += 1;
         let [p, q] = graph.pairs[k];
         face[p as usize] = true;
         face[q as usize] = true;
+        if x.fraction < 1.0 {
+            if open_part.is_empty() {
+                open_part = vec![1.0; m];
+            }
+            open_part[k] = 1.0 - x.fraction;
+            marks[k] |= MARK_PARTLY_CUT;
+            report.partly_cut_by_cracks += 1;
+            continue;
+        }
         if !remove[k] {
             report.cut_by_cracks += 1;
         }
@@ -428,10 +466,12 @@ pub(crate) fn apply_defects(
             ));
         }
     }
-    // Damage, by the branch midpoint.
-    let mut damage = Vec::new();
+    // Damage, by the branch midpoint; the open part of partly cut facets scales the same way.
+    let mut damage = open_part;
     if !spec.damage.is_empty() {
-        damage = vec![1.0; m];
+        if damage.is_empty() {
+            damage = vec![1.0; m];
+        }
         for k in 0..m {
             let p = graph.pairs[k][0] as usize;
             let mid = wrap(container, particles.centres[p] + 0.5 * graph.branch(k));

@@ -41,7 +41,7 @@ pub use checkpoint::{CheckpointSink, Checkpointing, CouplingState, RunCheckpoint
 pub use couple::{Coupled, couple, couple_checkpointed};
 pub use defects::{
     Crack, CutCause, CutContact, Damage, DefectReport, DefectSpec, Defects, InterfaceResistance,
-    MARK_DAMAGED, MARK_FILLED_CRACK, MARK_INTERFACE,
+    MARK_DAMAGED, MARK_FILLED_CRACK, MARK_INTERFACE, MARK_PARTLY_CUT,
 };
 pub use electric::{
     ElectricProblem, ElectricReport, ElectricRun, Electrode, ElectrodeAt, electric_conductances,

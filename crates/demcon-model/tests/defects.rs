@@ -238,6 +238,55 @@ fn a_crack_across_the_whole_section_passes_no_heat() {
     }
 }
 
+/// A crack in the plane y = 3 covering x < `edge` over the whole depth.
+fn half_plane_y(edge: f64) -> CrackShape {
+    CrackShape::Polygon {
+        points: vec![
+            Vec3::new(-1.0, 3.0, -1.0),
+            Vec3::new(edge, 3.0, -1.0),
+            Vec3::new(edge, 3.0, 10.0),
+            Vec3::new(-1.0, 3.0, 10.0),
+        ],
+    }
+}
+
+#[test]
+fn an_open_crack_cuts_laguerre_facets_by_the_part_it_covers() {
+    let spec = |edge: f64, whole: bool| DefectSpec {
+        cracks: vec![Crack {
+            shape: half_plane_y(edge),
+            gap_conductance: None,
+            gap_electric_resistance: None,
+        }],
+        whole_facet_cuts: whole,
+        ..DefectSpec::default()
+    };
+    let flow = |edge: f64, whole: bool| {
+        let m = lattice([4, 6, 4], None, PhaseRule::Centre, true, spec(edge, whole)).unwrap();
+        (heat_flow(&m, FloatingPolicy::Fail).unwrap(), m)
+    };
+    // The edge through the middle of the facets of the third column (x = 2.5): the first two
+    // columns are cut, the third keeps about half of each facet.
+    let (q_half, m) = flow(2.5, false);
+    assert_eq!(m.cut_contacts().len(), 8);
+    let partly = m
+        .contact_marks()
+        .iter()
+        .filter(|&&b| b & MARK_PARTLY_CUT != 0)
+        .count();
+    assert_eq!(partly, 4);
+    assert_eq!(m.defects.report.partly_cut_by_cracks, 4);
+    // Edges between the columns (x = 2, x = 3; the facets, read as discs of their area,
+    // overhang them a little) bracket the half-covered one.
+    let (q_two, _) = flow(2.0, false);
+    let (q_three, _) = flow(3.0, false);
+    assert!(q_three < q_half && q_half < q_two, "{q_three} {q_half} {q_two}");
+    // The segment rule cuts whole facets only.
+    let (_, whole) = flow(2.4, true);
+    assert_eq!(whole.defects.report.partly_cut_by_cracks, 0);
+    assert_eq!(whole.cut_contacts().len(), 8);
+}
+
 #[test]
 fn a_filled_crack_adds_its_gap_resistance_and_damage_scales() {
     let h_gap = 4.0;

@@ -350,6 +350,7 @@ pub fn defect_spec(cfg: &SceneConfig, materials: &MaterialTable) -> Result<Defec
         cracks,
         damage,
         cut_pairs: Vec::new(),
+        whole_facet_cuts: false,
     })
 }
 

@@ -391,8 +391,19 @@ pub fn set_interface_conductance(model: &mut Model, h: f64) {
 /// `model` with the interfaces, cracks and damage regions of `cfg` applied to its graph
 /// (no packing or tessellation again; `model` must have none): [`demcon_model::with_defects`].
 pub fn with_scene_defects(model: &Model, cfg: &SceneConfig) -> anyhow::Result<Model> {
+    with_scene_defects_rule(model, cfg, false)
+}
+
+/// [`with_scene_defects`] with open cracks cutting whole Laguerre facets (the segment rule)
+/// when `whole_facets`, else by the covered part of each facet (the default).
+pub fn with_scene_defects_rule(
+    model: &Model,
+    cfg: &SceneConfig,
+    whole_facets: bool,
+) -> anyhow::Result<Model> {
     let materials = demcon_scene::convert::materials(&cfg.materials)?;
-    let spec = demcon_scene::convert::defect_spec(cfg, &materials)?;
+    let mut spec = demcon_scene::convert::defect_spec(cfg, &materials)?;
+    spec.whole_facet_cuts = whole_facets;
     Ok(demcon_model::with_defects(model, &spec)?)
 }
 

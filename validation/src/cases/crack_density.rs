@@ -12,8 +12,10 @@
 //! non-interaction estimate holds to a few % of the reduction there). λ is the model's own
 //! uncracked λ on the same packing (Laguerre: λ exactly).
 //!
-//! Reported, not gated: `crack-penny` measured the network's crack as acting with an effective
-//! radius a + (1.9–2.9) R̄ at these resolutions, so the reduction Δλ/λ should exceed the
+//! Reported, not gated: `crack-penny` measured the network's crack (whole facets cut, the rule
+//! when this case was written) as acting with an effective radius a + (1.9–2.9) R̄ at these
+//! resolutions (now a + (1.5–2.1) R̄ with the covered part of each facet cut, the Laguerre
+//! rule since), so the reduction Δλ/λ should exceed the
 //! estimate by about (1 + 2R̄/a)³; the case reports the measured reduction over the estimate
 //! (the "crack efficiency", 1 in the continuum) and the effective radius it implies,
 //! a_eff/a = efficiency^(1/3), to be read against crack-penny's. (The numbers of crack-penny

@@ -27,6 +27,18 @@
 //! the disc cuts near its rim moves its effective radius by about half a radius (≈ 8 % of a;
 //! the mean jump ∝ a); the finite cube (fixed faces at 4a, adiabatic sides at 4a for
 //! a/L = 1/8; 2a for 1/4) adds a few %, growing with a/L.
+//!
+//! History. The first rule cut a facet whole when its segment crossed the crack (the segment
+//! rule, still the contact models' rule): it missed the 20 % with 23–32 % at 2·10⁴. The rule
+//! now used on the Laguerre cells (built after that run, from the diagnosis that a crack's edge
+//! rounded to whole facets is larger than the crack) cuts each facet by the part the crack
+//! covers ([`demcon_graph::blocked_contacts`]). The whole-facet Laguerre network runs beside it
+//! ("Laguerre, whole facets cut"). The jump is read on the same contacts for every model: those
+//! of the uncracked graph whose segment crosses the disc. A continuum check of the finite cube
+//! (`scripts/penny_crack_fv.py`: cell-centred finite volumes on one eighth of the cube, 128³
+//! cells, the crack's faces cut by covered area) gives a mean jump +1.9 / +2.0 / +4.1 % over
+//! the infinite-body formula at a/L = 1/8, 1/6, 1/4 (Q/Q₀ = 0.9947 / 0.9875 / 0.9584), still
+//! falling with the mesh: the finite cube is a few % of the excess, not most of it.
 
 use std::time::Instant;
 
@@ -51,9 +63,9 @@ const BANDS: usize = 5;
 /// was seen; `--full` gates at it.
 const TOL_JUMP: f64 = 0.2;
 /// The `--quick` regression bound of the same (fraction), set after the first quick run
-/// (2026-11-24) missed the a-priori 20 % with 23–32 % (the network's crack is more compliant
-/// than the continuum's by about R̄/a: the report's reading). Not a target: a guard against
-/// regressions while the along-crack coupling that would meet 20 % is missing.
+/// (2026-11-24) missed the a-priori 20 % with 23–32 % (whole facets cut; the network's crack
+/// is more compliant than the continuum's by about R̄/a: the report's reading). Not a target: a
+/// guard against regressions; the covered-part rule gives 15–22 % at 2·10⁴.
 const QUICK_JUMP_BOUND: f64 = 0.4;
 /// Through-section crack: largest accepted |Q|/Q₀.
 const TOL_THROUGH: f64 = 1e-12;
@@ -121,9 +133,56 @@ struct Jump {
     flow_ratio: f64,
 }
 
+/// A model of the cracked network: a surface model, and for the Laguerre cells whether the
+/// crack cuts whole facets (the segment rule) or the part of each facet it covers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct CrackModel {
+    surface: Surface,
+    whole_facets: bool,
+}
+
+impl CrackModel {
+    /// The headline: Laguerre cells cut by the covered part of each facet.
+    const HEADLINE: CrackModel = CrackModel {
+        surface: Surface::Laguerre,
+        whole_facets: false,
+    };
+    /// Every model run, the headline first; the contact models have no facets (segment rule).
+    const ALL: [CrackModel; 4] = [
+        Self::HEADLINE,
+        CrackModel {
+            surface: Surface::Laguerre,
+            whole_facets: true,
+        },
+        CrackModel {
+            surface: Surface::Terreros,
+            whole_facets: true,
+        },
+        CrackModel {
+            surface: Surface::Calibrated,
+            whole_facets: true,
+        },
+    ];
+
+    fn id(self) -> String {
+        match (self.surface, self.whole_facets) {
+            (Surface::Laguerre, true) => "laguerre_whole_facets".into(),
+            (s, _) => s.id().into(),
+        }
+    }
+
+    fn label(self) -> String {
+        match (self.surface, self.whole_facets) {
+            (Surface::Laguerre, true) => "Laguerre, whole facets cut".into(),
+            (Surface::Laguerre, false) => "Laguerre (covered part of each facet)".into(),
+            (s, _) => s.label().into(),
+        }
+    }
+}
+
 /// One model on one packing.
 struct Run {
-    surface: Surface,
+    model: CrackModel,
     lambda_hom: f64,
     jumps: Vec<Jump>,
     /// |Q|/Q₀ with the through-section crack.
@@ -143,10 +202,10 @@ struct PackingRun {
 }
 
 impl PackingRun {
-    fn run(&self, s: Surface) -> &Run {
+    fn run(&self, m: CrackModel) -> &Run {
         self.runs
             .iter()
-            .find(|r| r.surface == s)
+            .find(|r| r.model == m)
             .expect("every model runs on every packing")
     }
 }
@@ -175,7 +234,8 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     let c_t = calibrate_ct(&contacts)?.c_t;
     let cells = laguerre_model(&cfg, &contacts)?;
     let mut runs = Vec::new();
-    for s in Surface::ALL {
+    for model in CrackModel::ALL {
+        let s = model.surface;
         let base = if s.needs_cells() { &cells } else { &contacts };
         let cfg_s = with_surface_model(&cfg, s, Some(c_t));
         let mut solve_s = 0.0;
@@ -194,18 +254,22 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
         let mut jumps = Vec::new();
         for ratio in RATIOS {
             let a = ratio * L;
-            let cracked = with_scene_defects(base, &with_crack(&cfg_s, penny(a)))?;
+            let cracked = with_scene_defects_rule(base, &with_crack(&cfg_s, penny(a)), model.whole_facets)?;
             let (q, r) = flow(&cracked)?;
             let temps = &r
                 .thermal
                 .as_ref()
                 .ok_or_else(|| anyhow::anyhow!("no temperatures"))?
                 .temperatures;
-            jumps.push(read_jump(&cracked, temps, a, q / (L * L), lambda_hom, q / q0));
+            jumps.push(read_jump(base, temps, a, q / (L * L), lambda_hom, q / q0));
         }
-        let (q_through, _) = flow(&with_scene_defects(base, &with_crack(&cfg_s, through()))?)?;
+        let (q_through, _) = flow(&with_scene_defects_rule(
+            base,
+            &with_crack(&cfg_s, through()),
+            model.whole_facets,
+        )?)?;
         runs.push(Run {
-            surface: s,
+            model,
             lambda_hom,
             jumps,
             through: (q_through / q0).abs(),
@@ -223,19 +287,26 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     })
 }
 
-/// The jump on the contacts the crack of radius `a` cut: upper minus lower temperature at the
-/// crossing's radius, against (4q/(πλ))√(a² − r²).
+/// The jump across the crack of radius `a`, read on the contacts of the uncracked `model`
+/// whose segment crosses it (the same contacts whatever rule cut them): upper minus lower
+/// temperature at the crossing's radius, against (4q/(πλ))√(a² − r²).
 fn read_jump(model: &Model, temps: &[f64], a: f64, q: f64, lambda: f64, flow_ratio: f64) -> Jump {
     let centre = [0.5 * L, 0.5 * L];
     let j0 = 4.0 * q * a / (std::f64::consts::PI * lambda);
     let (mut sum, mut sum_ref) = (0.0, 0.0);
     let mut bands = vec![(0.0, 0.0, 0usize); BANDS];
     let mut cut = 0;
-    for c in model.cut_contacts() {
-        let CutCause::Crack { point, .. } = c.cause else {
+    let disc = demcon_graph::CrackShape::Disc {
+        centre: demcon_core::Vec3::new(0.5 * L, 0.5 * L, 0.5 * L),
+        normal: demcon_core::Vec3::y(),
+        radius: a,
+    };
+    for (k, pair) in model.graph.pairs.iter().enumerate() {
+        let from = model.particles.centres[pair[0] as usize];
+        let Some(point) = disc.crossing(&from, &(from + model.graph.branch(k))) else {
             continue;
         };
-        let [p, q_] = c.pair.map(|i| i as usize);
+        let [p, q_] = pair.map(|i| i as usize);
         let (lo, hi) = if model.particles.centres[p].y < model.particles.centres[q_].y {
             (p, q_)
         } else {
@@ -270,7 +341,7 @@ fn read_jump(model: &Model, temps: &[f64], a: f64, q: f64, lambda: f64, flow_rat
 }
 
 /// |mean jump error| of `s` at crack `i` over the packings of N = `n`.
-fn spread(packings: &[PackingRun], n: usize, s: Surface, i: usize) -> Spread {
+fn spread(packings: &[PackingRun], n: usize, s: CrackModel, i: usize) -> Spread {
     Spread::of(
         packings
             .iter()
@@ -285,7 +356,7 @@ fn ratio_key(r: f64) -> String {
 
 fn compare(mode: crate::Mode, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
     let mut by_model = Map::new();
-    for s in Surface::ALL {
+    for s in CrackModel::ALL {
         let mut cracks = Map::new();
         for (i, &r) in RATIOS.iter().enumerate() {
             let by_n: Map<String, Value> = ladder
@@ -294,7 +365,7 @@ fn compare(mode: crate::Mode, ladder: &[usize], packings: &[PackingRun], out: &m
                 .collect();
             cracks.insert(ratio_key(r), Value::Object(by_n));
         }
-        by_model.insert(s.id().to_string(), Value::Object(cracks));
+        by_model.insert(s.id(), Value::Object(cracks));
     }
     out.metric("mean_jump_abs_rel_error_by_model", Value::Object(by_model));
     let largest = *ladder.last().expect("a ladder");
@@ -305,17 +376,17 @@ fn compare(mode: crate::Mode, ladder: &[usize], packings: &[PackingRun], out: &m
         ),
         crate::Mode::Quick => (
             QUICK_JUMP_BOUND,
-            "[T](r) = (4q/(πλ))√(a² − r²); quick: a regression bound of 40 %, set after the first quick run missed \
-             the a-priori 20 % with 23–32 % (the target stays 20 %, gated in --full)",
+            "[T](r) = (4q/(πλ))√(a² − r²); quick: a regression bound of 40 %, set after the first quick run (whole \
+             facets cut) missed the a-priori 20 % with 23–32 % (the target stays 20 %, gated in --full)",
         ),
     };
     for (i, &r) in RATIOS.iter().enumerate() {
-        let e = spread(packings, largest, Surface::Laguerre, i);
+        let e = spread(packings, largest, CrackModel::HEADLINE, i);
         out.metric(&format!("mean_jump_rel_error_{}", ratio_key(r)), e.max);
         out.compare(Comparison::at_most(
             &format!(
-                "Laguerre, a/L = 1/{}, N = {largest}: max over {} packings of |mean jump / (8qa/(3πλ)) − 1| \
-                 (contact-averaged)",
+                "Laguerre (covered part of each facet), a/L = 1/{}, N = {largest}: max over {} packings of |mean \
+                 jump / (8qa/(3πλ)) − 1| (contact-averaged)",
                 (1.0 / r).round(),
                 e.count
             ),
@@ -329,14 +400,14 @@ fn compare(mode: crate::Mode, ladder: &[usize], packings: &[PackingRun], out: &m
             packings
                 .iter()
                 .filter(|p| p.n_target == largest)
-                .map(|p| p.run(Surface::Laguerre).jumps[i].mean_error * r * L / p.mean_radius),
+                .map(|p| p.run(CrackModel::HEADLINE).jumps[i].mean_error * r * L / p.mean_radius),
         );
         out.metric(
             &format!("laguerre_excess_radius_in_mean_radii_{}", ratio_key(r)),
             x.json(),
         );
     }
-    for s in Surface::ALL {
+    for s in CrackModel::ALL {
         let t = Spread::of(packings.iter().map(|p| p.run(s).through));
         out.metric(&format!("through_crack_flow_ratio_{}", s.id()), t.json());
         out.compare(Comparison::at_most(
@@ -360,14 +431,14 @@ fn compare(mode: crate::Mode, ladder: &[usize], packings: &[PackingRun], out: &m
 /// A line of the summary table.
 struct Summary<'a> {
     n: usize,
-    surface: Surface,
+    model: CrackModel,
     i: usize,
     packings: Vec<&'a PackingRun>,
 }
 
 impl Summary<'_> {
     fn jumps(&self) -> impl Iterator<Item = &Jump> + '_ {
-        self.packings.iter().map(|p| &p.run(self.surface).jumps[self.i])
+        self.packings.iter().map(|p| &p.run(self.model).jumps[self.i])
     }
 }
 
@@ -375,10 +446,10 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
     let lines: Vec<Summary> = ladder
         .iter()
         .flat_map(|&n| {
-            Surface::ALL.iter().flat_map(move |&s| {
+            CrackModel::ALL.iter().flat_map(move |&s| {
                 (0..RATIOS.len()).map(move |i| Summary {
                     n,
-                    surface: s,
+                    model: s,
                     i,
                     packings: packings.iter().filter(|p| p.n_target == n).collect(),
                 })
@@ -388,7 +459,7 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
     out.tables.push(
         Columns::new()
             .column("N", |l: &Summary| l.n.to_string())
-            .column("model", |l| l.surface.label().to_string())
+            .column("model", |l| l.model.label())
             .column("a/L", |l| format!("1/{}", (1.0 / RATIOS[l.i]).round()))
             .column("cut contacts (mean)", |l| {
                 format!("{:.0}", l.jumps().map(|j| j.cut as f64).sum::<f64>() / l.packings.len() as f64)
@@ -414,7 +485,7 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
                 let x = l
                     .packings
                     .iter()
-                    .map(|p| p.run(l.surface).jumps[l.i].mean_error * RATIOS[l.i] * L / p.mean_radius)
+                    .map(|p| p.run(l.model).jumps[l.i].mean_error * RATIOS[l.i] * L / p.mean_radius)
                     .sum::<f64>();
                 format!("{:.2}", x / k)
             })
@@ -433,7 +504,7 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
             .column("N", |p: &&PackingRun| p.n.to_string())
             .column("packing", |p| (p.k + 1).to_string())
             .columns_for(
-                Surface::ALL,
+                CrackModel::ALL,
                 |s| format!("{}: λ_hom, |Q|/Q₀ through-section, solves (s)", s.id()),
                 |s, p: &&PackingRun| {
                     let r = p.run(*s);
@@ -454,16 +525,48 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
         ctx.seed + PACKINGS - 1,
         100.0 * TOL_JUMP
     ));
-    out.note(
-        "Reading: the jump is high over the whole profile, the centre band included; read as a radius ([T](0) ∝ a) the \
-         excess is (mean jump error)·a ≈ 1.9–2.9 mean particle radii (column (a_eff − a)/R̄), and the relative error \
-         falls with R̄/a: with N and with a/L (the growth of the excess with a/L is the finite cube). The integrated \
-         effect is smaller: the flow reduction Q/Q₀ here and the periodic cells of crack-density (efficiency ≈ 1.3, a \
-         dipole of radius ≈ a + 0.6 R̄) — the network's crack is not a larger disc but a more compliant one: cutting an \
-         oblique branch also removes the conduction ALONG the crack that its facet carried in the layer of cells at the \
-         crack's faces (crack-density measures it: λ parallel to aligned cracks drops by 0.75 % at ρ = 0.016, where the \
-         continuum has 0). The 20 % target was set assuming an error of half a radius in the crack's extent; it is \
-         missed at 2·10⁴ (23–32 %) and stays the target (the --full gate); --quick gates a 40 % regression bound, set \
-         after that first run. The through-section crack is exact for every model.",
-    );
+    let largest = *ladder.last().expect("a ladder");
+    let worst = |m: CrackModel| {
+        RATIOS
+            .iter()
+            .enumerate()
+            .map(|(i, _)| spread(packings, largest, m, i).max)
+            .map(|e| format!("{:.0} %", 100.0 * e))
+            .collect::<Vec<_>>()
+            .join(" / ")
+    };
+    let excess = |m: CrackModel| {
+        let xs: Vec<f64> = packings
+            .iter()
+            .filter(|p| p.n_target == largest)
+            .flat_map(|p| {
+                RATIOS
+                    .iter()
+                    .enumerate()
+                    .map(|(i, r)| p.run(m).jumps[i].mean_error * r * L / p.mean_radius)
+            })
+            .collect();
+        let (lo, hi) = xs
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            });
+        format!("{lo:.1}–{hi:.1}")
+    };
+    let whole = CrackModel::ALL[1];
+    out.note(format!(
+        "Reading: at N = {largest} the largest mean-jump error over the packings is {} (a/L = 1/8, 1/6, 1/4) with the \
+         covered part of each facet cut, {} with whole facets cut (the earlier rule). Read as a radius ([T](0) ∝ a) the \
+         excess is (mean jump error)·a ≈ {} mean particle radii ({} with whole facets), and the relative error falls \
+         with R̄/a: with N and with a/L (the finite cube adds 2–4 %, growing with a/L: the module's continuum check). \
+         The jump stays high over the whole profile, the centre band included: the network's crack is not a larger disc \
+         but a more compliant one — cutting an oblique branch also removes the conduction ALONG the crack that its \
+         facet carried in the layer of cells at the crack's faces (crack-density measures it: λ parallel to aligned \
+         cracks drops where the continuum's does not). The 20 % target stays the --full gate; --quick gates a 40 % \
+         regression bound, set after the first run. The through-section crack is exact for every model.",
+        worst(CrackModel::HEADLINE),
+        worst(whole),
+        excess(CrackModel::HEADLINE),
+        excess(whole),
+    ));
 }

@@ -28,6 +28,7 @@ pub mod inclusion_interface;
 pub mod joule_transient;
 pub mod layered_interface;
 pub mod ligament_holm;
+pub mod multi_inclusion_interface;
 pub mod multi_inclusion_periodic;
 pub mod packing_stress;
 
@@ -110,6 +111,11 @@ pub fn registry() -> Vec<Case> {
             id: "inclusion-interface",
             about: "issue 14: Haddad §4 single inclusion with an interface conductance (a_K/a = 0.1, 1, 10; contrasts 5, 0.1) vs Hasselman–Johnson",
             run: inclusion_interface::run,
+        },
+        Case {
+            id: "multi-inclusion-interface",
+            about: "issue 14: epoxy/silica ETC against f with an interface conductance (a_K/a = 0.01…1) vs the equivalent-sphere third order; how much of the paper's 7 % a barrier explains",
+            run: multi_inclusion_interface::run,
         },
         Case {
             id: "crack-penny",
