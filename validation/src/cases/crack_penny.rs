@@ -48,6 +48,7 @@ use serde_json::{Map, Value};
 use super::common::*;
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
+use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Cube edge (m).
 const L: f64 = 0.1;
@@ -222,7 +223,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let mut out = CaseOutcome::new("crack-penny", ctx.mode);
     out.n_particles = packings.iter().map(|p| p.n).max().unwrap_or(0);
     compare(ctx.mode, &ladder, &packings, &mut out);
-    report(ctx, &ladder, &packings, &mut out);
+    report(ctx, &ladder, &packings, &mut out)?;
     Ok(out)
 }
 
@@ -442,7 +443,7 @@ impl Summary<'_> {
     }
 }
 
-fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
+fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) -> anyhow::Result<()> {
     let lines: Vec<Summary> = ladder
         .iter()
         .flat_map(|&n| {
@@ -569,4 +570,55 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
         excess(CrackModel::HEADLINE),
         excess(whole),
     ));
+    // The profile: band means over the packings of the largest N against the formula.
+    let at_largest: Vec<&PackingRun> = packings.iter().filter(|p| p.n_target == largest).collect();
+    let band_series = |m: CrackModel, i: usize| {
+        let points = (0..BANDS)
+            .filter_map(|b| {
+                let xs: Vec<f64> = at_largest
+                    .iter()
+                    .map(|p| p.run(m).jumps[i].bands[b].0)
+                    .filter(|x| x.is_finite())
+                    .collect();
+                (!xs.is_empty()).then(|| {
+                    (
+                        (b as f64 + 0.5) / BANDS as f64,
+                        xs.iter().sum::<f64>() / xs.len() as f64,
+                    )
+                })
+            })
+            .collect();
+        Series::markers(
+            &format!("{}, a/L = 1/{}", m.label(), (1.0 / RATIOS[i]).round()),
+            points,
+        )
+    };
+    let mut series: Vec<Series> = (0..RATIOS.len())
+        .map(|i| band_series(CrackModel::HEADLINE, i))
+        .chain(std::iter::once(band_series(whole, 0)))
+        .collect();
+    series.push(Series::line(
+        "(4q/(πλ))√(a² − r²) over 4qa/(πλ)",
+        (0..=50)
+            .map(|k| {
+                let x = k as f64 / 50.0;
+                (x, (1.0 - x * x).sqrt())
+            })
+            .collect(),
+    ));
+    draw(
+        &Chart {
+            title: format!(
+                "Penny crack: jump across the faces over 4qa/(πλ), N = {largest}, mean of the packings"
+            ),
+            x_label: "r/a (band centres)".into(),
+            y_label: "[T] / (4qa/(πλ))".into(),
+            x_scale: Scale::Linear,
+            y_scale: Scale::Linear,
+            series,
+        },
+        &ctx.out.join("crack-penny.png"),
+    )?;
+    out.charts.push("crack-penny.png".into());
+    Ok(())
 }
