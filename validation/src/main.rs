@@ -79,9 +79,14 @@ fn main() -> Result<()> {
             }
         }
     }
+    let (made, reused, saved_s) = cases::common::packing_cache_stats();
+    eprintln!("packings: {made} made, {reused} reused ({saved_s:.0} s of packing saved)");
     let header = format!(
         "Mode `{}`, seed {}, {} case(s). Regenerate with `cargo xtask validate{}`. Every number below \
-         is measured by this run; references come from `validation/data/` and `shared/refs/analytic.md`.",
+         is measured by this run; references come from `validation/data/` and `shared/refs/analytic.md`. \
+         Packings: {made} made, {reused} reused by later scenes with the same packing section and seed \
+         (a packing is a pure function of both; {saved_s:.0} s of packing saved; the packing times in \
+         the tables are the cost of making each packing).",
         mode.name(),
         args.seed,
         outcomes.len(),

@@ -78,9 +78,7 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let mut n_particles = 0;
     for &n in &sizes {
         // Slab.
-        let t0 = std::time::Instant::now();
-        let model = model_of(&slab::scene(n, ctx.seed, slab::explicit()))?;
-        let build_s = t0.elapsed().as_secs_f64();
+        let (model, build_s) = model_of_timed(&slab::scene(n, ctx.seed, slab::explicit()))?;
         n_particles = n_particles.max(model.particles.len());
         for (solver, cfg) in [
             ("explicit", slab::scene(n, ctx.seed, slab::explicit())),
@@ -98,9 +96,7 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
             });
         }
         // Sphere, to 10 s.
-        let t0 = std::time::Instant::now();
-        let model = model_of(&sphere::scene(n, ctx.seed, sphere::explicit(10.0)))?;
-        let build_s = t0.elapsed().as_secs_f64();
+        let (model, build_s) = model_of_timed(&sphere::scene(n, ctx.seed, sphere::explicit(10.0)))?;
         for (solver, cfg) in [
             ("explicit", sphere::scene(n, ctx.seed, sphere::explicit(10.0))),
             ("implicit", sphere::scene(n, ctx.seed, sphere::implicit(10.0))),

@@ -12,8 +12,6 @@
 //! reports < 0.2 %; our smallest N is 10⁴). `--quick` runs 4 realisations at 10⁴ and 3·10⁴
 //! and 2 at 10⁵ (packing 10⁵ particles dominates the cost).
 
-use std::time::Instant;
-
 use demcon_post::coefficient_of_variation;
 use demcon_scene::config::*;
 use serde_json::{Map, Value};
@@ -108,9 +106,8 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
         let (mut vals, mut vals_c, mut eps, mut z, mut pack_s, mut solve_s, mut iters) =
             (vec![], vec![], 0.0, 0.0, 0.0, 0.0, 0);
         for k in 0..realisations(n) {
-            let t0 = Instant::now();
-            let model = model_of(&scene(n, ctx.seed + k))?;
-            pack_s += t0.elapsed().as_secs_f64();
+            let (model, build_s) = model_of_timed(&scene(n, ctx.seed + k))?;
+            pack_s += build_s;
             let cal = calibrate_ct(&model)?;
             vals.push(cal.c_t);
             vals_c.push(cal.c_t_centres);

@@ -294,10 +294,8 @@ fn sweep(
 
 /// A packing of `n` particles with the side-by-side variants.
 fn side_by_side(n: usize, seed: u64, fem: &[FemPoint]) -> anyhow::Result<SideBySide> {
-    let t0 = Instant::now();
     let base = scene(n, seed, 1.0);
-    let model = model_of(&base)?;
-    let build_s = t0.elapsed().as_secs_f64();
+    let (model, build_s) = model_of_timed(&base)?;
     let set = ModelSet::new(&base, &model, &[(centred_sphere(), 1)])?;
     let cts = Calibrations::of(&model)?;
     let sweeps = Variant::side_by_side()
@@ -316,10 +314,8 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let n = ctx.pick(20_000, 150_000);
     let ladder_sizes = ctx.pick(vec![5_000, 10_000], vec![20_000, 50_000]);
     let fem = fem_reference()?;
-    let t0 = Instant::now();
     let base = scene(n, ctx.seed, 1.0);
-    let centre_model = model_of(&base)?;
-    let build_s = t0.elapsed().as_secs_f64();
+    let (centre_model, build_s) = model_of_timed(&base)?;
     let set = ModelSet::new(&base, &centre_model, &[(centred_sphere(), 1)])?;
     let laminate_model = set.by_rule(Surface::Terreros).get(PhaseRuleConfig::Laminate);
     let cts = Calibrations::of(&centre_model)?;

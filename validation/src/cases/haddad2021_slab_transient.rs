@@ -20,8 +20,6 @@
 //! implicit solver on the first only): the target 0.2 % at 10⁵ in `--full`, scaled by N^(-1/3) in `--quick`
 //! (0.2 % × (10⁵/N)^(1/3), 0.34 % at 2·10⁴), both chosen before any Laguerre number was seen.
 
-use std::time::Instant;
-
 use super::common::*;
 use super::transient::slab::{
     L, SlabErrors, analytic, explicit, implicit, measure as errors_of, scene, scene_calibrated,
@@ -131,9 +129,7 @@ fn laguerre_runs(
 /// calibrated models; the Laguerre cells on further packings.
 fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let n = ctx.pick(20_000, 100_000);
-    let t0 = Instant::now();
-    let model = model_of(&scene(n, ctx.seed, explicit()))?;
-    let build_s = t0.elapsed().as_secs_f64();
+    let (model, build_s) = model_of_timed(&scene(n, ctx.seed, explicit()))?;
     let mut laguerre = vec![laguerre_runs(n, ctx.seed, Some(&model), true)?];
     for k in 1..PACKINGS {
         laguerre.push(laguerre_runs(

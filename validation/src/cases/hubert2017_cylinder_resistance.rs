@@ -205,7 +205,6 @@ struct Measured {
 
 /// Packs one realisation and measures every model on it.
 fn measure_packing(n: usize, seed: u64) -> anyhow::Result<Sample> {
-    let t0 = Instant::now();
     let terreros = electric_scene(
         "cylinder-resistance",
         seed,
@@ -215,7 +214,7 @@ fn measure_packing(n: usize, seed: u64) -> anyhow::Result<Sample> {
         V0,
     );
     let model = model_of(&terreros)?;
-    let pack_s = t0.elapsed().as_secs_f64() - network_s(&model);
+    let pack_s = model.report.pack_s;
     let rt = run_with(&terreros, &model)?;
     let et = rt.electric.as_ref().expect("electric run");
     let t1 = Instant::now();

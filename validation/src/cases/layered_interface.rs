@@ -26,8 +26,6 @@
 //! models carry their homogeneous bias (homogeneous-exactness: a few %) and are reported, not
 //! gated.
 
-use std::time::Instant;
-
 use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
@@ -183,10 +181,9 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
 
 /// Every variant and share on one packing.
 fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
-    let t0 = Instant::now();
     let segment = scene(n, seed, PhaseRuleConfig::Segment);
     let contacts = model_of(&with_surface_model(&segment, Surface::Terreros, None))?;
-    let pack_s = t0.elapsed().as_secs_f64() - network_s(&contacts);
+    let pack_s = contacts.report.pack_s;
     let c_t = calibrate_ct(&contacts)?.c_t;
     let cells_segment = laguerre_model(&segment, &contacts)?;
     let cells_centre = laguerre_model(&scene(n, seed, PhaseRuleConfig::Centre), &contacts)?;
