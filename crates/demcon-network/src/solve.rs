@@ -137,7 +137,7 @@ impl Method {
             Self::AmgCg { .. } => "amg-pcg",
             Self::Auto { .. } => "auto",
             Self::Cholesky => "cholesky",
-            Self::Distributed { .. } => "petsc-cg-gamg",
+            Self::Distributed { .. } => distributed::METHOD,
         }
     }
 

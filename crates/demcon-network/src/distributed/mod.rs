@@ -42,6 +42,9 @@ mod petsc;
 #[cfg(feature = "petsc")]
 pub(crate) use petsc::Solver;
 
+/// Name of [`crate::Method::Distributed`] in reports.
+pub const METHOD: &str = "petsc-cg-gamg";
+
 /// Whether this build has the distributed solve (the `petsc` feature).
 pub const AVAILABLE: bool = cfg!(feature = "petsc");
 

@@ -400,14 +400,14 @@ impl Solver {
             unsafe { ffi::KSPGetResidualNorm(h.ksp, &mut rnorm) };
             if reason == ffi::KSP_DIVERGED_NANORINF {
                 return Err(SolveError::NonFinite {
-                    method: "petsc-cg-gamg",
+                    method: super::METHOD,
                     iteration: iterations,
                     what: "KSP residual norm",
                     value: rnorm,
                 });
             }
             return Err(SolveError::Breakdown {
-                method: "petsc-cg-gamg",
+                method: super::METHOD,
                 iteration: iterations,
                 detail: format!(
                     "KSPConvergedReason {reason} ({}), residual norm {rnorm:.3e}",
