@@ -140,6 +140,12 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             return Err(e);
         }
     };
+    if let Some(s) = &session {
+        // Collective: every rank reaches this point after the same run.
+        let peak = result.stages.peak_rss_bytes().unwrap_or(0) as f64;
+        s.gather_peak_memory(peak)
+            .context("gathering the ranks' peak memory")?;
+    }
     if !rank0 {
         // Every rank computed the same result; rank 0 writes it.
         return Ok(ExitCode::SUCCESS);
@@ -334,7 +340,8 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
     if d.ranks > 0 {
         println!(
             "  distributed ({}, {} rank(s), {}–{} rows per rank): {} systems, {} KSP solves, {} iterations; \
-             rank 0: assembly {:.2} s, set-up {:.2} s, solve {:.2} s, gather {:.2} s",
+             rank 0: assembly {:.2} s, set-up {:.2} s, solve {:.2} s, gather {:.2} s; peak memory per rank \
+             {:.2}–{:.2} GB",
             demcon_scene::distributed::METHOD,
             d.ranks,
             d.rows_per_rank.0,
@@ -345,7 +352,9 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
             d.assembly_s,
             d.setup_s,
             d.solve_s,
-            d.gather_s
+            d.gather_s,
+            d.peak_rss_bytes.0 / 1e9,
+            d.peak_rss_bytes.1 / 1e9
         );
     }
     println!("  total {:.2} s", r.wall_s);

@@ -95,6 +95,28 @@ impl Session {
         self.size
     }
 
+    /// Gathers every rank's peak resident memory (`bytes` of this rank) to every rank, in
+    /// rank order, and records the smallest and largest in [`stats`]. Collective: every rank
+    /// calls it once, at the same point.
+    ///
+    /// # Errors
+    /// [`SolveError::Petsc`] when the exchange fails.
+    pub fn gather_peak_memory(&self, bytes: f64) -> Result<Vec<f64>, SolveError> {
+        #[cfg(feature = "petsc")]
+        {
+            let all = petsc::all_gather(bytes)?;
+            let lo = all.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = all.iter().copied().fold(0.0, f64::max);
+            record(|s| s.peak_rss_bytes = (lo, hi));
+            Ok(all)
+        }
+        #[cfg(not(feature = "petsc"))]
+        {
+            let _ = bytes;
+            Err(unavailable())
+        }
+    }
+
     /// Resident memory of this process now (bytes), as PETSc measures it; `None` when it
     /// cannot tell.
     pub fn memory_bytes(&self) -> Option<f64> {
@@ -139,6 +161,9 @@ pub struct DistributedStats {
     pub max_unknowns: usize,
     /// Fewest and most rows one rank owned in the largest system.
     pub rows_per_rank: (usize, usize),
+    /// Smallest and largest peak resident memory over the ranks (bytes), once
+    /// [`Session::gather_peak_memory`] ran; (0, 0) before.
+    pub peak_rss_bytes: (f64, f64),
 }
 
 static STATS: Mutex<DistributedStats> = Mutex::new(DistributedStats {
@@ -152,6 +177,7 @@ static STATS: Mutex<DistributedStats> = Mutex::new(DistributedStats {
     gather_s: 0.0,
     max_unknowns: 0,
     rows_per_rank: (0, 0),
+    peak_rss_bytes: (0.0, 0.0),
 });
 
 /// The totals of this process's distributed solves so far.

@@ -85,6 +85,48 @@ pub(super) fn memory_bytes() -> Option<f64> {
     (unsafe { ffi::PetscMemoryGetCurrentUsage(&mut bytes) } == 0 && bytes > 0.0).then_some(bytes)
 }
 
+/// `value` of every rank, in rank order, on every rank (collective).
+pub(super) fn all_gather(value: f64) -> Result<Vec<f64>, SolveError> {
+    let (mut v, mut all, mut sc): (Vec_, Vec_, VecScatter) =
+        (ptr::null_mut(), ptr::null_mut(), ptr::null_mut());
+    // SAFETY: one entry per rank; the three objects are destroyed below on every path.
+    let result = unsafe {
+        (|| {
+            check(ffi::VecCreateMPI(world(), 1, -1, &mut v), "VecCreateMPI")?;
+            let mut a: *mut f64 = ptr::null_mut();
+            check(ffi::VecGetArray(v, &mut a), "VecGetArray")?;
+            *a = value;
+            check(ffi::VecRestoreArray(v, &mut a), "VecRestoreArray")?;
+            check(
+                ffi::VecScatterCreateToAll(v, &mut sc, &mut all),
+                "VecScatterCreateToAll",
+            )?;
+            check(
+                ffi::VecScatterBegin(sc, v, all, ffi::INSERT_VALUES, ffi::SCATTER_FORWARD),
+                "VecScatterBegin",
+            )?;
+            check(
+                ffi::VecScatterEnd(sc, v, all, ffi::INSERT_VALUES, ffi::SCATTER_FORWARD),
+                "VecScatterEnd",
+            )?;
+            let mut size: c_int = 0;
+            check(ffi::MPI_Comm_size(world(), &mut size), "MPI_Comm_size")?;
+            let mut b: *const f64 = ptr::null();
+            check(ffi::VecGetArrayRead(all, &mut b), "VecGetArrayRead")?;
+            let out = std::slice::from_raw_parts(b, size.max(0) as usize).to_vec();
+            check(ffi::VecRestoreArrayRead(all, &mut b), "VecRestoreArrayRead")?;
+            Ok(out)
+        })()
+    };
+    // SAFETY: created above or null (accepted by the Destroy functions).
+    unsafe {
+        ffi::VecScatterDestroy(&mut sc);
+        ffi::VecDestroy(&mut all);
+        ffi::VecDestroy(&mut v);
+    }
+    result
+}
+
 /// PETSc's objects of one system.
 struct Handles {
     a: Mat,
