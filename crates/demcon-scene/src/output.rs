@@ -113,6 +113,7 @@ fn distributed_json() -> serde_json::Value {
         "gather_s": s.gather_s,
         "max_unknowns": s.max_unknowns,
         "rows_per_rank": [s.rows_per_rank.0, s.rows_per_rank.1],
+        "ghosts_rank0": s.ghosts,
         "peak_rss_mb_per_rank": [s.peak_rss_bytes.0 / 1e6, s.peak_rss_bytes.1 / 1e6],
     })
 }

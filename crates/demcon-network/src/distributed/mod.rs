@@ -161,6 +161,9 @@ pub struct DistributedStats {
     pub max_unknowns: usize,
     /// Fewest and most rows one rank owned in the largest system.
     pub rows_per_rank: (usize, usize),
+    /// Unknowns owned by other ranks that this rank's rows of the largest system read (the
+    /// halo each matrix product receives: 8 bytes each).
+    pub ghosts: usize,
     /// Smallest and largest peak resident memory over the ranks (bytes), once
     /// [`Session::gather_peak_memory`] ran; (0, 0) before.
     pub peak_rss_bytes: (f64, f64),
@@ -177,6 +180,7 @@ static STATS: Mutex<DistributedStats> = Mutex::new(DistributedStats {
     gather_s: 0.0,
     max_unknowns: 0,
     rows_per_rank: (0, 0),
+    ghosts: 0,
     peak_rss_bytes: (0.0, 0.0),
 });
 

@@ -274,12 +274,19 @@ impl Solver {
         let m = to_int(hi - lo, "rows of a rank")?;
         let (mut c, mut v) = (Vec::new(), Vec::new());
         let (mut d_nnz, mut o_nnz) = (Vec::with_capacity(hi - lo), Vec::with_capacity(hi - lo));
+        // Columns owned by other ranks: the values each matrix product receives (the halo).
+        let mut ghosts: Vec<PetscInt> = Vec::new();
         for k in lo..hi {
             row(k, &mut c, &mut v);
             let d = c.iter().filter(|&&j| (lo..hi).contains(&(j as usize))).count();
             d_nnz.push(d as PetscInt);
             o_nnz.push((c.len() - d) as PetscInt);
+            ghosts.extend(c.iter().filter(|&&j| !(lo..hi).contains(&(j as usize))));
         }
+        ghosts.sort_unstable();
+        ghosts.dedup();
+        let n_ghosts = ghosts.len();
+        drop(ghosts);
         let mut h = Handles {
             a: ptr::null_mut(),
             b: ptr::null_mut(),
@@ -365,6 +372,7 @@ impl Solver {
                 s.max_unknowns = n;
                 let sizes = bounds.windows(2).map(|w| w[1] - w[0]);
                 s.rows_per_rank = (sizes.clone().min().unwrap_or(0), sizes.max().unwrap_or(0));
+                s.ghosts = n_ghosts;
             }
         });
         Ok(Self {
