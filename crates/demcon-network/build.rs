@@ -145,7 +145,11 @@ fn from_petsc_dir(dir: &Path) -> Result<Flags, String> {
     } else {
         dir.join(&arch)
     };
-    if let Ok(f) = pkg_config_in("PETSc", Some(&prefix.join("lib/pkgconfig"))) {
+    let pc = prefix.join("lib/pkgconfig");
+    // Only this installation's PETSc.pc: never fall back to another PETSc on the system.
+    if pc.join("PETSc.pc").is_file()
+        && let Ok(f) = pkg_config_in("PETSc", Some(&pc))
+    {
         return Ok(f);
     }
     if !prefix.join("include/petscconf.h").is_file() {

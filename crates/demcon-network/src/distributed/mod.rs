@@ -274,4 +274,28 @@ mod tests {
         assert_eq!(b, vec![0, 1, 2, 3, 4]);
         assert_eq!(partition(&[3, 3], 1), vec![0, 2]);
     }
+
+    /// Without the feature the method is refused with the build command, not a panic.
+    #[cfg(not(feature = "petsc"))]
+    #[test]
+    fn without_the_feature_the_method_names_the_build_command() {
+        use crate::{FloatingPolicy, LinearSystem, Method, Network, SolveError, SolveParams, resolve_fixed};
+        let net = Network::new(3, &[[0, 1], [1, 2]]).unwrap();
+        let bcs = resolve_fixed(&net, &[(vec![0], 0.0), (vec![2], 1.0)], FloatingPolicy::Fail).unwrap();
+        let params = SolveParams {
+            method: Method::Distributed {
+                rel_tol: 1e-8,
+                max_iter: 10,
+            },
+        };
+        let err = LinearSystem::new(&net, &[1.0, 1.0], None, &bcs, &params).unwrap_err();
+        assert!(
+            matches!(&err, SolveError::DistributedUnavailable { why } if why.contains("--features petsc")),
+            "{err}"
+        );
+        assert!(matches!(
+            super::Session::init(),
+            Err(SolveError::DistributedUnavailable { .. })
+        ));
+    }
 }

@@ -196,7 +196,7 @@ impl Solver {
     pub(crate) fn new(sys: &LinearSystem<'_>, nodes: &[u32]) -> Result<Self, SolveError> {
         if !running() {
             return Err(SolveError::DistributedUnavailable {
-                why: "PETSc is not initialised: start a distributed_solve Session first (the CLI's --distributed does)"
+                why: "PETSc is not initialised: create a demcon_network::distributed::Session on every rank first (the CLI's --distributed does)"
                     .into(),
             });
         }
