@@ -14,6 +14,7 @@ fn main() {
     println!("cargo::rerun-if-env-changed=PETSC_DIR");
     println!("cargo::rerun-if-env-changed=PETSC_ARCH");
     println!("cargo::rerun-if-env-changed=PKG_CONFIG_PATH");
+    println!("cargo::rerun-if-env-changed=PKG_CONFIG_LIBDIR");
     if env::var_os("CARGO_FEATURE_PETSC").is_none() {
         return;
     }
