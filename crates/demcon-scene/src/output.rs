@@ -103,6 +103,7 @@ fn distributed_json() -> serde_json::Value {
     }
     json!({
         "method": demcon_network::distributed::METHOD,
+        "petsc_solver": s.solver,
         "ranks": s.ranks,
         "systems": s.systems,
         "ksp_solves": s.ksp_solves,

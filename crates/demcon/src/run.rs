@@ -339,10 +339,11 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
     let d = demcon_scene::distributed::stats();
     if d.ranks > 0 {
         println!(
-            "  distributed ({}, {} rank(s), {}–{} rows per rank, {} ghosts on rank 0): {} systems, {} KSP solves, {} iterations; \
+            "  distributed ({}: {}, {} rank(s), {}–{} rows per rank, {} ghosts on rank 0): {} systems, {} KSP solves, {} iterations; \
              rank 0: assembly {:.2} s, set-up {:.2} s, solve {:.2} s, gather {:.2} s; peak memory per rank \
              {:.2}–{:.2} GB",
             demcon_scene::distributed::METHOD,
+            d.solver,
             d.ranks,
             d.rows_per_rank.0,
             d.rows_per_rank.1,

@@ -87,6 +87,8 @@ fn mpirun(ranks: usize, scene: &Path, out: &Path, extra: &[&str]) -> Output {
     Command::new("mpirun")
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        // The method under test, not a user's override.
+        .env_remove("PETSC_OPTIONS")
         .args(["--oversubscribe", "-n", &ranks.to_string()])
         .arg(env!("CARGO_BIN_EXE_demcon"))
         .args([
@@ -169,6 +171,7 @@ fn distributed_equals_serial(tag: &str, text: &str, values: &[&str], fields: &[&
         let dist = summary(&out);
         assert_eq!(dist["distributed"]["ranks"], ranks, "{}", dist["distributed"]);
         assert_eq!(dist["distributed"]["method"], "petsc-cg-gamg");
+        assert_eq!(dist["distributed"]["petsc_solver"], "cg + gamg");
         assert!(dist["distributed"]["iterations"].as_u64().unwrap() > 0);
         for v in values {
             let (a, b) = (serial.pointer(v), dist.pointer(v));

@@ -134,6 +134,8 @@ unsafe extern "C" {
         maxits: PetscInt,
     ) -> PetscErrorCode;
     pub fn KSPSetFromOptions(ksp: Ksp) -> PetscErrorCode;
+    pub fn KSPGetType(ksp: Ksp, t: *mut *const c_char) -> PetscErrorCode;
+    pub fn PCGetType(pc: Pc, t: *mut *const c_char) -> PetscErrorCode;
     pub fn KSPSetUp(ksp: Ksp) -> PetscErrorCode;
     pub fn KSPSolve(ksp: Ksp, b: Vec_, x: Vec_) -> PetscErrorCode;
     pub fn KSPGetConvergedReason(ksp: Ksp, reason: *mut c_int) -> PetscErrorCode;

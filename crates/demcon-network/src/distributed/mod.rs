@@ -138,10 +138,13 @@ impl Drop for Session {
 
 /// What the distributed solves of this process cost so far (every rank counts its own; the
 /// iteration counts are the same on every rank).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct DistributedStats {
     /// Ranks of the session (0 before [`Session::init`]).
     pub ranks: usize,
+    /// PETSc's Krylov method and preconditioner of the last system, as set up (`"cg + gamg"`
+    /// unless `PETSC_OPTIONS` changed them, e.g. `-pc_type hypre`).
+    pub solver: String,
     /// Distributed systems set up (one per steady solve, per Δt of an implicit run, per
     /// ρ_e(T) re-solve).
     pub systems: usize,
@@ -171,6 +174,7 @@ pub struct DistributedStats {
 
 static STATS: Mutex<DistributedStats> = Mutex::new(DistributedStats {
     ranks: 0,
+    solver: String::new(),
     systems: 0,
     ksp_solves: 0,
     iterations: 0,
@@ -187,8 +191,8 @@ static STATS: Mutex<DistributedStats> = Mutex::new(DistributedStats {
 /// The totals of this process's distributed solves so far.
 pub fn stats() -> DistributedStats {
     match STATS.lock() {
-        Ok(s) => *s,
-        Err(p) => *p.into_inner(),
+        Ok(s) => s.clone(),
+        Err(p) => p.into_inner().clone(),
     }
 }
 

@@ -363,9 +363,30 @@ impl Solver {
             check(ffi::KSPSetFromOptions(h.ksp), "KSPSetFromOptions")?;
             check(ffi::KSPSetUp(h.ksp), "KSPSetUp")?;
         }
+        // What runs after the options: "cg + gamg" unless PETSC_OPTIONS changed it.
+        let solver = {
+            let (mut k, mut p): (*const std::ffi::c_char, *const std::ffi::c_char) =
+                (ptr::null(), ptr::null());
+            let mut pc = ptr::null_mut();
+            // SAFETY: the type names are PETSc's static strings (or null).
+            unsafe {
+                check(ffi::KSPGetType(h.ksp, &mut k), "KSPGetType")?;
+                check(ffi::KSPGetPC(h.ksp, &mut pc), "KSPGetPC")?;
+                check(ffi::PCGetType(pc, &mut p), "PCGetType")?;
+                let name = |s: *const std::ffi::c_char| {
+                    if s.is_null() {
+                        "?".to_string()
+                    } else {
+                        CStr::from_ptr(s).to_string_lossy().into_owned()
+                    }
+                };
+                format!("{} + {}", name(k), name(p))
+            }
+        };
         let setup_s = t1.elapsed().as_secs_f64();
         record(|s| {
             s.systems += 1;
+            s.solver = solver;
             s.assembly_s += assembly_s;
             s.setup_s += setup_s;
             if n >= s.max_unknowns {
