@@ -1,7 +1,8 @@
 //! `cargo xtask`: project automation in Rust (no loose shell scripts).
 //!
 //! - `cargo xtask ci` — exactly what `.ci/run` runs: format check, clippy with warnings as
-//!   errors, the workspace tests (which include the tidy checks).
+//!   errors, the workspace tests (which include the tidy checks); `--petsc` adds the
+//!   distributed solve's clippy and tests (PETSc, MPI and `mpirun` installed).
 //! - `cargo xtask tidy` — the architecture checks alone: the layer picture of the crate
 //!   graph, faer only in demcon-network, RON only in demcon-scene, `//!` file headers.
 //! - `cargo xtask validate [CASE…] [--quick | --full] [--out DIR]` — the papers' validation
@@ -33,7 +34,7 @@ fn main() -> Result<()> {
         "bench" => bench(&rest),
         "help" | "--help" | "-h" => {
             println!(
-                "usage: cargo xtask <command>\n\n  ci                         format check, clippy -D warnings, cargo test --workspace\n  \
+                "usage: cargo xtask <command>\n\n  ci [--petsc]               format check, clippy -D warnings, cargo test --workspace\n                             (--petsc: also the distributed solve's, docs/distributed.md)\n  \
                  tidy                       layer rules of the crate graph, file headers\n  \
                  validate [CASE…] [--quick|--full] [--out DIR] [--list]\n                             run the validation cases (release build)\n  \
                  bench [NAME]               run the criterion benchmarks (all, or benches/NAME.rs)\n  \

@@ -145,6 +145,23 @@ pub enum SolveError {
     /// The direct factorisation failed.
     #[error("sparse Cholesky failed: {0}")]
     Factorization(String),
+    /// A distributed solve ([`crate::Method::Distributed`]) cannot run in this build or
+    /// process (built without the `petsc` feature, PETSc not started).
+    #[error("distributed solve unavailable: {why}")]
+    DistributedUnavailable {
+        /// What is missing and how to get it.
+        why: String,
+    },
+    /// A PETSc call failed (its `PetscErrorCode` and PETSc's text for it).
+    #[error("PETSc's {call} failed with error code {code}: {message}")]
+    Petsc {
+        /// The PETSc function.
+        call: &'static str,
+        /// Its `PetscErrorCode`.
+        code: i32,
+        /// PETSc's description of the code.
+        message: String,
+    },
 }
 
 impl SolveError {

@@ -36,6 +36,7 @@ mod amg;
 mod cholesky;
 mod constraints;
 mod csr;
+pub mod distributed;
 mod error;
 mod faer_cg;
 pub mod fixtures;

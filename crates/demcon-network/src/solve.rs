@@ -13,7 +13,7 @@ use crate::error::SolveError;
 use crate::ic::{self, Mic};
 use crate::network::Network;
 use crate::par::{CHUNK, chunks_map, chunks_map3, dot, ordered_sum};
-use crate::{cholesky, faer_cg};
+use crate::{cholesky, distributed, faer_cg};
 
 /// How the linear system is solved.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,6 +71,19 @@ pub enum Method {
     /// Direct sparse Cholesky (faer, AMD ordering). The factorisation is reused by every
     /// solve of one [`LinearSystem`]; practical to ~10⁵ unknowns.
     Cholesky,
+    /// PETSc's conjugate gradient preconditioned by its smoothed-aggregation multigrid
+    /// (KSPCG + PCGAMG) on the free block distributed over the MPI ranks by contiguous row
+    /// ranges ([`crate::distributed`]); needs the `petsc` feature and a running
+    /// [`crate::distributed::Session`] on every rank, and every rank must set up and solve
+    /// the same systems in the same order. The matrix and the hierarchy are built once per
+    /// [`LinearSystem`]. Stops on the true residual like [`Method::AmgCg`], with the same
+    /// restart loop: every rank ends with the whole solution.
+    Distributed {
+        /// Relative residual tolerance, in (0, 1).
+        rel_tol: f64,
+        /// Maximum number of iterations, ≥ 1.
+        max_iter: usize,
+    },
 }
 
 /// Relaxation ω of [`Method::IcCg`]'s modified incomplete Cholesky (0 = DIC, 1 = row sums
@@ -124,6 +137,7 @@ impl Method {
             Self::AmgCg { .. } => "amg-pcg",
             Self::Auto { .. } => "auto",
             Self::Cholesky => "cholesky",
+            Self::Distributed { .. } => distributed::METHOD,
         }
     }
 
@@ -145,6 +159,7 @@ impl Method {
             | Self::IcCg { rel_tol, max_iter }
             | Self::FaerCg { rel_tol, max_iter }
             | Self::AmgCg { rel_tol, max_iter }
+            | Self::Distributed { rel_tol, max_iter }
             | Self::Auto { rel_tol, max_iter } => {
                 if !(rel_tol.is_finite() && rel_tol > 0.0 && rel_tol < 1.0) {
                     return Err(SolveError::invalid(
@@ -246,6 +261,9 @@ pub struct LinearSystem<'a> {
     /// Modified incomplete Cholesky of the free block and the free nodes in unknown order
     /// ([`Method::IcCg`]).
     mic: Option<(Mic, Vec<u32>)>,
+    /// The PETSc solver of the free block and the free nodes in unknown order
+    /// ([`Method::Distributed`]).
+    petsc: Option<(distributed::Solver, Vec<u32>)>,
     setup_s: f64,
 }
 
@@ -309,7 +327,9 @@ impl<'a> LinearSystem<'a> {
             Method::Cg { .. } | Method::FaerCg { .. } | Method::Auto { .. } => {
                 EntryValues::Entries(net.entry_values(conductances))
             }
-            Method::AmgCg { .. } | Method::IcCg { .. } | Method::Cholesky => EntryValues::Edges(conductances),
+            Method::AmgCg { .. } | Method::IcCg { .. } | Method::Cholesky | Method::Distributed { .. } => {
+                EntryValues::Edges(conductances)
+            }
         };
         let mut diag = net.row_sums(conductances);
         if let Some(d) = shift {
@@ -337,6 +357,7 @@ impl<'a> LinearSystem<'a> {
             factor: None,
             amg: None,
             mic: None,
+            petsc: None,
             setup_s: 0.0,
         };
         match method {
@@ -349,6 +370,12 @@ impl<'a> LinearSystem<'a> {
                 demcon_core::release_free_memory();
             }
             Method::IcCg { .. } => sys.mic = Some(sys.incomplete_factor()?),
+            Method::Distributed { .. } => {
+                let nodes: Vec<u32> = (0..sys.free.len() as u32)
+                    .filter(|&p| sys.free[p as usize])
+                    .collect();
+                sys.petsc = Some((distributed::Solver::new(&sys, &nodes)?, nodes));
+            }
             Method::Cg { .. } | Method::FaerCg { .. } | Method::Auto { .. } => {}
         }
         sys.setup_s = start.elapsed().as_secs_f64();
@@ -525,6 +552,9 @@ impl<'a> LinearSystem<'a> {
                 }
                 Method::AmgCg { rel_tol, max_iter } => {
                     self.amg_pcg(rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
+                }
+                Method::Distributed { rel_tol, max_iter } => {
+                    self.petsc_pcg(rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
                 }
                 Method::Cholesky => {
                     let factor = self.factor.as_ref().ok_or_else(|| {
@@ -765,6 +795,34 @@ impl<'a> LinearSystem<'a> {
         };
         self.compact_pcg(b, x, r, stop, nodes, |rc, _, left| {
             amg::pcg(hierarchy, rc, rel_tol * b_norm, left)
+        })
+    }
+
+    /// [`Method::Distributed`]: PETSc's KSPCG + PCGAMG for the correction, asked for the
+    /// reduction that meets the tolerance on the true residual, restarted from the true
+    /// residual like [`Self::amg_pcg`]. Every rank runs the same loop on the same gathered
+    /// vectors, so every rank takes the same decisions.
+    fn petsc_pcg(
+        &self,
+        b: &[f64],
+        x: &mut [f64],
+        r: &mut [f64],
+        b_norm: f64,
+        rel_tol: f64,
+        max_iter: usize,
+    ) -> Result<(usize, f64, Option<f64>), SolveError> {
+        let Some((solver, nodes)) = &self.petsc else {
+            return Err(SolveError::Factorization(
+                "system prepared without a distributed solver".into(),
+            ));
+        };
+        let stop = Stop {
+            b_norm,
+            rel_tol,
+            max_iter,
+        };
+        self.compact_pcg(b, x, r, stop, nodes, |rc, r_norm, left| {
+            solver.solve(rc, rel_tol * b_norm / r_norm, left)
         })
     }
 

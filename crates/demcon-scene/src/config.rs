@@ -123,6 +123,9 @@ pub enum LinearMethodConfig {
     Jacobi,
     /// Direct sparse Cholesky (to ~10⁵ unknowns).
     Cholesky,
+    /// PETSc's multigrid-preconditioned CG over MPI (`docs/distributed.md`): what
+    /// `demcon run --distributed` sets; needs a demcon built with `--features petsc`.
+    Distributed,
 }
 
 /// Where the particles come from.

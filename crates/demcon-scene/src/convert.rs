@@ -530,6 +530,7 @@ pub fn solve_params(l: &LinearSolverConfig) -> SolveParams {
             LinearMethodConfig::Mic => Method::IcCg { rel_tol, max_iter },
             LinearMethodConfig::Jacobi => Method::Cg { rel_tol, max_iter },
             LinearMethodConfig::Cholesky => Method::Cholesky,
+            LinearMethodConfig::Distributed => Method::Distributed { rel_tol, max_iter },
         },
     }
 }

@@ -47,6 +47,8 @@ pub use build::build_model;
 pub use config::SceneConfig;
 pub use convert::Problem;
 pub use demcon_model::Model;
+/// The distributed solve's session and totals (`demcon run --distributed`).
+pub use demcon_network::distributed;
 pub use demcon_thermal::ProgressFn;
 pub use error::SceneError;
 pub use output::{summary_json, write_outputs};

@@ -88,8 +88,34 @@ fn summary_with(name: &str, r: &RunResult, stages: &[StageRecord]) -> serde_json
             "peak_rss_mb": peak.map(|b| b as f64 / 1e6),
             "peak_bytes_per_particle": peak.map(|b| b as f64 / m.particles.len().max(1) as f64),
         }),
+        "distributed": distributed_json(),
         "post_s": r.post_s,
         "wall_s": r.wall_s,
+    })
+}
+
+/// The distributed solves of this process (`demcon run --distributed`): ranks, systems,
+/// iterations and this rank's assembly, set-up, solve and gather times (s); null when none ran.
+fn distributed_json() -> serde_json::Value {
+    let s = demcon_network::distributed::stats();
+    if s.ranks == 0 {
+        return serde_json::Value::Null;
+    }
+    json!({
+        "method": demcon_network::distributed::METHOD,
+        "petsc_solver": s.solver,
+        "ranks": s.ranks,
+        "systems": s.systems,
+        "ksp_solves": s.ksp_solves,
+        "iterations": s.iterations,
+        "assembly_s": s.assembly_s,
+        "setup_s": s.setup_s,
+        "solve_s": s.solve_s,
+        "gather_s": s.gather_s,
+        "max_unknowns": s.max_unknowns,
+        "rows_per_rank": [s.rows_per_rank.0, s.rows_per_rank.1],
+        "ghosts_rank0": s.ghosts,
+        "peak_rss_mb_per_rank": [s.peak_rss_bytes.0 / 1e6, s.peak_rss_bytes.1 / 1e6],
     })
 }
 

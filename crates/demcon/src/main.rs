@@ -4,6 +4,7 @@ mod calibrate;
 mod container;
 mod import;
 mod info;
+mod mpi;
 mod pack;
 mod plot;
 mod progress;
@@ -70,7 +71,10 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {}", error_chain(&e));
+            // A distributed run's ranks fail alike: rank 0 says why, the others stay quiet.
+            if !mpi::silent() {
+                eprintln!("error: {}", error_chain(&e));
+            }
             ExitCode::FAILURE
         }
     }

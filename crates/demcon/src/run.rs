@@ -44,13 +44,34 @@ pub struct RunArgs {
     /// killed run would (no outputs, the checkpoint left).
     #[arg(long, hide = true, value_name = "N")]
     pub exit_after_checkpoints: Option<u64>,
+    /// Solve every linear system (steady, implicit steps, electric) with PETSc over MPI:
+    /// `mpirun -n K demcon run SCENE.ron --distributed` (a demcon built with `--features
+    /// petsc`; docs/distributed.md). Every rank runs the scene; rank 0 writes the outputs.
+    /// Without mpirun it is one rank. Checkpoints are not written.
+    #[arg(long)]
+    pub distributed: bool,
 }
 
 /// Runs the subcommand.
 pub fn run(args: RunArgs) -> Result<ExitCode> {
-    crate::set_threads(args.threads)?;
-    let scene =
+    let launch = crate::mpi::launch();
+    // Until PETSc says otherwise, the launcher's rank 0 is the one that prints errors.
+    crate::mpi::set_silent(launch.is_some_and(|l| l.rank != 0));
+    // Declared first, dropped last: PetscFinalize after every distributed system is gone.
+    let session = distributed_session(&args, launch)?;
+    let rank0 = session.as_ref().is_none_or(|s| s.rank() == 0);
+    let threads = match (args.threads, &session) {
+        (None, Some(s)) if s.size() > 1 => Some(crate::mpi::threads_per_rank(
+            launch.map_or(s.size(), |l| l.local_size),
+        )),
+        (t, _) => t,
+    };
+    crate::set_threads(threads)?;
+    let mut scene =
         Scene::load(&args.scene).with_context(|| format!("loading scene {}", args.scene.display()))?;
+    if session.is_some() {
+        scene.config.linear_solver.method = demcon_scene::config::LinearMethodConfig::Distributed;
+    }
     let stem = args
         .scene
         .file_stem()
@@ -65,7 +86,14 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     let out = args.out.unwrap_or_else(|| PathBuf::from("out").join(&stem));
     check_output_dir(&out).with_context(|| format!("output folder {}", out.display()))?;
     let checkpoint = checkpoint_path(&out).with_context(|| format!("output folder {}", out.display()))?;
+    let wants_checkpoints = scene.config.thermal.as_ref().and_then(|t| t.checkpoint).is_some();
+    if session.is_some() && wants_checkpoints && rank0 && !args.quiet {
+        eprintln!(
+            "note: a distributed run writes no checkpoints (the scene's thermal.checkpoint is ignored)"
+        );
+    }
     if !args.quiet
+        && session.is_none()
         && let Some(ck) = scene.config.thermal.as_ref().and_then(|t| t.checkpoint)
     {
         let every = [
@@ -87,7 +115,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }
         ControlFlow::Continue(())
     };
-    let display = RunDisplay::new(!args.quiet);
+    let display = RunDisplay::new(!args.quiet && rank0);
     let progress = |p: &demcon_packing::PackProgress| display.packing(p);
     let steps = display.clone();
     let transient_progress = Some(demcon_scene::ProgressFn::new(move |done, total| {
@@ -97,7 +125,8 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         progress: Some(&progress),
         transient_progress,
         stages: Some(Arc::new(display.clone())),
-        checkpoint: Some(CheckpointOptions {
+        // Checkpoints are one process's file: a distributed run writes none.
+        checkpoint: session.is_none().then(|| CheckpointOptions {
             path: checkpoint.clone(),
             resume: args.resume,
             after_write: Some(&after_write),
@@ -111,6 +140,16 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             return Err(e);
         }
     };
+    if let Some(s) = &session {
+        // Collective: every rank reaches this point after the same run.
+        let peak = result.stages.peak_rss_bytes().unwrap_or(0) as f64;
+        s.gather_peak_memory(peak)
+            .context("gathering the ranks' peak memory")?;
+    }
+    if !rank0 {
+        // Every rank computed the same result; rank 0 writes it.
+        return Ok(ExitCode::SUCCESS);
+    }
     display.started("outputs");
     let files = write_outputs(&name, &scene.config.outputs, &result, &out)
         .with_context(|| format!("writing outputs to {}", out.display()));
@@ -127,7 +166,47 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         );
     }
     println!("outputs in {}: {}", out.display(), files.join(", "));
+    drop(session);
     Ok(ExitCode::SUCCESS)
+}
+
+/// The PETSc session of `--distributed` after the launch checks (`crate::mpi`); `None` for
+/// a serial run.
+fn distributed_session(
+    args: &RunArgs,
+    launch: Option<crate::mpi::Launch>,
+) -> Result<Option<demcon_scene::distributed::Session>> {
+    if !args.distributed {
+        if let Some(l) = launch.filter(|l| l.size > 1) {
+            anyhow::bail!(
+                "launched by mpirun as {} processes without --distributed: every process would run the \
+                 whole scene alone and write the same outputs; add --distributed (a demcon built with \
+                 --features petsc), or run without mpirun",
+                l.size
+            );
+        }
+        return Ok(None);
+    }
+    if args.resume {
+        anyhow::bail!(
+            "--resume cannot be combined with --distributed: a distributed run writes no checkpoints; \
+             resume serially, or rerun with --distributed"
+        );
+    }
+    let session = demcon_scene::distributed::Session::init().context("--distributed")?;
+    crate::mpi::set_silent(session.rank() != 0);
+    if let Some(l) = launch
+        && l.size != session.size()
+    {
+        anyhow::bail!(
+            "mpirun started {} processes but PETSc's MPI sees {} rank(s): this demcon is linked with \
+             another MPI than the launcher's; launch it with the mpirun of the MPI PETSc was built \
+             with (Debian: /usr/bin/mpirun from openmpi-bin)",
+            l.size,
+            session.size()
+        );
+    }
+    Ok(Some(session))
 }
 
 fn print_summary(name: &str, r: &demcon_scene::RunResult) {
@@ -256,6 +335,29 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
     }
     for d in &r.diagnostics {
         println!("  note: {d}");
+    }
+    let d = demcon_scene::distributed::stats();
+    if d.ranks > 0 {
+        println!(
+            "  distributed ({}: {}, {} rank(s), {}–{} rows per rank, {} ghosts on rank 0): {} systems, {} KSP solves, {} iterations; \
+             rank 0: assembly {:.2} s, set-up {:.2} s, solve {:.2} s, gather {:.2} s; peak memory per rank \
+             {:.2}–{:.2} GB",
+            demcon_scene::distributed::METHOD,
+            d.solver,
+            d.ranks,
+            d.rows_per_rank.0,
+            d.rows_per_rank.1,
+            d.ghosts,
+            d.systems,
+            d.ksp_solves,
+            d.iterations,
+            d.assembly_s,
+            d.setup_s,
+            d.solve_s,
+            d.gather_s,
+            d.peak_rss_bytes.0 / 1e9,
+            d.peak_rss_bytes.1 / 1e9
+        );
     }
     println!("  total {:.2} s", r.wall_s);
 }

@@ -71,3 +71,30 @@ fn run_out_is_checked_before_the_run() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(out.join("summary.json").exists());
 }
+
+/// `--distributed` in a build without PETSc: refused before any work, naming the build
+/// command, no output folder.
+#[cfg(not(feature = "petsc"))]
+#[test]
+fn distributed_without_petsc_is_refused() {
+    let d = common::scratch("cli-run", "distributed");
+    let scene = d.join("ok.ron");
+    std::fs::write(&scene, SCENE.replace("DENSITY", "7800.0")).unwrap();
+    let out = d.join("out");
+    let o = demcon(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--distributed",
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("built without PETSc") && err.contains("--features petsc"),
+        "{err}"
+    );
+    assert!(!err.contains("packing"), "refused before the run: {err}");
+    assert!(!out.exists());
+}

@@ -1,0 +1,281 @@
+//! `mpirun -n K demcon run SCENE --distributed` (built with `--features petsc`) against the
+//! serial run of the same scene: effective conductivity, resistance and every particle's
+//! temperature (and potential) within 1e-8 relative, both solved to 1e-10, on 1, 2 and 4 ranks,
+//! for a steady thermal, a steady electric with the ρ_e(T) fixed point, and an implicit
+//! transient with Joule re-solves. Then the bad launches: a rank count above the unknowns, a
+//! solve that does not converge, mpirun without --distributed, --resume — one clear error on
+//! rank 0, every rank non-zero, no output folder.
+//!
+//! Needs `mpirun` (Open MPI's, from `openmpi-bin`) on PATH; runs as root allowed.
+#![cfg(feature = "petsc")]
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use common::scratch;
+
+const STEADY: &str = r#"(
+    name: "steady",
+    seed: 3,
+    packing: Generate(container: Box(size: (0.1, 0.1, 0.1)), count: 3000, phi: 0.6, radius_cov: 0.3),
+    contacts: (coordination: 7.5),
+    surface: TerrerosAlpha,
+    linear_solver: (rel_tol: 1e-10, max_iter: MAX_ITER),
+    materials: [(name: "steel", conductivity: 33.0, density: 7800.0, specific_heat: 500.0)],
+    thermal: (
+        initial_temperature: 25.0,
+        bcs: [WallTemperature(face: YMin, value: 25.0), WallTemperature(face: YMax, value: 35.0)],
+        solver: Steady,
+    ),
+    outputs: (etc_axis: Some(Y), particles_csv: true, vtk: false),
+)"#;
+
+/// Steady Joule heating of a cylinder with ρ_e(T) (β = 4e-3 1/K) solved to a fixed point.
+const ELECTRIC: &str = r#"(
+    name: "electric",
+    seed: 2,
+    packing: Generate(container: Cylinder(radius: 1.0e-3, length: 5.0e-3), count: 3000, phi: 0.64,
+                      radius_cov: 0.3, allow_short: true),
+    contacts: (coordination: 7.5),
+    surface: TerrerosAlpha,
+    linear_solver: (rel_tol: 1e-10),
+    materials: [(name: "AISI 304L", conductivity: 15.0, density: 7900.0, specific_heat: 500.0,
+                 resistivity: 0.73e-6, resistivity_temp_coeff: 4.0e-3, resistivity_ref_temp: 20.0)],
+    thermal: (
+        initial_temperature: 20.0,
+        bcs: [WallTemperature(face: ZMin, value: 20.0), WallTemperature(face: ZMax, value: 20.0)],
+        solver: Steady,
+    ),
+    electric: (
+        electrodes: [(face: ZMin, potential: 0.0), (face: ZMax, potential: 0.05)],
+        eta: 1.0,
+        surface: TerrerosAlpha,
+        recouple_tolerance: 1e-6,
+    ),
+    outputs: (particles_csv: true, vtk: false),
+)"#;
+
+/// Implicit transient (20 steps of one Δt) with the potential re-solved as ρ_e(T) moves.
+const IMPLICIT: &str = r#"(
+    name: "implicit",
+    seed: 4,
+    packing: Generate(container: Cylinder(radius: 1.0e-3, length: 5.0e-3), count: 2000, phi: 0.64,
+                      radius_cov: 0.3, allow_short: true),
+    contacts: (coordination: 7.5),
+    surface: TerrerosAlpha,
+    linear_solver: (rel_tol: 1e-10),
+    materials: [(name: "AISI 304L", conductivity: 15.0, density: 7900.0, specific_heat: 500.0,
+                 resistivity: 0.73e-6, resistivity_temp_coeff: 4.0e-3, resistivity_ref_temp: 20.0)],
+    thermal: (
+        initial_temperature: 20.0,
+        bcs: [WallTemperature(face: ZMin, value: 20.0)],
+        solver: Implicit(t_end: 13.0, dt: 0.65),
+    ),
+    electric: (
+        electrodes: [(face: ZMin, potential: 0.0), (face: ZMax, potential: 0.01)],
+        eta: 1.0,
+        surface: TerrerosAlpha,
+        recouple_tolerance: 0.05,
+    ),
+    outputs: (particles_csv: true, vtk: false),
+)"#;
+
+/// `mpirun -n ranks demcon run scene --out out --distributed --quiet --threads 1 extra…`.
+fn mpirun(ranks: usize, scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    Command::new("mpirun")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        // The method under test, not a user's override.
+        .env_remove("PETSC_OPTIONS")
+        .args(["--oversubscribe", "-n", &ranks.to_string()])
+        .arg(env!("CARGO_BIN_EXE_demcon"))
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .args(["--threads", "1"])
+        .args(extra)
+        .output()
+        .expect("mpirun on PATH (apt-get install openmpi-bin)")
+}
+
+/// Writes `text` as `name.ron` in `dir`.
+fn scene(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(format!("{name}.ron"));
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+/// The named numeric columns of particles.csv, one vector each.
+fn columns(out: &Path, names: &[&str]) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(out.join("particles.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let idx: Vec<usize> = names
+        .iter()
+        .map(|n| {
+            header
+                .iter()
+                .position(|h| h == n)
+                .unwrap_or_else(|| panic!("no column {n}"))
+        })
+        .collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    idx.iter()
+        .map(|&i| {
+            rows.iter()
+                .map(|r| r[i].parse::<f64>().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect()
+}
+
+fn close(what: &str, serial: f64, dist: f64) {
+    let rel = (serial - dist).abs() / serial.abs().max(f64::MIN_POSITIVE);
+    assert!(
+        rel <= 1e-8,
+        "{what}: serial {serial}, distributed {dist}, relative {rel:.2e}"
+    );
+}
+
+/// Runs `text` serially and on 1, 2 and 4 ranks; compares the quantities at the JSON
+/// pointers `values` and the particle columns `fields`.
+fn distributed_equals_serial(tag: &str, text: &str, values: &[&str], fields: &[&str]) {
+    let d = scratch("distributed", tag);
+    let s = scene(&d, tag, text);
+    let serial_out = d.join("serial");
+    let o = common::demcon(&[
+        "run",
+        s.to_str().unwrap(),
+        "--out",
+        serial_out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", common::text(&o));
+    let serial = summary(&serial_out);
+    assert!(serial["distributed"].is_null());
+    let serial_cols = columns(&serial_out, fields);
+    for ranks in [1, 2, 4] {
+        let out = d.join(format!("ranks-{ranks}"));
+        let o = mpirun(ranks, &s, &out, &["--distributed"]);
+        assert!(o.status.success(), "{ranks} ranks: {}", common::text(&o));
+        let dist = summary(&out);
+        assert_eq!(dist["distributed"]["ranks"], ranks, "{}", dist["distributed"]);
+        assert_eq!(dist["distributed"]["method"], "petsc-cg-gamg");
+        assert_eq!(dist["distributed"]["petsc_solver"], "cg + gamg");
+        assert!(dist["distributed"]["iterations"].as_u64().unwrap() > 0);
+        for v in values {
+            let (a, b) = (serial.pointer(v), dist.pointer(v));
+            let (Some(a), Some(b)) = (a.and_then(|x| x.as_f64()), b.and_then(|x| x.as_f64())) else {
+                panic!("{v}: serial {a:?}, distributed {b:?}");
+            };
+            close(&format!("{ranks} ranks, {v}"), a, b);
+        }
+        for (name, (a, b)) in fields.iter().zip(serial_cols.iter().zip(columns(&out, fields))) {
+            assert_eq!(a.len(), b.len());
+            for (p, (x, y)) in a.iter().zip(&b).enumerate() {
+                if x.is_nan() && y.is_nan() {
+                    continue; // an excluded particle in both
+                }
+                close(&format!("{ranks} ranks, {name} of particle {p}"), *x, *y);
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn steady_thermal_distributed_equals_serial() {
+    distributed_equals_serial(
+        "steady",
+        &STEADY.replace("MAX_ITER", "200000"),
+        &["/etc/lambda_e", "/etc/heat_flow_w"],
+        &["temperature"],
+    );
+}
+
+#[test]
+fn electric_with_resistivity_of_temperature_distributed_equals_serial() {
+    distributed_equals_serial(
+        "electric",
+        ELECTRIC,
+        &[
+            "/electric/resistance_ohm",
+            "/electric/current_in",
+            "/electric/joule_w",
+        ],
+        &["temperature", "potential"],
+    );
+}
+
+#[test]
+fn implicit_transient_distributed_equals_serial() {
+    distributed_equals_serial(
+        "implicit",
+        IMPLICIT,
+        &["/electric/resistance_ohm", "/electric/joule_w"],
+        &["temperature", "potential"],
+    );
+}
+
+/// A failed launch: non-zero, the error once (rank 0 only), no output folder.
+fn fails_once(o: &Output, out: &Path, expect: &str) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{}", common::text(o));
+    assert!(err.contains(expect), "expected `{expect}` in: {err}");
+    assert_eq!(
+        err.matches("error: ").count(),
+        1,
+        "one error message, from rank 0: {err}"
+    );
+    assert!(!out.exists(), "no output of a failed run");
+}
+
+#[test]
+fn more_ranks_than_unknowns_is_refused() {
+    let d = scratch("distributed", "ranks");
+    // Three particles between two walls held at fixed temperatures: 3 unknowns.
+    let s = scene(
+        &d,
+        "tiny",
+        &STEADY
+            .replace("count: 3000, phi: 0.6", "count: 3, phi: 0.3")
+            .replace("coordination: 7.5", "tolerance: 1.0")
+            .replace("MAX_ITER", "1000"),
+    );
+    let out = d.join("out");
+    let o = mpirun(4, &s, &out, &["--distributed"]);
+    fails_once(&o, &out, "must be at most the number of unknown rows");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_solve_that_does_not_converge_fails_on_every_rank() {
+    let d = scratch("distributed", "converge");
+    let s = scene(&d, "starved", &STEADY.replace("MAX_ITER", "1"));
+    let out = d.join("out");
+    let o = mpirun(2, &s, &out, &["--distributed"]);
+    fails_once(&o, &out, "petsc-cg-gamg did not converge");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn mpirun_without_distributed_and_resume_are_refused() {
+    let d = scratch("distributed", "launch");
+    let s = scene(&d, "steady", &STEADY.replace("MAX_ITER", "1000"));
+    let out = d.join("out");
+    let o = mpirun(2, &s, &out, &[]);
+    fails_once(&o, &out, "without --distributed");
+    let o = mpirun(2, &s, &out, &["--distributed", "--resume"]);
+    fails_once(&o, &out, "--resume cannot be combined with --distributed");
+    let _ = std::fs::remove_dir_all(&d);
+}
