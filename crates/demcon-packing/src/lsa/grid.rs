@@ -3,6 +3,8 @@
 
 use demcon_core::{Aabb, Vec3};
 
+use super::huge::huge_filled;
+
 const NONE: u32 = u32::MAX;
 
 /// A uniform grid of cells over a box; each particle sits in exactly one cell.
@@ -174,8 +176,8 @@ impl SphereGrid {
         Self {
             index,
             cap,
-            slots: vec![Slot::default(); n_cells * cap],
-            ids: vec![NONE; n_cells * cap],
+            slots: huge_filled(n_cells * cap, Slot::default()),
+            ids: huge_filled(n_cells * cap, NONE),
             len: vec![0; n_cells],
             spill: vec![Vec::new(); n_cells],
             cell_of: vec![NONE; n_particles],
@@ -240,6 +242,22 @@ impl SphereGrid {
             }
         }
         self.len[k] -= 1;
+    }
+
+    /// Renumbers the spheres: sphere `order[k]` becomes `k`, i.e. every stored id `j` becomes
+    /// `new_of[j]`. Slots keep their places.
+    pub fn renumber(&mut self, order: &[u32], new_of: &[u32]) {
+        for id in &mut self.ids {
+            if *id != NONE {
+                *id = new_of[*id as usize];
+            }
+        }
+        for cell in &mut self.spill {
+            for e in cell {
+                e.1 = new_of[e.1 as usize];
+            }
+        }
+        self.cell_of = order.iter().map(|&o| self.cell_of[o as usize]).collect();
     }
 
     /// Calls `f(centre, radius, id)` for every sphere stored in the cell of `p` and the

@@ -6,6 +6,8 @@
 //! one 128-byte aligned group (two adjacent cache lines), so a level of a sift reads one
 //! group and no other array; a third of the levels of a binary heap.
 
+use super::huge::{huge_filled, huge_vec};
+
 /// Children per node.
 const D: usize = 8;
 
@@ -58,9 +60,9 @@ impl EventHeap {
             id: u32::MAX,
         };
         let mut h = Self {
-            groups: vec![Group([empty; D]); (n + D - 1).div_ceil(D).max(1)],
+            groups: huge_filled((n + D - 1).div_ceil(D).max(1), Group([empty; D])),
             n,
-            pos: (0..n as u32).collect(),
+            pos: huge_vec(0..n as u32),
         };
         for (i, &t) in times.iter().enumerate() {
             h.put(i, Entry { t, id: i as u32 });
