@@ -3,7 +3,7 @@
 
 use demcon_core::{Aabb, Vec3};
 
-use super::huge::huge_filled;
+use super::huge::{huge_filled, permute_in_place};
 
 const NONE: u32 = u32::MAX;
 
@@ -257,7 +257,7 @@ impl SphereGrid {
                 e.1 = new_of[e.1 as usize];
             }
         }
-        self.cell_of = order.iter().map(|&o| self.cell_of[o as usize]).collect();
+        permute_in_place(&mut self.cell_of, order);
     }
 
     /// Calls `f(centre, radius, id)` for every sphere stored in the cell of `p` and the

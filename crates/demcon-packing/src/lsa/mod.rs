@@ -35,7 +35,7 @@ use crate::radius::jamming_estimate;
 use crate::report::{PackingReport, summarize};
 use grid::{CellGrid, SphereGrid};
 use heap::EventHeap;
-use huge::{huge_filled, huge_vec};
+use huge::{huge_filled, huge_vec, permute_in_place};
 use nblist::NbLists;
 use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay_coef, plane_delay};
 
@@ -612,8 +612,8 @@ impl Engine {
         for (k, &o) in order.iter().enumerate() {
             new_of[o as usize] = k as u32;
         }
-        self.p = huge_vec(order.iter().map(|&o| self.p[o as usize]));
-        self.count = huge_vec(order.iter().map(|&o| self.count[o as usize]));
+        permute_in_place(&mut self.p, &order);
+        permute_in_place(&mut self.count, &order);
         self.nb.renumber(&order, &new_of);
         self.grid.renumber(&order, &new_of);
     }

@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use demcon_core::Vec3;
 
 use super::Ev;
-use super::huge::{huge_filled, huge_vec};
+use super::huge::{huge_filled, permute_in_place};
 
 /// Neighbour ids stored in the block itself. Lists at φ ≈ 0.63 hold ~11 ids on average
 /// (Gaussian 0.3, skin 0.4); a few % of the particles hold more than 20.
@@ -165,8 +165,8 @@ impl NbLists {
     /// Renumbers the particles: the block of old particle `order[k]` becomes the block of `k`,
     /// and every stored id `j` (neighbours, event partners) becomes `new_of[j]`.
     pub fn renumber(&mut self, order: &[u32], new_of: &[u32]) {
-        let mut blocks = huge_vec(order.iter().map(|&o| self.blocks[o as usize]));
-        for b in &mut blocks {
+        permute_in_place(&mut self.blocks, order);
+        for b in &mut self.blocks {
             let m = (b.len as usize).min(INLINE);
             for id in &mut b.ids[..m] {
                 *id = new_of[*id as usize];
@@ -175,7 +175,6 @@ impl NbLists {
                 *j = new_of[*j as usize];
             }
         }
-        self.blocks = blocks;
         // Rebuilt in the order of the old keys; only looked up by id, so the order never matters.
         let mut spill: Vec<(u32, Vec<u32>)> = std::mem::take(&mut self.spill).into_iter().collect();
         spill.sort_unstable_by_key(|e| e.0);
