@@ -95,6 +95,19 @@ impl EventHeap {
         (e.id as usize, e.t)
     }
 
+    /// The particle with the second-earliest event (the earliest among the root's children),
+    /// usually the next to be processed; `None` below two entries.
+    #[inline]
+    pub fn runner_up(&self) -> Option<usize> {
+        if self.n < 2 {
+            return None;
+        }
+        let g = &self.groups[1].0;
+        let count = (self.n - 1).min(D);
+        let best = g[..count].iter().min_by_key(|e| e.key())?;
+        Some(best.id as usize)
+    }
+
     /// Re-keys particle `i` to `time`.
     #[inline]
     pub fn update(&mut self, i: usize, time: f64) {

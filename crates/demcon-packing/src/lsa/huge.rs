@@ -47,6 +47,21 @@ pub(crate) fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
     }
 }
 
+/// Asks the processor to start loading the cache line holding `*x` (no effect on results;
+/// a no-op off x86-64).
+#[inline(always)]
+pub(crate) fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    #[allow(unsafe_code)]
+    // SAFETY: a prefetch is a hint that never faults and writes nothing; the address comes
+    // from a live reference, and SSE (which the instruction needs) is part of x86-64.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>((x as *const T).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 fn advise(addr: usize, bytes: usize) {
     // Smallest vector (bytes) worth advising: below two huge pages little of it is aligned.

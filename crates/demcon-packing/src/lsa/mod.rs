@@ -671,6 +671,12 @@ impl Engine {
                 (win_elapsed_before, win_collisions, self.virial) = (0.0, 0, 0.0);
                 continue;
             }
+            // The next event is most likely the runner-up's: start loading its particle and
+            // block now, so that they arrive while this event is processed.
+            if let Some(k) = self.heap.runner_up() {
+                huge::prefetch(&self.p[k]);
+                self.nb.prefetch(k);
+            }
             match self.nb.event(i) {
                 Ev::Pair { j, cj } => {
                     let j = j as usize;

@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use demcon_core::Vec3;
 
 use super::Ev;
-use super::huge::{huge_filled, permute_in_place};
+use super::huge::{huge_filled, permute_in_place, prefetch};
 
 /// Neighbour ids stored in the block itself. Lists at φ ≈ 0.63 hold ~11 ids on average
 /// (Gaussian 0.3, skin 0.4); a few % of the particles hold more than 20.
@@ -73,6 +73,14 @@ impl NbLists {
         let b = &mut self.blocks[i];
         b.c = c;
         b.rad = rad;
+    }
+
+    /// Starts loading the block of `i` (both cache lines) into the cache.
+    #[inline]
+    pub fn prefetch(&self, i: usize) {
+        let b = &self.blocks[i];
+        prefetch(b);
+        prefetch(&b.ids[INLINE - 1]);
     }
 
     /// Scheduled event of `i`.
