@@ -3,7 +3,7 @@
 
 use demcon_core::{Aabb, Vec3};
 
-use super::huge::{huge_filled, permute_in_place};
+use super::huge::huge_filled;
 
 const NONE: u32 = u32::MAX;
 
@@ -242,22 +242,6 @@ impl SphereGrid {
             }
         }
         self.len[k] -= 1;
-    }
-
-    /// Renumbers the spheres: sphere `order[k]` becomes `k`, i.e. every stored id `j` becomes
-    /// `new_of[j]`. Slots keep their places.
-    pub fn renumber(&mut self, order: &[u32], new_of: &[u32]) {
-        for id in &mut self.ids {
-            if *id != NONE {
-                *id = new_of[*id as usize];
-            }
-        }
-        for cell in &mut self.spill {
-            for e in cell {
-                e.1 = new_of[e.1 as usize];
-            }
-        }
-        permute_in_place(&mut self.cell_of, order);
     }
 
     /// Calls `f(centre, radius, id)` for every sphere stored in the cell of `p` and the

@@ -22,31 +22,6 @@ pub(crate) fn huge_filled<T: Clone>(n: usize, value: T) -> Vec<T> {
     huge_vec(std::iter::repeat_n(value, n))
 }
 
-/// Reorders `v` in place so that `v[k]` becomes the old `v[order[k]]` (`order` a
-/// permutation), following its cycles: no second copy of a large array, and the memory keeps
-/// its huge pages.
-pub(crate) fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
-    debug_assert_eq!(v.len(), order.len());
-    let mut done = vec![0u64; v.len().div_ceil(64)];
-    for start in 0..v.len() {
-        if done[start / 64] >> (start % 64) & 1 == 1 {
-            continue;
-        }
-        let first = v[start];
-        let mut k = start;
-        loop {
-            done[k / 64] |= 1 << (k % 64);
-            let src = order[k] as usize;
-            if src == start {
-                v[k] = first;
-                break;
-            }
-            v[k] = v[src];
-            k = src;
-        }
-    }
-}
-
 /// Asks the processor to start loading the cache line holding `*x` (no effect on results;
 /// a no-op off x86-64).
 #[inline(always)]
@@ -97,16 +72,5 @@ mod tests {
         assert_eq!(v.len(), 3_000_000);
         assert_eq!(v[1_234_567], 2_469_134);
         assert_eq!(huge_filled(5, 7u8), vec![7u8; 5]);
-    }
-
-    #[test]
-    fn permutes_like_a_gather() {
-        let n = 1000u32;
-        let order: Vec<u32> = (0..n).map(|k| (k * 389 + 17) % n).collect();
-        let old: Vec<u32> = (0..n).map(|k| k * 3).collect();
-        let mut v = old.clone();
-        permute_in_place(&mut v, &order);
-        let want: Vec<u32> = order.iter().map(|&o| old[o as usize]).collect();
-        assert_eq!(v, want);
     }
 }

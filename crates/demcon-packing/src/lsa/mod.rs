@@ -35,7 +35,7 @@ use crate::radius::jamming_estimate;
 use crate::report::{PackingReport, summarize};
 use grid::{CellGrid, SphereGrid};
 use heap::EventHeap;
-use huge::{huge_filled, huge_vec, permute_in_place};
+use huge::{huge_filled, huge_vec};
 use nblist::NbLists;
 use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay_coef, plane_delay};
 
@@ -565,13 +565,6 @@ impl Engine {
     /// Synchronises everyone at `now`, restarts the clock at 0 and rescales the velocities to
     /// the target kinetic energy; continues with growth rate `g`; recomputes all events.
     fn thermostat(&mut self, now: f64, g: f64) {
-        self.rescale(now, g);
-        self.predict_all(0.0);
-    }
-
-    /// The thermostat without the new events: synchronise at `now`, restart the clock,
-    /// rescale the velocities, continue with growth rate `g`.
-    fn rescale(&mut self, now: f64, g: f64) {
         let n = self.p.len();
         for i in 0..n {
             self.advance(i, now);
@@ -586,36 +579,13 @@ impl Engine {
         }
         self.ke = self.ke_target;
         self.rescales += 1;
-    }
-
-    /// Ends the fast compression stage at `now`: rescale, final growth rate, Morton
-    /// renumbering, new events.
-    ///
-    /// The renumbering restores the memory locality of the start, which the particles have
-    /// lost by moving between φ 0.3 and 0.45; after that they move little (see docs/packing.md,
-    /// Speed).
-    fn end_compression(&mut self, now: f64) {
-        self.s_switch = f64::INFINITY;
-        self.rescale(now, self.g_final);
-        self.reorder();
         self.predict_all(0.0);
     }
 
-    /// Renumbers the particles along a Morton curve of their current centres, so that
-    /// neighbours in space are neighbours in memory again. Everything keyed by particle id
-    /// (state, collision counters, bounding spheres, lists, grid, scheduled events) moves
-    /// with it; the heap is not, so [`predict_all`](Self::predict_all) must follow.
-    fn reorder(&mut self) {
-        let x: Vec<Vec3> = self.p.iter().map(|p| p.x).collect();
-        let order = morton_order(&x, &self.container.bounds());
-        let mut new_of = vec![0u32; order.len()];
-        for (k, &o) in order.iter().enumerate() {
-            new_of[o as usize] = k as u32;
-        }
-        permute_in_place(&mut self.p, &order);
-        permute_in_place(&mut self.count, &order);
-        self.nb.renumber(&order, &new_of);
-        self.grid.renumber(&order, &new_of);
+    /// Ends the fast compression stage at `now`: rescale, final growth rate, new events.
+    fn end_compression(&mut self, now: f64) {
+        self.s_switch = f64::INFINITY;
+        self.thermostat(now, self.g_final);
     }
 
     /// The event loop. Returns the stop reason and the last reduced pressure.
@@ -803,76 +773,5 @@ mod tests {
             }
         }
         assert!(pairs > 400);
-    }
-
-    /// Renumbering moves everything keyed by particle id: the same pairs of spheres are
-    /// neighbours before and after, the lists stay symmetric, and the grid finds each list.
-    #[test]
-    fn reorder_keeps_every_list_and_sphere() {
-        let n = 2000;
-        let params = PackingParams::new(
-            Container::Box { size: [0.01; 3] },
-            n,
-            0.6,
-            RadiusDistribution::gaussian(0.3),
-        );
-        let mut rng = ChaCha8Rng::seed_from_u64(4);
-        let a = params.radii.sample(n, &mut rng);
-        let scale = (0.6 * params.container.volume()
-            / (a.iter().map(|r| r.powi(3)).sum::<f64>() * 4.0 / 3.0 * std::f64::consts::PI))
-            .cbrt();
-        let a: Vec<f64> = a.iter().map(|r| r * scale).collect();
-        let a_mean = a.iter().sum::<f64>() / n as f64;
-        let mut eng = Engine::start(&params, a, a_mean, &mut rng).unwrap();
-        // Scramble the positions so that the Morton order changes a lot (the lists and
-        // spheres are left as they are: only the renumbering is tested).
-        for i in 0..n {
-            let k = (i * 7919) % n;
-            let (xi, xk) = (eng.p[i].x, eng.p[k].x);
-            eng.p[i].x = xk;
-            eng.p[k].x = xi;
-        }
-        let key = |e: &Engine, i: usize| {
-            let (c, r) = e.nb.sphere(i);
-            (
-                c.x.to_bits(),
-                c.y.to_bits(),
-                c.z.to_bits(),
-                r.to_bits(),
-                e.p[i].a.to_bits(),
-            )
-        };
-        let pairs = |e: &Engine| {
-            let mut v = Vec::new();
-            for i in 0..n {
-                let (l, m) = e.nb.get(i);
-                for &j in l.iter().chain(m) {
-                    v.push((key(e, i), key(e, j as usize), e.count[i]));
-                }
-            }
-            v.sort_unstable();
-            v
-        };
-        eng.count.iter_mut().enumerate().for_each(|(i, c)| *c = i as u32);
-        let before = pairs(&eng);
-        let spilled = (0..n).filter(|&i| eng.nb.len(i) > nblist::INLINE).count();
-        assert!(spilled > 0, "the test should cover spilled lists");
-        let x_before: Vec<Vec3> = eng.p.iter().map(|p| p.x).collect();
-        eng.reorder();
-        assert_ne!(x_before, eng.p.iter().map(|p| p.x).collect::<Vec<_>>());
-        assert_eq!(pairs(&eng), before);
-        let mut list = Vec::new();
-        for i in 0..n {
-            let (l, m) = eng.nb.get(i);
-            let mut have: Vec<u32> = l.iter().chain(m).copied().collect();
-            for &j in &have {
-                let (c, d) = eng.nb.get(j as usize);
-                assert!(c.contains(&(i as u32)) || d.contains(&(i as u32)));
-            }
-            eng.find_neighbours(i, &mut list);
-            have.sort_unstable();
-            list.sort_unstable();
-            assert_eq!(have, list, "particle {i}");
-        }
     }
 }

@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use demcon_core::Vec3;
 
 use super::Ev;
-use super::huge::{huge_filled, permute_in_place, prefetch};
+use super::huge::{huge_filled, prefetch};
 
 /// Neighbour ids stored in the block itself. Lists at φ ≈ 0.63 hold ~11 ids on average
 /// (Gaussian 0.3, skin 0.4); a few % of the particles hold more than 20.
@@ -168,33 +168,6 @@ impl NbLists {
         out.extend_from_slice(b);
         self.blocks[i].len = 0;
         self.spill.remove(&(i as u32));
-    }
-
-    /// Renumbers the particles: the block of old particle `order[k]` becomes the block of `k`,
-    /// and every stored id `j` (neighbours, event partners) becomes `new_of[j]`.
-    pub fn renumber(&mut self, order: &[u32], new_of: &[u32]) {
-        permute_in_place(&mut self.blocks, order);
-        for b in &mut self.blocks {
-            let m = (b.len as usize).min(INLINE);
-            for id in &mut b.ids[..m] {
-                *id = new_of[*id as usize];
-            }
-            if let Ev::Pair { j, .. } = &mut b.ev {
-                *j = new_of[*j as usize];
-            }
-        }
-        // Rebuilt in the order of the old keys; only looked up by id, so the order never matters.
-        let mut spill: Vec<(u32, Vec<u32>)> = std::mem::take(&mut self.spill).into_iter().collect();
-        spill.sort_unstable_by_key(|e| e.0);
-        self.spill = spill
-            .into_iter()
-            .map(|(i, list)| {
-                (
-                    new_of[i as usize],
-                    list.iter().map(|&j| new_of[j as usize]).collect(),
-                )
-            })
-            .collect();
     }
 
     /// Replaces the list of `i` by `list`.
