@@ -186,6 +186,11 @@ mod tests {
                 .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
                 .unwrap();
             assert_eq!((i, t), (j, tj), "step {step}");
+            // The runner-up is the second-earliest entry.
+            let second = (0..n)
+                .filter(|&q| q != j)
+                .min_by(|&a, &b| keys[a].total_cmp(&keys[b]).then(a.cmp(&b)));
+            assert_eq!(h.runner_up(), second, "step {step}");
             let k = rng.random_range(0..n);
             // Mix of increases, decreases and ties.
             let nt = if step % 7 == 0 {
