@@ -1,4 +1,5 @@
-//! Vectors whose memory is backed by transparent huge pages where the system allows it.
+//! Memory helpers of the event loop: vectors backed by transparent huge pages where the
+//! system allows it, and a cache prefetch.
 //!
 //! The packer's arrays are read at random places (events come in time order, i.e. anywhere
 //! in the box): at 10⁶ particles its ~200 MB in 4 KiB pages miss the TLB on almost every
