@@ -3,6 +3,8 @@
 
 use demcon_core::{Aabb, Vec3};
 
+use super::huge::huge_filled;
+
 const NONE: u32 = u32::MAX;
 
 /// A uniform grid of cells over a box; each particle sits in exactly one cell.
@@ -174,8 +176,8 @@ impl SphereGrid {
         Self {
             index,
             cap,
-            slots: vec![Slot::default(); n_cells * cap],
-            ids: vec![NONE; n_cells * cap],
+            slots: huge_filled(n_cells * cap, Slot::default()),
+            ids: huge_filled(n_cells * cap, NONE),
             len: vec![0; n_cells],
             spill: vec![Vec::new(); n_cells],
             cell_of: vec![NONE; n_particles],

@@ -6,6 +6,8 @@
 //! one 128-byte aligned group (two adjacent cache lines), so a level of a sift reads one
 //! group and no other array; a third of the levels of a binary heap.
 
+use super::huge::{huge_filled, huge_vec};
+
 /// Children per node.
 const D: usize = 8;
 
@@ -58,9 +60,9 @@ impl EventHeap {
             id: u32::MAX,
         };
         let mut h = Self {
-            groups: vec![Group([empty; D]); (n + D - 1).div_ceil(D).max(1)],
+            groups: huge_filled((n + D - 1).div_ceil(D).max(1), Group([empty; D])),
             n,
-            pos: (0..n as u32).collect(),
+            pos: huge_vec(0..n as u32),
         };
         for (i, &t) in times.iter().enumerate() {
             h.put(i, Entry { t, id: i as u32 });
@@ -91,6 +93,19 @@ impl EventHeap {
     pub fn top(&self) -> (usize, f64) {
         let e = self.at(0);
         (e.id as usize, e.t)
+    }
+
+    /// The particle with the second-earliest event (the earliest among the root's children),
+    /// usually the next to be processed; `None` below two entries.
+    #[inline]
+    pub fn runner_up(&self) -> Option<usize> {
+        if self.n < 2 {
+            return None;
+        }
+        let g = &self.groups[1].0;
+        let count = (self.n - 1).min(D);
+        let best = g[..count].iter().min_by_key(|e| e.key())?;
+        Some(best.id as usize)
     }
 
     /// Re-keys particle `i` to `time`.
@@ -171,6 +186,11 @@ mod tests {
                 .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
                 .unwrap();
             assert_eq!((i, t), (j, tj), "step {step}");
+            // The runner-up is the second-earliest entry.
+            let second = (0..n)
+                .filter(|&q| q != j)
+                .min_by(|&a, &b| keys[a].total_cmp(&keys[b]).then(a.cmp(&b)));
+            assert_eq!(h.runner_up(), second, "step {step}");
             let k = rng.random_range(0..n);
             // Mix of increases, decreases and ties.
             let nt = if step % 7 == 0 {

@@ -18,6 +18,7 @@
 
 pub(crate) mod grid;
 pub(crate) mod heap;
+pub(crate) mod huge;
 pub(crate) mod nblist;
 pub mod predict;
 
@@ -34,6 +35,7 @@ use crate::radius::jamming_estimate;
 use crate::report::{PackingReport, summarize};
 use grid::{CellGrid, SphereGrid};
 use heap::EventHeap;
+use huge::{huge_filled, huge_vec};
 use nblist::NbLists;
 use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay_coef, plane_delay};
 
@@ -308,21 +310,19 @@ impl Engine {
         let mut eng = Engine {
             container: c,
             period,
-            p: (0..n)
-                .map(|i| P {
-                    x: x[i],
-                    t: 0.0,
-                    v: v[i],
-                    a: a[i],
-                })
-                .collect(),
+            p: huge_vec((0..n).map(|i| P {
+                x: x[i],
+                t: 0.0,
+                v: v[i],
+                a: a[i],
+            })),
             a_mean,
             a_max,
             s0,
             g: params.growth_rate,
             g_final: params.growth_rate,
             s_switch: f64::INFINITY,
-            count: vec![0; n],
+            count: huge_filled(n, 0),
             heap: EventHeap::new(vec![f64::INFINITY; n]),
             nb: NbLists::new(n),
             grid,
@@ -640,6 +640,12 @@ impl Engine {
                 self.end_compression(ts);
                 (win_elapsed_before, win_collisions, self.virial) = (0.0, 0, 0.0);
                 continue;
+            }
+            // The next event is most likely the runner-up's: start loading its particle and
+            // block now, so that they arrive while this event is processed.
+            if let Some(k) = self.heap.runner_up() {
+                huge::prefetch(&self.p[k]);
+                self.nb.prefetch(k);
             }
             match self.nb.event(i) {
                 Ev::Pair { j, cj } => {

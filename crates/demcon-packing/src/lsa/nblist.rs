@@ -12,6 +12,7 @@ use std::collections::HashMap;
 use demcon_core::Vec3;
 
 use super::Ev;
+use super::huge::{huge_filled, prefetch};
 
 /// Neighbour ids stored in the block itself. Lists at φ ≈ 0.63 hold ~11 ids on average
 /// (Gaussian 0.3, skin 0.4); a few % of the particles hold more than 20.
@@ -45,16 +46,16 @@ impl NbLists {
     /// Empty lists, bounding spheres of radius 0 at the origin, for `n` particles.
     pub fn new(n: usize) -> Self {
         Self {
-            blocks: vec![
+            blocks: huge_filled(
+                n,
                 Block {
                     c: Vec3::zeros(),
                     rad: 0.0,
                     ev: Ev::Exit,
                     len: 0,
                     ids: [0; INLINE],
-                };
-                n
-            ],
+                },
+            ),
             spill: HashMap::new(),
         }
     }
@@ -72,6 +73,14 @@ impl NbLists {
         let b = &mut self.blocks[i];
         b.c = c;
         b.rad = rad;
+    }
+
+    /// Starts loading the block of `i` (both cache lines) into the cache.
+    #[inline]
+    pub fn prefetch(&self, i: usize) {
+        let b = &self.blocks[i];
+        prefetch(b);
+        prefetch(&b.ids[INLINE - 1]);
     }
 
     /// Scheduled event of `i`.
