@@ -379,15 +379,18 @@ pub struct CrackCover {
 /// For every contact of `graph`, how much of its facet `cracks` cover
 /// ([`CrackShape::blocked_fraction`]): the facet of a Laguerre graph is the disc of its area
 /// around its centroid; a graph without cells has no facet, and the segment rule decides
-/// (covered wholly when its segment crosses a crack, [`crossed_contacts`]). Runs in parallel;
-/// the result does not depend on the thread count.
+/// (covered wholly when its segment crosses a crack, [`crossed_contacts`]), as it does for
+/// every graph with `whole_facets`. Runs in parallel; the result does not depend on the
+/// thread count.
 pub fn blocked_contacts(
     graph: &ContactGraph,
     particles: &ParticleSet,
     container: &Container,
     cracks: &[CrackShape],
+    whole_facets: bool,
 ) -> Vec<Option<CrackCover>> {
-    let Some(cells) = graph.cells.as_deref() else {
+    let cells = graph.cells.as_deref().filter(|_| !whole_facets);
+    let Some(cells) = cells else {
         return crossed_contacts(graph, particles, container, cracks)
             .into_iter()
             .map(|x| {

@@ -50,8 +50,8 @@ use std::collections::HashMap;
 
 use demcon_core::{Container, ParticleSet, Region, Vec3};
 use demcon_graph::{
-    ContactGraph, CrackCover, CrackShape, HalfBond, Laminates, Mix, WallContacts, blocked_contacts,
-    crossed_contacts, first_crossing,
+    ContactGraph, CrackShape, HalfBond, Laminates, Mix, WallContacts, blocked_contacts, crossed_contacts,
+    first_crossing,
 };
 use serde::Serialize;
 
@@ -389,20 +389,7 @@ pub(crate) fn apply_defects(
         .filter(|&i| spec.cracks[i].gap_conductance.is_none())
         .collect();
     let shapes: Vec<CrackShape> = open.iter().map(|&i| spec.cracks[i].shape.clone()).collect();
-    let covers = if spec.whole_facet_cuts {
-        crossed_contacts(&graph, particles, container, &shapes)
-            .into_iter()
-            .map(|x| {
-                x.map(|x| CrackCover {
-                    crack: x.crack,
-                    fraction: 1.0,
-                    point: x.point,
-                })
-            })
-            .collect()
-    } else {
-        blocked_contacts(&graph, particles, container, &shapes)
-    };
+    let covers = blocked_contacts(&graph, particles, container, &shapes, spec.whole_facet_cuts);
     // The open part of each facet an open crack covers in part (empty when none).
     let mut open_part = Vec::new();
     for (k, x) in covers.iter().enumerate() {
