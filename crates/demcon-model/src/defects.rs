@@ -43,8 +43,9 @@
 //!   in the report; an index out of range is an error.
 //!
 //! Per-contact marks ([`Defects::marks`], bits [`MARK_INTERFACE`], [`MARK_DAMAGED`],
-//! [`MARK_FILLED_CRACK`], [`MARK_PARTLY_CUT`]) and the cut contacts ([`Defects::cut`]) are kept for the output
-//! writers; [`Defects::crack_face`] lists the particles on a crack face.
+//! [`MARK_FILLED_CRACK`], [`MARK_PARTLY_CUT`]) and the cut contacts ([`Defects::cut`]) are
+//! kept for the output writers; [`Defects::crack_face`] lists the particles on a crack face
+//! (the ends of a contact an open crack cuts or covers in part, or a filled crack crosses).
 
 use std::collections::HashMap;
 
@@ -280,7 +281,7 @@ pub struct Defects {
     /// What was asked for.
     pub spec: DefectSpec,
     /// Per contact of the model's graph: [`MARK_INTERFACE`] | [`MARK_DAMAGED`] |
-    /// [`MARK_FILLED_CRACK`] bits (0 for a plain contact).
+    /// [`MARK_FILLED_CRACK`] | [`MARK_PARTLY_CUT`] bits (0 for a plain contact).
     pub marks: Vec<u8>,
     /// Per contact: the factor on its conductances, the damage regions' factors times the open
     /// part of a facet an open crack covers in part (empty when neither: all 1).

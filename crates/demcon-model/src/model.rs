@@ -98,9 +98,10 @@ impl Model {
 
     /// Per contact of [`Model::graph`], its marks for the output writers: a bit set of
     /// [`crate::defects::MARK_INTERFACE`] (crosses a listed phase interface: the series
-    /// resistance applies), [`crate::defects::MARK_DAMAGED`] (in a damage region) and
-    /// [`crate::defects::MARK_FILLED_CRACK`] (crossed by a filled crack); 0 for a plain
-    /// contact. Cut contacts are not in the graph: see [`Model::cut_contacts`].
+    /// resistance applies), [`crate::defects::MARK_DAMAGED`] (in a damage region),
+    /// [`crate::defects::MARK_FILLED_CRACK`] (crossed by a filled crack) and
+    /// [`crate::defects::MARK_PARTLY_CUT`] (a Laguerre facet an open crack covers in part);
+    /// 0 for a plain contact. Cut contacts are not in the graph: see [`Model::cut_contacts`].
     pub fn contact_marks(&self) -> &[u8] {
         &self.defects.marks
     }
