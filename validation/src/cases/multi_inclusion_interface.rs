@@ -191,9 +191,8 @@ impl Measured {
     /// particle count.
     fn mean_at(&self, n: usize, v: Variant, value: impl Fn(&Run) -> f64) -> (f64, f64) {
         let at: Vec<&PackingRun> = self.packings.iter().filter(|p| p.n_target == n).collect();
-        let xs: Vec<f64> = at.iter().filter_map(|p| p.run(v)).map(value).collect();
         let count = at.iter().map(|p| p.n as f64).sum::<f64>() / at.len() as f64;
-        (xs.iter().sum::<f64>() / xs.len() as f64, count)
+        (mean_of(&at, v, value), count)
     }
 
     /// The ratio ETC(α)/ETC(0) of model `v` at (i, j) extrapolated to N → ∞ from the two
@@ -354,7 +353,7 @@ fn compare(ctx: &Ctx, m: &Measured, variants: &[Variant], tol: f64, out: &mut Ca
             format!("f_{f}"),
             serde_json::json!({
                 "alpha_dem": dem,
-                "alpha_dem_extrapolated": alpha_for_gap(|j| if j == 0 { 1.0 } else { m.extrapolated_ratio(head, i, j) }),
+                "alpha_dem_extrapolated": alpha_for_gap(|j| m.extrapolated_ratio(head, i, j)),
                 "alpha_reference": alpha_for_gap(|j| reference_ratio(*f, ALPHAS[j])),
                 "largest_radius_m_at_h_low": dem.map(|a| LAMBDA_EPOXY / (H_PUBLISHED.0 * a)),
             }),
@@ -467,11 +466,7 @@ fn report(ctx: &Ctx, m: &Measured, variants: &[Variant], out: &mut CaseOutcome) 
                 format!(
                     "{}; {} ({})",
                     show(alpha_for_gap(|j| ratio_mean(*i, j))),
-                    show(alpha_for_gap(|j| if j == 0 {
-                        1.0
-                    } else {
-                        m.extrapolated_ratio(head, *i, j)
-                    })),
+                    show(alpha_for_gap(|j| m.extrapolated_ratio(head, *i, j))),
                     show(alpha_for_gap(|j| reference_ratio(FS[*i], ALPHAS[j])))
                 )
             })
