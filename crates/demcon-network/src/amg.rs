@@ -17,13 +17,17 @@
 //! Bytes per cycle (issue 12): the hierarchy's matrices (each level's operator as the
 //! smoother reads it, P and R) are stored in f32 and widened on use, CG's own product keeps
 //! the f64 fine operator, so the solution's accuracy is unchanged (22 iterations at 10⁶
-//! either way); row pointers are u32; r·z is summed in the last smoothing sweep.
+//! either way); row pointers are u32; r·z is summed in the last smoothing sweep. Each
+//! level's operator is kept in sliced-ELLPACK form ([`Sell`]) once its Galerkin product is
+//! formed: the residual, the smoothing sweep and CG's product read four rows side by side
+//! (solve −18 % at 10⁶, setup +8 % for the conversion; `docs/performance.md`).
 
 use rayon::prelude::*;
 
 use crate::csr::{Accumulator, Csr, Value};
 use crate::error::SolveError;
 use crate::par::{CHUNK, chunks_map, chunks_map2, dot, ordered_sum};
+use crate::sell::Sell;
 
 /// Largest level solved directly by dense Cholesky (unknowns).
 pub(crate) const MAX_COARSE: usize = 400;
@@ -74,9 +78,11 @@ pub struct AmgInfo {
 /// is unchanged while the cycle moves a third fewer bytes. Rounding keeps A symmetric and R
 /// exactly Pᵀ, and the same rounded A serves both smoothing sweeps, so the cycle stays
 /// symmetric; ω carries a 10 % margin, far above the 1e-7 relative change of rounding.
+/// The operator is kept in sliced-ELLPACK form ([`Sell`]): the residual and the smoothing
+/// sweep read it once each per cycle, four rows side by side.
 #[derive(Debug)]
 struct Level {
-    a: Csr<f32>,
+    a: Sell,
     /// ω_s / a_ii, the damped-Jacobi smoother.
     wdinv: Vec<f64>,
     /// Prolongator to this level from the next coarser one (rows: this level).
@@ -88,7 +94,7 @@ struct Level {
 /// A multigrid hierarchy for a symmetric positive definite matrix.
 #[derive(Debug)]
 pub(crate) struct Amg {
-    /// The matrix's values in f64 on the structure of the first level's operator, for CG's
+    /// The matrix's values in f64 on the layout of the first level's operator, for CG's
     /// products (`None` when the matrix is the coarsest level).
     fine: Option<Vec<f64>>,
     levels: Vec<Level>,
@@ -134,27 +140,12 @@ impl Amg {
             let r = r.into_f32();
             let omega = 4.0 / (3.0 * rho);
             let wdinv = dinv.iter().map(|d| omega * d).collect();
-            // The first level keeps its f64 values for CG, sharing the structure.
-            let a32 = if fine.is_none() {
-                let Csr {
-                    nrows,
-                    ncols,
-                    ptr,
-                    cols,
-                    vals,
-                } = a;
-                let a32 = Csr {
-                    nrows,
-                    ncols,
-                    ptr,
-                    cols,
-                    vals: vals.par_iter().with_min_len(CHUNK).map(|&v| v as f32).collect(),
-                };
+            // The level's operator in SELL form, rounded to f32 for the smoother; the first
+            // level keeps its f64 values, laid out alike, for CG.
+            let (a32, vals) = Sell::from_csr(a);
+            if fine.is_none() {
                 fine = Some(vals);
-                a32
-            } else {
-                a.into_f32()
-            };
+            }
             levels.push(Level { a: a32, wdinv, p, r });
             a = ac;
             b = b_c;
@@ -182,7 +173,7 @@ impl Amg {
             .levels
             .iter()
             .map(|l| AmgLevel {
-                rows: l.a.nrows,
+                rows: l.a.nrows(),
                 nnz: l.a.nnz(),
             })
             .collect();
@@ -201,7 +192,7 @@ impl Amg {
     /// q = A p with the finest operator in f64; returns p·q.
     pub(crate) fn fine_spmv_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
         match (&self.fine, self.levels.first()) {
-            (Some(vals), Some(l)) => l.a.spmv_dot_with(vals, p, q),
+            (Some(vals), Some(l)) => ordered_sum(&l.a.map_rows_with(vals, p, q, |_, v| v, |i, v| v * p[i])),
             _ => self.coarse_a.spmv_dot(p, q),
         }
     }
@@ -211,8 +202,8 @@ impl Amg {
         self.levels
             .iter()
             .map(|l| Work {
-                r: vec![0.0; l.a.nrows],
-                tmp: vec![0.0; l.a.nrows],
+                r: vec![0.0; l.a.nrows()],
+                tmp: vec![0.0; l.a.nrows()],
                 bc: vec![0.0; l.p.ncols],
                 xc: vec![0.0; l.p.ncols],
             })
@@ -256,12 +247,17 @@ impl Amg {
                 *xi = di * bi;
             }
         });
-        lev.a.residual(b, x, &mut w.r);
+        lev.a.map_rows(x, &mut w.r, |i, ax| b[i] - ax, |_, _| 0.0);
         lev.r.spmv(&w.r, &mut w.bc);
         self.cycle(l + 1, &w.bc, &mut w.xc, rest);
         lev.p.spmv_add(&w.xc, x);
         // Post-smoothing: x += ω D⁻¹ (b − A x), with b·x in the same sweep.
-        let bx = ordered_sum(&jacobi(&lev.a, &lev.wdinv, b, x, &mut w.tmp));
+        let bx = ordered_sum(&lev.a.map_rows(
+            x,
+            &mut w.tmp,
+            |i, ax| x[i] + lev.wdinv[i] * (b[i] - ax),
+            |i, v| b[i] * v,
+        ));
         std::mem::swap(x, &mut w.tmp);
         bx
     }

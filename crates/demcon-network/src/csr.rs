@@ -64,7 +64,8 @@ impl<T: Value> Csr<T> {
         });
     }
 
-    /// r = b − self · x.
+    /// r = b − self · x (tests; the cycle's residual reads the [`crate::sell::Sell`] form).
+    #[cfg(test)]
     pub fn residual(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
         chunks_map(r, |c, rc| {
             let base = c * CHUNK;

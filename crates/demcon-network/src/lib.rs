@@ -45,6 +45,7 @@ mod homogenize;
 mod ic;
 mod network;
 mod par;
+mod sell;
 mod solve;
 
 pub use amg::{AmgInfo, AmgLevel};
