@@ -307,10 +307,17 @@ impl Csr {
         debug_assert_eq!(self.ncols, b.nrows);
         let m = b.ncols;
         // Built in place: a symbolic pass counts each row's columns, then the numeric pass
-        // writes the rows into the result (no chunk copies beside a large product).
-        Self::from_row_lengths(
+        // writes the rows into the result (no chunk copies beside a large product). Chunks
+        // of 1024 rows, a few parallel tasks per thread: a block of the Galerkin product on
+        // a coarse level has ~2·10⁴ costly rows, which chunks of [`CHUNK`] rows left on one
+        // thread (the result does not depend on the chunking).
+        const MATMUL_CHUNK: usize = 1024;
+        let tasks = 2 * rayon::current_num_threads().max(1);
+        Self::from_row_lengths_in(
             nrows,
             m,
+            MATMUL_CHUNK,
+            nrows.div_ceil(MATMUL_CHUNK).div_ceil(tasks).max(1),
             || Accumulator::new(m),
             |acc, i| {
                 let (ac, _) = self.row(row_of(i));
