@@ -18,9 +18,10 @@
 //! smoother reads it, P and R) are stored in f32 and widened on use, CG's own product keeps
 //! the f64 fine operator, so the solution's accuracy is unchanged (22 iterations at 10⁶
 //! either way); row pointers are u32; r·z is summed in the last smoothing sweep. Each
-//! level's operator is kept in sliced-ELLPACK form ([`Sell`]) once its Galerkin product is
-//! formed: the residual, the smoothing sweep and CG's product read four rows side by side
-//! (solve −18 % at 10⁶, setup +8 % for the conversion; `docs/performance.md`).
+//! level's operator, P and R are kept in sliced-ELLPACK form ([`Sell`]) once the level's
+//! Galerkin product is formed: the residual, the smoothing sweep, CG's product, the
+//! restriction and the prolongation read four rows side by side (solve −26 % at 10⁶, setup
+//! +5 % for the conversions; `docs/performance.md`).
 
 use rayon::prelude::*;
 
@@ -86,9 +87,9 @@ struct Level {
     /// ω_s / a_ii, the damped-Jacobi smoother.
     wdinv: Vec<f64>,
     /// Prolongator to this level from the next coarser one (rows: this level).
-    p: Csr<f32>,
+    p: Sell,
     /// Restriction Pᵀ.
-    r: Csr<f32>,
+    r: Sell,
 }
 
 /// A multigrid hierarchy for a symmetric positive definite matrix.
@@ -136,16 +137,19 @@ impl Amg {
             // temporary is rounded as soon as it is no longer read.
             let r = p.transpose();
             let ac = r.galerkin(&a, &p);
-            let p = p.into_f32();
-            let r = r.into_f32();
+            let p = Sell::from_csr(p);
+            let r = Sell::from_csr(r);
             let omega = 4.0 / (3.0 * rho);
             let wdinv = dinv.iter().map(|d| omega * d).collect();
             // The level's operator in SELL form, rounded to f32 for the smoother; the first
             // level keeps its f64 values, laid out alike, for CG.
-            let (a32, vals) = Sell::from_csr(a);
-            if fine.is_none() {
+            let a32 = if fine.is_none() {
+                let (a32, vals) = Sell::from_csr_with_f64(a);
                 fine = Some(vals);
-            }
+                a32
+            } else {
+                Sell::from_csr(a)
+            };
             levels.push(Level { a: a32, wdinv, p, r });
             a = ac;
             b = b_c;
@@ -192,7 +196,9 @@ impl Amg {
     /// q = A p with the finest operator in f64; returns p·q.
     pub(crate) fn fine_spmv_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
         match (&self.fine, self.levels.first()) {
-            (Some(vals), Some(l)) => ordered_sum(&l.a.map_rows_with(vals, p, q, |_, v| v, |i, v| v * p[i])),
+            (Some(vals), Some(l)) => {
+                ordered_sum(&l.a.map_rows_with(vals, p, q, |_, _, v| v, |i, v| v * p[i]))
+            }
             _ => self.coarse_a.spmv_dot(p, q),
         }
     }
@@ -204,8 +210,8 @@ impl Amg {
             .map(|l| Work {
                 r: vec![0.0; l.a.nrows()],
                 tmp: vec![0.0; l.a.nrows()],
-                bc: vec![0.0; l.p.ncols],
-                xc: vec![0.0; l.p.ncols],
+                bc: vec![0.0; l.p.ncols()],
+                xc: vec![0.0; l.p.ncols()],
             })
             .collect()
     }
@@ -247,15 +253,15 @@ impl Amg {
                 *xi = di * bi;
             }
         });
-        lev.a.map_rows(x, &mut w.r, |i, ax| b[i] - ax, |_, _| 0.0);
-        lev.r.spmv(&w.r, &mut w.bc);
+        lev.a.map_rows(x, &mut w.r, |i, _, ax| b[i] - ax, |_, _| 0.0);
+        lev.r.map_rows(&w.r, &mut w.bc, |_, _, s| s, |_, _| 0.0);
         self.cycle(l + 1, &w.bc, &mut w.xc, rest);
-        lev.p.spmv_add(&w.xc, x);
+        lev.p.map_rows(&w.xc, x, |_, y, s| y + s, |_, _| 0.0);
         // Post-smoothing: x += ω D⁻¹ (b − A x), with b·x in the same sweep.
         let bx = ordered_sum(&lev.a.map_rows(
             x,
             &mut w.tmp,
-            |i, ax| x[i] + lev.wdinv[i] * (b[i] - ax),
+            |i, _, ax| x[i] + lev.wdinv[i] * (b[i] - ax),
             |i, v| b[i] * v,
         ));
         std::mem::swap(x, &mut w.tmp);

@@ -39,7 +39,8 @@ impl<T: Value> Csr<T> {
         (&self.cols[lo..hi], &self.vals[lo..hi])
     }
 
-    /// y = self · x.
+    /// y = self · x. (tests: the cycle reads the [`crate::sell::Sell`] form).
+    #[cfg(test)]
     pub fn spmv(&self, x: &[f64], y: &mut [f64]) {
         chunks_map(y, |c, yc| {
             let base = c * CHUNK;
@@ -54,7 +55,8 @@ impl<T: Value> Csr<T> {
         self.spmv_dot_with(&self.vals, p, q)
     }
 
-    /// y += self · x.
+    /// y += self · x. (tests: the cycle reads the [`crate::sell::Sell`] form).
+    #[cfg(test)]
     pub fn spmv_add(&self, x: &[f64], y: &mut [f64]) {
         chunks_map(y, |c, yc| {
             let base = c * CHUNK;
@@ -123,6 +125,7 @@ impl<T: Value> Csr<T> {
 impl Csr {
     /// The same matrix with f32 values (each value rounded to nearest), reusing the
     /// structure: half the value bytes for operators that only the preconditioner reads.
+    #[cfg(test)]
     pub fn into_f32(self) -> Csr<f32> {
         Csr {
             nrows: self.nrows,

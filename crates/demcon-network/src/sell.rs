@@ -1,16 +1,16 @@
-//! Sliced-ELLPACK storage (SELL-4-256) of the multigrid smoother's operators, for the three
-//! sweeps that read every entry of a level once per cycle: the residual, the damped-Jacobi
-//! sweep, and CG's own product on the finest level.
+//! Sliced-ELLPACK storage (SELL-4-256) of the multigrid hierarchy's matrices, for the sweeps
+//! that read every entry of a level once per cycle: the residual, the damped-Jacobi sweep,
+//! CG's own product on the finest level, the restriction and the prolongation.
 //!
-//! Rows of a packing's operator hold ~8 entries. In compressed rows, each row's loop
-//! (bounds, remainder, four partial sums combined at the end) cost more than its loads: the
-//! three fine sweeps ran at ~9 GB/s, a third of the machine's triad (issue 12, perf at 10⁶).
-//! Here rows are taken four at a time (a *slice*), sorted by length within windows of 256
-//! rows so a slice's rows have nearly the same length; their entries are interleaved and
-//! padded to the slice's longest row with zero values pointing at the row itself. One
-//! fixed-length loop per slice sums the four rows side by side (four independent chains of
-//! additions, no per-row exit), as the explicit step does (`demcon-thermal`'s
-//! `ExplicitStepper`).
+//! Rows of a packing's operator hold ~8 entries, those of the prolongator ~7. In compressed
+//! rows, each row's loop (bounds, remainder, four partial sums combined at the end) cost
+//! more than its loads: the three fine sweeps ran at ~9 GB/s, a third of the machine's triad
+//! (issue 12, perf at 10⁶). Here rows are taken four at a time (a *slice*), sorted by length
+//! within windows of 256 rows so a slice's rows have nearly the same length; their entries
+//! are interleaved and padded to the slice's longest row with zero values pointing at the
+//! row's first column (already read). One fixed-length loop per slice sums the four rows
+//! side by side (four independent chains of additions, no per-row exit), as the explicit
+//! step does (`demcon-thermal`'s `ExplicitStepper`).
 //!
 //! Results do not depend on the thread count: each row is summed in its column order, rows
 //! stay inside their [`CHUNK`] (a window divides a chunk), and per-chunk partial sums are
@@ -27,11 +27,13 @@ const LANES: usize = 4;
 const WINDOW: usize = 256;
 const _: () = assert!(CHUNK.is_multiple_of(WINDOW) && WINDOW.is_multiple_of(LANES));
 
-/// A square sparse matrix in SELL-4-256 form, values in f32: slice s holds sorted positions 4s..4s+4,
-/// whose rows are `perm[4s..4s+4]`; entry j of lane l sits at `slice_ptr[s] + 4j + l`.
+/// A sparse matrix in SELL-4-256 form, values in f32: slice s holds sorted positions
+/// 4s..4s+4, whose rows are `perm[4s..4s+4]`; entry j of lane l sits at
+/// `slice_ptr[s] + 4j + l`.
 #[derive(Debug, Clone)]
 pub(crate) struct Sell {
     nrows: usize,
+    ncols: usize,
     /// Stored entries of the matrix itself (without padding).
     nnz: usize,
     /// Row at each sorted position.
@@ -40,14 +42,20 @@ pub(crate) struct Sell {
     /// count past the compressed rows' u32 bound, and it costs 2 bytes per row).
     slice_ptr: Vec<usize>,
     cols: Vec<u32>,
-    /// The values rounded to f32 (the f64 ones laid out alike are kept by the caller).
+    /// The values rounded to f32 (f64 values laid out alike are kept by the caller:
+    /// [`Sell::from_csr_with_f64`]).
     vals: Vec<f32>,
 }
 
 impl Sell {
-    /// Rows (= columns).
+    /// Rows.
     pub fn nrows(&self) -> usize {
         self.nrows
+    }
+
+    /// Columns.
+    pub fn ncols(&self) -> usize {
+        self.ncols
     }
 
     /// Entries of the matrix (padding not counted).
@@ -55,20 +63,20 @@ impl Sell {
         self.nnz
     }
 
-    /// `out[i] = f(i, Σ_j a_ij x_j)` for every row i with this layout's values `vals`
-    /// (`self.vals`, or other values laid out alike: [`Sell::from_csr`]); returns, per
-    /// [`CHUNK`] of rows in chunk order, the sum of `g(i, out[i])` over the chunk's rows in
-    /// their sorted order.
+    /// `out[i] = f(i, out[i], Σ_j a_ij x_j)` for every row i with this layout's values
+    /// `vals` (`self.vals`, or other values laid out alike: [`Sell::from_csr_with_f64`]);
+    /// returns, per [`CHUNK`] of rows in chunk order, the sum of `g(i, out[i])` (new value)
+    /// over the chunk's rows in their sorted order.
     #[inline(always)]
     pub fn map_rows_with<V: Value>(
         &self,
         vals: &[V],
         x: &[f64],
         out: &mut [f64],
-        f: impl Fn(usize, f64) -> f64 + Sync + Send,
+        f: impl Fn(usize, f64, f64) -> f64 + Sync + Send,
         g: impl Fn(usize, f64) -> f64 + Sync + Send,
     ) -> Vec<f64> {
-        debug_assert!(vals.len() == self.cols.len() && out.len() == self.nrows && x.len() == self.nrows);
+        debug_assert!(vals.len() == self.cols.len() && out.len() == self.nrows && x.len() == self.ncols);
         chunks_map(out, |c, oc| {
             let base = c * CHUNK;
             let end = base + oc.len();
@@ -87,42 +95,47 @@ impl Sell {
                 let i0 = s * LANES;
                 for (l, &a) in acc.iter().enumerate().take(LANES.min(end - i0)) {
                     let i = self.perm[i0 + l] as usize;
-                    let v = f(i, a);
-                    oc[i - base] = v;
-                    partial += g(i, v);
+                    let o = &mut oc[i - base];
+                    *o = f(i, *o, a);
+                    partial += g(i, *o);
                 }
             }
             partial
         })
     }
 
-    /// `out[i] = f(i, Σ_j a_ij x_j)` with the stored values; returns the per-chunk sums of
-    /// `g(i, out[i])` ([`Self::map_rows_with`]).
+    /// `out[i] = f(i, out[i], Σ_j a_ij x_j)` with the stored values; returns the per-chunk
+    /// sums of `g(i, out[i])` ([`Self::map_rows_with`]).
     #[inline(always)]
     pub fn map_rows(
         &self,
         x: &[f64],
         out: &mut [f64],
-        f: impl Fn(usize, f64) -> f64 + Sync + Send,
+        f: impl Fn(usize, f64, f64) -> f64 + Sync + Send,
         g: impl Fn(usize, f64) -> f64 + Sync + Send,
     ) -> Vec<f64> {
         self.map_rows_with(&self.vals, x, out, f, g)
     }
-}
 
-impl Sell {
-    /// The layout of square `a`, consumed: the values rounded to f32 (what the smoother
-    /// reads) and the f64 values laid out alike (what CG's own product reads), one structure
-    /// for both. Rows keep their column order; padding entries point at their own row with
-    /// value 0.
-    ///
-    /// Memory: the f64 values are laid out first and `a`'s values freed, then the columns,
-    /// then `a`'s columns freed: the conversion holds at most 20 bytes per entry (`a`'s 12 and
-    /// the new values' 8), against 16 for `a` beside its f32 copy.
-    pub fn from_csr(a: Csr) -> (Self, Vec<f64>) {
-        assert_eq!(a.nrows, a.ncols, "SELL storage is for square operators");
-        let n = a.nrows;
-        let nnz = a.nnz();
+    /// The layout of `a`, consumed, with its values rounded to f32. Rows keep their column
+    /// order. Memory: the values are laid out and `a`'s freed, then the columns: at most
+    /// `a`'s 12 bytes per entry plus 4.
+    pub fn from_csr(a: Csr) -> Self {
+        let (s, _) = Self::convert(a, false);
+        s
+    }
+
+    /// As [`Self::from_csr`], also returning the f64 values laid out alike (CG's product on
+    /// the finest level reads them, the smoother the f32 ones: one structure for both). The
+    /// f64 values are laid out first and `a`'s freed, then the columns: at most 20 bytes per
+    /// entry during the conversion (`a`'s 12 and the new values' 8), against 16 for `a`
+    /// beside an f32 copy.
+    pub fn from_csr_with_f64(a: Csr) -> (Self, Vec<f64>) {
+        Self::convert(a, true)
+    }
+
+    fn convert(a: Csr, keep_f64: bool) -> (Self, Vec<f64>) {
+        let (n, ncols, nnz) = (a.nrows, a.ncols, a.nnz());
         let Csr {
             ptr,
             cols: a_cols,
@@ -150,14 +163,29 @@ impl Sell {
             slice_ptr: &slice_ptr,
             ptr: &ptr,
         };
-        let vals64 = layout.fill(&a_vals, |_| 0.0);
-        drop(a_vals);
-        let cols = layout.fill(&a_cols, |p| p);
+        let (vals, vals64) = if keep_f64 {
+            let vals64 = layout.fill(|k| a_vals[k], |_| 0.0);
+            drop(a_vals);
+            let vals = vals64.par_iter().with_min_len(CHUNK).map(|&v| v as f32).collect();
+            (vals, vals64)
+        } else {
+            let vals = layout.fill(|k| a_vals[k] as f32, |_| 0.0);
+            drop(a_vals);
+            (vals, Vec::new())
+        };
+        // Padding reads the row's first column (0 for an empty row): a value already loaded.
+        let cols = layout.fill(
+            |k| a_cols[k],
+            |p| {
+                let k = ptr[p as usize] as usize;
+                if len(p as usize) > 0 { a_cols[k] } else { 0 }
+            },
+        );
         drop((a_cols, ptr));
-        let vals = vals64.par_iter().with_min_len(CHUNK).map(|&v| v as f32).collect();
         (
             Self {
                 nrows: n,
+                ncols,
                 nnz,
                 perm,
                 slice_ptr,
@@ -178,9 +206,13 @@ struct Layout<'a> {
 }
 
 impl Layout<'_> {
-    /// `src` (one value per compressed-row entry) in the sliced layout; the padding of row p
-    /// is `pad(p)`. Slices own disjoint ranges: filled in parallel.
-    fn fill<U: Copy + Default + Send + Sync>(&self, src: &[U], pad: impl Fn(u32) -> U + Sync) -> Vec<U> {
+    /// The compressed rows' entries (`src(k)` for entry k) in the sliced layout; the padding
+    /// of row p is `pad(p)`. Slices own disjoint ranges: filled in parallel.
+    fn fill<U: Copy + Default + Send + Sync>(
+        &self,
+        src: impl Fn(usize) -> U + Sync,
+        pad: impl Fn(u32) -> U + Sync,
+    ) -> Vec<U> {
         let n = self.perm.len();
         let n_slices = self.slice_ptr.len() - 1;
         let mut out = vec![U::default(); self.slice_ptr[n_slices]];
@@ -198,12 +230,13 @@ impl Layout<'_> {
             .for_each(|(s, part)| {
                 for l in 0..LANES.min(n - s * LANES) {
                     let p = self.perm[s * LANES + l];
+                    let fill = pad(p);
                     for j in (l..part.len()).step_by(LANES) {
-                        part[j] = pad(p);
+                        part[j] = fill;
                     }
                     let (lo, hi) = (self.ptr[p as usize] as usize, self.ptr[p as usize + 1] as usize);
-                    for (j, &v) in src[lo..hi].iter().enumerate() {
-                        part[LANES * j + l] = v;
+                    for (j, k) in (lo..hi).enumerate() {
+                        part[LANES * j + l] = src(k);
                     }
                 }
             });
@@ -259,14 +292,14 @@ mod tests {
     #[test]
     fn rows_match_compressed_rows_and_partials_are_thread_count_free() {
         let a = matrix();
-        let (s, v64) = Sell::from_csr(a.clone());
+        let (s, v64) = Sell::from_csr_with_f64(a.clone());
         assert_eq!(s.nnz(), a.nnz());
         assert!(s.cols.len() >= a.nnz() && s.cols.len() == s.vals.len() && v64.len() == s.vals.len());
         let x: Vec<f64> = (0..a.nrows).map(|i| (i as f64 * 0.37).sin()).collect();
         let b: Vec<f64> = (0..a.nrows).map(|i| (i as f64 * 0.11).cos()).collect();
         let run = || {
             let mut r = vec![0.0; a.nrows];
-            let partials = s.map_rows_with(&v64, &x, &mut r, |i, ax| b[i] - ax, |i, ri| ri * x[i]);
+            let partials = s.map_rows_with(&v64, &x, &mut r, |i, _, ax| b[i] - ax, |i, ri| ri * x[i]);
             (r, ordered_sum(&partials))
         };
         let (r, rx) = run();
@@ -288,9 +321,59 @@ mod tests {
         }
         // The f32 values: the same products to f32 rounding.
         let mut y32 = vec![0.0; a.nrows];
-        s.map_rows(&x, &mut y32, |i, ax| b[i] - ax, |_, _| 0.0);
+        s.map_rows(&x, &mut y32, |i, _, ax| b[i] - ax, |_, _| 0.0);
         for (u, v) in y32.iter().zip(&r) {
             assert!((u - v).abs() <= 1e-6 * (1.0 + v.abs()), "{u} vs {v}");
+        }
+    }
+
+    #[test]
+    fn rectangular_products_match_compressed_rows() {
+        // A prolongator-like 40 000 × 5 000 matrix (0 to 9 entries a row) and its transpose.
+        let (n, m) = (40_000usize, 5_000usize);
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut ptr = vec![0u32];
+        let (mut cols, mut vals) = (Vec::new(), Vec::new());
+        for _ in 0..n {
+            let mut row: Vec<u32> = (0..next() % 10).map(|_| (next() % m as u64) as u32).collect();
+            row.sort_unstable();
+            row.dedup();
+            for c in row {
+                cols.push(c);
+                vals.push(((next() % 1000) as f64 + 1.0) / 1000.0);
+            }
+            ptr.push(cols.len() as u32);
+        }
+        let p = Csr {
+            nrows: n,
+            ncols: m,
+            ptr,
+            cols,
+            vals,
+        };
+        let r = p.transpose();
+        let xc: Vec<f64> = (0..m).map(|i| (i as f64 * 0.7).sin()).collect();
+        let xf: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).cos()).collect();
+        // y += P x, and R x, against the compressed rows with the same f32 values.
+        let mut y = xf.clone();
+        Sell::from_csr(p.clone()).map_rows(&xc, &mut y, |_, y, s| y + s, |_, _| 0.0);
+        let mut want = xf.clone();
+        p.clone().into_f32().spmv_add(&xc, &mut want);
+        for (u, v) in y.iter().zip(&want) {
+            assert!((u - v).abs() <= 1e-12 * (1.0 + v.abs()), "{u} vs {v}");
+        }
+        let mut z = vec![0.0; m];
+        Sell::from_csr(r.clone()).map_rows(&xf, &mut z, |_, _, s| s, |_, _| 0.0);
+        let mut want = vec![0.0; m];
+        r.into_f32().spmv(&xf, &mut want);
+        for (u, v) in z.iter().zip(&want) {
+            assert!((u - v).abs() <= 1e-12 * (1.0 + v.abs()), "{u} vs {v}");
         }
     }
 }
