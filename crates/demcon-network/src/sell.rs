@@ -21,11 +21,37 @@ use rayon::prelude::*;
 use crate::csr::{Csr, Value};
 use crate::par::{CHUNK, chunks_map};
 
-/// Rows summed side by side (one slice).
-const LANES: usize = 4;
-/// Rows are sorted by length within windows of this many rows (divides [`CHUNK`]).
-const WINDOW: usize = 256;
+/// Rows summed side by side (one slice) in the sliced layouts ([`Sell`], and the explicit
+/// heat step's in `demcon-thermal`).
+pub const SELL_LANES: usize = 4;
+/// Rows are sorted by length within windows of this many rows (divides [`CHUNK`], so a
+/// chunk's rows stay in the chunk).
+pub const SELL_WINDOW: usize = 256;
+const LANES: usize = SELL_LANES;
+const WINDOW: usize = SELL_WINDOW;
 const _: () = assert!(CHUNK.is_multiple_of(WINDOW) && WINDOW.is_multiple_of(LANES));
+
+/// The sliced layout of `n` rows of `len(p)` entries: the row at each sorted position
+/// (longest first within windows of [`SELL_WINDOW`] rows, ties by index) and the start of
+/// each slice's entries ([`SELL_LANES`] rows per slice, padded to the slice's longest row;
+/// one more start than slices, the last being the total).
+pub fn sliced_layout(n: usize, len: impl Fn(usize) -> usize + Sync) -> (Vec<u32>, Vec<usize>) {
+    let mut perm: Vec<u32> = (0..n as u32).collect();
+    perm.par_chunks_mut(WINDOW)
+        .for_each(|w| w.sort_by_key(|&p| (std::cmp::Reverse(len(p as usize)), p)));
+    let n_slices = n.div_ceil(LANES);
+    let mut slice_ptr = Vec::with_capacity(n_slices + 1);
+    slice_ptr.push(0usize);
+    for s in 0..n_slices {
+        let width = perm[s * LANES..((s + 1) * LANES).min(n)]
+            .iter()
+            .map(|&p| len(p as usize))
+            .max()
+            .unwrap_or(0);
+        slice_ptr.push(slice_ptr[s] + LANES * width);
+    }
+    (perm, slice_ptr)
+}
 
 /// A sparse matrix in SELL-4-256 form, values in f32: slice s holds sorted positions
 /// 4s..4s+4, whose rows are `perm[4s..4s+4]`; entry j of lane l sits at
@@ -143,21 +169,7 @@ impl Sell {
             ..
         } = a;
         let len = |p: usize| (ptr[p + 1] - ptr[p]) as usize;
-        // Longest first (ties by index) within each window.
-        let mut perm: Vec<u32> = (0..n as u32).collect();
-        perm.par_chunks_mut(WINDOW)
-            .for_each(|w| w.sort_by_key(|&p| (std::cmp::Reverse(len(p as usize)), p)));
-        let n_slices = n.div_ceil(LANES);
-        let mut slice_ptr = Vec::with_capacity(n_slices + 1);
-        slice_ptr.push(0usize);
-        for s in 0..n_slices {
-            let width = perm[s * LANES..((s + 1) * LANES).min(n)]
-                .iter()
-                .map(|&p| len(p as usize))
-                .max()
-                .unwrap_or(0);
-            slice_ptr.push(slice_ptr[s] + LANES * width);
-        }
+        let (perm, slice_ptr) = sliced_layout(n, len);
         let layout = Layout {
             perm: &perm,
             slice_ptr: &slice_ptr,
@@ -249,17 +261,21 @@ mod tests {
     use super::*;
     use crate::par::ordered_sum;
 
-    /// A random symmetric pattern with rows of ~1 to 20 entries, 40 000 rows (ten chunks: the
-    /// parallel path).
-    fn matrix() -> Csr {
-        let n = 40_000usize;
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
+    /// A xorshift64 sequence from `state` (≠ 0): test patterns without a dependency.
+    fn xorshift(mut state: u64) -> impl FnMut() -> u64 {
+        move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
             state
-        };
+        }
+    }
+
+    /// A random symmetric pattern with rows of ~1 to 20 entries, 40 000 rows (ten chunks: the
+    /// parallel path).
+    fn matrix() -> Csr {
+        let n = 40_000usize;
+        let mut next = xorshift(0x9e37_79b9_7f4a_7c15);
         let mut rows: Vec<Vec<(u32, f64)>> = (0..n).map(|i| vec![(i as u32, 10.0)]).collect();
         for i in 0..n {
             for _ in 0..(next() % 6) {
@@ -331,13 +347,7 @@ mod tests {
     fn rectangular_products_match_compressed_rows() {
         // A prolongator-like 40 000 × 5 000 matrix (0 to 9 entries a row) and its transpose.
         let (n, m) = (40_000usize, 5_000usize);
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut next = xorshift(0x2545_f491_4f6c_dd1d);
         let mut ptr = vec![0u32];
         let (mut cols, mut vals) = (Vec::new(), Vec::new());
         for _ in 0..n {

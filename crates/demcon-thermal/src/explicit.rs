@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use demcon_core::check::{check_finite, check_len};
-use demcon_network::{CHUNK, MIN_TASK_CHUNKS, Network, NodeKind};
+use demcon_network::{CHUNK, MIN_TASK_CHUNKS, Network, NodeKind, SELL_LANES, sliced_layout};
 use rayon::prelude::*;
 
 use crate::capacity::DtBound;
@@ -96,11 +96,11 @@ pub enum WeightPrecision {
     F32,
 }
 
-/// Rows swept together by the explicit kernel (one slice).
-const LANES: usize = 4;
-/// Rows are sorted by degree within windows of this many rows (a divisor of [`CHUNK`]), so
-/// the rows of a slice have nearly the same number of entries and little padding is needed.
-const WINDOW: usize = 256;
+/// Rows swept together by the explicit kernel (one slice). Rows are sorted by degree within
+/// windows of [`demcon_network::SELL_WINDOW`] rows (a divisor of [`CHUNK`]), so the rows of a
+/// slice have nearly the same number of entries and little padding is needed: the layout
+/// of [`sliced_layout`], which the multigrid hierarchy shares.
+const LANES: usize = SELL_LANES;
 
 /// The explicit update with its per-row coefficients precomputed:
 /// T'_p = c_p T_p + Σ_q w_pq T_q + s_p, with w_pq = Δt H_pq/C_p, c_p = 1 − Σ_q w_pq,
@@ -186,22 +186,9 @@ impl<'a> ExplicitStepper<'a> {
         let n = net.n_nodes();
         let free = |p: usize| kinds[p] == NodeKind::Free;
         let degree = |p: usize| if free(p) { row_ptr[p + 1] - row_ptr[p] } else { 0 };
-        // Sort by degree (descending, ties by index) within each window.
-        let mut perm: Vec<u32> = (0..n as u32).collect();
-        perm.par_chunks_mut(WINDOW).for_each(|w| {
-            w.sort_by_key(|&p| (std::cmp::Reverse(degree(p as usize)), p));
-        });
-        let n_slices = n.div_ceil(LANES);
-        let mut slice_ptr = Vec::with_capacity(n_slices + 1);
-        slice_ptr.push(0usize);
-        for s in 0..n_slices {
-            let width = perm[s * LANES..((s + 1) * LANES).min(n)]
-                .iter()
-                .map(|&p| degree(p as usize))
-                .max()
-                .unwrap_or(0);
-            slice_ptr.push(slice_ptr[s] + LANES * width);
-        }
+        // Sorted by degree (descending, ties by index) within each window, in slices.
+        let (perm, slice_ptr) = sliced_layout(n, degree);
+        let n_slices = slice_ptr.len() - 1;
         let total = slice_ptr[n_slices];
         if total > u32::MAX as usize {
             return Err(ThermalError::invalid(
