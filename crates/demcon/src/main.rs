@@ -71,13 +71,20 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
-            // A distributed run's ranks fail alike: rank 0 says why, the others stay quiet.
-            if !mpi::silent() {
-                eprintln!("error: {}", error_chain(&e));
-            }
+            report_error(&e);
             ExitCode::FAILURE
         }
     }
+}
+
+/// Prints a failed command's error once. A distributed run's ranks fail alike: rank 0 says
+/// why, the others stay quiet; a distributed run reports before PETSc finalizes, and this
+/// process prints nothing after that.
+pub(crate) fn report_error(e: &anyhow::Error) {
+    if !mpi::silent() {
+        eprintln!("error: {}", error_chain(e));
+    }
+    mpi::set_silent(true);
 }
 
 /// The error and its causes joined by ": ", each cause once: a cause whose text the message

@@ -59,8 +59,25 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     crate::mpi::set_silent(launch.is_some_and(|l| l.rank != 0));
     // Declared first, dropped last: PetscFinalize after every distributed system is gone.
     let session = distributed_session(&args, launch)?;
-    let rank0 = session.as_ref().is_none_or(|s| s.rank() == 0);
-    let threads = match (args.threads, &session) {
+    let result = run_in(args, launch, session.as_ref());
+    if let (Some(_), Err(e)) = (&session, &result) {
+        // Said before PetscFinalize: MPI_Finalize waits for every rank, so no other rank can
+        // exit non-zero (which makes mpirun abort the job, rank 0 with it) before rank 0 has
+        // printed why the run failed. `main` then prints nothing more.
+        crate::report_error(e);
+    }
+    drop(session);
+    result
+}
+
+/// The run itself, inside the PETSc session of a distributed run (`None`: serial).
+fn run_in(
+    args: RunArgs,
+    launch: Option<crate::mpi::Launch>,
+    session: Option<&demcon_scene::distributed::Session>,
+) -> Result<ExitCode> {
+    let rank0 = session.is_none_or(|s| s.rank() == 0);
+    let threads = match (args.threads, session) {
         (None, Some(s)) if s.size() > 1 => Some(crate::mpi::threads_per_rank(
             launch.map_or(s.size(), |l| l.local_size),
         )),
@@ -140,7 +157,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             return Err(e);
         }
     };
-    if let Some(s) = &session {
+    if let Some(s) = session {
         // Collective: every rank reaches this point after the same run.
         let peak = result.stages.peak_rss_bytes().unwrap_or(0) as f64;
         s.gather_peak_memory(peak)
@@ -166,7 +183,6 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         );
     }
     println!("outputs in {}: {}", out.display(), files.join(", "));
-    drop(session);
     Ok(ExitCode::SUCCESS)
 }
 
