@@ -172,7 +172,11 @@ pub fn check_output_dir(dir: &Path) -> Result<(), SceneError> {
         }
     }
     std::fs::create_dir_all(parent).map_err(io(parent))?;
-    let probe = parent.join(format!(".demcon-write-test-{}", std::process::id()));
+    // Unique within the process too: two runs of one process (threads, tests) may check the
+    // same parent at once, and one would remove the other's probe.
+    static PROBES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = PROBES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let probe = parent.join(format!(".demcon-write-test-{}-{n}", std::process::id()));
     std::fs::write(&probe, b"").map_err(io(parent))?;
     std::fs::remove_file(&probe).map_err(io(&probe))?;
     Ok(())
