@@ -72,19 +72,25 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(e) => {
             report_error(&e);
+            if mpi::silent() {
+                // A rank other than 0: let rank 0 print first (`mpi::LINGER`); still here
+                // after it, this rank failed alone and says why.
+                std::thread::sleep(mpi::LINGER);
+                let rank = mpi::launch().map_or(0, |l| l.rank);
+                eprintln!("error (rank {rank}): {}", error_chain(&e));
+            }
             ExitCode::FAILURE
         }
     }
 }
 
-/// Prints a failed command's error once. A distributed run's ranks fail alike: rank 0 says
-/// why, the others stay quiet; a distributed run reports before PETSc finalizes, and this
-/// process prints nothing after that.
+/// Prints a failed command's error once: a distributed run reports before PETSc finalizes
+/// (`run.rs`), and `main` then prints nothing more. A distributed run's ranks fail alike:
+/// rank 0 says why, the others stay quiet.
 pub(crate) fn report_error(e: &anyhow::Error) {
-    if !mpi::silent() {
+    if mpi::first_report() && !mpi::silent() {
         eprintln!("error: {}", error_chain(e));
     }
-    mpi::set_silent(true);
 }
 
 /// The error and its causes joined by ": ", each cause once: a cause whose text the message

@@ -22,6 +22,22 @@ pub(crate) fn set_silent(silent: bool) {
     SILENT.store(silent, Ordering::Relaxed);
 }
 
+/// Set once a failed run's error has been handled ([`first_report`]).
+static REPORTED: AtomicBool = AtomicBool::new(false);
+
+/// `true` the first time only: a failed run's error is printed once.
+pub(crate) fn first_report() -> bool {
+    !REPORTED.swap(true, Ordering::Relaxed)
+}
+
+/// How long a rank other than 0 waits before it exits with an error. The ranks of a
+/// distributed run fail alike, and mpirun aborts the whole job at the first non-zero exit:
+/// rank 0 must have printed the reason by then. Inside the PETSc session MPI_Finalize
+/// already orders them (rank 0 prints first); before it (a refused launch) this wait does.
+/// Rank 0's own exit ends the wait (mpirun stops the job); a rank still alive after it
+/// failed alone and prints its own error, naming its rank.
+pub(crate) const LINGER: std::time::Duration = std::time::Duration::from_secs(2);
+
 /// What the MPI launcher told this process through its environment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Launch {
