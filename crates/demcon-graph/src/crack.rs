@@ -353,14 +353,22 @@ pub fn crossed_contacts(
         return vec![None; graph.len()];
     }
     let period = container.period();
+    map_branches(graph, particles, |_, a, b| first_crossing(cracks, &a, &b, period))
+}
+
+/// `f(k, a, b)` for every contact k of `graph`, with a the centre of its first particle and
+/// b = a + its branch vector (m), in parallel; in contact order whatever the thread count.
+fn map_branches<T: Send>(
+    graph: &ContactGraph,
+    particles: &ParticleSet,
+    f: impl Fn(usize, Vec3, Vec3) -> T + Sync,
+) -> Vec<T> {
     (0..graph.len())
         .into_par_iter()
         .with_min_len(1024)
         .map(|k| {
-            let p = graph.pairs[k][0] as usize;
-            let a = particles.centres[p];
-            let b = a + graph.branch(k);
-            first_crossing(cracks, &a, &b, period)
+            let a = particles.centres[graph.pairs[k][0] as usize];
+            f(k, a, a + graph.branch(k))
         })
         .collect()
 }
@@ -406,38 +414,31 @@ pub fn blocked_contacts(
         return vec![None; graph.len()];
     }
     let period = container.period();
-    (0..graph.len())
-        .into_par_iter()
-        .with_min_len(1024)
-        .map(|k| {
-            let p = graph.pairs[k][0] as usize;
-            let a = particles.centres[p];
-            let b = a + graph.branch(k);
-            let centre = a + cells.centroid[k];
-            let rho = (cells.facet_area[k] / std::f64::consts::PI).sqrt();
-            let mut cover: Option<CrackCover> = None;
-            for (i, c) in cracks.iter().enumerate() {
-                let f = c.blocked_fraction_periodic(&a, &b, &centre, rho, period);
-                if f <= 0.0 {
-                    continue;
-                }
-                match cover.as_mut() {
-                    Some(x) => x.fraction = (x.fraction + f).min(1.0),
-                    None => {
-                        let (o, n) = c.plane();
-                        let (sa, sb) = (n.dot(&(a - o)), n.dot(&(b - o)));
-                        let t = if sa != sb { sa / (sa - sb) } else { 0.5 };
-                        cover = Some(CrackCover {
-                            crack: i as u32,
-                            fraction: f,
-                            point: a + (b - a) * t.clamp(0.0, 1.0),
-                        });
-                    }
+    map_branches(graph, particles, |k, a, b| {
+        let centre = a + cells.centroid[k];
+        let rho = (cells.facet_area[k] / std::f64::consts::PI).sqrt();
+        let mut cover: Option<CrackCover> = None;
+        for (i, c) in cracks.iter().enumerate() {
+            let f = c.blocked_fraction_periodic(&a, &b, &centre, rho, period);
+            if f <= 0.0 {
+                continue;
+            }
+            match cover.as_mut() {
+                Some(x) => x.fraction = (x.fraction + f).min(1.0),
+                None => {
+                    let (o, n) = c.plane();
+                    let (sa, sb) = (n.dot(&(a - o)), n.dot(&(b - o)));
+                    let t = if sa != sb { sa / (sa - sb) } else { 0.5 };
+                    cover = Some(CrackCover {
+                        crack: i as u32,
+                        fraction: f,
+                        point: a + (b - a) * t.clamp(0.0, 1.0),
+                    });
                 }
             }
-            cover
-        })
-        .collect()
+        }
+        cover
+    })
 }
 
 /// The first of `cracks` the segment a → b crosses (periodic images when `period` is given).
