@@ -3,7 +3,7 @@
 
 use demcon_core::{Aabb, Vec3};
 
-use super::huge::huge_filled;
+use super::huge::{huge_filled, prefetch};
 
 const NONE: u32 = u32::MAX;
 
@@ -248,6 +248,15 @@ impl SphereGrid {
     /// cells next to it (centre and radius as stored, in `f32` precision).
     #[inline]
     pub fn for_each_near(&self, p: &Vec3, mut f: impl FnMut(Vec3, f64, u32)) {
+        // First start loading every cell's count, slots and ids, then read them: the
+        // cells are in up to nine places in memory, each load otherwise waited for in turn.
+        self.index.for_each_cell_near(p, |k| {
+            let base = k * self.cap;
+            prefetch(&self.len[k]);
+            prefetch(&self.slots[base]);
+            prefetch(&self.slots[base + self.cap - 1]);
+            prefetch(&self.ids[base]);
+        });
         let min = self.index.min;
         let mut visit = |s: &Slot, id: u32| {
             f(

@@ -418,6 +418,10 @@ impl Engine {
     fn rebuild(&mut self, i: usize, now: f64) {
         let mut list = std::mem::take(&mut self.scratch);
         self.nb.take(i, &mut list);
+        // Each old neighbour's block is edited: start loading them all at once.
+        for &j in &list {
+            self.nb.prefetch(j as usize);
+        }
         for &j in &list {
             self.nb.remove(j as usize, i as u32);
         }
@@ -524,6 +528,27 @@ impl Engine {
             }
         }
         (now + best, kind)
+    }
+
+    /// Starts loading what the event of `k` (most likely the next one) will read: the
+    /// particles of `k`'s neighbour list (its prediction) and, for a collision, the partner's
+    /// particle and block. `k`'s own block was prefetched at the start of the current event
+    /// and has usually arrived. Only cache hints: nothing is changed.
+    #[inline]
+    fn prefetch_event(&self, k: usize) {
+        self.prefetch_neighbours(k);
+        if let Ev::Pair { j, .. } = self.nb.event(k) {
+            huge::prefetch(&self.p[j as usize]);
+            self.nb.prefetch(j as usize);
+        }
+    }
+
+    /// Starts loading the particles of `k`'s neighbour list (those held in its block).
+    #[inline]
+    fn prefetch_neighbours(&self, k: usize) {
+        for &j in self.nb.inline_ids(k) {
+            huge::prefetch(&self.p[j as usize]);
+        }
     }
 
     #[inline]
@@ -642,8 +667,12 @@ impl Engine {
                 continue;
             }
             // The next event is most likely the runner-up's: start loading its particle and
-            // block now, so that they arrive while this event is processed.
-            if let Some(k) = self.heap.runner_up() {
+            // block now, so that they arrive while this event is processed. Once its block
+            // is in (after this event's first prediction), its neighbours and partner follow
+            // (`prefetch_event`), and after the second its partner's neighbours. Events wait
+            // on memory at random places; these hints keep several loads in flight.
+            let ru = self.heap.runner_up();
+            if let Some(k) = ru {
                 huge::prefetch(&self.p[k]);
                 self.nb.prefetch(k);
             }
@@ -653,6 +682,9 @@ impl Engine {
                     if self.count[j] != cj {
                         self.stale += 1;
                         self.advance(i, te);
+                        if let Some(k) = ru {
+                            self.prefetch_event(k);
+                        }
                         self.predict(i, te);
                         continue;
                     }
@@ -673,7 +705,15 @@ impl Engine {
                     self.collisions += 1;
                     win_collisions += 1;
                     self.predict(i, te);
+                    if let Some(k) = ru {
+                        self.prefetch_event(k);
+                    }
                     self.predict(j, te);
+                    if let Some(k) = ru
+                        && let Ev::Pair { j: m, .. } = self.nb.event(k)
+                    {
+                        self.prefetch_neighbours(m as usize);
+                    }
                 }
                 Ev::Wall(w) => {
                     self.advance(i, te);
@@ -685,6 +725,9 @@ impl Engine {
                     self.ke += dw * w0 + 0.5 * dw * dw;
                     self.count[i] += 1;
                     self.wall_collisions += 1;
+                    if let Some(k) = ru {
+                        self.prefetch_event(k);
+                    }
                     self.predict(i, te);
                 }
                 Ev::Exit => {

@@ -113,6 +113,13 @@ impl NbLists {
         }
     }
 
+    /// The neighbours of `i` held in its block (all of them up to [`INLINE`]).
+    #[inline]
+    pub fn inline_ids(&self, i: usize) -> &[u32] {
+        let b = &self.blocks[i];
+        &b.ids[..(b.len as usize).min(INLINE)]
+    }
+
     /// Neighbour number `k` of `i`.
     #[inline]
     fn at(&self, i: usize, k: usize) -> u32 {
