@@ -3,8 +3,9 @@
 //!
 //! Scheme (single-event, after Smallenburg 2022): every particle holds exactly one
 //! scheduled event, the earliest of (a) a collision with a neighbour, (b) a wall hit,
-//! (c) leaving its neighbour-list bounding sphere. Events sit in an indexed heap keyed by
-//! `(time, id)`. A collision event stores its partner's collision counter and is discarded
+//! (c) leaving its neighbour-list bounding sphere. Events are popped in `(time, id)` order
+//! from a queue that keeps the near future in a small heap and the rest in a calendar of time
+//! buckets (`queue.rs`). A collision event stores its partner's collision counter and is discarded
 //! as stale when the partner has collided since. Particles are advanced lazily (each keeps
 //! its own time stamp). Neighbour lists: each particle owns a bounding sphere (its radius
 //! plus a skin) fixed in space until it would leave it; two particles are neighbours iff
@@ -17,10 +18,10 @@
 //! then at the set rate.
 
 pub(crate) mod grid;
-pub(crate) mod heap;
 pub(crate) mod huge;
 pub(crate) mod nblist;
 pub mod predict;
+pub(crate) mod queue;
 
 use std::time::Instant;
 
@@ -34,10 +35,10 @@ use crate::params::{PackProgress, PackingParams, StopReason};
 use crate::radius::jamming_estimate;
 use crate::report::{PackingReport, summarize};
 use grid::{CellGrid, SphereGrid};
-use heap::EventHeap;
 use huge::{huge_filled, huge_vec};
 use nblist::NbLists;
 use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay_coef, plane_delay};
+use queue::EventQueue;
 
 /// Largest overlap (relative to the smaller radius) accepted in a finished packing before
 /// it is reported as a numerical failure.
@@ -83,7 +84,7 @@ struct Engine {
     /// Scale `s` at which the fast compression stage ends (`f64::INFINITY` when none).
     s_switch: f64,
     count: Vec<u32>,
-    heap: EventHeap,
+    queue: EventQueue,
     /// Bounding spheres and neighbour lists.
     nb: NbLists,
     grid: SphereGrid,
@@ -323,7 +324,7 @@ impl Engine {
             g_final: params.growth_rate,
             s_switch: f64::INFINITY,
             count: huge_filled(n, 0),
-            heap: EventHeap::new(vec![f64::INFINITY; n]),
+            queue: EventQueue::new(vec![f64::INFINITY; n]),
             nb: NbLists::new(n),
             grid,
             skin,
@@ -555,10 +556,10 @@ impl Engine {
     fn predict(&mut self, i: usize, now: f64) {
         let (t, kind) = self.next_event(i, now);
         self.nb.set_event(i, kind);
-        self.heap.update(i, t);
+        self.queue.update(i, t);
     }
 
-    /// Recomputes every particle's event (all synchronised at `now`) and rebuilds the heap.
+    /// Recomputes every particle's event (all synchronised at `now`) and rebuilds the queue.
     fn predict_all(&mut self, now: f64) {
         let n = self.p.len();
         let mut times = Vec::with_capacity(n);
@@ -567,7 +568,7 @@ impl Engine {
             self.nb.set_event(i, kind);
             times.push(t);
         }
-        self.heap = EventHeap::new(times);
+        self.queue = EventQueue::new(times);
     }
 
     /// Inward unit normal of wall `w` at the position of particle `i`.
@@ -643,7 +644,7 @@ impl Engine {
                     && wall - last_progress >= 0.2
                 {
                     last_progress = wall;
-                    let s = self.s(self.heap.top().1.min((1.0 - self.s0) / self.g));
+                    let s = self.s(self.queue.top().1.min((1.0 - self.s0) / self.g));
                     cb(&PackProgress {
                         phi: params.target_phi * s * s * s,
                         target_phi: params.target_phi,
@@ -653,7 +654,7 @@ impl Engine {
                     });
                 }
             }
-            let (i, te) = self.heap.top();
+            let (i, te) = self.queue.top();
             let t_target = (1.0 - self.s0) / self.g;
             if te >= t_target.min((self.s_switch - self.s0) / self.g) {
                 if te >= t_target {
@@ -671,7 +672,7 @@ impl Engine {
             // is in (after this event's first prediction), its neighbours and partner follow
             // (`prefetch_event`), and after the second its partner's neighbours. Events wait
             // on memory at random places; these hints keep several loads in flight.
-            let ru = self.heap.runner_up();
+            let ru = self.queue.runner_up();
             if let Some(k) = ru {
                 huge::prefetch(&self.p[k]);
                 self.nb.prefetch(k);
