@@ -109,8 +109,7 @@ pub struct EventQueue {
     cur: u64,
     /// Lap at which the overflow list is next sorted out (all its entries lie at or after it).
     next_sort: u64,
-    /// Live entries outside the heap: in all, in bucket lists, in lap lists, in the overflow.
-    far: usize,
+    /// Live entries outside the heap: in bucket lists, in lap lists, in the overflow list.
     in_buckets: usize,
     in_laps: usize,
     in_overflow: usize,
@@ -140,7 +139,6 @@ impl EventQueue {
             inv_w: if w > 0.0 { 1.0 / w } else { 0.0 },
             cur: 0,
             next_sort: COARSE,
-            far: 0,
             in_buckets: 0,
             in_laps: 0,
             in_overflow: 0,
@@ -151,7 +149,6 @@ impl EventQueue {
             if b == 0 {
                 q.push_unordered(i, t);
             } else {
-                q.far += 1;
                 q.place_far(i, t, b);
             }
         }
@@ -205,7 +202,6 @@ impl EventQueue {
                 return;
             }
             self.remove(k);
-            self.far += 1;
             self.place_far(i, time, b);
             if self.n == 0 {
                 self.refill();
@@ -213,7 +209,6 @@ impl EventQueue {
         } else {
             self.forget(loc);
             if b <= self.cur {
-                self.far -= 1;
                 self.insert(i, time);
             } else {
                 self.place_far(i, time, b);
@@ -245,7 +240,7 @@ impl EventQueue {
         }
     }
 
-    /// Files particle `i` (already counted in `far`, bucket `b > cur`) in its bucket's list,
+    /// Files particle `i` (out of the heap, bucket `b > cur`) in its bucket's list,
     /// its lap's list or the overflow list.
     #[inline]
     fn place_far(&mut self, i: usize, t: f64, b: u64) {
@@ -269,7 +264,7 @@ impl EventQueue {
 
     /// Moves on to the next bucket with live entries and pours it into the (empty) heap.
     fn refill(&mut self) {
-        while self.n == 0 && self.far > 0 {
+        while self.n == 0 && self.in_buckets + self.in_laps + self.in_overflow > 0 {
             if self.in_buckets > 0 {
                 // A live entry lies ahead in this lap.
                 self.cur += 1;
@@ -325,7 +320,6 @@ impl EventQueue {
             self.forget(loc);
             let b = self.bucket(e.t);
             if b <= self.cur {
-                self.far -= 1;
                 self.push_unordered(e.id as usize, e.t);
                 to_heap = true;
             } else {
