@@ -331,7 +331,8 @@ fn bench_steady(c: &mut Criterion) {
                 .amg_info()
             {
                 println!(
-                    "  hierarchy (rows, nnz): {:?}, operator complexity {:.2}, grid complexity {:.2}",
+                    "  {} hierarchy (rows, nnz): {:?}, operator complexity {:.2}, grid complexity {:.2}",
+                    info.cycle,
                     info.levels.iter().map(|l| (l.rows, l.nnz)).collect::<Vec<_>>(),
                     info.operator_complexity,
                     info.grid_complexity

@@ -6,7 +6,7 @@ use std::time::Instant;
 use demcon_core::check::{check_finite, check_len};
 use rayon::prelude::*;
 
-use crate::amg::{self, Amg, AmgInfo};
+use crate::amg::{self, Amg, AmgInfo, Coarsening};
 use crate::constraints::{Constraints, NodeKind};
 use crate::csr::Csr;
 use crate::error::SolveError;
@@ -364,7 +364,15 @@ impl<'a> LinearSystem<'a> {
             Method::Cholesky => sys.factor = Some(cholesky::Factor::new(&sys)?),
             Method::AmgCg { .. } => {
                 let (a0, nodes) = sys.free_block();
-                sys.amg = Some((Amg::new(a0)?, nodes));
+                // One solve, or a few (steady, electric, homogenisation): plain aggregation and a
+                // K-cycle, a third of the setup. Shifted systems are implicit time steps, solved
+                // hundreds of times: smoothed aggregation, the faster cycle.
+                let coarsening = if shift.is_some() {
+                    Coarsening::Smoothed
+                } else {
+                    Coarsening::Plain
+                };
+                sys.amg = Some((Amg::new(a0, coarsening)?, nodes));
                 // The setup's temporaries were freed in many sizes: hand what the allocator
                 // keeps resident back to the system before the solve allocates its vectors.
                 demcon_core::release_free_memory();
