@@ -40,7 +40,7 @@ use rayon::prelude::*;
 
 use crate::csr::{Accumulator, Csr, Value};
 use crate::error::SolveError;
-use crate::par::{CHUNK, chunks_map, chunks_map2, dot, ordered_sum};
+use crate::par::{CHUNK, chunks_map, chunks_map2, dot, ordered_sum, ordered_sums};
 use crate::sell::Sell;
 
 /// Largest level solved directly by dense Cholesky (unknowns).
@@ -65,6 +65,10 @@ const MIN_COARSENING: f64 = 0.8;
 /// smoother stays convergent while the estimate exceeds 2/3 of the true ρ, far below what
 /// six steps give; a non-positive-definite cycle would be reported as a breakdown.
 const POWER_STEPS: usize = 6;
+/// Power iterations for a plain-aggregation hierarchy: at 10⁶ unknowns 2, 3, 4 and 6 steps
+/// gave 27, 28, 28 and 28 iterations (the K-cycle's line searches absorb a rougher ω), and
+/// each step costs a product with the level's operator (10 ms on the finest).
+const PLAIN_POWER_STEPS: usize = 3;
 
 /// How a level's aggregates become the next coarser level ([`Amg::new`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -229,7 +233,11 @@ impl Amg {
             if n_agg == 0 || n_agg as f64 > MIN_COARSENING * a.nrows as f64 {
                 break;
             }
-            let rho = spectral_radius(&a, &dinv);
+            let steps = match coarsening {
+                Coarsening::Smoothed => POWER_STEPS,
+                Coarsening::Plain => PLAIN_POWER_STEPS,
+            };
+            let rho = spectral_radius(&a, &dinv, steps);
             let (ac, transfer) = match coarsening {
                 Coarsening::Plain => {
                     let (ptr, members) = members_of(&agg, n_agg);
@@ -275,7 +283,7 @@ impl Amg {
             Coarse::Dense(DenseCholesky::new(&a)?)
         } else {
             let diag = diagonal(&a)?;
-            let rho = spectral_radius(&a, &diag.iter().map(|d| 1.0 / d).collect::<Vec<_>>());
+            let rho = spectral_radius(&a, &diag.iter().map(|d| 1.0 / d).collect::<Vec<_>>(), POWER_STEPS);
             Coarse::Jacobi(diag.iter().map(|d| 4.0 / (3.0 * rho * d)).collect())
         };
         Ok(Self {
@@ -356,13 +364,33 @@ impl Amg {
             .collect()
     }
 
-    /// x = M⁻¹ b, one cycle from a zero guess; returns b·x (summed as [`dot`]).
-    pub(crate) fn apply(&self, b: &[f64], x: &mut Vec<f64>, work: &mut [Work]) -> f64 {
-        self.cycle(0, b, x, work)
+    /// x = M⁻¹ b, one cycle from a zero guess; returns b·x and q·x (0 without `q`; summed
+    /// as [`dot`]), the second in the same pass: flexible CG's q = Ap.
+    pub(crate) fn apply(
+        &self,
+        b: &[f64],
+        x: &mut Vec<f64>,
+        work: &mut [Work],
+        q: Option<&[f64]>,
+    ) -> [f64; 2] {
+        self.cycle_with(0, b, x, work, q)
     }
 
     /// One cycle from level `l`; returns b·x.
     fn cycle(&self, l: usize, b: &[f64], x: &mut Vec<f64>, work: &mut [Work]) -> f64 {
+        self.cycle_with(l, b, x, work, None)[0]
+    }
+
+    /// One cycle from level `l`; returns b·x and q·x (0 without `q`).
+    fn cycle_with(
+        &self,
+        l: usize,
+        b: &[f64],
+        x: &mut Vec<f64>,
+        work: &mut [Work],
+        q: Option<&[f64]>,
+    ) -> [f64; 2] {
+        let dots = |x: &[f64]| [dot(b, x), q.map_or(0.0, |q| dot(q, x))];
         let Some(lev) = self.levels.get(l) else {
             match &self.coarse {
                 Coarse::Dense(f) => f.solve(b, x),
@@ -379,10 +407,10 @@ impl Amg {
                     std::mem::swap(x, &mut tmp);
                 }
             }
-            return dot(b, x);
+            return dots(x);
         };
         let Some((w, rest)) = work.split_first_mut() else {
-            return dot(b, x);
+            return dots(x);
         };
 
         // Pre-smoothing from x = 0: x = ω D⁻¹ b. (Folding it into the residual, which then
@@ -401,15 +429,17 @@ impl Amg {
             self.cycle(l + 1, &w.bc, &mut w.xc, rest);
         }
         lev.transfer.prolong_add(&w.xc, x);
-        // Post-smoothing: x += ω D⁻¹ (b − A x), with b·x in the same sweep.
-        let bx = ordered_sum(&lev.a.map_rows(
-            x,
-            &mut w.tmp,
-            |i, _, ax| x[i] + lev.wdinv[i] * (b[i] - ax),
-            |i, v| b[i] * v,
-        ));
+        // Post-smoothing: x += ω D⁻¹ (b − A x), with b·x (and q·x) in the same sweep.
+        let smooth = |i: usize, _, ax: f64| x[i] + lev.wdinv[i] * (b[i] - ax);
+        let sums = match q {
+            None => [
+                ordered_sum(&lev.a.map_rows(x, &mut w.tmp, smooth, |i, v| b[i] * v)),
+                0.0,
+            ],
+            Some(q) => ordered_sums(&lev.a.map_rows(x, &mut w.tmp, smooth, |i, v| [b[i] * v, q[i] * v])),
+        };
         std::mem::swap(x, &mut w.tmp);
-        bx
+        sums
     }
 }
 
@@ -442,15 +472,15 @@ impl Amg {
             }
             [rr, bb]
         });
-        let sum = |k: usize| ordered_sum(&parts.iter().map(|p| p[k]).collect::<Vec<f64>>());
-        if sum(0) <= K_CYCLE_TOLERANCE * K_CYCLE_TOLERANCE * sum(1) {
+        let [rr, bb] = ordered_sums(&parts);
+        if rr <= K_CYCLE_TOLERANCE * K_CYCLE_TOLERANCE * bb {
             w.xc.iter_mut().for_each(|x| *x *= s1);
             return;
         }
         let alpha2 = self.cycle(l, &w.r2, &mut w.c2, rest);
-        let c2 = &w.c2;
-        let beta = ordered_sum(&a.map_rows(c2, &mut w.v2, |_, _, s| s, |i, v| c2[i] * v));
-        let gamma = dot(c2, &w.v1);
+        let (c2, v1) = (&w.c2, &w.v1);
+        let [beta, gamma] =
+            ordered_sums(&a.map_rows(c2, &mut w.v2, |_, _, s| s, |i, v| [c2[i] * v, c2[i] * v1[i]]));
         let rho2 = beta - gamma * gamma / rho1;
         let (f1, f2) = if rho2 > 0.0 && rho2.is_finite() {
             (s1 - gamma * alpha2 / (rho1 * rho2), alpha2 / rho2)
@@ -686,7 +716,7 @@ fn smooth_prolongator(a: &Csr, dinv: &[f64], omega: f64, ptent: &[f64], agg: &[u
 
 /// Estimate of ρ(D⁻¹A): the largest of a few power-iteration Rayleigh quotients, raised by
 /// 10 %, capped by the Gershgorin bound max_i Σ_j |a_ij| / a_ii.
-fn spectral_radius(a: &Csr, dinv: &[f64]) -> f64 {
+fn spectral_radius(a: &Csr, dinv: &[f64], steps: usize) -> f64 {
     let n = a.nrows;
     let gershgorin = (0..n)
         .into_par_iter()
@@ -702,7 +732,7 @@ fn spectral_radius(a: &Csr, dinv: &[f64]) -> f64 {
         .collect();
     let mut y = vec![0.0; n];
     let mut est = 0.0f64;
-    for _ in 0..POWER_STEPS {
+    for _ in 0..steps {
         // One pass: y = D⁻¹ A x, with the partial sums of x·Ax, x·Dx (the Rayleigh quotient
         // in the D inner product) and y·y, per chunk, combined in chunk order.
         let partials = chunks_map(&mut y, |c, yc| {
@@ -718,8 +748,7 @@ fn spectral_radius(a: &Csr, dinv: &[f64]) -> f64 {
             }
             [xax, xdx, yy]
         });
-        let sum = |k: usize| ordered_sum(&partials.iter().map(|p| p[k]).collect::<Vec<f64>>());
-        let (xax, xdx, yy) = (sum(0), sum(1), sum(2));
+        let [xax, xdx, yy] = ordered_sums(&partials);
         if xdx > 0.0 {
             est = est.max(xax / xdx);
         }
@@ -845,7 +874,7 @@ pub(crate) fn pcg(
     let mut r = rhs.to_vec();
     let mut z = vec![0.0; n];
     let mut q = vec![0.0; n];
-    let mut rz = amg.apply(&r, &mut z, &mut work);
+    let [mut rz, _] = amg.apply(&r, &mut z, &mut work, None);
     let mut p = z.clone();
     let mut iterations = 0;
     while iterations < max_iter {
@@ -904,14 +933,12 @@ pub(crate) fn pcg(
         if rr.sqrt() <= abs_tol || iterations >= max_iter {
             break;
         }
-        let rz_new = amg.apply(&r, &mut z, &mut work);
         // Flexible CG (the K-cycle is nonlinear): β = −(z·q)/(p·q) makes the new direction
-        // A-conjugate to the last; with a linear, symmetric cycle the usual r·z ratio.
-        let beta = if amg.flexible() {
-            -dot(&z, &q) / pq
-        } else {
-            rz_new / rz
-        };
+        // A-conjugate to the last (z·q summed in the cycle's last sweep); with a linear,
+        // symmetric cycle the usual r·z ratio.
+        let flexible = amg.flexible();
+        let [rz_new, zq] = amg.apply(&r, &mut z, &mut work, flexible.then_some(&q[..]));
+        let beta = if flexible { -zq / pq } else { rz_new / rz };
         rz = rz_new;
         chunks_map(&mut p, |c, pc| {
             let range = c * CHUNK..c * CHUNK + pc.len();

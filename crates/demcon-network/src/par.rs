@@ -15,6 +15,12 @@ pub fn ordered_sum(partials: &[f64]) -> f64 {
     partials.iter().sum()
 }
 
+/// Sums per-chunk partial results of several quantities, each in chunk order
+/// (deterministic, as [`ordered_sum`]).
+pub fn ordered_sums<const K: usize>(partials: &[[f64; K]]) -> [f64; K] {
+    std::array::from_fn(|k| partials.iter().map(|p| p[k]).sum())
+}
+
 /// Whether `len` entries are processed on the calling thread: at most one parallel task's
 /// worth of chunks, where handing the work to the pool would cost more than it saves (and,
 /// on a loaded machine, wait for a worker to be scheduled). Results are identical either

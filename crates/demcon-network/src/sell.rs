@@ -53,6 +53,28 @@ pub fn sliced_layout(n: usize, len: impl Fn(usize) -> usize + Sync) -> (Vec<u32>
     (perm, slice_ptr)
 }
 
+/// Per-row terms summed alongside a product ([`Sell::map_rows_with`]): one number, or a pair
+/// summed componentwise, so that two dot products share one pass over the matrix.
+pub(crate) trait Sums: Copy + Default + Send {
+    /// self += other.
+    fn add(&mut self, other: Self);
+}
+
+impl Sums for f64 {
+    #[inline(always)]
+    fn add(&mut self, other: Self) {
+        *self += other;
+    }
+}
+
+impl Sums for [f64; 2] {
+    #[inline(always)]
+    fn add(&mut self, other: Self) {
+        self[0] += other[0];
+        self[1] += other[1];
+    }
+}
+
 /// A sparse matrix in SELL-4-256 form, values in f32: slice s holds sorted positions
 /// 4s..4s+4, whose rows are `perm[4s..4s+4]`; entry j of lane l sits at
 /// `slice_ptr[s] + 4j + l`.
@@ -92,21 +114,21 @@ impl Sell {
     /// `out[i] = f(i, out[i], Σ_j a_ij x_j)` for every row i with this layout's values
     /// `vals` (`self.vals`, or other values laid out alike: [`Sell::from_csr_with_f64`]);
     /// returns, per [`CHUNK`] of rows in chunk order, the sum of `g(i, out[i])` (new value)
-    /// over the chunk's rows in their sorted order.
+    /// over the chunk's rows in their sorted order (a number, or several: [`Sums`]).
     #[inline(always)]
-    pub fn map_rows_with<V: Value>(
+    pub fn map_rows_with<V: Value, S: Sums>(
         &self,
         vals: &[V],
         x: &[f64],
         out: &mut [f64],
         f: impl Fn(usize, f64, f64) -> f64 + Sync + Send,
-        g: impl Fn(usize, f64) -> f64 + Sync + Send,
-    ) -> Vec<f64> {
+        g: impl Fn(usize, f64) -> S + Sync + Send,
+    ) -> Vec<S> {
         debug_assert!(vals.len() == self.cols.len() && out.len() == self.nrows && x.len() == self.ncols);
         chunks_map(out, |c, oc| {
             let base = c * CHUNK;
             let end = base + oc.len();
-            let mut partial = 0.0;
+            let mut partial = S::default();
             for s in base / LANES..end.div_ceil(LANES) {
                 let (lo, hi) = (self.slice_ptr[s], self.slice_ptr[s + 1]);
                 let mut acc = [0.0f64; LANES];
@@ -123,7 +145,7 @@ impl Sell {
                     let i = self.perm[i0 + l] as usize;
                     let o = &mut oc[i - base];
                     *o = f(i, *o, a);
-                    partial += g(i, *o);
+                    partial.add(g(i, *o));
                 }
             }
             partial
@@ -133,13 +155,13 @@ impl Sell {
     /// `out[i] = f(i, out[i], Σ_j a_ij x_j)` with the stored values; returns the per-chunk
     /// sums of `g(i, out[i])` ([`Self::map_rows_with`]).
     #[inline(always)]
-    pub fn map_rows(
+    pub fn map_rows<S: Sums>(
         &self,
         x: &[f64],
         out: &mut [f64],
         f: impl Fn(usize, f64, f64) -> f64 + Sync + Send,
-        g: impl Fn(usize, f64) -> f64 + Sync + Send,
-    ) -> Vec<f64> {
+        g: impl Fn(usize, f64) -> S + Sync + Send,
+    ) -> Vec<S> {
         self.map_rows_with(&self.vals, x, out, f, g)
     }
 
