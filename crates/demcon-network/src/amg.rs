@@ -233,11 +233,15 @@ impl Amg {
             if n_agg == 0 || n_agg as f64 > MIN_COARSENING * a.nrows as f64 {
                 break;
             }
-            let steps = match coarsening {
-                Coarsening::Smoothed => POWER_STEPS,
-                Coarsening::Plain => PLAIN_POWER_STEPS,
+            // ρ(D⁻¹A), for the smoother's ω: before the products for smoothed aggregation,
+            // whose prolongator needs it; after the conversion for plain aggregation, from
+            // the SELL form's cheaper products (the Gershgorin bound, read from the rows, caps
+            // it either way).
+            let bound = gershgorin(&a, &dinv);
+            let mut rho = match coarsening {
+                Coarsening::Smoothed => spectral_radius(&a, &dinv, bound),
+                Coarsening::Plain => bound,
             };
-            let rho = spectral_radius(&a, &dinv, steps);
             let (ac, transfer) = match coarsening {
                 Coarsening::Plain => {
                     let (ptr, members) = members_of(&agg, n_agg);
@@ -259,8 +263,6 @@ impl Amg {
                 }
             };
             drop(diag);
-            let omega = 4.0 / (3.0 * rho);
-            let wdinv = dinv.iter().map(|d| omega * d).collect();
             // The level's operator in SELL form, rounded to f32 for the smoother; the first
             // level keeps its f64 values, laid out alike, for CG.
             let a32 = if fine.is_none() {
@@ -270,6 +272,11 @@ impl Amg {
             } else {
                 Sell::from_csr(a)
             };
+            if coarsening == Coarsening::Plain {
+                rho = sell_spectral_radius(&a32, &dinv, bound);
+            }
+            let omega = 4.0 / (3.0 * rho);
+            let wdinv = dinv.iter().map(|d| omega * d).collect();
             levels.push(Level {
                 a: a32,
                 wdinv,
@@ -283,7 +290,8 @@ impl Amg {
             Coarse::Dense(DenseCholesky::new(&a)?)
         } else {
             let diag = diagonal(&a)?;
-            let rho = spectral_radius(&a, &diag.iter().map(|d| 1.0 / d).collect::<Vec<_>>(), POWER_STEPS);
+            let dinv: Vec<f64> = diag.iter().map(|d| 1.0 / d).collect();
+            let rho = spectral_radius(&a, &dinv, gershgorin(&a, &dinv));
             Coarse::Jacobi(diag.iter().map(|d| 4.0 / (3.0 * rho * d)).collect())
         };
         Ok(Self {
@@ -532,9 +540,24 @@ fn diagonal(a: &Csr) -> Result<Vec<f64>, SolveError> {
     }
 }
 
-/// Greedy aggregation on strong connections, in node order. Returns the aggregate of each
-/// node ([`NO_AGGREGATE`]: none, for nodes without strong connections) and the count.
+/// Rows per block of the aggregation. Fixed (not per thread), so the aggregates do not
+/// depend on the thread count; at 10⁶ unknowns, 16 blocks.
+const AGGREGATION_BLOCK: usize = 1 << 16;
+
+/// Greedy aggregation on strong connections, in node order within blocks of
+/// [`AGGREGATION_BLOCK`] rows, the blocks in parallel. Returns the aggregate of each node
+/// ([`NO_AGGREGATE`]: none, for nodes without strong connections) and the count.
+///
+/// Pass 1 makes seeds of nodes whose strong neighbourhood is unaggregated and inside the
+/// block; pass 2 attaches each node left to the pass-1 aggregate it is most strongly
+/// connected to, in any block; pass 3 groups the rest with their unaggregated strong
+/// neighbours in the block. Aggregates are numbered pass-1 ones first, each pass's in
+/// block order. At 10⁶ unknowns the blocks halve the aggregation's time on two threads; the
+/// nodes of a block's boundary that cannot seed are attached in pass 2, and the iteration
+/// counts at 10⁵ and 10⁶ did not change (`docs/performance.md`).
 fn aggregate(a: &Csr, diag: &[f64]) -> (Vec<u32>, usize) {
+    /// Marks a pass-3 aggregate numbered within its block until the blocks' counts are known.
+    const LOCAL: u32 = 1 << 31;
     let n = a.nrows;
     // |a_ij| > θ √a_ii √a_jj, with the square roots taken once per node.
     let sq: Vec<f64> = diag.par_iter().with_min_len(CHUNK).map(|d| d.sqrt()).collect();
@@ -548,59 +571,115 @@ fn aggregate(a: &Csr, diag: &[f64]) -> (Vec<u32>, usize) {
         })
     };
     let mut agg = vec![NO_AGGREGATE; n];
-    let mut count = 0u32;
-    // Pass 1: seeds whose strong neighbourhood is entirely unaggregated.
-    for i in 0..n {
-        if agg[i] != NO_AGGREGATE {
-            continue;
-        }
-        let mut any = false;
-        let mut all_free = true;
-        for (j, _) in strong(i) {
-            any = true;
-            if agg[j] != NO_AGGREGATE {
-                all_free = false;
-                break;
+    // Pass 1, numbered within each block.
+    let seeds: Vec<u32> = agg
+        .par_chunks_mut(AGGREGATION_BLOCK)
+        .enumerate()
+        .map(|(b, block)| {
+            let base = b * AGGREGATION_BLOCK;
+            let inside = base..base + block.len();
+            let mut count = 0u32;
+            for i in inside.clone() {
+                if block[i - base] != NO_AGGREGATE {
+                    continue;
+                }
+                let mut any = false;
+                let mut all_free = true;
+                for (j, _) in strong(i) {
+                    any = true;
+                    if !inside.contains(&j) || block[j - base] != NO_AGGREGATE {
+                        all_free = false;
+                        break;
+                    }
+                }
+                if any && all_free {
+                    block[i - base] = count;
+                    for (j, _) in strong(i) {
+                        block[j - base] = count;
+                    }
+                    count += 1;
+                }
             }
-        }
-        if any && all_free {
-            agg[i] = count;
-            for (j, _) in strong(i) {
-                agg[j] = count;
-            }
-            count += 1;
-        }
-    }
-    // Pass 2: attach to the most strongly connected aggregate of pass 1.
+            count
+        })
+        .collect();
+    let offsets = |counts: &[u32]| -> (Vec<u32>, u32) {
+        let mut at = 0u32;
+        let starts = counts
+            .iter()
+            .map(|&c| {
+                at += c;
+                at - c
+            })
+            .collect();
+        (starts, at)
+    };
+    let (start1, n_first) = offsets(&seeds);
+    agg.par_chunks_mut(AGGREGATION_BLOCK)
+        .zip(&start1)
+        .for_each(|(block, &s)| {
+            block
+                .iter_mut()
+                .filter(|k| **k != NO_AGGREGATE)
+                .for_each(|k| *k += s);
+        });
+    // Pass 2: attach to the most strongly connected aggregate of pass 1 (read from a copy,
+    // so that the blocks do not see each other's attachments).
     let first = agg.clone();
-    for i in 0..n {
-        if first[i] != NO_AGGREGATE {
-            continue;
-        }
-        let mut best: Option<(f64, u32)> = None;
-        for (j, s) in strong(i) {
-            if first[j] != NO_AGGREGATE && best.is_none_or(|(b, _)| s > b) {
-                best = Some((s, first[j]));
+    agg.par_chunks_mut(AGGREGATION_BLOCK)
+        .enumerate()
+        .for_each(|(b, block)| {
+            let base = b * AGGREGATION_BLOCK;
+            for (i, k) in (base..).zip(block.iter_mut()) {
+                if first[i] != NO_AGGREGATE {
+                    continue;
+                }
+                let mut best: Option<(f64, u32)> = None;
+                for (j, s) in strong(i) {
+                    if first[j] != NO_AGGREGATE && best.is_none_or(|(b, _)| s > b) {
+                        best = Some((s, first[j]));
+                    }
+                }
+                if let Some((_, found)) = best {
+                    *k = found;
+                }
             }
-        }
-        if let Some((_, k)) = best {
-            agg[i] = k;
-        }
-    }
-    // Pass 3: the rest form aggregates with their unaggregated strong neighbours.
-    for i in 0..n {
-        if agg[i] != NO_AGGREGATE || strong(i).next().is_none() {
-            continue;
-        }
-        agg[i] = count;
-        for (j, _) in strong(i) {
-            if agg[j] == NO_AGGREGATE {
-                agg[j] = count;
+        });
+    drop(first);
+    // Pass 3: the rest form aggregates with their unaggregated strong neighbours in the
+    // block, numbered within the block (tagged) and renumbered below.
+    let rest: Vec<u32> = agg
+        .par_chunks_mut(AGGREGATION_BLOCK)
+        .enumerate()
+        .map(|(b, block)| {
+            let base = b * AGGREGATION_BLOCK;
+            let inside = base..base + block.len();
+            let mut count = 0u32;
+            for i in inside.clone() {
+                if block[i - base] != NO_AGGREGATE || strong(i).next().is_none() {
+                    continue;
+                }
+                block[i - base] = LOCAL | count;
+                for (j, _) in strong(i) {
+                    if inside.contains(&j) && block[j - base] == NO_AGGREGATE {
+                        block[j - base] = LOCAL | count;
+                    }
+                }
+                count += 1;
             }
-        }
-        count += 1;
-    }
-    (agg, count as usize)
+            count
+        })
+        .collect();
+    let (start3, n_rest) = offsets(&rest);
+    agg.par_chunks_mut(AGGREGATION_BLOCK)
+        .zip(&start3)
+        .for_each(|(block, &s)| {
+            block
+                .iter_mut()
+                .filter(|k| **k != NO_AGGREGATE && **k & LOCAL != 0)
+                .for_each(|k| *k = n_first + s + (*k & !LOCAL));
+        });
+    (agg, (n_first + n_rest) as usize)
 }
 
 /// The members of each aggregate, in node order: (start of each aggregate's list, nodes).
@@ -626,21 +705,12 @@ fn members_of(agg: &[u32], n_agg: usize) -> (Vec<u32>, Vec<u32>) {
 /// members and of their rows' entries.
 fn galerkin_plain(a: &Csr, agg: &[u32], ptr: &[u32], members: &[u32]) -> Csr {
     let n_agg = ptr.len() - 1;
-    let members_of = |k: usize| &members[ptr[k] as usize..ptr[k + 1] as usize];
-    Csr::from_row_lengths(
+    Csr::from_rows(
         n_agg,
         n_agg,
         || Accumulator::new(n_agg),
-        |acc, k| {
-            members_of(k)
-                .iter()
-                .flat_map(|&i| a.row(i as usize).0)
-                .map(|&j| agg[j as usize])
-                .filter(|&l| l != NO_AGGREGATE && acc.mark(k, l))
-                .count()
-        },
         |acc, k, cols, vals| {
-            for &i in members_of(k) {
+            for &i in &members[ptr[k] as usize..ptr[k + 1] as usize] {
                 let (c, v) = a.row(i as usize);
                 for (&j, &x) in c.iter().zip(v) {
                     let l = agg[j as usize];
@@ -649,7 +719,7 @@ fn galerkin_plain(a: &Csr, agg: &[u32], ptr: &[u32], members: &[u32]) -> Csr {
                     }
                 }
             }
-            acc.drain_sorted_into(cols, vals);
+            acc.drain_sorted_append(cols, vals);
         },
     )
 }
@@ -714,17 +784,62 @@ fn smooth_prolongator(a: &Csr, dinv: &[f64], omega: f64, ptent: &[f64], agg: &[u
     )
 }
 
-/// Estimate of ρ(D⁻¹A): the largest of a few power-iteration Rayleigh quotients, raised by
-/// 10 %, capped by the Gershgorin bound max_i Σ_j |a_ij| / a_ii.
-fn spectral_radius(a: &Csr, dinv: &[f64], steps: usize) -> f64 {
-    let n = a.nrows;
-    let gershgorin = (0..n)
+/// The Gershgorin bound of ρ(D⁻¹A): max_i Σ_j |a_ij| / a_ii.
+fn gershgorin(a: &Csr, dinv: &[f64]) -> f64 {
+    (0..a.nrows)
         .into_par_iter()
         .with_min_len(CHUNK)
         .map(|i| a.row(i).1.iter().map(|v| v.abs()).sum::<f64>() * dinv[i])
-        .reduce(|| 0.0, f64::max);
+        .reduce(|| 0.0, f64::max)
+}
+
+/// Estimate of ρ(D⁻¹A) from [`POWER_STEPS`] power iterations on the compressed rows
+/// ([`power_estimate`]).
+fn spectral_radius(a: &Csr, dinv: &[f64], bound: f64) -> f64 {
+    power_estimate(a.nrows, POWER_STEPS, bound, |x, y| {
+        // y = D⁻¹ A x with the partial sums of x·Ax, x·Dx and y·y, per chunk.
+        ordered_sums(&chunks_map(y, |c, yc| {
+            let base = c * CHUNK;
+            let (mut xax, mut xdx, mut yy) = (0.0, 0.0, 0.0);
+            for (k, yi) in yc.iter_mut().enumerate() {
+                let i = base + k;
+                let ax = a.row_dot(i, x);
+                xax += x[i] * ax;
+                xdx += x[i] * x[i] / dinv[i];
+                *yi = ax * dinv[i];
+                yy += *yi * *yi;
+            }
+            [xax, xdx, yy]
+        }))
+    })
+}
+
+/// As [`spectral_radius`] with [`PLAIN_POWER_STEPS`] products of the SELL form (f32 values:
+/// the estimate only sets ω).
+fn sell_spectral_radius(a: &Sell, dinv: &[f64], bound: f64) -> f64 {
+    power_estimate(a.nrows(), PLAIN_POWER_STEPS, bound, |x, y| {
+        ordered_sums(&a.map_rows(
+            x,
+            y,
+            |i, _, ax| ax * dinv[i],
+            |i, yi| [x[i] * yi / dinv[i], x[i] * x[i] / dinv[i], yi * yi],
+        ))
+    })
+}
+
+/// Estimate of ρ(D⁻¹A): the largest of `steps` power-iteration Rayleigh quotients (in the D
+/// inner product), raised by 10 %, capped by `bound` (Gershgorin's). `step(x, y)` sets
+/// y = D⁻¹ A x and returns x·Ax, x·Dx and y·y.
+fn power_estimate(
+    n: usize,
+    steps: usize,
+    bound: f64,
+    mut step: impl FnMut(&[f64], &mut [f64]) -> [f64; 3],
+) -> f64 {
     // Fixed pseudo-random start vector (deterministic).
     let mut x: Vec<f64> = (0..n)
+        .into_par_iter()
+        .with_min_len(CHUNK)
         .map(|i| {
             let h = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
             ((h >> 11) as f64 / (1u64 << 53) as f64) - 0.5
@@ -733,22 +848,7 @@ fn spectral_radius(a: &Csr, dinv: &[f64], steps: usize) -> f64 {
     let mut y = vec![0.0; n];
     let mut est = 0.0f64;
     for _ in 0..steps {
-        // One pass: y = D⁻¹ A x, with the partial sums of x·Ax, x·Dx (the Rayleigh quotient
-        // in the D inner product) and y·y, per chunk, combined in chunk order.
-        let partials = chunks_map(&mut y, |c, yc| {
-            let base = c * CHUNK;
-            let (mut xax, mut xdx, mut yy) = (0.0, 0.0, 0.0);
-            for (k, yi) in yc.iter_mut().enumerate() {
-                let i = base + k;
-                let ax = a.row_dot(i, &x);
-                xax += x[i] * ax;
-                xdx += x[i] * x[i] / dinv[i];
-                *yi = ax * dinv[i];
-                yy += *yi * *yi;
-            }
-            [xax, xdx, yy]
-        });
-        let [xax, xdx, yy] = ordered_sums(&partials);
+        let [xax, xdx, yy] = step(&x, &mut y);
         if xdx > 0.0 {
             est = est.max(xax / xdx);
         }
@@ -762,9 +862,9 @@ fn spectral_radius(a: &Csr, dinv: &[f64], steps: usize) -> f64 {
             .for_each(|(xi, yi)| *xi = yi / norm);
     }
     if est > 0.0 {
-        (1.1 * est).min(gershgorin)
+        (1.1 * est).min(bound)
     } else {
-        gershgorin.max(1.0)
+        bound.max(1.0)
     }
 }
 
@@ -1002,12 +1102,10 @@ mod tests {
         }
     }
 
-    #[test]
-    fn plain_galerkin_operator_is_pt_a_p() {
-        // A 2-D 5-point Laplacian on 30 × 30 nodes with varying weights.
-        let m = 30;
+    /// 2-D 5-point Laplacian on m × m nodes, with varying weights and a small shift.
+    fn laplace_2d(m: usize) -> Csr {
         let w = |i: usize, j: usize| 1.0 + ((i * 31 + j * 17) % 5) as f64;
-        let a = Csr::from_rows(
+        Csr::from_rows(
             m * m,
             m * m,
             || (),
@@ -1033,7 +1131,45 @@ mod tests {
                     v.push(x);
                 }
             },
+        )
+    }
+
+    #[test]
+    fn aggregation_in_blocks_covers_every_node_and_ignores_the_thread_count() {
+        // 300 × 300 nodes: two aggregation blocks.
+        let m = 300;
+        let a = laplace_2d(m);
+        assert!(a.nrows > AGGREGATION_BLOCK);
+        let diag = diagonal(&a).unwrap();
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| aggregate(&a, &diag))
+        };
+        let (agg, n_agg) = run(1);
+        assert_eq!(run(2), (agg.clone(), n_agg));
+        // Every node is in an aggregate (all have strong neighbours); every aggregate has
+        // members, and a block boundary does not leave a trail of single nodes.
+        let mut size = vec![0usize; n_agg];
+        for &k in &agg {
+            assert!((k as usize) < n_agg, "{k} of {n_agg}");
+            size[k as usize] += 1;
+        }
+        assert!(size.iter().all(|&s| s > 0));
+        let singles = size.iter().filter(|&&s| s == 1).count();
+        assert!(
+            singles * 100 < n_agg,
+            "{singles} single-node aggregates of {n_agg}"
         );
+        assert!(n_agg * 3 < m * m, "{n_agg} aggregates");
+    }
+
+    #[test]
+    fn plain_galerkin_operator_is_pt_a_p() {
+        let m = 30;
+        let a = laplace_2d(m);
         let diag = diagonal(&a).unwrap();
         let (agg, n_agg) = aggregate(&a, &diag);
         assert!(n_agg > 1 && n_agg < m * m / 2, "{n_agg} aggregates");

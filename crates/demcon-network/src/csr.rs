@@ -136,31 +136,59 @@ impl Csr {
         }
     }
 
-    /// Builds a matrix row by row: `row(scratch, i, cols, vals)` appends the entries of row
-    /// i (sorted unique columns). Each row is built twice (counted, then written in place
-    /// by [`Self::from_row_lengths`]): for tests and small matrices.
-    #[cfg(test)]
+    /// Builds a matrix row by row in one pass: `row(scratch, i, cols, vals)` appends the
+    /// entries of row i (sorted unique columns) to its chunk's buffers, which are then
+    /// joined in chunk order; `init` makes a scratch state per parallel task (it must not
+    /// influence the values). The join costs a copy of the result, where
+    /// [`Self::from_row_lengths`] builds each row twice: for results much smaller than what
+    /// their rows read (the plain-aggregation Galerkin operator, a tenth of its fine level).
     pub fn from_rows<S, I, F>(nrows: usize, ncols: usize, init: I, row: F) -> Self
     where
         I: Fn() -> S + Sync + Send,
         F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) + Sync + Send,
     {
-        let build = |s: &mut S, i: usize| {
-            let (mut c, mut v) = (Vec::new(), Vec::new());
-            row(s, i, &mut c, &mut v);
-            (c, v)
+        let build = |s: &mut S, c: usize| {
+            let (mut lens, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+            for i in c * CHUNK..((c + 1) * CHUNK).min(nrows) {
+                let before = cols.len();
+                row(s, i, &mut cols, &mut vals);
+                lens.push(cols.len() - before);
+            }
+            (lens, cols, vals)
         };
-        Self::from_row_lengths(
+        let chunks = nrows.div_ceil(CHUNK);
+        let pieces: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = if chunks <= MIN_TASK_CHUNKS {
+            let mut s = init();
+            (0..chunks).map(|c| build(&mut s, c)).collect()
+        } else {
+            (0..chunks)
+                .into_par_iter()
+                .with_min_len(MIN_TASK_CHUNKS)
+                .map_init(&init, build)
+                .collect()
+        };
+        let nnz: usize = pieces.iter().map(|p| p.1.len()).sum();
+        assert!(
+            u32::try_from(nnz).is_ok(),
+            "{nnz} entries: more than a u32 row pointer holds"
+        );
+        let mut ptr = Vec::with_capacity(nrows + 1);
+        ptr.push(0u32);
+        let (mut cols, mut vals) = (Vec::with_capacity(nnz), Vec::with_capacity(nnz));
+        for (lens, c, v) in pieces {
+            for l in lens {
+                ptr.push(ptr[ptr.len() - 1] + l as u32);
+            }
+            cols.extend_from_slice(&c);
+            vals.extend_from_slice(&v);
+        }
+        Self {
             nrows,
             ncols,
-            init,
-            |s, i| build(s, i).0.len(),
-            |s, i, cols, vals| {
-                let (c, v) = build(s, i);
-                cols.copy_from_slice(&c);
-                vals.copy_from_slice(&v);
-            },
-        )
+            ptr,
+            cols,
+            vals,
+        }
     }
 
     /// Builds a matrix in place from its row lengths: `len(scratch, i)` is the number of
@@ -483,6 +511,17 @@ impl Accumulator {
             *m = tag;
             true
         }
+    }
+
+    /// Appends the row's entries (sorted columns), and resets.
+    pub fn drain_sorted_append(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+        self.touched.sort_unstable();
+        for &j in &self.touched {
+            cols.push(j);
+            vals.push(self.values[j as usize]);
+            self.mark[j as usize] = usize::MAX;
+        }
+        self.touched.clear();
     }
 
     /// Writes the row's entries (sorted columns) into slices of exactly their count, and

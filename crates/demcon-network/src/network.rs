@@ -140,7 +140,16 @@ impl Network {
     /// [`SolveError::LengthMismatch`] or [`SolveError::InvalidParameter`] naming the edge.
     pub fn check_conductances(&self, conductances: &[f64]) -> Result<(), SolveError> {
         check_len("conductances", conductances.len(), self.n_edges())?;
-        match conductances.iter().position(|g| !(g.is_finite() && *g > 0.0)) {
+        let bad = |g: &f64| !(g.is_finite() && *g > 0.0);
+        // The first bad entry: its chunk found in parallel (10⁶-node networks: ~4·10⁶ edges).
+        let first = conductances
+            .par_chunks(CHUNK)
+            .position_first(|c| c.iter().any(bad))
+            .and_then(|c| {
+                let at = c * CHUNK;
+                conductances[at..].iter().position(bad).map(|k| at + k)
+            });
+        match first {
             None => Ok(()),
             Some(e) => Err(SolveError::invalid(
                 format!("conductances[{e}] (edge {:?})", self.edges[e]),

@@ -53,8 +53,8 @@ pub fn sliced_layout(n: usize, len: impl Fn(usize) -> usize + Sync) -> (Vec<u32>
     (perm, slice_ptr)
 }
 
-/// Per-row terms summed alongside a product ([`Sell::map_rows_with`]): one number, or a pair
-/// summed componentwise, so that two dot products share one pass over the matrix.
+/// Per-row terms summed alongside a product ([`Sell::map_rows_with`]): one number, or several
+/// summed componentwise, so that dot products share one pass over the matrix.
 pub(crate) trait Sums: Copy + Default + Send {
     /// self += other.
     fn add(&mut self, other: Self);
@@ -67,11 +67,15 @@ impl Sums for f64 {
     }
 }
 
-impl Sums for [f64; 2] {
+impl<const K: usize> Sums for [f64; K]
+where
+    [f64; K]: Default,
+{
     #[inline(always)]
     fn add(&mut self, other: Self) {
-        self[0] += other[0];
-        self[1] += other[1];
+        for (a, b) in self.iter_mut().zip(other) {
+            *a += b;
+        }
     }
 }
 
