@@ -1,9 +1,11 @@
-//! Smoothed-aggregation algebraic multigrid (SA-AMG, Vaněk–Mandel–Brezina 1996) used as the
-//! preconditioner of conjugate gradient on the free-node block A of D + K.
+//! Aggregation algebraic multigrid used as the preconditioner of conjugate gradient on the
+//! free-node block A of D + K: smoothed aggregation with a V-cycle (SA-AMG, Vaněk–Mandel–
+//! Brezina 1996), or plain aggregation with a K-cycle (below), on the same aggregates.
 //!
 //! Setup, per level: strength of connection |a_ij| ≥ θ √(a_ii a_jj); greedy aggregation in
-//! node order (seeds whose strong neighbours are all free, then attachment to the most
-//! strongly connected aggregate, then aggregates of the leftovers); a tentative prolongator
+//! node order within fixed blocks of rows, the blocks in parallel (seeds whose strong
+//! neighbours are all free, then attachment to the most strongly connected aggregate, then
+//! aggregates of the leftovers; [`aggregate`]); a tentative prolongator
 //! that interpolates the near-null space (the constant vector on the finest level)
 //! piecewise on aggregates, normalised per aggregate; the prolongator smoothed by one damped
 //! Jacobi step P = (I − ω D⁻¹A) P_tent with ω = 4/(3 ρ(D⁻¹A)); the Galerkin operator
@@ -11,8 +13,8 @@
 //! ([`Csr::galerkin`]). Coarsening stops below [`MAX_COARSE`] unknowns,
 //! where a dense Cholesky factor solves exactly. The cycle is a symmetric V(1,1) with
 //! damped-Jacobi smoothing, so the preconditioner is symmetric positive definite and CG
-//! applies. Every step is sequential or uses fixed row chunks with ordered sums: results do
-//! not depend on the thread count.
+//! applies. Every step uses fixed row blocks or chunks with ordered sums: results do not
+//! depend on the thread count.
 //!
 //! Bytes per cycle (issue 12): the hierarchy's matrices (each level's operator as the
 //! smoother reads it, P and R) are stored in f32 and widened on use, CG's own product keeps
@@ -27,14 +29,15 @@
 //! few times; Notay & Vassilevski 2008, Notay 2010). The same aggregates, but the
 //! prolongator is not smoothed: P[i, agg(i)] = 1, so the Galerkin operator is a sum of A's
 //! entries over pairs of aggregates, restriction a sum over an aggregate's members and
-//! prolongation a copy — a fifth of the smoothed setup's work (the two smoothed Galerkin
-//! products are half of that setup at 10⁶). A plain V-cycle loses much of its accuracy level
-//! by level (71 iterations against 22 at 10⁶); the K-cycle recovers it: every coarse level's
-//! correction is two steps of flexible CG on that level, preconditioned by the cycle below,
-//! the second skipped when the first has reduced the residual four-fold. The cycle is then
-//! a nonlinear preconditioner, so the outer CG is flexible: β = −(z·Aq)/(p·Ap) keeps
-//! consecutive directions A-conjugate. At 10⁶ unknowns: 28 iterations against 22, setup
-//! 0.35 s against 0.92–0.99 s, solve 0.77 s against 0.69–0.75 s (`docs/performance.md`).
+//! prolongation a copy (the two smoothed Galerkin products are half of the smoothed setup at
+//! 10⁶). A plain V-cycle loses much of its accuracy level by level (71 iterations against
+//! 22 at 10⁶); the K-cycle recovers it: every coarse level's correction is two steps of
+//! flexible CG on that level, preconditioned by the cycle below, the second skipped when the
+//! first has reduced the residual four-fold. The cycle is then a nonlinear preconditioner,
+//! so the outer CG is flexible: β = −(z·Ap)/(p·Ap) keeps consecutive directions A-conjugate.
+//! At 10⁶ unknowns, alternating with the smoothed hierarchy: 28 iterations against 22, setup
+//! 0.27–0.30 s against 0.96–1.02 s, solve 0.77–0.87 s against 0.70–0.76 s, 1.04–1.15 s in all
+//! against 1.66–1.74 s (`docs/performance.md` § 4).
 
 use rayon::prelude::*;
 
@@ -76,8 +79,9 @@ pub(crate) enum Coarsening {
     /// Smoothed aggregation with a V(1,1)-cycle: the costlier setup, the cheaper cycle; for
     /// a hierarchy reused over many solves (implicit time steps).
     Smoothed,
-    /// Plain aggregation with a K-cycle and flexible CG: a setup a third as long, a solve
-    /// ~10 % longer at 10⁶ unknowns; for one or a few solves (steady, electric).
+    /// Plain aggregation with a K-cycle and flexible CG: a setup under a third as long, a
+    /// solve 10–15 % longer at 10⁶ unknowns; for one or a few solves (steady, electric,
+    /// homogenisation).
     Plain,
 }
 

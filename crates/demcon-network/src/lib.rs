@@ -9,10 +9,11 @@
 //! residual ([`SolveReport`]) and fail with a clear [`SolveError`] rather than return
 //! garbage. Results do not depend on the rayon thread count (fixed reduction order).
 //!
-//! [`Method::AmgCg`] is conjugate gradient preconditioned by smoothed-aggregation algebraic
-//! multigrid: its hierarchy is built once per [`LinearSystem`] (cost reported as
-//! [`SolveReport::setup_s`], shape by [`LinearSystem::amg_info`]) and needs ~20–25
-//! iterations to 1e-8 on packing networks of 10⁴–10⁶ nodes, where Jacobi-PCG
+//! [`Method::AmgCg`] is conjugate gradient preconditioned by aggregation algebraic
+//! multigrid (plain aggregation with a K-cycle for one-off solves, smoothed aggregation with
+//! a V-cycle for implicit steps): its hierarchy is built once per [`LinearSystem`] (cost
+//! reported as [`SolveReport::setup_s`], shape by [`LinearSystem::amg_info`]) and needs
+//! ~20–30 iterations to 1e-8 on packing networks of 10⁴–10⁶ nodes, where Jacobi-PCG
 //! ([`Method::Cg`]) needs 200–800. [`Method::IcCg`] is CG preconditioned by a modified
 //! diagonal incomplete Cholesky factor in Eisenstat's form (a third of Jacobi's iterations
 //! at the same cost each; sequential). The default, [`Method::Auto`], runs MIC-PCG below

@@ -35,11 +35,14 @@ pub enum Method {
         /// Maximum number of iterations, ≥ 1.
         max_iter: usize,
     },
-    /// Conjugate gradient preconditioned by one V-cycle of smoothed-aggregation algebraic
-    /// multigrid (SA-AMG) on the free-node block, deterministic for any thread count. The
-    /// hierarchy is built once per [`LinearSystem`] (cost in [`SolveReport::setup_s`]) and
-    /// reused by every solve; a few tens of iterations at any size where Jacobi-PCG needs
-    /// hundreds. Stops on the true residual like [`Method::Cg`].
+    /// Conjugate gradient preconditioned by aggregation algebraic multigrid on the free-node
+    /// block, deterministic for any thread count: plain aggregation with a K-cycle and
+    /// flexible CG for unshifted systems (steady, electric, homogenisation: a cheap setup),
+    /// smoothed aggregation with a V-cycle for shifted ones (implicit steps: a cheap cycle).
+    /// The hierarchy is built once per [`LinearSystem`] (cost in [`SolveReport::setup_s`],
+    /// kind in [`LinearSystem::amg_info`]) and reused by every solve; a few tens of
+    /// iterations at any size where Jacobi-PCG needs hundreds. Stops on the true residual
+    /// like [`Method::Cg`].
     AmgCg {
         /// Relative residual tolerance, in (0, 1).
         rel_tol: f64,
@@ -365,8 +368,8 @@ impl<'a> LinearSystem<'a> {
             Method::AmgCg { .. } => {
                 let (a0, nodes) = sys.free_block();
                 // One solve, or a few (steady, electric, homogenisation): plain aggregation and a
-                // K-cycle, a third of the setup. Shifted systems are implicit time steps, solved
-                // hundreds of times: smoothed aggregation, the faster cycle.
+                // K-cycle, under a third of the setup. Shifted systems are implicit time steps,
+                // solved hundreds of times: smoothed aggregation, the faster cycle.
                 let coarsening = if shift.is_some() {
                     Coarsening::Smoothed
                 } else {
