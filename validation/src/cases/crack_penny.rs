@@ -21,7 +21,9 @@
 //! must pass no heat at all: |Q|/Q₀ to round-off.
 //!
 //! Tolerances, fixed before any number was seen: the through-section crack ≤ 10⁻¹² of Q₀
-//! (every model: the two halves share no branch, each is held at one temperature); the mean
+//! (every model: the two halves share no branch, each is held at one temperature; that run
+//! solves to a relative residual of 10⁻¹³, [`THROUGH_REL_TOL`], since the flow it reads is a
+//! sum of residual entries); the mean
 //! jump of the Laguerre network within 20 % at the largest N for every a/L. Why 20 %: at
 //! 2·10⁴ particles the crack radius a = L/8 spans about six particle radii, and which branches
 //! the disc cuts near its rim moves its effective radius by about half a radius (≈ 8 % of a;
@@ -69,6 +71,13 @@ const TOL_JUMP: f64 = 0.2;
 const QUICK_JUMP_BOUND: f64 = 0.4;
 /// Through-section crack: largest accepted |Q|/Q₀.
 const TOL_THROUGH: f64 = 1e-12;
+/// Relative residual of the through-section solve. |Q|/Q₀ of that run is the sum of a
+/// part's residual entries over Q₀, so a check at [`TOL_THROUGH`] needs a solve that tight:
+/// at the scenes' default 10⁻¹⁰, smoothed-aggregation multigrid happened to leave residuals
+/// whose sums over each part cancelled (|Q|/Q₀ ≤ 10⁻¹²), the K-cycle multigrid leaves
+/// 3·10⁻¹¹–4·10⁻¹⁰ (twelfth session). Solving to 10⁻¹³ (or to the round-off floor, which
+/// the solver accepts and reports) tests the topology, not the solver's luck.
+const THROUGH_REL_TOL: f64 = 1e-13;
 
 /// The uncracked scene.
 fn scene(n: usize, seed: u64) -> SceneConfig {
@@ -238,8 +247,13 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
         let base = if s.needs_cells() { &cells } else { &contacts };
         let cfg_s = with_surface_model(&cfg, s, Some(c_t));
         let mut solve_s = 0.0;
-        let mut flow = |model: &Model| -> anyhow::Result<(f64, RunResult)> {
-            let r = run_with(&cfg_s, model)?;
+        // The through-section run solves to THROUGH_REL_TOL: the heat leaving a part held at
+        // one temperature is the sum of its residual entries, so |Q|/Q₀ can be no smaller than
+        // the solve's relative residual allows.
+        let mut cfg_through = cfg_s.clone();
+        cfg_through.linear_solver.rel_tol = THROUGH_REL_TOL;
+        let mut flow = |cfg: &SceneConfig, model: &Model| -> anyhow::Result<(f64, RunResult)> {
+            let r = run_with(cfg, model)?;
             solve_s += r.thermal.as_ref().map_or(0.0, |t| t.report.wall_s);
             let q = r
                 .etc
@@ -248,13 +262,13 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
                 .heat_flow_w;
             Ok((q, r))
         };
-        let (q0, _) = flow(base)?;
+        let (q0, _) = flow(&cfg_s, base)?;
         let lambda_hom = q0 * L / (L * L);
         let mut jumps = Vec::new();
         for ratio in RATIOS {
             let a = ratio * L;
             let cracked = with_scene_defects_rule(base, &with_crack(&cfg_s, penny(a)), model.whole_facets)?;
-            let (q, r) = flow(&cracked)?;
+            let (q, r) = flow(&cfg_s, &cracked)?;
             let temps = &r
                 .thermal
                 .as_ref()
@@ -262,11 +276,10 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
                 .temperatures;
             jumps.push(read_jump(base, temps, a, q / (L * L), lambda_hom, q / q0));
         }
-        let (q_through, _) = flow(&with_scene_defects_rule(
-            base,
-            &with_crack(&cfg_s, through()),
-            model.whole_facets,
-        )?)?;
+        let (q_through, _) = flow(
+            &cfg_through,
+            &with_scene_defects_rule(base, &with_crack(&cfg_s, through()), model.whole_facets)?,
+        )?;
         runs.push(Run {
             model,
             lambda_hom,
@@ -517,7 +530,10 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
         "{} mode: N = {:?}, {PACKINGS} packings each (seeds {}…{}); q = Q/A of the cracked cube, λ = the model's own \
          λ_hom on the same packing. The infinite-body formula is the reference; the cube's fixed faces (at (L/2 − 0) = \
          4a … 2a from the crack) and adiabatic sides make the finite-size part grow with a/L. Tolerances (Laguerre \
-         mean jump {:.0} %, through-section crack {TOL_THROUGH:e}) fixed before the numbers were seen.",
+         mean jump {:.0} %, through-section crack {TOL_THROUGH:e}) fixed before the numbers were seen. The \
+         through-section run solves to a relative residual of {THROUGH_REL_TOL:e} (the others to the default): the heat \
+         leaving a part held at one temperature is the sum of its residual entries, so the check is only as tight as \
+         the solve (at 1e-10 the K-cycle multigrid leaves 3e-11–4e-10 of Q₀).",
         ctx.mode.name(),
         ladder,
         ctx.seed,
