@@ -576,37 +576,32 @@ fn aggregate(a: &Csr, diag: &[f64]) -> (Vec<u32>, usize) {
     };
     let mut agg = vec![NO_AGGREGATE; n];
     // Pass 1, numbered within each block.
-    let seeds: Vec<u32> = agg
-        .par_chunks_mut(AGGREGATION_BLOCK)
-        .enumerate()
-        .map(|(b, block)| {
-            let base = b * AGGREGATION_BLOCK;
-            let inside = base..base + block.len();
-            let mut count = 0u32;
-            for i in inside.clone() {
-                if block[i - base] != NO_AGGREGATE {
-                    continue;
-                }
-                let mut any = false;
-                let mut all_free = true;
-                for (j, _) in strong(i) {
-                    any = true;
-                    if !inside.contains(&j) || block[j - base] != NO_AGGREGATE {
-                        all_free = false;
-                        break;
-                    }
-                }
-                if any && all_free {
-                    block[i - base] = count;
-                    for (j, _) in strong(i) {
-                        block[j - base] = count;
-                    }
-                    count += 1;
+    let seeds = each_block(&mut agg, |inside, block| {
+        let base = inside.start;
+        let mut count = 0u32;
+        for i in inside.clone() {
+            if block[i - base] != NO_AGGREGATE {
+                continue;
+            }
+            let mut any = false;
+            let mut all_free = true;
+            for (j, _) in strong(i) {
+                any = true;
+                if !inside.contains(&j) || block[j - base] != NO_AGGREGATE {
+                    all_free = false;
+                    break;
                 }
             }
-            count
-        })
-        .collect();
+            if any && all_free {
+                block[i - base] = count;
+                for (j, _) in strong(i) {
+                    block[j - base] = count;
+                }
+                count += 1;
+            }
+        }
+        count
+    });
     let offsets = |counts: &[u32]| -> (Vec<u32>, u32) {
         let mut at = 0u32;
         let starts = counts
@@ -619,71 +614,79 @@ fn aggregate(a: &Csr, diag: &[f64]) -> (Vec<u32>, usize) {
         (starts, at)
     };
     let (start1, n_first) = offsets(&seeds);
-    agg.par_chunks_mut(AGGREGATION_BLOCK)
-        .zip(&start1)
-        .for_each(|(block, &s)| {
-            block
-                .iter_mut()
-                .filter(|k| **k != NO_AGGREGATE)
-                .for_each(|k| *k += s);
-        });
+    each_block(&mut agg, |inside, block| {
+        let s = start1[inside.start / AGGREGATION_BLOCK];
+        block
+            .iter_mut()
+            .filter(|k| **k != NO_AGGREGATE)
+            .for_each(|k| *k += s);
+        0
+    });
     // Pass 2: attach to the most strongly connected aggregate of pass 1 (read from a copy,
     // so that the blocks do not see each other's attachments).
     let first = agg.clone();
-    agg.par_chunks_mut(AGGREGATION_BLOCK)
-        .enumerate()
-        .for_each(|(b, block)| {
-            let base = b * AGGREGATION_BLOCK;
-            for (i, k) in (base..).zip(block.iter_mut()) {
-                if first[i] != NO_AGGREGATE {
-                    continue;
-                }
-                let mut best: Option<(f64, u32)> = None;
-                for (j, s) in strong(i) {
-                    if first[j] != NO_AGGREGATE && best.is_none_or(|(b, _)| s > b) {
-                        best = Some((s, first[j]));
-                    }
-                }
-                if let Some((_, found)) = best {
-                    *k = found;
+    each_block(&mut agg, |inside, block| {
+        for (i, k) in inside.zip(block.iter_mut()) {
+            if first[i] != NO_AGGREGATE {
+                continue;
+            }
+            let mut best: Option<(f64, u32)> = None;
+            for (j, s) in strong(i) {
+                if first[j] != NO_AGGREGATE && best.is_none_or(|(b, _)| s > b) {
+                    best = Some((s, first[j]));
                 }
             }
-        });
+            if let Some((_, found)) = best {
+                *k = found;
+            }
+        }
+        0
+    });
     drop(first);
     // Pass 3: the rest form aggregates with their unaggregated strong neighbours in the
     // block, numbered within the block (tagged) and renumbered below.
-    let rest: Vec<u32> = agg
-        .par_chunks_mut(AGGREGATION_BLOCK)
+    let rest = each_block(&mut agg, |inside, block| {
+        let base = inside.start;
+        let mut count = 0u32;
+        for i in inside.clone() {
+            if block[i - base] != NO_AGGREGATE || strong(i).next().is_none() {
+                continue;
+            }
+            block[i - base] = LOCAL | count;
+            for (j, _) in strong(i) {
+                if inside.contains(&j) && block[j - base] == NO_AGGREGATE {
+                    block[j - base] = LOCAL | count;
+                }
+            }
+            count += 1;
+        }
+        count
+    });
+    let (start3, n_rest) = offsets(&rest);
+    each_block(&mut agg, |inside, block| {
+        let s = n_first + start3[inside.start / AGGREGATION_BLOCK];
+        block
+            .iter_mut()
+            .filter(|k| **k != NO_AGGREGATE && **k & LOCAL != 0)
+            .for_each(|k| *k = s + (*k & !LOCAL));
+        0
+    });
+    (agg, (n_first + n_rest) as usize)
+}
+
+/// `f(rows, block)` on each [`AGGREGATION_BLOCK`] of `agg`, in parallel (`rows`: the block's
+/// node indices); the counts it returns, in block order.
+fn each_block(
+    agg: &mut [u32],
+    f: impl Fn(std::ops::Range<usize>, &mut [u32]) -> u32 + Sync + Send,
+) -> Vec<u32> {
+    agg.par_chunks_mut(AGGREGATION_BLOCK)
         .enumerate()
         .map(|(b, block)| {
             let base = b * AGGREGATION_BLOCK;
-            let inside = base..base + block.len();
-            let mut count = 0u32;
-            for i in inside.clone() {
-                if block[i - base] != NO_AGGREGATE || strong(i).next().is_none() {
-                    continue;
-                }
-                block[i - base] = LOCAL | count;
-                for (j, _) in strong(i) {
-                    if inside.contains(&j) && block[j - base] == NO_AGGREGATE {
-                        block[j - base] = LOCAL | count;
-                    }
-                }
-                count += 1;
-            }
-            count
+            f(base..base + block.len(), block)
         })
-        .collect();
-    let (start3, n_rest) = offsets(&rest);
-    agg.par_chunks_mut(AGGREGATION_BLOCK)
-        .zip(&start3)
-        .for_each(|(block, &s)| {
-            block
-                .iter_mut()
-                .filter(|k| **k != NO_AGGREGATE && **k & LOCAL != 0)
-                .for_each(|k| *k = n_first + s + (*k & !LOCAL));
-        });
-    (agg, (n_first + n_rest) as usize)
+        .collect()
 }
 
 /// The members of each aggregate, in node order: (start of each aggregate's list, nodes).
