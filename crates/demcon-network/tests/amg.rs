@@ -63,6 +63,9 @@ fn agrees_with_cholesky_on_random_networks_with_sources() {
         let sys = LinearSystem::new(&net, &g, None, &bcs, &amg(1e-10)).unwrap();
         let info = sys.amg_info().unwrap();
         assert!(info.levels.len() >= 2, "{info:?}");
+        // Unshifted systems are solved once or a few times: the hierarchy with the cheaper
+        // setup.
+        assert_eq!(info.cycle, "plain aggregation, K-cycle");
         assert_eq!(info.levels[0].rows, bcs.n_free());
         assert!(
             info.operator_complexity > 1.0 && info.operator_complexity < 2.0,
@@ -99,6 +102,8 @@ fn shifted_systems_reuse_one_hierarchy_and_match_cholesky() {
     let bcs = resolve_fixed(&net, &faces(&x, 0.0, 1.0), FloatingPolicy::Keep).unwrap();
     let d: Vec<f64> = (0..net.n_nodes()).map(|p| 0.05 + 0.1 * (p % 5) as f64).collect();
     let sys = LinearSystem::new(&net, &g, Some(&d), &bcs, &amg(1e-11)).unwrap();
+    // Shifted systems are solved many times: the hierarchy with the cheaper cycle.
+    assert_eq!(sys.amg_info().unwrap().cycle, "smoothed aggregation, V(1,1)");
     let direct = LinearSystem::new(&net, &g, Some(&d), &bcs, &CHOLESKY).unwrap();
     let mut prev: Option<Vec<f64>> = None;
     for k in 0..3 {
