@@ -11,6 +11,8 @@
 //! weights change (energy drift, temperature difference over a long adiabatic run), and each solve case prints its iterations, setup and solve
 //! times once. With `DEMCON_BENCH_SUMMARY_ONLY=1` only these one-off lines are produced
 //! (no criterion sampling), which is how the 10⁶-particle figures are taken quickly.
+//! `DEMCON_BENCH_SEED=k` builds every random network with its seed shifted by k: other
+//! realisations for figures over several networks.
 //!
 //! The electric paper's own case is benchmarked too (`electric_cylinder`): an LS packing of
 //! 5000 particles in the cylinder r = 1 mm, l = 5 mm (Gaussian radii, CoV 0.3), contacts for
@@ -46,7 +48,10 @@ struct Case {
 }
 
 fn build(n: usize, random_order: bool, seed: u64) -> Case {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    // `DEMCON_BENCH_SEED=k` shifts every case's network seed by k (other realisations of
+    // the same network class; 0 by default).
+    let shift = std::env::var("DEMCON_BENCH_SEED").map_or(0, |v| v.parse::<u64>().unwrap_or(0));
+    let mut rng = ChaCha8Rng::seed_from_u64(seed + shift);
     let l = (n as f64).cbrt();
     let pts: Vec<Vec3> = (0..n)
         .map(|_| {

@@ -247,10 +247,8 @@ impl Amg {
             // the SELL form's cheaper products (the Gershgorin bound, read from the rows, caps
             // it either way).
             let bound = gershgorin(&a, &dinv);
-            let mut rho = match coarsening {
-                Coarsening::Smoothed => spectral_radius(&a, &dinv, bound),
-                Coarsening::Plain => bound,
-            };
+            let smoothed_rho =
+                (coarsening == Coarsening::Smoothed).then(|| spectral_radius(&a, &dinv, bound));
             let (ac, transfer) = match coarsening {
                 Coarsening::Plain => {
                     let (ptr, members) = members_of(&agg, n_agg);
@@ -260,6 +258,7 @@ impl Amg {
                 Coarsening::Smoothed => {
                     // The fine near-null space is read once here: freed before the products.
                     let (ptent, b_c) = tentative(&agg, n_agg, &std::mem::take(&mut b));
+                    let rho = smoothed_rho.unwrap_or(bound);
                     let p = smooth_prolongator(&a, &dinv, 4.0 / (3.0 * rho), &ptent, &agg);
                     drop((agg, ptent));
                     // A_c = Pᵀ (A P), in blocks of A_c's rows: A P is never stored whole.
@@ -281,9 +280,7 @@ impl Amg {
             } else {
                 Sell::from_csr(a)
             };
-            if coarsening == Coarsening::Plain {
-                rho = sell_spectral_radius(&a32, &dinv, bound);
-            }
+            let rho = smoothed_rho.unwrap_or_else(|| sell_spectral_radius(&a32, &dinv, bound));
             let omega = 4.0 / (3.0 * rho);
             let wdinv = dinv.iter().map(|d| omega * d).collect();
             levels.push(Level {
