@@ -83,3 +83,13 @@ pub fn wanted(id: &str) -> bool {
 pub fn summary_only() -> bool {
     std::env::var("DEMCON_BENCH_SUMMARY_ONLY").is_ok_and(|v| v == "1")
 }
+
+/// How many times each one-off summary line is measured and printed
+/// (`DEMCON_BENCH_REPEAT=k`, default 1): repeated solves on the network already built, so
+/// that a comparison of two binaries on a busy host rests on several samples per process.
+pub fn summary_repeats() -> usize {
+    std::env::var("DEMCON_BENCH_REPEAT")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .map_or(1, |k| k.max(1))
+}

@@ -12,7 +12,8 @@
 //! times once. With `DEMCON_BENCH_SUMMARY_ONLY=1` only these one-off lines are produced
 //! (no criterion sampling), which is how the 10⁶-particle figures are taken quickly.
 //! `DEMCON_BENCH_SEED=k` builds every random network with its seed shifted by k: other
-//! realisations for figures over several networks.
+//! realisations for figures over several networks. `DEMCON_BENCH_REPEAT=k` measures and
+//! prints each solve case's line k times on the same network.
 //!
 //! The electric paper's own case is benchmarked too (`electric_cylinder`): an LS packing of
 //! 5000 particles in the cylinder r = 1 mm, l = 5 mm (Gaussian radii, CoV 0.3), contacts for
@@ -23,7 +24,7 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use demcon_benches::{summary_only, wanted};
+use demcon_benches::{summary_only, summary_repeats, wanted};
 use demcon_core::{Container, Face, Selector, Vec3, morton_order};
 use demcon_electric::{ElectricParams, solve_potential};
 use demcon_graph::{ContactParams, SurfaceModel, conductances, contact_surfaces, detect_contacts};
@@ -321,16 +322,18 @@ fn bench_steady(c: &mut Criterion) {
                 continue;
             }
             let p = SolveParams { method };
-            let r = solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges");
-            println!(
-                "steady n = {n}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s",
-                case.net.n_edges(),
-                method.name(),
-                r.report.iterations,
-                r.report.relative_residual,
-                r.report.setup_s,
-                r.report.wall_s
-            );
+            for _ in 0..summary_repeats() {
+                let r = solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges");
+                println!(
+                    "steady n = {n}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s",
+                    case.net.n_edges(),
+                    method.name(),
+                    r.report.iterations,
+                    r.report.relative_residual,
+                    r.report.setup_s,
+                    r.report.wall_s
+                );
+            }
             if let Some(info) = LinearSystem::new(&case.net, &case.g, None, &bcs, &p)
                 .expect("valid system")
                 .amg_info()
@@ -379,18 +382,20 @@ fn bench_electric(c: &mut Criterion) {
                 floating: FloatingPolicy::Exclude,
                 solve: SolveParams { method },
             };
-            let r = solve_potential(&case.net, &case.g, &electrodes, &p).expect("solves");
-            println!(
-                "electric n = {n}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s, R = {:.6e} ohm, in/out mismatch {:.1e}",
-                case.net.n_edges(),
-                method.name(),
-                r.report.iterations,
-                r.report.relative_residual,
-                r.report.setup_s,
-                r.report.wall_s,
-                r.resistance_ohm.unwrap_or(f64::NAN),
-                r.current_mismatch
-            );
+            for _ in 0..summary_repeats() {
+                let r = solve_potential(&case.net, &case.g, &electrodes, &p).expect("solves");
+                println!(
+                    "electric n = {n}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s, R = {:.6e} ohm, in/out mismatch {:.1e}",
+                    case.net.n_edges(),
+                    method.name(),
+                    r.report.iterations,
+                    r.report.relative_residual,
+                    r.report.setup_s,
+                    r.report.wall_s,
+                    r.resistance_ohm.unwrap_or(f64::NAN),
+                    r.current_mismatch
+                );
+            }
             if summary_only() {
                 continue;
             }

@@ -378,24 +378,34 @@ impl Amg {
             .collect()
     }
 
+    /// ω / a_ii of the finest level's smoother (`None` when the matrix is the coarsest
+    /// level): the caller may apply the pre-smoothing x = ω D⁻¹ b itself, in a pass it makes
+    /// anyway, and call [`Self::apply`] with `presmoothed`.
+    pub(crate) fn fine_smoother(&self) -> Option<&[f64]> {
+        self.levels.first().map(|l| &l.wdinv[..])
+    }
+
     /// x = M⁻¹ b, one cycle from a zero guess; returns b·x and q·x (0 without `q`; summed
-    /// as [`dot`]), the second in the same pass: flexible CG's q = Ap.
+    /// as [`dot`]), the second in the same pass: flexible CG's q = Ap. With `presmoothed`, x
+    /// already holds the first sweep ω D⁻¹ b ([`Self::fine_smoother`]).
     pub(crate) fn apply(
         &self,
         b: &[f64],
         x: &mut Vec<f64>,
         work: &mut [Work],
         q: Option<&[f64]>,
+        presmoothed: bool,
     ) -> [f64; 2] {
-        self.cycle_with(0, b, x, work, q)
+        self.cycle_with(0, b, x, work, q, presmoothed)
     }
 
     /// One cycle from level `l`; returns b·x.
     fn cycle(&self, l: usize, b: &[f64], x: &mut Vec<f64>, work: &mut [Work]) -> f64 {
-        self.cycle_with(l, b, x, work, None)[0]
+        self.cycle_with(l, b, x, work, None, false)[0]
     }
 
-    /// One cycle from level `l`; returns b·x and q·x (0 without `q`).
+    /// One cycle from level `l`; returns b·x and q·x (0 without `q`). With `presmoothed`, x
+    /// already holds ω D⁻¹ b.
     fn cycle_with(
         &self,
         l: usize,
@@ -403,6 +413,7 @@ impl Amg {
         x: &mut Vec<f64>,
         work: &mut [Work],
         q: Option<&[f64]>,
+        presmoothed: bool,
     ) -> [f64; 2] {
         let dots = |x: &[f64]| [dot(b, x), q.map_or(0.0, |q| dot(q, x))];
         let Some(lev) = self.levels.get(l) else {
@@ -429,12 +440,14 @@ impl Amg {
 
         // Pre-smoothing from x = 0: x = ω D⁻¹ b. (Folding it into the residual, which then
         // gathers ω/a_jj and b_j instead of x_j, was measured slower at 10⁶.)
-        chunks_map(x, |c, xc| {
-            let range = c * CHUNK..c * CHUNK + xc.len();
-            for ((xi, bi), di) in xc.iter_mut().zip(&b[range.clone()]).zip(&lev.wdinv[range]) {
-                *xi = di * bi;
-            }
-        });
+        if !presmoothed {
+            chunks_map(x, |c, xc| {
+                let range = c * CHUNK..c * CHUNK + xc.len();
+                for ((xi, bi), di) in xc.iter_mut().zip(&b[range.clone()]).zip(&lev.wdinv[range]) {
+                    *xi = di * bi;
+                }
+            });
+        }
         lev.a.map_rows(x, &mut w.r, |i, _, ax| b[i] - ax, |_, _| 0.0);
         lev.transfer.restrict(&w.r, &mut w.bc);
         if self.k_cycle_at(l + 1) {
@@ -984,8 +997,11 @@ pub(crate) fn pcg(
     let mut r = rhs.to_vec();
     let mut z = vec![0.0; n];
     let mut q = vec![0.0; n];
-    let [mut rz, _] = amg.apply(&r, &mut z, &mut work, None);
+    let [mut rz, _] = amg.apply(&r, &mut z, &mut work, None, false);
     let mut p = z.clone();
+    let flexible = amg.flexible();
+    // The fine smoother's first sweep, z = ω D⁻¹ r, is made in the pass that updates r.
+    let smoother = amg.fine_smoother();
     let mut iterations = 0;
     while iterations < max_iter {
         if !rz.is_finite() {
@@ -1016,18 +1032,27 @@ pub(crate) fn pcg(
             break;
         }
         let alpha = rz / pq;
-        let partials = chunks_map2(&mut x, &mut r, |c, xc, rc| {
-            let range = c * CHUNK..c * CHUNK + xc.len();
+        // r −= α q, and the next cycle's first sweep z = ω D⁻¹ r; x is updated with the
+        // direction below (one pass fewer over p).
+        let partials = chunks_map2(&mut r, &mut z, |c, rc, zc| {
+            let range = c * CHUNK..c * CHUNK + rc.len();
             let mut rr = 0.0;
-            for (((xi, ri), pi), qi) in xc
-                .iter_mut()
-                .zip(rc.iter_mut())
-                .zip(&p[range.clone()])
-                .zip(&q[range])
-            {
-                *xi += alpha * pi;
-                *ri -= alpha * qi;
-                rr += *ri * *ri;
+            match smoother {
+                Some(wdinv) => {
+                    for (((ri, zi), qi), di) in
+                        rc.iter_mut().zip(zc).zip(&q[range.clone()]).zip(&wdinv[range])
+                    {
+                        *ri -= alpha * qi;
+                        *zi = di * *ri;
+                        rr += *ri * *ri;
+                    }
+                }
+                None => {
+                    for (ri, qi) in rc.iter_mut().zip(&q[range]) {
+                        *ri -= alpha * qi;
+                        rr += *ri * *ri;
+                    }
+                }
             }
             rr
         });
@@ -1041,23 +1066,41 @@ pub(crate) fn pcg(
             });
         }
         if rr.sqrt() <= abs_tol || iterations >= max_iter {
+            axpy(alpha, &p, &mut x);
             break;
         }
         // Flexible CG (the K-cycle is nonlinear): β = −(z·q)/(p·q) makes the new direction
         // A-conjugate to the last (z·q summed in the cycle's last sweep); with a linear,
         // symmetric cycle the usual r·z ratio.
-        let flexible = amg.flexible();
-        let [rz_new, zq] = amg.apply(&r, &mut z, &mut work, flexible.then_some(&q[..]));
+        let [rz_new, zq] = amg.apply(
+            &r,
+            &mut z,
+            &mut work,
+            flexible.then_some(&q[..]),
+            smoother.is_some(),
+        );
         let beta = if flexible { -zq / pq } else { rz_new / rz };
         rz = rz_new;
-        chunks_map(&mut p, |c, pc| {
+        // x += α p with the old direction, then p = z + β p.
+        chunks_map2(&mut x, &mut p, |c, xc, pc| {
             let range = c * CHUNK..c * CHUNK + pc.len();
-            for (pi, zi) in pc.iter_mut().zip(&z[range]) {
+            for ((xi, pi), zi) in xc.iter_mut().zip(pc.iter_mut()).zip(&z[range]) {
+                *xi += alpha * *pi;
                 *pi = zi + beta * *pi;
             }
         });
     }
     Ok((x, iterations))
+}
+
+/// y += α x, in parallel chunks.
+fn axpy(alpha: f64, x: &[f64], y: &mut [f64]) {
+    chunks_map(y, |c, yc| {
+        let range = c * CHUNK..c * CHUNK + yc.len();
+        for (yi, xi) in yc.iter_mut().zip(&x[range]) {
+            *yi += alpha * xi;
+        }
+    });
 }
 
 #[cfg(test)]
