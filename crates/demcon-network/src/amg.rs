@@ -44,7 +44,7 @@ use rayon::prelude::*;
 use crate::csr::{Accumulator, Csr, Value};
 use crate::error::SolveError;
 use crate::par::{CHUNK, chunks_map, chunks_map2, dot, ordered_sum, ordered_sums};
-use crate::sell::Sell;
+use crate::sell::{RowSell, Sell};
 
 /// Largest level solved directly by dense Cholesky (unknowns).
 pub(crate) const MAX_COARSE: usize = 400;
@@ -123,6 +123,19 @@ struct Level {
     wdinv: Vec<f64>,
     /// Transfer to and from the next coarser level.
     transfer: Transfer,
+}
+
+impl Level {
+    /// The level of operator `a` (D⁻¹ = `dinv`), smoothed by damped Jacobi with
+    /// ω = 4 / (3 ρ(D⁻¹A)).
+    fn new(a: Sell, dinv: &[f64], rho: f64, transfer: Transfer) -> Self {
+        let omega = 4.0 / (3.0 * rho);
+        Self {
+            a,
+            wdinv: dinv.iter().map(|d| omega * d).collect(),
+            transfer,
+        }
+    }
 }
 
 /// Prolongation and restriction between a level and the next coarser one.
@@ -226,8 +239,44 @@ impl Amg {
     /// Builds the hierarchy of `a` (square, symmetric positive definite, sorted rows with the
     /// diagonal stored).
     pub(crate) fn new(a: Csr, coarsening: Coarsening) -> Result<Self, SolveError> {
-        let mut levels = Vec::new();
-        let mut fine = None;
+        Self::build(a, coarsening, Vec::new(), None)
+    }
+
+    /// A plain-aggregation hierarchy ([`Coarsening::Plain`]) of a matrix assembled straight
+    /// into SELL form (same conditions as [`Self::new`]): the finest level's aggregates and
+    /// Galerkin operator are read from that form, so no compressed-row copy of the largest
+    /// matrix is made. Small matrices, and a first coarsening that stalls, take the
+    /// compressed-row path.
+    pub(crate) fn plain_from_sell(a: RowSell, diag: Vec<f64>) -> Result<Self, SolveError> {
+        let n = a.nrows();
+        if n <= MAX_COARSE {
+            return Self::new(a.to_csr(), Coarsening::Plain);
+        }
+        check_diagonal(&diag)?;
+        let dinv: Vec<f64> = diag.par_iter().with_min_len(CHUNK).map(|d| 1.0 / d).collect();
+        let (agg, n_agg) = aggregate(&a, &diag);
+        drop(diag);
+        if n_agg == 0 || n_agg as f64 > MIN_COARSENING * n as f64 {
+            return Self::new(a.to_csr(), Coarsening::Plain);
+        }
+        let bound = a.max_scaled_abs_row_sum(&dinv);
+        let (ac, transfer) = plain_coarsening(&a, agg, n_agg);
+        let (a32, vals) = a.into_parts();
+        let rho = sell_spectral_radius(&a32, &dinv, bound);
+        let level = Level::new(a32, &dinv, rho, transfer);
+        Self::build(ac, Coarsening::Plain, vec![level], Some(vals))
+    }
+
+    /// The hierarchy below `levels` (already built, finest first; `fine`: the f64 values of
+    /// the first one's operator) of `a`.
+    fn build(
+        a: Csr,
+        coarsening: Coarsening,
+        levels: Vec<Level>,
+        fine: Option<Vec<f64>>,
+    ) -> Result<Self, SolveError> {
+        let mut levels = levels;
+        let mut fine = fine;
         let mut a = a;
         // The near-null space, carried down by smoothed aggregation (plain aggregation's P
         // interpolates constants exactly without it).
@@ -236,6 +285,7 @@ impl Amg {
             Coarsening::Plain => Vec::new(),
         };
         while a.nrows > MAX_COARSE && levels.len() + 1 < MAX_LEVELS {
+            // (`levels` may already hold the finest: [`Self::plain_from_sell`].)
             let diag = diagonal(&a)?;
             let dinv: Vec<f64> = diag.iter().map(|d| 1.0 / d).collect();
             let (agg, n_agg) = aggregate(&a, &diag);
@@ -250,11 +300,7 @@ impl Amg {
             let smoothed_rho =
                 (coarsening == Coarsening::Smoothed).then(|| spectral_radius(&a, &dinv, bound));
             let (ac, transfer) = match coarsening {
-                Coarsening::Plain => {
-                    let (ptr, members) = members_of(&agg, n_agg);
-                    let ac = galerkin_plain(&a, &agg, &ptr, &members);
-                    (ac, Transfer::Plain { agg, ptr, members })
-                }
+                Coarsening::Plain => plain_coarsening(&a, agg, n_agg),
                 Coarsening::Smoothed => {
                     // The fine near-null space is read once here: freed before the products.
                     let (ptent, b_c) = tentative(&agg, n_agg, &std::mem::take(&mut b));
@@ -281,13 +327,7 @@ impl Amg {
                 Sell::from_csr(a)
             };
             let rho = smoothed_rho.unwrap_or_else(|| sell_spectral_radius(&a32, &dinv, bound));
-            let omega = 4.0 / (3.0 * rho);
-            let wdinv = dinv.iter().map(|d| omega * d).collect();
-            levels.push(Level {
-                a: a32,
-                wdinv,
-                transfer,
-            });
+            levels.push(Level::new(a32, &dinv, rho, transfer));
             a = ac;
         }
         // Coarsening can stall above the dense size (e.g. free nodes joined only to fixed
@@ -549,14 +589,59 @@ fn diagonal(a: &Csr) -> Result<Vec<f64>, SolveError> {
             c.binary_search(&(i as u32)).map_or(0.0, |k| v[k])
         })
         .collect();
+    check_diagonal(&d)?;
+    Ok(d)
+}
+
+/// Refuses a diagonal entry that is not finite and > 0.
+fn check_diagonal(d: &[f64]) -> Result<(), SolveError> {
     match d.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
-        None => Ok(d),
+        None => Ok(()),
         Some(i) => Err(SolveError::Breakdown {
             method: "amg-pcg",
             iteration: 0,
             detail: format!("multigrid setup: diagonal entry {i} is {:e}", d[i]),
         }),
     }
+}
+
+/// Row access to a level's operator (f64 values) during the setup: compressed rows, or the
+/// finest level assembled straight into SELL form ([`RowSell`]).
+trait Rows: Sync {
+    /// Rows (= columns).
+    fn n(&self) -> usize;
+    /// Row i's entries (column, value) in column order.
+    fn entries(&self, i: usize) -> impl Iterator<Item = (u32, f64)> + '_;
+}
+
+impl Rows for Csr {
+    fn n(&self) -> usize {
+        self.nrows
+    }
+
+    #[inline]
+    fn entries(&self, i: usize) -> impl Iterator<Item = (u32, f64)> + '_ {
+        let (c, v) = self.row(i);
+        c.iter().copied().zip(v.iter().copied())
+    }
+}
+
+impl Rows for RowSell {
+    fn n(&self) -> usize {
+        self.nrows()
+    }
+
+    #[inline]
+    fn entries(&self, i: usize) -> impl Iterator<Item = (u32, f64)> + '_ {
+        self.row(i)
+    }
+}
+
+/// Plain aggregation's next level: the Galerkin operator of the aggregates and the transfer.
+fn plain_coarsening(a: &impl Rows, agg: Vec<u32>, n_agg: usize) -> (Csr, Transfer) {
+    let (ptr, members) = members_of(&agg, n_agg);
+    let ac = galerkin_plain(a, &agg, &ptr, &members);
+    (ac, Transfer::Plain { agg, ptr, members })
 }
 
 /// Rows per block of the aggregation. Fixed (not per thread), so the aggregates do not
@@ -575,17 +660,16 @@ const AGGREGATION_BLOCK: usize = 1 << 16;
 /// 0.055–0.057 s to 0.043 s (one instrumented run); the nodes of a block's boundary that
 /// cannot seed are attached in pass 2, and the iteration counts at 10⁵ and 10⁶ did not
 /// change (`docs/performance.md`).
-fn aggregate(a: &Csr, diag: &[f64]) -> (Vec<u32>, usize) {
+fn aggregate(a: &impl Rows, diag: &[f64]) -> (Vec<u32>, usize) {
     /// Marks a pass-3 aggregate numbered within its block until the blocks' counts are known.
     const LOCAL: u32 = 1 << 31;
-    let n = a.nrows;
+    let n = a.n();
     // |a_ij| > θ √a_ii √a_jj, with the square roots taken once per node.
     let sq: Vec<f64> = diag.par_iter().with_min_len(CHUNK).map(|d| d.sqrt()).collect();
     let sq = &sq;
     let strong = |i: usize| {
-        let (c, v) = a.row(i);
         let t = THETA * sq[i];
-        c.iter().zip(v).filter_map(move |(&j, &x)| {
+        a.entries(i).filter_map(move |(j, x)| {
             let ju = j as usize;
             (ju != i && x.abs() > t * sq[ju]).then_some((ju, x.abs()))
         })
@@ -726,7 +810,7 @@ fn members_of(agg: &[u32], n_agg: usize) -> (Vec<u32>, Vec<u32>) {
 /// The Galerkin operator of plain aggregation, Pᵀ A P with P[i, agg(i)] = 1:
 /// (A_c)_kl = Σ a_ij over i in aggregate k and j in aggregate l, summed in the order of k's
 /// members and of their rows' entries.
-fn galerkin_plain(a: &Csr, agg: &[u32], ptr: &[u32], members: &[u32]) -> Csr {
+fn galerkin_plain(a: &impl Rows, agg: &[u32], ptr: &[u32], members: &[u32]) -> Csr {
     let n_agg = ptr.len() - 1;
     Csr::from_rows(
         n_agg,
@@ -734,8 +818,7 @@ fn galerkin_plain(a: &Csr, agg: &[u32], ptr: &[u32], members: &[u32]) -> Csr {
         || Accumulator::new(n_agg),
         |acc, k, cols, vals| {
             for &i in &members[ptr[k] as usize..ptr[k + 1] as usize] {
-                let (c, v) = a.row(i as usize);
-                for (&j, &x) in c.iter().zip(v) {
+                for (j, x) in a.entries(i as usize) {
                     let l = agg[j as usize];
                     if l != NO_AGGREGATE {
                         acc.add(k, l, x);
@@ -1257,6 +1340,44 @@ mod tests {
         let mut x = vec![0.0; m * m];
         transfer.prolong_add(&xc, &mut x);
         assert!((dot(&bc, &xc) - dot(&r, &x)).abs() <= 1e-9 * dot(&r, &r).sqrt());
+    }
+
+    #[test]
+    fn hierarchy_assembled_in_sliced_form_is_the_compressed_rows_one() {
+        // The same aggregates, Galerkin operators and ω either way, so the same iterates.
+        let a = laplace_2d(120);
+        let diag = diagonal(&a).unwrap();
+        let direct = RowSell::from_rows(
+            a.nrows,
+            || (),
+            |_, i| a.row(i).0.len(),
+            |_, i, c, v| {
+                let (ac, av) = a.row(i);
+                c.copy_from_slice(ac);
+                v.copy_from_slice(av);
+            },
+        );
+        let from_sell = Amg::plain_from_sell(direct, diag).unwrap();
+        let from_csr = Amg::new(a.clone(), Coarsening::Plain).unwrap();
+        assert!(from_csr.levels.len() >= 2);
+        assert_eq!(
+            from_sell
+                .info()
+                .levels
+                .iter()
+                .map(|l| (l.rows, l.nnz))
+                .collect::<Vec<_>>(),
+            from_csr
+                .info()
+                .levels
+                .iter()
+                .map(|l| (l.rows, l.nnz))
+                .collect::<Vec<_>>()
+        );
+        let b: Vec<f64> = (0..a.nrows).map(|i| ((i * 7) % 13) as f64 - 6.0).collect();
+        let (x1, it1) = pcg(&from_sell, &b, 1e-10 * dot(&b, &b).sqrt(), 200).unwrap();
+        let (x2, it2) = pcg(&from_csr, &b, 1e-10 * dot(&b, &b).sqrt(), 200).unwrap();
+        assert_eq!((it1, &x1), (it2, &x2));
     }
 
     #[test]

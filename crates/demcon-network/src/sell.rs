@@ -19,7 +19,7 @@
 use rayon::prelude::*;
 
 use crate::csr::{Csr, Value};
-use crate::par::{CHUNK, chunks_map};
+use crate::par::{CHUNK, MIN_TASK_CHUNKS, chunks_map};
 
 /// Rows summed side by side (one slice) in the sliced layouts ([`Sell`], and the explicit
 /// heat step's in `demcon-thermal`).
@@ -235,6 +235,172 @@ impl Sell {
     }
 }
 
+/// A square matrix built straight into SELL form from its rows, with its f64 values and
+/// access to each row: the finest level of a plain-aggregation hierarchy, assembled from the
+/// network without an intermediate compressed-row copy (at 10⁶ unknowns that copy and its
+/// conversion were 0.13–0.15 s of a 0.3 s setup; `docs/performance.md` § 4).
+#[derive(Debug)]
+pub(crate) struct RowSell {
+    /// The layout, values in f32.
+    pub a: Sell,
+    /// The f64 values laid out alike.
+    pub vals: Vec<f64>,
+    /// Sorted position of each row.
+    pos: Vec<u32>,
+    /// Entries of each row.
+    len: Vec<u32>,
+}
+
+impl RowSell {
+    /// The n × n matrix whose row i has `len(state, i)` entries, written in column order by
+    /// `fill(state, i, cols, vals)` (slices of that length); `init` makes one state per
+    /// parallel task, as [`Csr::from_row_lengths`]. The same rows give the same matrix for
+    /// any thread count.
+    pub fn from_rows<S, I, L, F>(n: usize, init: I, len: L, fill: F) -> Self
+    where
+        I: Fn() -> S + Sync + Send,
+        L: Fn(&mut S, usize) -> usize + Sync + Send,
+        F: Fn(&mut S, usize, &mut [u32], &mut [f64]) + Sync + Send,
+    {
+        let mut lens = vec![0u32; n];
+        lens.par_chunks_mut(CHUNK)
+            .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .for_each_init(&init, |s, (c, lc)| {
+                for (k, l) in lc.iter_mut().enumerate() {
+                    *l = len(s, c * CHUNK + k) as u32;
+                }
+            });
+        let nnz = lens.iter().map(|&l| l as usize).sum();
+        let (perm, slice_ptr) = sliced_layout(n, |p| lens[p] as usize);
+        // A row's sorted position stays in its window.
+        let mut pos = vec![0u32; n];
+        pos.par_chunks_mut(WINDOW).enumerate().for_each(|(w, pw)| {
+            let base = w * WINDOW;
+            for (k, &p) in perm[base..base + pw.len()].iter().enumerate() {
+                pw[p as usize - base] = (base + k) as u32;
+            }
+        });
+        let n_slices = slice_ptr.len() - 1;
+        let total = slice_ptr[n_slices];
+        // Columns, f64 and f32 values written in one pass (each fresh page is touched by the
+        // thread that fills it, once).
+        let mut cols = vec![0u32; total];
+        let mut vals = vec![0.0f64; total];
+        let mut vals32 = vec![0.0f32; total];
+        let mut parts: Vec<(&mut [u32], &mut [f64], &mut [f32])> = Vec::with_capacity(n_slices);
+        let (mut rest_c, mut rest_v, mut rest_w) = (&mut cols[..], &mut vals[..], &mut vals32[..]);
+        for s in 0..n_slices {
+            let w = slice_ptr[s + 1] - slice_ptr[s];
+            let (hc, tc) = rest_c.split_at_mut(w);
+            let (hv, tv) = rest_v.split_at_mut(w);
+            let (hw, tw) = rest_w.split_at_mut(w);
+            parts.push((hc, hv, hw));
+            (rest_c, rest_v, rest_w) = (tc, tv, tw);
+        }
+        parts
+            .into_par_iter()
+            .enumerate()
+            .with_min_len(CHUNK / LANES)
+            .for_each_init(
+                || (init(), Vec::new(), Vec::new()),
+                |(st, rc, rv), (s, (pc, pv, pw))| {
+                    for l in 0..LANES.min(n - s * LANES) {
+                        let p = perm[s * LANES + l] as usize;
+                        let m = lens[p] as usize;
+                        rc.resize(m, 0);
+                        rv.resize(m, 0.0);
+                        fill(st, p, rc, rv);
+                        // Padding: value 0 at the row's first column (already read).
+                        let pad = rc.first().copied().unwrap_or(0);
+                        let lane = pc[l..]
+                            .iter_mut()
+                            .step_by(LANES)
+                            .zip(pv[l..].iter_mut().step_by(LANES))
+                            .zip(pw[l..].iter_mut().step_by(LANES));
+                        for (j, ((c, v), w)) in lane.enumerate() {
+                            (*c, *v) = if j < m { (rc[j], rv[j]) } else { (pad, 0.0) };
+                            *w = *v as f32;
+                        }
+                    }
+                },
+            );
+        Self {
+            a: Sell {
+                nrows: n,
+                ncols: n,
+                nnz,
+                perm,
+                slice_ptr,
+                cols,
+                vals: vals32,
+            },
+            vals,
+            pos,
+            len: lens,
+        }
+    }
+
+    /// Rows.
+    pub fn nrows(&self) -> usize {
+        self.a.nrows
+    }
+
+    /// Row i's entries (column, f64 value) in column order.
+    #[inline]
+    pub fn row(&self, i: usize) -> impl Iterator<Item = (u32, f64)> + '_ {
+        let at = self.pos[i] as usize;
+        let base = self.a.slice_ptr[at / LANES] + at % LANES;
+        (0..self.len[i] as usize).map(move |j| {
+            let k = base + LANES * j;
+            (self.a.cols[k], self.vals[k])
+        })
+    }
+
+    /// max_i s_i Σ_j |a_ij| (the Gershgorin bound of ρ(SA) for S = diag(s)), read slice by
+    /// slice in storage order.
+    pub fn max_scaled_abs_row_sum(&self, s: &[f64]) -> f64 {
+        let a = &self.a;
+        (0..a.slice_ptr.len() - 1)
+            .into_par_iter()
+            .with_min_len(CHUNK / LANES)
+            .map(|sl| {
+                let (lo, hi) = (a.slice_ptr[sl], a.slice_ptr[sl + 1]);
+                let mut acc = [0.0f64; LANES];
+                for vj in self.vals[lo..hi].chunks_exact(LANES) {
+                    for (t, v) in acc.iter_mut().zip(vj) {
+                        *t += v.abs();
+                    }
+                }
+                let i0 = sl * LANES;
+                (0..LANES.min(a.nrows - i0))
+                    .map(|l| acc[l] * s[a.perm[i0 + l] as usize])
+                    .fold(0.0, f64::max)
+            })
+            .reduce(|| 0.0, f64::max)
+    }
+
+    /// The layout and its f64 values; the row access is dropped.
+    pub fn into_parts(self) -> (Sell, Vec<f64>) {
+        (self.a, self.vals)
+    }
+
+    /// The same matrix in compressed rows.
+    pub fn to_csr(&self) -> Csr {
+        Csr::from_row_lengths(
+            self.nrows(),
+            self.nrows(),
+            || (),
+            |_, i| self.len[i] as usize,
+            |_, i, c, v| {
+                for ((cj, vj), (col, val)) in c.iter_mut().zip(v.iter_mut()).zip(self.row(i)) {
+                    (*cj, *vj) = (col, val);
+                }
+            },
+        )
+    }
+}
+
 /// Where each compressed-row entry goes in the sliced layout.
 struct Layout<'a> {
     perm: &'a [u32],
@@ -367,6 +533,56 @@ mod tests {
         for (u, v) in y32.iter().zip(&r) {
             assert!((u - v).abs() <= 1e-6 * (1.0 + v.abs()), "{u} vs {v}");
         }
+    }
+
+    /// The rows of `a` assembled straight into the sliced layout.
+    fn row_sell(a: &Csr) -> RowSell {
+        RowSell::from_rows(
+            a.nrows,
+            || (),
+            |_, i| a.row(i).0.len(),
+            |_, i, c, v| {
+                let (ac, av) = a.row(i);
+                c.copy_from_slice(ac);
+                v.copy_from_slice(av);
+            },
+        )
+    }
+
+    #[test]
+    fn rows_assembled_in_place_match_the_converted_layout() {
+        let a = matrix();
+        let direct = row_sell(&a);
+        let (conv, v64) = Sell::from_csr_with_f64(a.clone());
+        assert_eq!(direct.a.nnz(), a.nnz());
+        assert_eq!(
+            (&direct.a.perm, &direct.a.slice_ptr),
+            (&conv.perm, &conv.slice_ptr)
+        );
+        assert_eq!((&direct.a.cols, &direct.a.vals), (&conv.cols, &conv.vals));
+        assert_eq!(direct.vals, v64);
+        // Row access and the compressed rows back.
+        for i in [0, 1, 4095, 4096, 17_777, a.nrows - 1] {
+            let (c, v) = a.row(i);
+            let got: Vec<(u32, f64)> = direct.row(i).collect();
+            let want: Vec<(u32, f64)> = c.iter().copied().zip(v.iter().copied()).collect();
+            assert_eq!(got, want, "row {i}");
+        }
+        let back = direct.to_csr();
+        assert_eq!((&back.ptr, &back.cols, &back.vals), (&a.ptr, &a.cols, &a.vals));
+        // The scaled Gershgorin bound, against the compressed rows.
+        let s: Vec<f64> = (0..a.nrows).map(|i| 1.0 + (i % 7) as f64).collect();
+        let want = (0..a.nrows)
+            .map(|i| a.row(i).1.iter().map(|v| v.abs()).sum::<f64>() * s[i])
+            .fold(0.0, f64::max);
+        assert_eq!(direct.max_scaled_abs_row_sum(&s), want);
+        // The same layout on one thread.
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let one = pool.install(|| row_sell(&a));
+        assert_eq!(
+            (&one.a.cols, &one.vals, &one.pos),
+            (&direct.a.cols, &direct.vals, &direct.pos)
+        );
     }
 
     #[test]

@@ -13,6 +13,7 @@ use crate::error::SolveError;
 use crate::ic::{self, Mic};
 use crate::network::Network;
 use crate::par::{CHUNK, chunks_map, chunks_map3, dot, ordered_sum};
+use crate::sell::RowSell;
 use crate::{cholesky, distributed, faer_cg};
 
 /// How the linear system is solved.
@@ -366,16 +367,22 @@ impl<'a> LinearSystem<'a> {
         match method {
             Method::Cholesky => sys.factor = Some(cholesky::Factor::new(&sys)?),
             Method::AmgCg { .. } => {
-                let (a0, nodes) = sys.free_block();
                 // One solve, or a few (steady, electric, homogenisation): plain aggregation and a
-                // K-cycle, under a third of the setup. Shifted systems are implicit time steps,
-                // solved hundreds of times: smoothed aggregation, the faster cycle.
-                let coarsening = if shift.is_some() {
-                    Coarsening::Smoothed
+                // K-cycle, under a third of the setup, its finest level assembled straight into
+                // the sliced layout. Shifted systems are implicit time steps, solved hundreds of
+                // times: smoothed aggregation, the faster cycle.
+                sys.amg = Some(if shift.is_some() {
+                    let (a0, nodes) = sys.free_block();
+                    (Amg::new(a0, Coarsening::Smoothed)?, nodes)
                 } else {
-                    Coarsening::Plain
-                };
-                sys.amg = Some((Amg::new(a0, coarsening)?, nodes));
+                    let (a0, nodes) = sys.free_block_sell();
+                    let diag = nodes
+                        .par_iter()
+                        .with_min_len(CHUNK)
+                        .map(|&p| sys.diag[p as usize])
+                        .collect();
+                    (Amg::plain_from_sell(a0, diag)?, nodes)
+                });
                 // The setup's temporaries were freed in many sizes: hand what the allocator
                 // keeps resident back to the system before the solve allocates its vectors.
                 demcon_core::release_free_memory();
@@ -437,64 +444,23 @@ impl<'a> LinearSystem<'a> {
     /// The free-node block of D + K in compressed rows (unknowns numbered in node order,
     /// parallel edges merged, diagonal stored) and the node of each unknown.
     fn free_block(&self) -> (Csr, Vec<u32>) {
-        let n = self.net.n_nodes();
-        let mut index = vec![u32::MAX; n];
-        let mut nodes = Vec::with_capacity(self.constraints.n_free());
-        for (p, &f) in self.free.iter().enumerate() {
-            if f {
-                index[p] = nodes.len() as u32;
-                nodes.push(p as u32);
-            }
-        }
-        let (row_ptr, cols) = (self.net.row_ptr(), self.net.cols());
-        let (index, nodes_ref) = (&index, &nodes);
-        // The free neighbours of node p in unknown numbering (sorted: node order is kept),
-        // with their conductances; parallel edges are consecutive.
-        let free_entries = move |p: usize| {
-            (row_ptr[p]..row_ptr[p + 1]).filter_map(move |e| {
-                let j = index[cols[e] as usize];
-                (j != u32::MAX).then_some((j, e))
-            })
-        };
-        let a = Csr::from_row_lengths(
-            nodes.len(),
-            nodes.len(),
+        let rows = FreeRows::new(self);
+        let n = rows.nodes.len();
+        let a = Csr::from_row_lengths(n, n, || (), |_, k| rows.len(k), |_, k, c, v| rows.fill(k, c, v));
+        (a, rows.nodes)
+    }
+
+    /// The same block assembled straight into the sliced layout ([`RowSell`]), for a
+    /// plain-aggregation hierarchy.
+    fn free_block_sell(&self) -> (RowSell, Vec<u32>) {
+        let rows = FreeRows::new(self);
+        let a = RowSell::from_rows(
+            rows.nodes.len(),
             || (),
-            // Distinct free neighbours, plus the diagonal.
-            |_, k| {
-                let mut last = u32::MAX;
-                1 + free_entries(nodes_ref[k] as usize)
-                    .filter(|&(j, _)| std::mem::replace(&mut last, j) != j)
-                    .count()
-            },
-            |_, k, c, v| {
-                let p = nodes_ref[k] as usize;
-                let mut at = 0usize;
-                let mut diag_done = false;
-                for (j, e) in free_entries(p) {
-                    if !diag_done && j as usize > k {
-                        c[at] = k as u32;
-                        v[at] = self.diag[p];
-                        at += 1;
-                        diag_done = true;
-                    }
-                    if at > 0 && c[at - 1] == j {
-                        v[at - 1] -= self.entry_value(e);
-                    } else {
-                        c[at] = j;
-                        v[at] = -self.entry_value(e);
-                        at += 1;
-                    }
-                }
-                if !diag_done {
-                    c[at] = k as u32;
-                    v[at] = self.diag[p];
-                    at += 1;
-                }
-                debug_assert_eq!(at, c.len());
-            },
+            |_, k| rows.len(k),
+            |_, k, c, v| rows.fill(k, c, v),
         );
-        (a, nodes)
+        (a, rows.nodes)
     }
 
     /// Wall time spent preparing (and factorising) the system (s).
@@ -1062,6 +1028,77 @@ impl Progress {
             relative_residual: rel,
             tolerance: rel_tol,
         })
+    }
+}
+
+/// The rows of the free-node block of D + K: unknowns numbered in node order, parallel edges
+/// merged, the diagonal stored, columns sorted.
+struct FreeRows<'s, 'a> {
+    sys: &'s LinearSystem<'a>,
+    /// Unknown of each node (`u32::MAX`: not free).
+    index: Vec<u32>,
+    /// Node of each unknown.
+    nodes: Vec<u32>,
+}
+
+impl<'s, 'a> FreeRows<'s, 'a> {
+    fn new(sys: &'s LinearSystem<'a>) -> Self {
+        let mut index = vec![u32::MAX; sys.net.n_nodes()];
+        let mut nodes = Vec::with_capacity(sys.constraints.n_free());
+        for (p, &f) in sys.free.iter().enumerate() {
+            if f {
+                index[p] = nodes.len() as u32;
+                nodes.push(p as u32);
+            }
+        }
+        Self { sys, index, nodes }
+    }
+
+    /// The free neighbours of node p in unknown numbering (sorted: node order is kept),
+    /// with their entries; parallel edges are consecutive.
+    fn free_entries(&self, p: usize) -> impl Iterator<Item = (u32, usize)> + '_ {
+        let (row_ptr, cols) = (self.sys.net.row_ptr(), self.sys.net.cols());
+        (row_ptr[p]..row_ptr[p + 1]).filter_map(move |e| {
+            let j = self.index[cols[e] as usize];
+            (j != u32::MAX).then_some((j, e))
+        })
+    }
+
+    /// Entries of unknown k's row: its distinct free neighbours and the diagonal.
+    fn len(&self, k: usize) -> usize {
+        let mut last = u32::MAX;
+        1 + self
+            .free_entries(self.nodes[k] as usize)
+            .filter(|&(j, _)| std::mem::replace(&mut last, j) != j)
+            .count()
+    }
+
+    /// Writes unknown k's row ([`Self::len`] entries) in column order.
+    fn fill(&self, k: usize, c: &mut [u32], v: &mut [f64]) {
+        let p = self.nodes[k] as usize;
+        let mut at = 0usize;
+        let mut diag_done = false;
+        for (j, e) in self.free_entries(p) {
+            if !diag_done && j as usize > k {
+                c[at] = k as u32;
+                v[at] = self.sys.diag[p];
+                at += 1;
+                diag_done = true;
+            }
+            if at > 0 && c[at - 1] == j {
+                v[at - 1] -= self.sys.entry_value(e);
+            } else {
+                c[at] = j;
+                v[at] = -self.sys.entry_value(e);
+                at += 1;
+            }
+        }
+        if !diag_done {
+            c[at] = k as u32;
+            v[at] = self.sys.diag[p];
+            at += 1;
+        }
+        debug_assert_eq!(at, c.len());
     }
 }
 
