@@ -2,7 +2,8 @@
 //! free-node block A of D + K: smoothed aggregation with a V-cycle (SA-AMG, Vaněk–Mandel–
 //! Brezina 1996), or plain aggregation with a K-cycle (below), on the same aggregates.
 //!
-//! Setup, per level: strength of connection |a_ij| ≥ θ √(a_ii a_jj); greedy aggregation in
+//! Setup, per level (the finest level of a plain-aggregation hierarchy is assembled straight
+//! into the sliced layout and read from it: [`Amg::plain_from_sell`]): strength of connection |a_ij| ≥ θ √(a_ii a_jj); greedy aggregation in
 //! node order within fixed blocks of rows, the blocks in parallel (seeds whose strong
 //! neighbours are all free, then attachment to the most strongly connected aggregate, then
 //! aggregates of the leftovers; [`aggregate`]); a tentative prolongator
@@ -132,7 +133,7 @@ impl Level {
         let omega = 4.0 / (3.0 * rho);
         Self {
             a,
-            wdinv: dinv.iter().map(|d| omega * d).collect(),
+            wdinv: dinv.par_iter().with_min_len(CHUNK).map(|d| omega * d).collect(),
             transfer,
         }
     }
@@ -1077,11 +1078,12 @@ pub(crate) fn pcg(
         return Ok((x, 1));
     }
     let mut x = vec![0.0; n];
-    let mut r = rhs.to_vec();
+    // Copies in parallel chunks (fresh pages first touched by both threads).
+    let mut r: Vec<f64> = rhs.par_iter().with_min_len(CHUNK).copied().collect();
     let mut z = vec![0.0; n];
     let mut q = vec![0.0; n];
     let [mut rz, _] = amg.apply(&r, &mut z, &mut work, None, false);
-    let mut p = z.clone();
+    let mut p: Vec<f64> = z.par_iter().with_min_len(CHUNK).copied().collect();
     let flexible = amg.flexible();
     // The fine smoother's first sweep, z = ω D⁻¹ r, is made in the pass that updates r.
     let smoother = amg.fine_smoother();

@@ -854,7 +854,13 @@ impl<'a> LinearSystem<'a> {
         let mut iterations = 0usize;
         let mut progress = Progress::new(self.method.name(), dot(r, r).sqrt() / b_norm)?;
         while progress.go_on(rel_tol, iterations, max_iter) {
-            let rc: Vec<f64> = nodes.iter().map(|&p| r[p as usize]).collect();
+            // Gathers in parallel: fresh pages are first touched by both threads (in this VM a
+            // 4 KB page costs ~1.7 µs on first touch; docs/performance.md § 4).
+            let rc: Vec<f64> = nodes
+                .par_iter()
+                .with_min_len(CHUNK)
+                .map(|&p| r[p as usize])
+                .collect();
             let (delta, its) = inner(&rc, progress.current() * b_norm, max_iter - iterations)?;
             iterations += its.max(1);
             for (&p, d) in nodes.iter().zip(&delta) {
