@@ -401,6 +401,23 @@ impl RowSell {
     }
 }
 
+#[cfg(test)]
+impl RowSell {
+    /// The rows of `a` assembled straight into the sliced layout (tests).
+    pub fn from_csr_rows(a: &Csr) -> Self {
+        Self::from_rows(
+            a.nrows,
+            || (),
+            |_, i| a.row(i).0.len(),
+            |_, i, c, v| {
+                let (ac, av) = a.row(i);
+                c.copy_from_slice(ac);
+                v.copy_from_slice(av);
+            },
+        )
+    }
+}
+
 /// Where each compressed-row entry goes in the sliced layout.
 struct Layout<'a> {
     perm: &'a [u32],
@@ -535,24 +552,10 @@ mod tests {
         }
     }
 
-    /// The rows of `a` assembled straight into the sliced layout.
-    fn row_sell(a: &Csr) -> RowSell {
-        RowSell::from_rows(
-            a.nrows,
-            || (),
-            |_, i| a.row(i).0.len(),
-            |_, i, c, v| {
-                let (ac, av) = a.row(i);
-                c.copy_from_slice(ac);
-                v.copy_from_slice(av);
-            },
-        )
-    }
-
     #[test]
     fn rows_assembled_in_place_match_the_converted_layout() {
         let a = matrix();
-        let direct = row_sell(&a);
+        let direct = RowSell::from_csr_rows(&a);
         let (conv, v64) = Sell::from_csr_with_f64(a.clone());
         assert_eq!(direct.a.nnz(), a.nnz());
         assert_eq!(
@@ -578,7 +581,7 @@ mod tests {
         assert_eq!(direct.max_scaled_abs_row_sum(&s), want);
         // The same layout on one thread.
         let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        let one = pool.install(|| row_sell(&a));
+        let one = pool.install(|| RowSell::from_csr_rows(&a));
         assert_eq!(
             (&one.a.cols, &one.vals, &one.pos),
             (&direct.a.cols, &direct.vals, &direct.pos)
