@@ -26,7 +26,7 @@ use std::time::Instant;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use demcon_benches::{summary_only, summary_repeats, wanted};
 use demcon_core::{Container, Face, Selector, Vec3, morton_order};
-use demcon_electric::{ElectricParams, solve_potential};
+use demcon_electric::{ElectricParams, ElectricSolution, solve_potential};
 use demcon_graph::{ContactParams, SurfaceModel, conductances, contact_surfaces, detect_contacts};
 use demcon_network::{
     Constraints, FloatingPolicy, LinearSystem, Method, Network, SolveParams, resolve_fixed, solve_steady,
@@ -357,6 +357,21 @@ fn bench_steady(c: &mut Criterion) {
     group.finish();
 }
 
+/// The one-off line of an electric solve: contacts, method, iterations, residual, setup and
+/// solve times (s), resistance (Ω).
+fn electric_line(label: &str, net: &Network, method: Method, r: &ElectricSolution) -> String {
+    format!(
+        "{label}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s, R = {:.6e} ohm",
+        net.n_edges(),
+        method.name(),
+        r.report.iterations,
+        r.report.relative_residual,
+        r.report.setup_s,
+        r.report.wall_s,
+        r.resistance_ohm.unwrap_or(f64::NAN),
+    )
+}
+
 fn bench_electric(c: &mut Criterion) {
     let mut group = c.benchmark_group("electric_solve");
     group.sample_size(10);
@@ -384,17 +399,8 @@ fn bench_electric(c: &mut Criterion) {
             };
             for _ in 0..summary_repeats() {
                 let r = solve_potential(&case.net, &case.g, &electrodes, &p).expect("solves");
-                println!(
-                    "electric n = {n}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s, R = {:.6e} ohm, in/out mismatch {:.1e}",
-                    case.net.n_edges(),
-                    method.name(),
-                    r.report.iterations,
-                    r.report.relative_residual,
-                    r.report.setup_s,
-                    r.report.wall_s,
-                    r.resistance_ohm.unwrap_or(f64::NAN),
-                    r.current_mismatch
-                );
+                let line = electric_line(&format!("electric n = {n}"), &case.net, method, &r);
+                println!("{line}, in/out mismatch {:.1e}", r.current_mismatch);
             }
             if summary_only() {
                 continue;
@@ -457,17 +463,8 @@ fn bench_electric_cylinder(c: &mut Criterion) {
             solve: SolveParams { method },
         };
         let r = solve_potential(&net, &g, &electrodes, &p).expect("solves");
-        println!(
-            "electric cylinder n = {}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s, R = {:.6e} ohm",
-            net.n_nodes(),
-            net.n_edges(),
-            method.name(),
-            r.report.iterations,
-            r.report.relative_residual,
-            r.report.setup_s,
-            r.report.wall_s,
-            r.resistance_ohm.unwrap_or(f64::NAN),
-        );
+        let label = format!("electric cylinder n = {}", net.n_nodes());
+        println!("{}", electric_line(&label, &net, method, &r));
         if summary_only() {
             continue;
         }
