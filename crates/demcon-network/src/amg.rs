@@ -421,23 +421,9 @@ impl Amg {
 
     /// ω / a_ii of the finest level's smoother (`None` when the matrix is the coarsest
     /// level): the caller may apply the pre-smoothing x = ω D⁻¹ b itself, in a pass it makes
-    /// anyway, and call [`Self::apply`] with `presmoothed`.
+    /// anyway, and call [`Self::cycle_with`] with `presmoothed`.
     pub(crate) fn fine_smoother(&self) -> Option<&[f64]> {
         self.levels.first().map(|l| &l.wdinv[..])
-    }
-
-    /// x = M⁻¹ b, one cycle from a zero guess; returns b·x and q·x (0 without `q`; summed
-    /// as [`dot`]), the second in the same pass: flexible CG's q = Ap. With `presmoothed`, x
-    /// already holds the first sweep ω D⁻¹ b ([`Self::fine_smoother`]).
-    pub(crate) fn apply(
-        &self,
-        b: &[f64],
-        x: &mut Vec<f64>,
-        work: &mut [Work],
-        q: Option<&[f64]>,
-        presmoothed: bool,
-    ) -> [f64; 2] {
-        self.cycle_with(0, b, x, work, q, presmoothed)
     }
 
     /// One cycle from level `l`; returns b·x.
@@ -445,8 +431,10 @@ impl Amg {
         self.cycle_with(l, b, x, work, None, false)[0]
     }
 
-    /// One cycle from level `l`; returns b·x and q·x (0 without `q`). With `presmoothed`, x
-    /// already holds ω D⁻¹ b.
+    /// One cycle from level `l` from a zero guess (level 0: x = M⁻¹ b); returns b·x and q·x
+    /// (0 without `q`; summed as [`dot`]), the second in the same pass: flexible CG's
+    /// q = Ap. With `presmoothed`, x already holds the first sweep ω D⁻¹ b
+    /// ([`Self::fine_smoother`]).
     fn cycle_with(
         &self,
         l: usize,
@@ -1082,7 +1070,7 @@ pub(crate) fn pcg(
     let mut r: Vec<f64> = rhs.par_iter().with_min_len(CHUNK).copied().collect();
     let mut z = vec![0.0; n];
     let mut q = vec![0.0; n];
-    let [mut rz, _] = amg.apply(&r, &mut z, &mut work, None, false);
+    let [mut rz, _] = amg.cycle_with(0, &r, &mut z, &mut work, None, false);
     let mut p: Vec<f64> = z.par_iter().with_min_len(CHUNK).copied().collect();
     let flexible = amg.flexible();
     // The fine smoother's first sweep, z = ω D⁻¹ r, is made in the pass that updates r.
@@ -1157,7 +1145,8 @@ pub(crate) fn pcg(
         // Flexible CG (the K-cycle is nonlinear): β = −(z·q)/(p·q) makes the new direction
         // A-conjugate to the last (z·q summed in the cycle's last sweep); with a linear,
         // symmetric cycle the usual r·z ratio.
-        let [rz_new, zq] = amg.apply(
+        let [rz_new, zq] = amg.cycle_with(
+            0,
             &r,
             &mut z,
             &mut work,
