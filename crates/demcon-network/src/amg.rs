@@ -397,7 +397,7 @@ impl Amg {
         self.k_cycle_at(1)
     }
 
-    /// Work vectors for [`Self::apply`].
+    /// Work vectors for [`Self::cycle_with`].
     pub(crate) fn work(&self) -> Vec<Work> {
         self.levels
             .iter()
