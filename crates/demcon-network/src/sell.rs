@@ -156,6 +156,110 @@ impl Sell {
         })
     }
 
+    /// A P for the P with P[j, group[j]] = 1 (no entry where `group[j]` is `u32::MAX`),
+    /// `ngroups` columns: each row's entries summed by their column's group, in f64 and in
+    /// the row's order, rounded once; a row's groups in the order first met. Rows are sorted
+    /// by their own length within the same windows as this layout's. Two passes over the
+    /// entries, a window at a time: one counts each row's groups, one sums them.
+    pub fn group_columns(&self, group: &[u32], ngroups: usize) -> Sell {
+        let n = self.nrows;
+        let grouper = || Grouper {
+            mark: vec![[0; LANES]; ngroups],
+            at: vec![[0; LANES]; ngroups],
+            tag: 0,
+            ks: Vec::new(),
+            vs: Vec::new(),
+        };
+        // Pass 1: each row's count of groups, this layout's slices in storage order.
+        let mut lens = vec![0u32; n];
+        let nnz: usize = lens
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .map_init(grouper, |g, (c, lc)| {
+                let base = c * CHUNK;
+                let mut nnz = 0;
+                for q in (base..base + lc.len()).step_by(LANES) {
+                    let count = g.sum_slice::<false>(self, q / LANES, group);
+                    for (l, &m) in count.iter().enumerate().take(LANES.min(n - q)) {
+                        lc[self.perm[q + l] as usize - base] = m as u32;
+                        nnz += m;
+                    }
+                }
+                nnz
+            })
+            .sum();
+        let (perm, slice_ptr) = sliced_layout(n, |i| lens[i] as usize);
+        drop(lens);
+        let n_slices = slice_ptr.len() - 1;
+        let total = slice_ptr[n_slices];
+        let (mut cols, mut vals) = (vec![0u32; total], vec![0.0f32; total]);
+        // Pass 2, a chunk's slices per task (the fresh pages touched by the thread filling
+        // them). A chunk's rows keep their windows, so they are this layout's chunk too.
+        let per_chunk = CHUNK / LANES;
+        let mut parts = Vec::with_capacity(n_slices.div_ceil(per_chunk));
+        let (mut rest_c, mut rest_v) = (&mut cols[..], &mut vals[..]);
+        for s0 in (0..n_slices).step_by(per_chunk) {
+            let w = slice_ptr[(s0 + per_chunk).min(n_slices)] - slice_ptr[s0];
+            let (hc, tc) = rest_c.split_at_mut(w);
+            let (hv, tv) = rest_v.split_at_mut(w);
+            parts.push((hc, hv));
+            (rest_c, rest_v) = (tc, tv);
+        }
+        let (perm_ref, slice_ptr_ref) = (&perm, &slice_ptr);
+        parts
+            .into_par_iter()
+            .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .for_each_init(
+                || (grouper(), Vec::new()),
+                |(g, pos), (c, (pc, pv))| {
+                    let base = c * CHUNK;
+                    let end = (base + CHUNK).min(n);
+                    // The new position of each of the chunk's rows.
+                    pos.resize(end - base, 0usize);
+                    for q in base..end {
+                        pos[perm_ref[q] as usize - base] = q;
+                    }
+                    let first = slice_ptr_ref[c * per_chunk];
+                    // This layout's slices in storage order (contiguous reads), each lane
+                    // written to its row's new place.
+                    for q in (base..end).step_by(LANES) {
+                        let count = g.sum_slice::<true>(self, q / LANES, group);
+                        for (l, &cl) in count.iter().enumerate().take(LANES.min(n - q)) {
+                            let to = pos[self.perm[q + l] as usize - base];
+                            let s = to / LANES;
+                            let (lo, hi) = (slice_ptr_ref[s] - first, slice_ptr_ref[s + 1] - first);
+                            // The p-th group at slot LANES p; padding: value 0 at the row's
+                            // first column (already read).
+                            let pad = if cl > 0 { g.ks[l] } else { 0 };
+                            let lane = pc[lo + to % LANES..hi]
+                                .iter_mut()
+                                .step_by(LANES)
+                                .zip(pv[lo + to % LANES..hi].iter_mut().step_by(LANES));
+                            for (p, (cj, vj)) in lane.enumerate() {
+                                let slot = LANES * p + l;
+                                (*cj, *vj) = if p < cl {
+                                    (g.ks[slot], g.vs[slot] as f32)
+                                } else {
+                                    (pad, 0.0)
+                                };
+                            }
+                        }
+                    }
+                },
+            );
+        Sell {
+            nrows: n,
+            ncols: ngroups,
+            nnz,
+            perm,
+            slice_ptr,
+            cols,
+            vals,
+        }
+    }
+
     /// `out[i] = f(i, out[i], Σ_j a_ij x_j)` with the stored values; returns the per-chunk
     /// sums of `g(i, out[i])` ([`Self::map_rows_with`]).
     #[inline(always)]
@@ -232,6 +336,58 @@ impl Sell {
             },
             vals64,
         )
+    }
+}
+
+/// Scratch of [`Sell::group_columns`]: per group and lane, the tag of the last call that
+/// met it there and its place in that lane's sums; the lanes' groups and sums, lane l's p-th
+/// at LANES p + l.
+struct Grouper {
+    mark: Vec<[u32; LANES]>,
+    at: Vec<[u32; LANES]>,
+    tag: u32,
+    ks: Vec<u32>,
+    vs: Vec<f64>,
+}
+
+impl Grouper {
+    /// The rows of slice s of `a` summed by group (only counted without `SUMS`), the lanes
+    /// side by side (independent chains); returns each lane's count of groups. Branch-free
+    /// but for padding and dropped columns: a group is new to lane l when its mark there is
+    /// not this call's tag.
+    fn sum_slice<const SUMS: bool>(&mut self, a: &Sell, s: usize, group: &[u32]) -> [usize; LANES] {
+        self.tag += 1;
+        let tag = self.tag;
+        let (lo, hi) = (a.slice_ptr[s], a.slice_ptr[s + 1]);
+        if SUMS && self.ks.len() < hi - lo {
+            self.ks.resize(hi - lo, 0);
+            self.vs.resize(hi - lo, 0.0);
+        }
+        let lanes = LANES.min(a.nrows - s * LANES);
+        let mut count = [0usize; LANES];
+        for (cj, vj) in a.cols[lo..hi]
+            .chunks_exact(LANES)
+            .zip(a.vals[lo..hi].chunks_exact(LANES))
+        {
+            for l in 0..lanes {
+                let (k, v) = (group[cj[l] as usize], f64::from(vj[l]));
+                if v == 0.0 || k == u32::MAX {
+                    continue;
+                }
+                let ku = k as usize;
+                let new = self.mark[ku][l] != tag;
+                self.mark[ku][l] = tag;
+                if SUMS {
+                    let p = if new { count[l] } else { self.at[ku][l] as usize };
+                    self.at[ku][l] = p as u32;
+                    let slot = LANES * p + l;
+                    self.ks[slot] = k;
+                    self.vs[slot] = if new { v } else { self.vs[slot] + v };
+                }
+                count[l] += usize::from(new);
+            }
+        }
+        count
     }
 }
 
@@ -630,6 +786,70 @@ mod tests {
         r.into_f32().spmv(&xf, &mut want);
         for (u, v) in z.iter().zip(&want) {
             assert!((u - v).abs() <= 1e-12 * (1.0 + v.abs()), "{u} vs {v}");
+        }
+    }
+
+    #[test]
+    fn grouped_columns_are_a_times_p_whatever_the_thread_count() {
+        let a = matrix();
+        let n = a.nrows;
+        // Groups of ~7 consecutive columns, every 13th column in none.
+        let group: Vec<u32> = (0..n)
+            .map(|j| if j % 13 == 5 { u32::MAX } else { (j / 7) as u32 })
+            .collect();
+        let ngroups = n.div_ceil(7);
+        let s = Sell::from_csr(a.clone());
+        let ap = s.group_columns(&group, ngroups);
+        assert_eq!((ap.nrows(), ap.ncols()), (n, ngroups));
+        // The same product from the f32 values through P as a vector: A (P e).
+        let e: Vec<f64> = (0..ngroups).map(|k| ((k * 31 % 17) as f64) - 8.0).collect();
+        let pe: Vec<f64> = group
+            .iter()
+            .map(|&k| if k == u32::MAX { 0.0 } else { e[k as usize] })
+            .collect();
+        let (mut want, mut got) = (vec![0.0; n], vec![0.0; n]);
+        s.map_rows(&pe, &mut want, |_, _, v| v, |_, _| 0.0);
+        ap.map_rows(&e, &mut got, |_, _, v| v, |_, _| 0.0);
+        let mut distinct = 0;
+        for i in 0..n {
+            let (cols, vals) = a.row(i);
+            let scale: f64 = vals.iter().map(|v| v.abs()).sum::<f64>() * 8.0;
+            // Sums of f32 entries rounded once more: within 2 ε₃₂ Σ |a_ij| max |e|.
+            assert!(
+                (got[i] - want[i]).abs() <= 1.2e-7 * scale,
+                "row {i}: {} vs {}",
+                got[i],
+                want[i]
+            );
+            let mut ks: Vec<u32> = cols
+                .iter()
+                .map(|&j| group[j as usize])
+                .filter(|&k| k != u32::MAX)
+                .collect();
+            ks.sort_unstable();
+            ks.dedup();
+            distinct += ks.len();
+        }
+        // One entry per group met in a row, and no more.
+        assert_eq!(ap.nnz(), distinct);
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let again = pool.install(|| s.group_columns(&group, ngroups));
+            assert_eq!(
+                (&again.perm, &again.slice_ptr, &again.cols),
+                (&ap.perm, &ap.slice_ptr, &ap.cols),
+                "{threads} threads"
+            );
+            assert!(
+                again
+                    .vals
+                    .iter()
+                    .zip(&ap.vals)
+                    .all(|(x, y)| x.to_bits() == y.to_bits())
+            );
         }
     }
 }
