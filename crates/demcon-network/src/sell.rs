@@ -160,7 +160,8 @@ impl Sell {
     /// `ngroups` columns: each row's entries summed by their column's group, in f64 and in
     /// the row's order, rounded once; a row's groups in the order first met. Rows are sorted
     /// by their own length within the same windows as this layout's. Two passes over the
-    /// entries, a window at a time: one counts each row's groups, one sums them.
+    /// entries in storage order, a chunk of rows per task: one counts each row's groups, one
+    /// sums them. The same matrix for any thread count.
     pub fn group_columns(&self, group: &[u32], ngroups: usize) -> Sell {
         let n = self.nrows;
         let grouper = || Grouper {
