@@ -50,7 +50,7 @@ use rayon::prelude::*;
 use crate::csr::{Accumulator, Csr, Value};
 use crate::error::SolveError;
 use crate::par::{CHUNK, chunks_map, chunks_map2, dot, ordered_sum, ordered_sums};
-use crate::sell::{RowSell, Sell};
+use crate::sell::{NO_GROUP, RowSell, Sell};
 
 /// Largest level solved directly by dense Cholesky (unknowns).
 pub(crate) const MAX_COARSE: usize = 400;
@@ -150,15 +150,43 @@ enum Transfer {
     /// Smoothed aggregation: the prolongator P (rows: this level) and R = Pᵀ.
     Smoothed { p: Sell, r: Sell },
     /// Plain aggregation, P[i, agg(i)] = 1: prolongation copies an aggregate's value to its
-    /// members, restriction sums over them. The members of aggregate k are
-    /// `members[ptr[k]..ptr[k + 1]]`, in node order. `ap` is A P, laid out as the level's
-    /// operator (about a third of its entries), for the post-smoothing's residual.
-    Plain {
-        agg: Vec<u32>,
-        ptr: Vec<u32>,
-        members: Vec<u32>,
-        ap: Sell,
-    },
+    /// members, restriction sums over them. `ap` is A P, laid out as the level's operator
+    /// (about a third of its entries), for the post-smoothing's residual.
+    Plain { aggs: Aggregates, ap: Sell },
+}
+
+/// A level's plain aggregates: the aggregate of each node ([`NO_AGGREGATE`]: none) and the
+/// members of aggregate k, `members[ptr[k]..ptr[k + 1]]`, in node order.
+#[derive(Debug)]
+struct Aggregates {
+    agg: Vec<u32>,
+    ptr: Vec<u32>,
+    members: Vec<u32>,
+}
+
+impl Aggregates {
+    /// The members of each of the `n_agg` aggregates of `agg`.
+    fn new(agg: Vec<u32>, n_agg: usize) -> Self {
+        let mut ptr = vec![0u32; n_agg + 1];
+        for &k in agg.iter().filter(|&&k| k != NO_AGGREGATE) {
+            ptr[k as usize + 1] += 1;
+        }
+        for k in 0..n_agg {
+            ptr[k + 1] += ptr[k];
+        }
+        let mut next = ptr.clone();
+        let mut members = vec![0u32; ptr[n_agg] as usize];
+        for (i, &k) in agg.iter().enumerate().filter(|&(_, &k)| k != NO_AGGREGATE) {
+            members[next[k as usize] as usize] = i as u32;
+            next[k as usize] += 1;
+        }
+        Self { agg, ptr, members }
+    }
+
+    /// Number of aggregates.
+    fn count(&self) -> usize {
+        self.ptr.len() - 1
+    }
 }
 
 impl Transfer {
@@ -166,7 +194,7 @@ impl Transfer {
     fn coarse_rows(&self) -> usize {
         match self {
             Self::Smoothed { p, .. } => p.ncols(),
-            Self::Plain { ptr, .. } => ptr.len() - 1,
+            Self::Plain { aggs, .. } => aggs.count(),
         }
     }
 
@@ -176,7 +204,8 @@ impl Transfer {
             Self::Smoothed { r: rm, .. } => {
                 rm.map_rows(r, bc, |_, _, s| s, |_, _| 0.0);
             }
-            Self::Plain { ptr, members, .. } => {
+            Self::Plain { aggs, .. } => {
+                let (ptr, members) = (&aggs.ptr, &aggs.members);
                 chunks_map(bc, |c, out| {
                     let base = c * CHUNK;
                     for (k, o) in out.iter_mut().enumerate() {
@@ -189,21 +218,16 @@ impl Transfer {
     }
 
     /// The plain-aggregation transfer of the level whose operator is `a` (A P is read from
-    /// it): aggregate of each node, members of each aggregate.
-    fn plain(a: &Sell, agg: Vec<u32>, n_agg: usize) -> Self {
-        let (ptr, members) = members_of(&agg, n_agg);
-        let ap = a.group_columns(&agg, n_agg);
-        Self::Plain {
-            agg,
-            ptr,
-            members,
-            ap,
-        }
+    /// it).
+    fn plain(a: &Sell, aggs: Aggregates) -> Self {
+        let ap = a.group_columns(&aggs.agg, aggs.count());
+        Self::Plain { aggs, ap }
     }
 }
 
-/// Aggregate of a node left out of every aggregate (no strong connection).
-const NO_AGGREGATE: u32 = u32::MAX;
+/// Aggregate of a node left out of every aggregate (no strong connection); A P drops its
+/// column ([`Sell::group_columns`]).
+const NO_AGGREGATE: u32 = NO_GROUP;
 
 /// A K-cycle step stops after its first flexible-CG step when that step has reduced the
 /// level's residual norm by this factor (Notay's t = 0.25).
@@ -262,10 +286,11 @@ impl Amg {
             return Self::new(a.to_csr(), Coarsening::Plain);
         }
         let bound = a.max_scaled_abs_row_sum(&dinv);
-        let ac = galerkin_plain(&a, &agg, n_agg);
+        let aggs = Aggregates::new(agg, n_agg);
+        let ac = galerkin_plain(&a, &aggs);
         let (a32, vals) = a.into_parts();
         let rho = sell_spectral_radius(&a32, &dinv, bound);
-        let transfer = Transfer::plain(&a32, agg, n_agg);
+        let transfer = Transfer::plain(&a32, aggs);
         let level = Level::new(a32, &dinv, rho, transfer);
         Self::build(ac, Coarsening::Plain, vec![level], Some(vals))
     }
@@ -305,7 +330,10 @@ impl Amg {
             // (A plain transfer reads A P from the level's SELL form, made below: until then
             // its aggregates stand in for it.)
             let (ac, transfer) = match coarsening {
-                Coarsening::Plain => (galerkin_plain(&a, &agg, n_agg), Err(agg)),
+                Coarsening::Plain => {
+                    let aggs = Aggregates::new(agg, n_agg);
+                    (galerkin_plain(&a, &aggs), Err(aggs))
+                }
                 Coarsening::Smoothed => {
                     // The fine near-null space is read once here: freed before the products.
                     let (ptent, b_c) = tentative(&agg, n_agg, &std::mem::take(&mut b));
@@ -332,7 +360,7 @@ impl Amg {
                 Sell::from_csr(a)
             };
             let rho = smoothed_rho.unwrap_or_else(|| sell_spectral_radius(&a32, &dinv, bound));
-            let transfer = transfer.unwrap_or_else(|agg| Transfer::plain(&a32, agg, n_agg));
+            let transfer = transfer.unwrap_or_else(|aggs| Transfer::plain(&a32, aggs));
             levels.push(Level::new(a32, &dinv, rho, transfer));
             a = ac;
         }
@@ -493,7 +521,8 @@ impl Amg {
         // in the same sweep.
         let wdinv = &lev.wdinv;
         let sums = match &lev.transfer {
-            Transfer::Plain { agg, ap, .. } => {
+            Transfer::Plain { aggs, ap } => {
+                let agg = &aggs.agg;
                 // Both in one pass over A P instead of A: b − A (x + P e) = r − (A P) e, r
                 // being the residual restricted above. A P has a third of A's entries and
                 // gathers from the coarse e (`docs/performance.md` § 4).
@@ -803,29 +832,12 @@ fn each_block(
         .collect()
 }
 
-/// The members of each aggregate, in node order: (start of each aggregate's list, nodes).
-fn members_of(agg: &[u32], n_agg: usize) -> (Vec<u32>, Vec<u32>) {
-    let mut ptr = vec![0u32; n_agg + 1];
-    for &k in agg.iter().filter(|&&k| k != NO_AGGREGATE) {
-        ptr[k as usize + 1] += 1;
-    }
-    for k in 0..n_agg {
-        ptr[k + 1] += ptr[k];
-    }
-    let mut next = ptr.clone();
-    let mut members = vec![0u32; ptr[n_agg] as usize];
-    for (i, &k) in agg.iter().enumerate().filter(|&(_, &k)| k != NO_AGGREGATE) {
-        members[next[k as usize] as usize] = i as u32;
-        next[k as usize] += 1;
-    }
-    (ptr, members)
-}
-
 /// The Galerkin operator of plain aggregation, Pᵀ A P with P[i, agg(i)] = 1:
 /// (A_c)_kl = Σ a_ij over i in aggregate k and j in aggregate l, summed in the order of k's
 /// members and of their rows' entries.
-fn galerkin_plain(a: &impl Rows, agg: &[u32], n_agg: usize) -> Csr {
-    let (ptr, members) = members_of(agg, n_agg);
+fn galerkin_plain(a: &impl Rows, aggs: &Aggregates) -> Csr {
+    let Aggregates { agg, ptr, members } = aggs;
+    let n_agg = aggs.count();
     Csr::from_rows(
         n_agg,
         n_agg,
@@ -1333,7 +1345,8 @@ mod tests {
         let diag = diagonal(&a).unwrap();
         let (agg, n_agg) = aggregate(&a, &diag);
         assert!(n_agg > 1 && n_agg < m * m / 2, "{n_agg} aggregates");
-        let ac = galerkin_plain(&a, &agg, n_agg);
+        let aggs = Aggregates::new(agg.clone(), n_agg);
+        let ac = galerkin_plain(&a, &aggs);
         // The same products with P as a matrix.
         let p = Csr::from_rows(
             m * m,
@@ -1356,7 +1369,7 @@ mod tests {
         }
         // The stored A P (f32, from A in f32) is A times P; restriction sums over members:
         // R = Pᵀ.
-        let transfer = Transfer::plain(&Sell::from_csr(a.clone()), agg, n_agg);
+        let transfer = Transfer::plain(&Sell::from_csr(a.clone()), aggs);
         let Transfer::Plain { ap, .. } = &transfer else {
             unreachable!("a plain transfer")
         };

@@ -156,7 +156,7 @@ impl Sell {
         })
     }
 
-    /// A P for the P with P[j, group[j]] = 1 (no entry where `group[j]` is `u32::MAX`),
+    /// A P for the P with P[j, group[j]] = 1 (no entry where `group[j]` is [`NO_GROUP`]),
     /// `ngroups` columns: each row's entries summed by their column's group, in f64 and in
     /// the row's order, rounded once; a row's groups in the order first met. Rows are sorted
     /// by their own length within the same windows as this layout's. Two passes over the
@@ -342,6 +342,9 @@ impl Sell {
     }
 }
 
+/// A column in no group ([`Sell::group_columns`]).
+pub(crate) const NO_GROUP: u32 = u32::MAX;
+
 /// Scratch of [`Sell::group_columns`]: per group and lane, the tag of the last call that
 /// met it there and its place in that lane's sums; the lanes' groups and sums, lane l's p-th
 /// at LANES p + l.
@@ -374,7 +377,7 @@ impl Grouper {
         {
             for l in 0..lanes {
                 let (k, v) = (group[cj[l] as usize], f64::from(vj[l]));
-                if v == 0.0 || k == u32::MAX {
+                if v == 0.0 || k == NO_GROUP {
                     continue;
                 }
                 let ku = k as usize;
@@ -802,7 +805,7 @@ mod tests {
         let group: Vec<u32> = (0..n)
             .map(|j| {
                 if j % 13 == 5 || (20_000..20_600).contains(&j) {
-                    u32::MAX
+                    NO_GROUP
                 } else {
                     (j / 7) as u32
                 }
@@ -816,7 +819,7 @@ mod tests {
         let e: Vec<f64> = (0..ngroups).map(|k| ((k * 31 % 17) as f64) - 8.0).collect();
         let pe: Vec<f64> = group
             .iter()
-            .map(|&k| if k == u32::MAX { 0.0 } else { e[k as usize] })
+            .map(|&k| if k == NO_GROUP { 0.0 } else { e[k as usize] })
             .collect();
         let (mut want, mut got) = (vec![0.0; n], vec![0.0; n]);
         s.map_rows(&pe, &mut want, |_, _, v| v, |_, _| 0.0);
@@ -835,7 +838,7 @@ mod tests {
             let mut ks: Vec<u32> = cols
                 .iter()
                 .map(|&j| group[j as usize])
-                .filter(|&k| k != u32::MAX)
+                .filter(|&k| k != NO_GROUP)
                 .collect();
             ks.sort_unstable();
             ks.dedup();
