@@ -8,7 +8,9 @@
 //! largest allowed φ, so the run stops at jamming (p* ≥ 10⁶). Prints the report, the bulk
 //! coordination (neighbours closer than 1 % and 5 % of the mean radius, spheres more than two
 //! mean diameters from every wall) and a hash of the packing (determinism checks). Time it
-//! with `/usr/bin/time -v` for CPU seconds.
+//! with `/usr/bin/time -v` for CPU seconds. With `PACK_TRACE=1`, φ, the events and p* are
+//! printed to stderr every 5 s of the run (where the time goes: the start, the fast stage,
+//! the approach to the target).
 
 use demcon_core::{Container, ParticleSet, Vec3};
 use demcon_packing::{MAX_PHI_ABOVE_JAMMING, PackingParams, RadiusDistribution, jamming_estimate, pack};
@@ -44,7 +46,19 @@ fn main() {
     if let Ok(s) = std::env::var("PACK_CG") {
         params.compression_growth_rate = s.parse().expect("PACK_CG");
     }
-    let (p, r) = pack(&params, seed, None).expect("packing");
+    let last = std::cell::Cell::new(-1.0f64);
+    let trace = |pr: &demcon_packing::PackProgress| {
+        if pr.wall_s - last.get() >= 5.0 {
+            last.set(pr.wall_s);
+            eprintln!(
+                "  {:7.1} s  φ {:.4}  events {:.3e}  p* {:.3e}",
+                pr.wall_s, pr.phi, pr.events as f64, pr.reduced_pressure
+            );
+        }
+    };
+    let progress: Option<&dyn Fn(&demcon_packing::PackProgress)> =
+        std::env::var_os("PACK_TRACE").is_some().then_some(&trace as _);
+    let (p, r) = pack(&params, seed, progress).expect("packing");
     let (z1, z5) = coordination(&p, &container);
     let mut h: u64 = 0xcbf29ce484222325;
     for (c, r) in p.centres.iter().zip(&p.radii) {

@@ -1,5 +1,6 @@
 //! Uniform cell grids for finding the particles whose points lie near a given point:
-//! a linked-list grid (insert only) and a grid of spheres stored contiguously per cell. Periodic grids wrap; walled grids clamp to their box.
+//! a linked-list grid (insert only), an insert-only grid of placed spheres and a grid of
+//! spheres stored contiguously per cell. Periodic grids wrap; walled grids clamp to their box.
 
 use demcon_core::{Aabb, Vec3};
 
@@ -135,6 +136,82 @@ impl CellGrid {
                 }
             }
         }
+    }
+}
+
+/// Insert-only grid of placed spheres for the random sequential addition that starts a
+/// packing: each cell owns `cap` consecutive slots holding the exact centre and radius
+/// (32 bytes; the extra spheres of a full cell go to its spill vector). A placement
+/// test reads its cells' slots, one or two cache lines each, and stops at the first overlap,
+/// instead of following linked lists into the particle arrays (at 10⁶ particles, ids placed
+/// largest first lie at random in space and in memory: the placement took 8 s of the 10 s
+/// start, now 5 s of 7). Exact values, so the same placements as any exact test.
+#[derive(Debug, Clone)]
+pub struct PlacedGrid {
+    index: CellGrid,
+    cap: usize,
+    /// Centre (m) and radius (m) of each slot.
+    slots: Vec<[f64; 4]>,
+    len: Vec<u32>,
+    spill: Vec<Vec<[f64; 4]>>,
+}
+
+impl PlacedGrid {
+    /// See [`CellGrid::new`].
+    pub fn new(bounds: &Aabb, min_cell: f64, periodic: bool, n_particles: usize, max_cells: usize) -> Self {
+        let index = CellGrid::new(bounds, min_cell, periodic, 0, max_cells);
+        let n_cells = index.head.len();
+        // The mean occupancy plus a margin, 2 to 16 slots (64–512 bytes).
+        let cap = (n_particles / n_cells + 2).next_power_of_two().clamp(2, 16);
+        Self {
+            index,
+            cap,
+            slots: huge_filled(n_cells * cap, [0.0; 4]),
+            len: vec![0; n_cells],
+            spill: vec![Vec::new(); n_cells],
+        }
+    }
+
+    /// Stores a sphere of centre `c` (m) and radius `rad` (m).
+    pub fn insert(&mut self, c: &Vec3, rad: f64) {
+        let k = self.index.cell_index([0, 1, 2].map(|a| self.index.coord(c, a)));
+        let slot = [c.x, c.y, c.z, rad];
+        let len = self.len[k] as usize;
+        if len < self.cap {
+            self.slots[k * self.cap + len] = slot;
+        } else {
+            self.spill[k].push(slot);
+        }
+        self.len[k] += 1;
+    }
+
+    /// Whether some stored sphere (centre c, radius ρ) in the cell of `p` or the cells next
+    /// to it is closer than touching a sphere of radius `r` at `p`:
+    /// |sep(c − p)|² < (r + ρ)², `sep` mapping a difference to its periodic image.
+    #[inline]
+    pub fn overlaps(&self, p: &Vec3, r: f64, sep: impl Fn(Vec3) -> Vec3) -> bool {
+        let mut cells = [0usize; 27];
+        let mut m = 0;
+        self.index.for_each_cell_near(p, |k| {
+            cells[m] = k;
+            m += 1;
+            prefetch(&self.len[k]);
+            // (Two slots per cache line.)
+            for q in (0..self.cap).step_by(2) {
+                prefetch(&self.slots[k * self.cap + q]);
+            }
+        });
+        let hit = |s: &[f64; 4]| {
+            let d = sep(Vec3::new(s[0], s[1], s[2]) - p);
+            let t = r + s[3];
+            d.norm_squared() < t * t
+        };
+        cells[..m].iter().any(|&k| {
+            let len = self.len[k] as usize;
+            let base = k * self.cap;
+            self.slots[base..base + len.min(self.cap)].iter().any(hit)
+                || (len > self.cap && self.spill[k].iter().any(hit))
+        })
     }
 }
 
@@ -416,6 +493,43 @@ mod tests {
                 assert_eq!(found.len(), n, "duplicates");
                 let want = brute(&pts, p, 1.0, periodic.then_some(len));
                 assert!(want.iter().all(|j| found.binary_search(j).is_ok()));
+            }
+        }
+    }
+
+    /// The placement test against brute force: spheres of radius ≤ 0.5 in cells of 1,
+    /// clustered so that some cells spill, in a walled and a periodic box (also with fewer
+    /// than three cells per axis).
+    #[test]
+    fn placed_grid_reports_exactly_the_overlaps() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for (periodic, len) in [(false, 6.0), (true, 6.0), (true, 2.5)] {
+            let b = Aabb {
+                min: Vec3::zeros(),
+                max: Vec3::repeat(len),
+            };
+            let n = 300;
+            let mut g = PlacedGrid::new(&b, 1.0, periodic, n, 1 << 20);
+            let sep = |d: Vec3| {
+                if periodic {
+                    d.map(|x| x - len * (x / len).round())
+                } else {
+                    d
+                }
+            };
+            let mut placed: Vec<(Vec3, f64)> = Vec::new();
+            for i in 0..n {
+                let p = if i % 3 == 0 {
+                    Vec3::repeat(0.2) + Vec3::new(rng.random(), rng.random(), rng.random()) * 0.5
+                } else {
+                    Vec3::new(rng.random(), rng.random(), rng.random()) * len
+                };
+                let r = 0.5 * rng.random::<f64>();
+                let want = placed.iter().any(|(c, rc)| sep(c - p).norm() < r + rc);
+                assert_eq!(g.overlaps(&p, r, sep), want, "sphere {i}");
+                // Insert every sphere, overlapping or not, so that cells overfill.
+                g.insert(&p, r);
+                placed.push((p, r));
             }
         }
     }

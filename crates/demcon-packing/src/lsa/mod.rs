@@ -34,7 +34,7 @@ use crate::error::PackingError;
 use crate::params::{PackProgress, PackingParams, StopReason};
 use crate::radius::jamming_estimate;
 use crate::report::{PackingReport, summarize};
-use grid::{CellGrid, SphereGrid};
+use grid::{PlacedGrid, SphereGrid};
 use huge::{huge_filled, huge_vec};
 use nblist::NbLists;
 use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay_coef, plane_delay};
@@ -246,7 +246,7 @@ impl Engine {
         by_size.sort_by(|&i, &j| a[j as usize].total_cmp(&a[i as usize]).then(i.cmp(&j)));
         let x = 'attempt: loop {
             let s0 = (phi0 / params.target_phi).cbrt();
-            let mut grid = CellGrid::new(&c.bounds(), 2.0 * a_max * s0, period.is_some(), n, 4 * n + 64);
+            let mut grid = PlacedGrid::new(&c.bounds(), 2.0 * a_max * s0, period.is_some(), n, 4 * n + 64);
             let mut x = vec![Vec3::zeros(); n];
             for &i in &by_size {
                 let i = i as usize;
@@ -254,17 +254,9 @@ impl Engine {
                 let mut placed = false;
                 for _ in 0..20_000 {
                     let p = random_point(&c, ri, rng);
-                    let mut free = true;
-                    grid.for_each_near(&p, |j| {
-                        if free {
-                            let d = min_image(period, x[j] - p);
-                            let s = ri + a[j] * s0;
-                            free = d.norm_squared() >= s * s;
-                        }
-                    });
-                    if free {
+                    if !grid.overlaps(&p, ri, |d| min_image(period, d)) {
                         x[i] = p;
-                        grid.insert(i, &p);
+                        grid.insert(&p, ri);
                         placed = true;
                         break;
                     }
