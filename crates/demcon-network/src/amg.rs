@@ -250,6 +250,7 @@ pub(crate) struct Amg {
 #[derive(Debug)]
 pub(crate) struct Work {
     r: Vec<f64>,
+    /// The smoothed level's post-smoothing output (empty on a plain level).
     tmp: Vec<f64>,
     bc: Vec<f64>,
     xc: Vec<f64>,
@@ -440,7 +441,11 @@ impl Amg {
                 let k = if self.k_cycle_at(l + 1) { nc } else { 0 };
                 Work {
                     r: vec![0.0; lev.a.nrows()],
-                    tmp: vec![0.0; lev.a.nrows()],
+                    // (A plain level's post-smoothing updates x in place.)
+                    tmp: match lev.transfer {
+                        Transfer::Smoothed { .. } => vec![0.0; lev.a.nrows()],
+                        Transfer::Plain { .. } => Vec::new(),
+                    },
                     bc: vec![0.0; nc],
                     xc: vec![0.0; nc],
                     c2: vec![0.0; k],
@@ -520,26 +525,29 @@ impl Amg {
         // Prolongation x += P e, then post-smoothing x += ω D⁻¹ (b − A x), with b·x (and q·x)
         // in the same sweep.
         let wdinv = &lev.wdinv;
-        let sums = match &lev.transfer {
+        match &lev.transfer {
             Transfer::Plain { aggs, ap } => {
                 let agg = &aggs.agg;
                 // Both in one pass over A P instead of A: b − A (x + P e) = r − (A P) e, r
                 // being the residual restricted above. A P has a third of A's entries and
-                // gathers from the coarse e (`docs/performance.md` § 4).
+                // gathers from the coarse e (`docs/performance.md` § 4). No other row reads
+                // x here, so the sweep updates it in place.
                 let (r, e) = (&w.r, &w.xc);
-                sweep_dots(ap, e, &mut w.tmp, b, q, |i, ape| {
+                sweep_dots(ap, e, x, b, q, |i, xi, ape| {
                     let k = agg[i];
                     let pe = if k == NO_AGGREGATE { 0.0 } else { e[k as usize] };
-                    x[i] + pe + wdinv[i] * (r[i] - ape)
+                    xi + pe + wdinv[i] * (r[i] - ape)
                 })
             }
             Transfer::Smoothed { p, .. } => {
                 p.map_rows(&w.xc, x, |_, y, s| y + s, |_, _| 0.0);
-                sweep_dots(&lev.a, x, &mut w.tmp, b, q, |i, ax| x[i] + wdinv[i] * (b[i] - ax))
+                let sums = sweep_dots(&lev.a, x, &mut w.tmp, b, q, |i, _, ax| {
+                    x[i] + wdinv[i] * (b[i] - ax)
+                });
+                std::mem::swap(x, &mut w.tmp);
+                sums
             }
-        };
-        std::mem::swap(x, &mut w.tmp);
-        sums
+        }
     }
 }
 
@@ -597,17 +605,16 @@ impl Amg {
     }
 }
 
-/// `out[i] = f(i, Σ_j m_ij v_j)` for every row i, with b·out and q·out (0 without `q`)
-/// summed in the same pass, as [`dot`] sums them.
+/// `out[i] = f(i, out[i], Σ_j m_ij v_j)` for every row i, with b·out and q·out (0 without
+/// `q`) summed in the same pass, as [`dot`] sums them.
 fn sweep_dots(
     m: &Sell,
     v: &[f64],
     out: &mut [f64],
     b: &[f64],
     q: Option<&[f64]>,
-    f: impl Fn(usize, f64) -> f64 + Sync + Send,
+    f: impl Fn(usize, f64, f64) -> f64 + Sync + Send,
 ) -> [f64; 2] {
-    let f = |i: usize, _, s: f64| f(i, s);
     match q {
         None => [ordered_sum(&m.map_rows(v, out, f, |i, x| b[i] * x)), 0.0],
         Some(q) => ordered_sums(&m.map_rows(v, out, f, |i, x| [b[i] * x, q[i] * x])),

@@ -257,6 +257,9 @@ pub struct LinearSystem<'a> {
     /// 1/diag at free nodes, 0 elsewhere (Jacobi preconditioner and free mask).
     pub(crate) inv_diag: Vec<f64>,
     pub(crate) free: Vec<bool>,
+    /// The free nodes next to a fixed node, sorted: the only rows of b_eff that differ
+    /// from b ([`Self::lifted_rhs`]).
+    lift_rows: Vec<u32>,
     method: Method,
     factor: Option<cholesky::Factor>,
     /// Multigrid hierarchy of the free block and the free nodes in unknown order
@@ -350,6 +353,17 @@ impl<'a> LinearSystem<'a> {
             .zip(&free)
             .map(|(&d, &f)| if f && d > 0.0 { 1.0 / d } else { 0.0 })
             .collect();
+        let mut lift_rows: Vec<u32> = constraints
+            .fixed_nodes()
+            .iter()
+            .flat_map(|&p| {
+                let p = p as usize;
+                net.cols()[net.row_ptr()[p]..net.row_ptr()[p + 1]].iter().copied()
+            })
+            .filter(|&q| free[q as usize])
+            .collect();
+        lift_rows.sort_unstable();
+        lift_rows.dedup();
         let mut sys = Self {
             net,
             constraints,
@@ -357,6 +371,7 @@ impl<'a> LinearSystem<'a> {
             diag,
             inv_diag,
             free,
+            lift_rows,
             method,
             factor: None,
             amg: None,
@@ -498,11 +513,7 @@ impl<'a> LinearSystem<'a> {
         };
         self.constraints.impose(&mut x);
         // ‖b_eff‖: the residual with the free unknowns at zero.
-        let mut lift = vec![0.0; n];
-        self.constraints.impose(&mut lift);
-        let mut r = vec![0.0; n];
-        self.residual(rhs, &lift, &mut r);
-        drop(lift);
+        let mut r = self.lifted_rhs(rhs, &x);
         let b_norm = dot(&r, &r).sqrt();
         self.check_rhs(&r, b_norm)?;
         if x0.is_some() {
@@ -606,6 +617,29 @@ impl<'a> LinearSystem<'a> {
             })
             .sum();
         ATTAINABLE_FACTOR * f64::EPSILON * sq.sqrt() / b_norm
+    }
+
+    /// b_eff = b − A x with the free unknowns at zero (x's values are read at the fixed nodes
+    /// only), 0 off the free rows: b itself except on the rows next to a fixed node
+    /// ([`Self::lift_rows`]), so only those are summed: Σ g_ij x_j over their fixed j, in
+    /// the row's order.
+    fn lifted_rhs(&self, b: &[f64], x: &[f64]) -> Vec<f64> {
+        let mut r: Vec<f64> = b
+            .par_iter()
+            .zip(self.free.par_iter())
+            .with_min_len(CHUNK)
+            .map(|(&v, &f)| if f { v } else { 0.0 })
+            .collect();
+        let (row_ptr, cols, kinds) = (self.net.row_ptr(), self.net.cols(), self.constraints.kinds());
+        for &i in &self.lift_rows {
+            let i = i as usize;
+            let lift: f64 = (row_ptr[i]..row_ptr[i + 1])
+                .filter(|&e| kinds[cols[e] as usize] == NodeKind::Fixed)
+                .map(|e| self.entry_value(e) * x[cols[e] as usize])
+                .sum();
+            r[i] = b[i] + lift;
+        }
+        r
     }
 
     /// r = b − A x on free rows (x holds fixed values at fixed nodes), 0 elsewhere.
