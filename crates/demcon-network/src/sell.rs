@@ -53,6 +53,19 @@ pub fn sliced_layout(n: usize, len: impl Fn(usize) -> usize + Sync) -> (Vec<u32>
     (perm, slice_ptr)
 }
 
+/// The sorted position of each row of a sliced layout's `perm` (its inverse; a row's position
+/// stays in its window).
+fn positions(perm: &[u32]) -> Vec<u32> {
+    let mut pos = vec![0u32; perm.len()];
+    pos.par_chunks_mut(WINDOW).enumerate().for_each(|(w, pw)| {
+        let base = w * WINDOW;
+        for (k, &p) in perm[base..base + pw.len()].iter().enumerate() {
+            pw[p as usize - base] = (base + k) as u32;
+        }
+    });
+    pos
+}
+
 /// Per-row terms summed alongside a product ([`Sell::map_rows_with`]): one number, or several
 /// summed componentwise, so that dot products share one pass over the matrix.
 pub(crate) trait Sums: Copy + Default + Send {
@@ -157,12 +170,16 @@ impl Sell {
     }
 
     /// A P for the P with P[j, group[j]] = 1 (no entry where `group[j]` is [`NO_GROUP`]),
-    /// `ngroups` columns: each row's entries summed by their column's group, in f64 and in
-    /// the row's order, rounded once; a row's groups in the order first met. Rows are sorted
-    /// by their own length within the same windows as this layout's. Two passes over the
-    /// entries in storage order, a chunk of rows per task: one counts each row's groups, one
-    /// sums them. The same matrix for any thread count.
-    pub fn group_columns(&self, group: &[u32], ngroups: usize) -> Sell {
+    /// `ngroups` columns, from this layout's values `vals` (f32 or f64, laid out alike): each
+    /// row's entries summed by their column's group, in f64 and in the row's order; a row's
+    /// groups in the order first met. Returned in this form with the sums rounded to f32
+    /// (rows sorted by their own length within the same windows as this layout's), and in
+    /// compressed rows with the f64 sums (columns in the order first met, not sorted): the
+    /// Galerkin sum Pᵀ (A P) reads those rows one by one. Two passes over the entries in
+    /// storage order, a chunk of rows per task: one counts each row's groups, one sums them.
+    /// The same matrices for any thread count.
+    pub fn group_columns<V: Value>(&self, vals: &[V], group: &[u32], ngroups: usize) -> (Sell, Csr) {
+        debug_assert_eq!(vals.len(), self.cols.len());
         let n = self.nrows;
         let grouper = || Grouper {
             mark: vec![[0; LANES]; ngroups],
@@ -181,7 +198,7 @@ impl Sell {
                 let base = c * CHUNK;
                 let mut nnz = 0;
                 for q in (base..base + lc.len()).step_by(LANES) {
-                    let count = g.sum_slice::<false>(self, q / LANES, group);
+                    let count = g.sum_slice::<false, V>(self, vals, q / LANES, group);
                     for (l, &m) in count.iter().enumerate().take(LANES.min(n - q)) {
                         lc[self.perm[q + l] as usize - base] = m as u32;
                         nnz += m;
@@ -191,76 +208,97 @@ impl Sell {
             })
             .sum();
         let (perm, slice_ptr) = sliced_layout(n, |i| lens[i] as usize);
+        let pos = positions(&perm);
+        let mut ptr = Vec::with_capacity(n + 1);
+        ptr.push(0u32);
+        for (i, &m) in lens.iter().enumerate() {
+            // nnz ≤ A's entries, whose count fits u32 (the compressed rows' bound).
+            ptr.push(ptr[i] + m);
+        }
         drop(lens);
         let n_slices = slice_ptr.len() - 1;
         let total = slice_ptr[n_slices];
-        let (mut cols, mut vals) = (vec![0u32; total], vec![0.0f32; total]);
+        let (mut cols, mut vals32) = (vec![0u32; total], vec![0.0f32; total]);
+        let (mut row_cols, mut row_sums) = (vec![0u32; nnz], vec![0.0f64; nnz]);
         // Pass 2, a chunk's slices per task (the fresh pages touched by the thread filling
-        // them). A chunk's rows keep their windows, so they are this layout's chunk too.
+        // them). A chunk's rows keep their windows, so they are this layout's chunk too, and
+        // a contiguous range of the compressed rows.
         let per_chunk = CHUNK / LANES;
         let mut parts = Vec::with_capacity(n_slices.div_ceil(per_chunk));
-        let (mut rest_c, mut rest_v) = (&mut cols[..], &mut vals[..]);
-        for s0 in (0..n_slices).step_by(per_chunk) {
+        let (mut rest_c, mut rest_w) = (&mut cols[..], &mut vals32[..]);
+        let (mut rest_rc, mut rest_rs) = (&mut row_cols[..], &mut row_sums[..]);
+        for (c, s0) in (0..n_slices).step_by(per_chunk).enumerate() {
             let w = slice_ptr[(s0 + per_chunk).min(n_slices)] - slice_ptr[s0];
             let (hc, tc) = rest_c.split_at_mut(w);
-            let (hv, tv) = rest_v.split_at_mut(w);
-            parts.push((hc, hv));
-            (rest_c, rest_v) = (tc, tv);
+            let (hw, tw) = rest_w.split_at_mut(w);
+            let m = (ptr[((c + 1) * CHUNK).min(n)] - ptr[c * CHUNK]) as usize;
+            let (hrc, trc) = rest_rc.split_at_mut(m);
+            let (hrs, trs) = rest_rs.split_at_mut(m);
+            parts.push((hc, hw, hrc, hrs));
+            (rest_c, rest_w, rest_rc, rest_rs) = (tc, tw, trc, trs);
         }
-        let (perm_ref, slice_ptr_ref) = (&perm, &slice_ptr);
+        let (pos_ref, ptr_ref, slice_ptr_ref) = (&pos, &ptr, &slice_ptr);
         parts
             .into_par_iter()
             .enumerate()
             .with_min_len(MIN_TASK_CHUNKS)
-            .for_each_init(
-                || (grouper(), Vec::new()),
-                |(g, pos), (c, (pc, pv))| {
-                    let base = c * CHUNK;
-                    let end = (base + CHUNK).min(n);
-                    // The new position of each of the chunk's rows.
-                    pos.resize(end - base, 0usize);
-                    for q in base..end {
-                        pos[perm_ref[q] as usize - base] = q;
-                    }
-                    let first = slice_ptr_ref[c * per_chunk];
-                    // This layout's slices in storage order (contiguous reads), each lane
-                    // written to its row's new place.
-                    for q in (base..end).step_by(LANES) {
-                        let count = g.sum_slice::<true>(self, q / LANES, group);
-                        for (l, &cl) in count.iter().enumerate().take(LANES.min(n - q)) {
-                            let to = pos[self.perm[q + l] as usize - base];
-                            let s = to / LANES;
-                            let (lo, hi) = (slice_ptr_ref[s] - first, slice_ptr_ref[s + 1] - first);
-                            // The p-th group at slot LANES p; padding: value 0 at the row's
-                            // first column (already read).
-                            let pad = if cl > 0 { g.ks[l] } else { 0 };
-                            // (A slice of empty rows has no slots at all.)
-                            let lane = pc[lo..hi]
-                                .iter_mut()
-                                .skip(to % LANES)
-                                .step_by(LANES)
-                                .zip(pv[lo..hi].iter_mut().skip(to % LANES).step_by(LANES));
-                            for (p, (cj, vj)) in lane.enumerate() {
-                                let slot = LANES * p + l;
-                                (*cj, *vj) = if p < cl {
-                                    (g.ks[slot], g.vs[slot] as f32)
-                                } else {
-                                    (pad, 0.0)
-                                };
-                            }
+            .for_each_init(grouper, |g, (c, (pc, pw, rc, rs))| {
+                let base = c * CHUNK;
+                let end = (base + CHUNK).min(n);
+                let (first, first_row) = (slice_ptr_ref[c * per_chunk], ptr_ref[base]);
+                // This layout's slices in storage order (contiguous reads), each lane
+                // written to its row's new place and to its compressed row.
+                for q in (base..end).step_by(LANES) {
+                    let count = g.sum_slice::<true, V>(self, vals, q / LANES, group);
+                    for (l, &cl) in count.iter().enumerate().take(LANES.min(n - q)) {
+                        let i = self.perm[q + l] as usize;
+                        let to = pos_ref[i] as usize;
+                        let s = to / LANES;
+                        let (lo, hi) = (slice_ptr_ref[s] - first, slice_ptr_ref[s + 1] - first);
+                        // The p-th group at slot LANES p; padding: value 0 at the row's
+                        // first column (already read).
+                        let pad = if cl > 0 { g.ks[l] } else { 0 };
+                        // (A slice of empty rows has no slots at all.)
+                        let lane = pc[lo..hi]
+                            .iter_mut()
+                            .zip(pw[lo..hi].iter_mut())
+                            .skip(to % LANES)
+                            .step_by(LANES);
+                        for (p, (cj, wj)) in lane.enumerate() {
+                            let slot = LANES * p + l;
+                            (*cj, *wj) = if p < cl {
+                                (g.ks[slot], g.vs[slot] as f32)
+                            } else {
+                                (pad, 0.0)
+                            };
+                        }
+                        let at = (ptr_ref[i] - first_row) as usize;
+                        for (p, (kc, vc)) in rc[at..at + cl].iter_mut().zip(&mut rs[at..at + cl]).enumerate()
+                        {
+                            let slot = LANES * p + l;
+                            (*kc, *vc) = (g.ks[slot], g.vs[slot]);
                         }
                     }
-                },
-            );
-        Sell {
-            nrows: n,
-            ncols: ngroups,
-            nnz,
-            perm,
-            slice_ptr,
-            cols,
-            vals,
-        }
+                }
+            });
+        (
+            Sell {
+                nrows: n,
+                ncols: ngroups,
+                nnz,
+                perm,
+                slice_ptr,
+                cols,
+                vals: vals32,
+            },
+            Csr {
+                nrows: n,
+                ncols: ngroups,
+                ptr,
+                cols: row_cols,
+                vals: row_sums,
+            },
+        )
     }
 
     /// `out[i] = f(i, out[i], Σ_j a_ij x_j)` with the stored values; returns the per-chunk
@@ -361,7 +399,13 @@ impl Grouper {
     /// side by side (independent chains); returns each lane's count of groups. Branch-free
     /// but for padding and dropped columns: a group is new to lane l when its mark there is
     /// not this call's tag.
-    fn sum_slice<const SUMS: bool>(&mut self, a: &Sell, s: usize, group: &[u32]) -> [usize; LANES] {
+    fn sum_slice<const SUMS: bool, V: Value>(
+        &mut self,
+        a: &Sell,
+        vals: &[V],
+        s: usize,
+        group: &[u32],
+    ) -> [usize; LANES] {
         self.tag += 1;
         let tag = self.tag;
         let (lo, hi) = (a.slice_ptr[s], a.slice_ptr[s + 1]);
@@ -373,10 +417,10 @@ impl Grouper {
         let mut count = [0usize; LANES];
         for (cj, vj) in a.cols[lo..hi]
             .chunks_exact(LANES)
-            .zip(a.vals[lo..hi].chunks_exact(LANES))
+            .zip(vals[lo..hi].chunks_exact(LANES))
         {
             for l in 0..lanes {
-                let (k, v) = (group[cj[l] as usize], f64::from(vj[l]));
+                let (k, v) = (group[cj[l] as usize], vj[l].into());
                 if v == 0.0 || k == NO_GROUP {
                     continue;
                 }
@@ -436,14 +480,7 @@ impl RowSell {
             });
         let nnz = lens.iter().map(|&l| l as usize).sum();
         let (perm, slice_ptr) = sliced_layout(n, |p| lens[p] as usize);
-        // A row's sorted position stays in its window.
-        let mut pos = vec![0u32; n];
-        pos.par_chunks_mut(WINDOW).enumerate().for_each(|(w, pw)| {
-            let base = w * WINDOW;
-            for (k, &p) in perm[base..base + pw.len()].iter().enumerate() {
-                pw[p as usize - base] = (base + k) as u32;
-            }
-        });
+        let pos = positions(&perm);
         let n_slices = slice_ptr.len() - 1;
         let total = slice_ptr[n_slices];
         // Columns, f64 and f32 values written in one pass (each fresh page is touched by the
@@ -813,7 +850,7 @@ mod tests {
             .collect();
         let ngroups = n.div_ceil(7);
         let s = Sell::from_csr(a.clone());
-        let ap = s.group_columns(&group, ngroups);
+        let ap = s.group_columns(&s.vals, &group, ngroups).0;
         assert_eq!((ap.nrows(), ap.ncols()), (n, ngroups));
         // The same product from the f32 values through P as a vector: A (P e).
         let e: Vec<f64> = (0..ngroups).map(|k| ((k * 31 % 17) as f64) - 8.0).collect();
@@ -853,7 +890,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            let again = pool.install(|| s.group_columns(&group, ngroups));
+            let again = pool.install(|| s.group_columns(&s.vals, &group, ngroups).0);
             assert_eq!(
                 (&again.perm, &again.slice_ptr, &again.cols),
                 (&ap.perm, &ap.slice_ptr, &ap.cols),
@@ -866,6 +903,25 @@ mod tests {
                     .zip(&ap.vals)
                     .all(|(x, y)| x.to_bits() == y.to_bits())
             );
+        }
+        // From the f64 values: each compressed row holds its group sums exactly as summed in
+        // the row's order.
+        let (s64, v64) = Sell::from_csr_with_f64(a.clone());
+        let (_, rows) = s64.group_columns(&v64, &group, ngroups);
+        for i in (0..n).step_by(7) {
+            let (cols, vals) = a.row(i);
+            let mut want: Vec<(u32, f64)> = Vec::new();
+            for (&j, &v) in cols.iter().zip(vals) {
+                let k = group[j as usize];
+                match want.iter_mut().find(|(g, _)| *g == k) {
+                    _ if k == NO_GROUP => {}
+                    Some((_, sum)) => *sum += v,
+                    None => want.push((k, v)),
+                }
+            }
+            let (rc, rv) = rows.row(i);
+            let got: Vec<(u32, f64)> = rc.iter().copied().zip(rv.iter().copied()).collect();
+            assert_eq!(got, want, "row {i}");
         }
     }
 }
