@@ -144,7 +144,7 @@ impl CellGrid {
 /// (32 bytes; the extra spheres of a full cell go to its spill vector). A placement
 /// test reads its cells' slots, one or two cache lines each, and stops at the first overlap,
 /// instead of following linked lists into the particle arrays (at 10⁶ particles, ids placed
-/// largest first lie at random in space and in memory: the placement took 8 s of the 10 s
+/// largest first lie at random in space and in memory: the placement took most of the 10 s
 /// start, now 5 s of 7). Exact values, so the same placements as any exact test.
 #[derive(Debug, Clone)]
 pub struct PlacedGrid {
