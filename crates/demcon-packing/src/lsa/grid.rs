@@ -363,6 +363,14 @@ mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
 
+    /// The box [0, len]³.
+    fn cube(len: f64) -> Aabb {
+        Aabb {
+            min: Vec3::zeros(),
+            max: Vec3::repeat(len),
+        }
+    }
+
     fn brute(points: &[Vec3], p: &Vec3, r: f64, period: Option<f64>) -> Vec<usize> {
         let mut v: Vec<usize> = (0..points.len())
             .filter(|&j| {
@@ -392,10 +400,7 @@ mod tests {
             (f64::INFINITY, 1.0),
         ];
         for (len, cell) in cases {
-            let b = Aabb {
-                min: Vec3::zeros(),
-                max: Vec3::repeat(len),
-            };
+            let b = cube(len);
             for periodic in [false, true] {
                 let mut g = CellGrid::new(&b, cell, periodic, 3, 64);
                 assert!(g.head.len() <= 64, "{len} {cell}");
@@ -473,10 +478,7 @@ mod tests {
     fn finds_all_points_within_one_cell() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
         for (periodic, len) in [(false, 10.0), (true, 10.0), (true, 2.5)] {
-            let b = Aabb {
-                min: Vec3::zeros(),
-                max: Vec3::repeat(len),
-            };
+            let b = cube(len);
             let pts: Vec<Vec3> = (0..300)
                 .map(|_| Vec3::new(rng.random(), rng.random(), rng.random()) * len)
                 .collect();
@@ -504,10 +506,7 @@ mod tests {
     fn placed_grid_reports_exactly_the_overlaps() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         for (periodic, len) in [(false, 6.0), (true, 6.0), (true, 2.5)] {
-            let b = Aabb {
-                min: Vec3::zeros(),
-                max: Vec3::repeat(len),
-            };
+            let b = cube(len);
             let n = 300;
             let mut g = PlacedGrid::new(&b, 1.0, periodic, n, 1 << 20);
             let sep = |d: Vec3| {
