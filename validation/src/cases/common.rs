@@ -380,7 +380,7 @@ pub fn packing_cache_stats() -> (usize, usize, f64) {
 /// The packing of `cfg`'s section and seed, generated once per process; whether it was
 /// reused.
 fn cached_packing(cfg: &SceneConfig) -> anyhow::Result<(Arc<CachedPacking>, bool)> {
-    let key = format!("{:?}|{}", cfg.packing, cfg.seed);
+    let key = packing_key(cfg);
     let cache = PACKINGS.get_or_init(Default::default);
     if let Some(hit) = cache
         .lock()
@@ -399,6 +399,63 @@ fn cached_packing(cfg: &SceneConfig) -> anyhow::Result<(Arc<CachedPacking>, bool
         .map_err(|_| anyhow::anyhow!("packing cache poisoned"))?
         .insert(key, (entry.clone(), 0));
     Ok((entry, false))
+}
+
+/// Makes the generated packings of `cfgs` that this process has not made yet, as many at a
+/// time as rayon has threads, largest first, so that the case's later [`model_of`] calls
+/// find them made. For cases that need several packings: the packer runs on one thread, so
+/// one at a time leaves the other cores idle. A packing is a pure function of its section
+/// and seed, so the packings, and everything computed from them, are those made one by one;
+/// each one's `pack_s` is its own wall time, measured beside the others (sharing the memory
+/// bandwidth). The first error in `cfgs`' order is returned.
+pub fn prepack(cfgs: &[SceneConfig]) -> anyhow::Result<()> {
+    let mut todo: Vec<(usize, SceneConfig)> = Vec::new();
+    let mut keys = std::collections::HashSet::new();
+    for cfg in cfgs {
+        let PackingConfig::Generate { count, .. } = cfg.packing else {
+            continue;
+        };
+        if cfg.cut_contacts.is_some() {
+            continue;
+        }
+        // The key `model_of` will look up: of the validated scene.
+        let scene = Scene::from_config(cfg.clone(), PathBuf::new())?;
+        if keys.insert(packing_key(&scene.config)) && !is_cached(&scene.config) {
+            todo.push((count, scene.config));
+        }
+    }
+    todo.sort_by_key(|(count, _)| std::cmp::Reverse(*count));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let errors = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..rayon::current_num_threads().min(todo.len()) {
+            s.spawn(|| {
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some((_, cfg)) = todo.get(k) else { break };
+                    if let Err(e) = cached_packing(cfg) {
+                        errors.lock().unwrap_or_else(|p| p.into_inner()).push((k, e));
+                    }
+                }
+            });
+        }
+    });
+    let mut errors = errors.into_inner().unwrap_or_else(|p| p.into_inner());
+    errors.sort_by_key(|(k, _)| *k);
+    errors.into_iter().next().map_or(Ok(()), |(_, e)| Err(e))
+}
+
+/// The packing cache's key of a (validated) scene: its packing section and seed.
+fn packing_key(cfg: &SceneConfig) -> String {
+    format!("{:?}|{}", cfg.packing, cfg.seed)
+}
+
+/// Whether the packing of `cfg` has been made in this process.
+fn is_cached(cfg: &SceneConfig) -> bool {
+    PACKINGS
+        .get()
+        .and_then(|c| c.lock().ok())
+        .is_some_and(|c| c.contains_key(&packing_key(cfg)))
 }
 
 /// Validates a scene built in code and builds its model. A generated packing is made once
@@ -560,4 +617,60 @@ pub fn wall(face: FaceConfig, value: f64) -> ThermalBcConfig {
 /// (`20000`), as the metric names documented in the report expect.
 pub fn key(n: usize) -> String {
     n.to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small(seed: u64, count: usize) -> SceneConfig {
+        thermal_scene(
+            "prepack-test",
+            seed,
+            packing(
+                ContainerConfig::Box {
+                    size: (0.01, 0.01, 0.01),
+                },
+                count,
+            ),
+            vec![table1_steel()],
+            ThermalConfig {
+                initial_temperature: 0.0,
+                bcs: vec![fixed(FaceConfig::YMin, 0.0)],
+                sources: Vec::new(),
+                solver: ThermalSolverConfig::Steady,
+                checkpoint: None,
+            },
+        )
+    }
+
+    /// Packings made ahead, several at a time, are the ones a case would make one by one.
+    #[test]
+    fn prepacked_packings_are_those_made_one_by_one() {
+        let scenes: Vec<SceneConfig> = (0..3).map(|k| small(9100 + k, 300 + 50 * k as usize)).collect();
+        // The same scene twice is made once.
+        let mut with_repeat = scenes.clone();
+        with_repeat.push(scenes[0].clone());
+        prepack(&with_repeat).unwrap();
+        for cfg in &scenes {
+            let scene = Scene::from_config(cfg.clone(), PathBuf::new()).unwrap();
+            assert!(is_cached(&scene.config));
+            let cached = model_of(cfg).unwrap();
+            let (direct, ..) =
+                demcon_scene::build::make_particles(&scene.config, std::path::Path::new(""), None).unwrap();
+            assert_eq!(cached.particles.centres, direct.centres);
+            assert_eq!(cached.particles.radii, direct.radii);
+        }
+    }
+
+    /// A packing that cannot be made is reported, naming the field and the value.
+    #[test]
+    fn prepack_reports_a_bad_scene() {
+        let mut bad = small(9200, 300);
+        if let PackingConfig::Generate { phi, .. } = &mut bad.packing {
+            *phi = 1.5;
+        }
+        let err = prepack(&[small(9201, 300), bad]).unwrap_err().to_string();
+        assert!(err.contains("phi") && err.contains("1.5"), "{err}");
+    }
 }

@@ -153,6 +153,7 @@ struct PackingRun {
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let n = ctx.pick(20_000, 100_000);
+    prepack(&(0..PACKINGS).map(|k| scene(n, ctx.seed + k)).collect::<Vec<_>>())?;
     let mut packings = Vec::new();
     for k in 0..PACKINGS {
         packings.push(measure_packing(n, ctx.seed + k, k)?);

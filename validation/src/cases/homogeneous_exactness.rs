@@ -233,6 +233,12 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
 /// Every geometry, every packing, every model.
 fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let n = ctx.pick(10_000, 100_000);
+    let mut scenes: Vec<SceneConfig> = Geometry::ALL
+        .iter()
+        .flat_map(|g| (0..PACKINGS).map(move |k| g.scene(n, ctx.seed + k, &g.axes()[0])))
+        .collect();
+    scenes.extend((0..PACKINGS).map(|k| periodic_scene(n, ctx.seed + k)));
+    prepack(&scenes)?;
     let mut packings = Vec::new();
     for g in Geometry::ALL {
         for k in 0..PACKINGS {

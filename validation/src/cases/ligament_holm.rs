@@ -109,10 +109,16 @@ const MODELS: [Surface; 2] = [Surface::Laguerre, Surface::Terreros];
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let ladder: Vec<usize> = ctx.pick(vec![5_000, 20_000], vec![20_000, 100_000]);
+    let count = |i: usize| if i + 1 == ladder.len() { PACKINGS } else { 1 };
+    let scenes: Vec<SceneConfig> = ladder
+        .iter()
+        .enumerate()
+        .flat_map(|(i, &n)| (0..count(i)).map(move |k| scene(n, ctx.seed + k)))
+        .collect();
+    prepack(&scenes)?;
     let mut packings = Vec::new();
     for (i, &n) in ladder.iter().enumerate() {
-        let count = if i + 1 == ladder.len() { PACKINGS } else { 1 };
-        for k in 0..count {
+        for k in 0..count(i) {
             packings.push(measure_packing(n, ctx.seed + k, k)?);
         }
     }
