@@ -129,6 +129,9 @@ fn laguerre_runs(
 /// calibrated models; the Laguerre cells on further packings.
 fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let n = ctx.pick(20_000, 100_000);
+    let mut scenes = vec![scene(n, ctx.seed, explicit())];
+    scenes.extend((1..PACKINGS).map(|k| scene_laguerre(n, ctx.seed + k, explicit())));
+    prepack(&scenes)?;
     let (model, build_s) = model_of_timed(&scene(n, ctx.seed, explicit()))?;
     let mut laguerre = vec![laguerre_runs(n, ctx.seed, Some(&model), true)?];
     for k in 1..PACKINGS {
