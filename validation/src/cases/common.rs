@@ -623,25 +623,9 @@ pub fn key(n: usize) -> String {
 mod tests {
     use super::*;
 
+    /// A small scene (any case's builder will do: only its packing section and seed count).
     fn small(seed: u64, count: usize) -> SceneConfig {
-        thermal_scene(
-            "prepack-test",
-            seed,
-            packing(
-                ContainerConfig::Box {
-                    size: (0.01, 0.01, 0.01),
-                },
-                count,
-            ),
-            vec![table1_steel()],
-            ThermalConfig {
-                initial_temperature: 0.0,
-                bcs: vec![fixed(FaceConfig::YMin, 0.0)],
-                sources: Vec::new(),
-                solver: ThermalSolverConfig::Steady,
-                checkpoint: None,
-            },
-        )
+        super::super::haddad2021_halo_cov::scene(count, seed)
     }
 
     /// Packings made ahead, several at a time, are the ones a case would make one by one.
