@@ -407,7 +407,8 @@ fn cached_packing(cfg: &SceneConfig) -> anyhow::Result<(Arc<CachedPacking>, bool
 /// one at a time leaves the other cores idle. A packing is a pure function of its section
 /// and seed, so the packings, and everything computed from them, are those made one by one;
 /// each one's `pack_s` is its own wall time, measured beside the others (sharing the memory
-/// bandwidth). The first error in `cfgs`' order is returned.
+/// bandwidth). Of several errors, the one of the largest packing (then the earliest in
+/// `cfgs`) is returned.
 pub fn prepack(cfgs: &[SceneConfig]) -> anyhow::Result<()> {
     let mut todo: Vec<(usize, SceneConfig)> = Vec::new();
     let mut keys = std::collections::HashSet::new();
@@ -425,10 +426,28 @@ pub fn prepack(cfgs: &[SceneConfig]) -> anyhow::Result<()> {
         }
     }
     todo.sort_by_key(|(count, _)| std::cmp::Reverse(*count));
+    let Some(largest) = todo.first().map(|(count, _)| *count) else {
+        return Ok(());
+    };
+    let threads = rayon::current_num_threads().min(todo.len());
+    // A `--full` case can pack for many minutes before its next line: say so.
+    eprintln!(
+        "   making {} packing(s) first, {threads} at a time (the largest of {largest} particles)",
+        todo.len()
+    );
+    let started = std::time::Instant::now();
+    let result = pack_all(&todo, threads);
+    eprintln!("   packings made in {:.1} s", started.elapsed().as_secs_f64());
+    result
+}
+
+/// Makes the packings of `todo` (validated scenes, each with its particle count) on `threads`
+/// threads, each taking the next one in the list; the first error in the list's order.
+fn pack_all(todo: &[(usize, SceneConfig)], threads: usize) -> anyhow::Result<()> {
     let next = std::sync::atomic::AtomicUsize::new(0);
     let errors = std::sync::Mutex::new(Vec::new());
     std::thread::scope(|s| {
-        for _ in 0..rayon::current_num_threads().min(todo.len()) {
+        for _ in 0..threads {
             s.spawn(|| {
                 loop {
                     let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
