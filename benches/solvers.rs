@@ -25,6 +25,7 @@ use std::time::Instant;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use demcon_benches::{summary_only, summary_repeats, wanted};
+use demcon_core::mem::huge_filled;
 use demcon_core::{Container, Face, Selector, Vec3, morton_order};
 use demcon_electric::{ElectricParams, ElectricSolution, solve_potential};
 use demcon_graph::{ContactParams, SurfaceModel, conductances, contact_surfaces, detect_contacts};
@@ -214,8 +215,9 @@ fn bandwidth_summary() {
         let bcs = constraints(&case);
         for precision in [WeightPrecision::F64, WeightPrecision::F32] {
             let st = stepper(&case, &bcs, precision);
-            let mut a = vec![0.5; n];
-            let mut b = vec![0.0; n];
+            // In huge pages, as `run_explicit` allocates them.
+            let mut a = huge_filled(n, 0.5);
+            let mut b = huge_filled(n, 0.0);
             let mut best = f64::INFINITY;
             for _ in 0..30 {
                 let t = Instant::now();
@@ -272,8 +274,9 @@ fn bench_explicit(c: &mut Criterion) {
             let case = build(n, random, 1);
             let bcs = constraints(&case);
             let st = stepper(&case, &bcs, precision);
-            let mut a = vec![0.5; n];
-            let mut b = vec![0.0; n];
+            // In huge pages, as `run_explicit` allocates them.
+            let mut a = huge_filled(n, 0.5);
+            let mut b = huge_filled(n, 0.0);
             // Elements = contacts, so criterion reports contacts per second.
             group.throughput(Throughput::Elements(case.net.n_edges() as u64));
             group.bench_with_input(BenchmarkId::new(label, n), &n, |bch, _| {

@@ -24,6 +24,7 @@ mod components;
 mod diagnostic;
 mod error;
 mod material;
+pub mod mem;
 mod morton;
 mod particles;
 mod region;

@@ -5,6 +5,7 @@
 use std::time::Instant;
 
 use demcon_core::check::{check_finite, check_len};
+use demcon_core::mem::{huge_copy, huge_filled, prefetch};
 use demcon_network::{CHUNK, MIN_TASK_CHUNKS, Network, NodeKind, SELL_LANES, sliced_layout};
 use rayon::prelude::*;
 
@@ -116,6 +117,8 @@ const LANES: usize = SELL_LANES;
 /// reads a u32 column and an f64 weight (12 bytes) and gathers T_q (from cache when the
 /// particles are in a space-filling order); per row a u32 permutation index, c_p, T_p and
 /// T'_p (and s_p only when some source is non-zero). Fixed and excluded rows carry no entry.
+/// The entry streams live in huge pages, and the sweep prefetches the T_q it will gather
+/// 128 entries ahead (results unchanged: both are hints to the machine).
 #[derive(Debug, Clone)]
 pub struct ExplicitStepper<'a> {
     net: std::marker::PhantomData<&'a Network>,
@@ -197,8 +200,10 @@ impl<'a> ExplicitStepper<'a> {
                 "must fit in u32 (≤ 4 294 967 295, about 2·10⁹ contacts)",
             ));
         }
-        let mut cols = vec![0u32; total];
-        let mut weights = vec![0.0f64; total];
+        // The entry streams and the temperatures in huge pages (`demcon_core::mem`): the
+        // gathers of T_q then rarely miss the TLB.
+        let mut cols = huge_filled(total, 0u32);
+        let mut weights = huge_filled(total, 0.0f64);
         let mut centre = vec![1.0; n];
         let mut source = vec![0.0; n];
         let mut scale = vec![0.0; n];
@@ -262,13 +267,12 @@ impl<'a> ExplicitStepper<'a> {
                         "must lie in f32's normal range (1.2e-38 to 3.4e38 W/K) for f32 weights; use WeightPrecision::F64",
                     ));
                 }
-                Weights::F32 {
-                    h: weights
-                        .par_iter()
-                        .with_min_len(CHUNK)
-                        .map(|&h| h as f32)
-                        .collect(),
-                }
+                let mut h = huge_filled(total, 0.0f32);
+                h.par_iter_mut()
+                    .zip(weights.par_iter())
+                    .with_min_len(CHUNK)
+                    .for_each(|(h, &w)| *h = w as f32);
+                Weights::F32 { h }
             }
         };
         Ok(Self {
@@ -336,8 +340,23 @@ impl<'a> ExplicitStepper<'a> {
         }
     }
 
+    /// Starts loading T_q for the entries [`PREFETCH_AHEAD`] after entry `at` (in storage
+    /// order), so that the gathers of a later slice find them in cache. A hint only.
+    #[inline(always)]
+    fn prefetch_ahead(&self, at: usize, t: &[f64]) {
+        if let Some(ahead) = self.cols.get(at + PREFETCH_AHEAD..at + PREFETCH_AHEAD + LANES) {
+            for &q in ahead {
+                if let Some(x) = t.get(q as usize) {
+                    prefetch(x);
+                }
+            }
+        }
+    }
+
     /// One step from `t_old` into `t_new` (K); returns the (min, max) of `t_new` and
-    /// whether a non-finite value appeared.
+    /// whether a non-finite value appeared. At scale, keep both in huge pages
+    /// ([`demcon_core::mem::huge_copy`], as [`run_explicit`] does): at 10⁶ particles the
+    /// gathers of T_q otherwise miss the TLB.
     ///
     /// # Panics
     /// If `t_old` or `t_new` does not have one value per node (an internal invariant of
@@ -365,10 +384,12 @@ impl<'a> ExplicitStepper<'a> {
                                 let src = self.source.as_ref().map_or(0.0, |src| src[i]);
                                 *v = centre[i] * t_old[self.perm[i] as usize] + src;
                             }
-                            for (cj, wj) in self.cols[a..b]
+                            for (k, (cj, wj)) in self.cols[a..b]
                                 .chunks_exact(LANES)
                                 .zip(w[a..b].chunks_exact(LANES))
+                                .enumerate()
                             {
+                                self.prefetch_ahead(a + LANES * k, t_old);
                                 for ((v, &w), &q) in acc.iter_mut().zip(wj).zip(cj) {
                                     *v += w * t_old[q as usize];
                                 }
@@ -379,10 +400,12 @@ impl<'a> ExplicitStepper<'a> {
                             for (l, t) in tp.iter_mut().enumerate().take(lanes) {
                                 *t = t_old[self.perm[i0 + l] as usize];
                             }
-                            for (cj, hj) in self.cols[a..b]
+                            for (k, (cj, hj)) in self.cols[a..b]
                                 .chunks_exact(LANES)
                                 .zip(h[a..b].chunks_exact(LANES))
+                                .enumerate()
                             {
+                                self.prefetch_ahead(a + LANES * k, t_old);
                                 for (((v, &h), &q), &t) in acc.iter_mut().zip(hj).zip(cj).zip(&tp) {
                                     *v += f64::from(h) * (t_old[q as usize] - t);
                                 }
@@ -410,6 +433,16 @@ impl<'a> ExplicitStepper<'a> {
         )
     }
 }
+
+/// How far ahead (stored entries, about 16 rows) the explicit sweep prefetches the
+/// temperatures it will gather. At 10⁶ particles the 8 MB of temperatures are out of cache,
+/// and the gathers of the neighbours that lie far in the index space wait on memory: the
+/// out-of-order window alone does not reach them in time. In a standalone benchmark of the
+/// kernel (10⁶ rows, 7.9·10⁶ entries, medians of 7 rounds, two threads) huge pages took the
+/// step from 7.8 to 9.4·10⁸ contacts/s and this prefetch, 128 entries ahead, to
+/// 10.5–11.1·10⁸; 32, 64 or 256 ahead gained less or the same. In the solver benchmark at
+/// 10⁶: 5.5–5.7 → 8.1–8.3·10⁸ contacts/s (`docs/performance.md`, seventeenth session).
+const PREFETCH_AHEAD: usize = 128;
 
 /// Full steps of `dt` in a segment of length `span` (s), and whether a shortened last step
 /// is needed.
@@ -542,7 +575,7 @@ pub fn run_explicit_from(
     let (mut heat_base, mut cool_base, mut t_change);
     match start {
         TransientStart::Initial(input) => {
-            cur = input.temperatures.to_vec();
+            cur = huge_copy(input.temperatures);
             constraints.impose(&mut cur);
             t0 = cur.clone();
             sources = input.sources.to_vec();
@@ -551,7 +584,7 @@ pub fn run_explicit_from(
         }
         TransientStart::Resume(s) => {
             check_state(s, system, SCHEME, dt, params.t_end, &seg_steps)?;
-            cur = s.temperatures.clone();
+            cur = huge_copy(&s.temperatures);
             t0 = s.initial_temperatures.clone();
             sources = s.sources.clone();
             (first_segment, first_step, steps, prior_wall_s) =
@@ -570,7 +603,7 @@ pub fn run_explicit_from(
     let mut schedule = Schedule::new(checkpoints, steps)?;
     let mut stepper = ExplicitStepper::with_precision(system, &sources, dt, params.weights)?;
     let kinds = constraints.kinds();
-    let mut next = cur.clone();
+    let mut next = huge_copy(&cur);
 
     // Range allowed by the maximum principle, growing with the sources.
     let (lo0, hi0) = t0.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {

@@ -4,7 +4,7 @@
 
 use demcon_core::{Aabb, Vec3};
 
-use super::huge::{huge_filled, prefetch};
+use demcon_core::mem::{huge_filled, prefetch};
 
 const NONE: u32 = u32::MAX;
 

@@ -18,7 +18,6 @@
 //! then at the set rate.
 
 pub(crate) mod grid;
-pub(crate) mod huge;
 pub(crate) mod nblist;
 pub mod predict;
 pub(crate) mod queue;
@@ -34,8 +33,8 @@ use crate::error::PackingError;
 use crate::params::{PackProgress, PackingParams, StopReason};
 use crate::radius::jamming_estimate;
 use crate::report::{PackingReport, summarize};
+use demcon_core::mem::{huge_filled, huge_vec};
 use grid::{PlacedGrid, SphereGrid};
-use huge::{huge_filled, huge_vec};
 use nblist::NbLists;
 use predict::{collide_pair, collide_wall, inside_ball_delay, pair_delay_coef, plane_delay};
 use queue::EventQueue;
@@ -531,7 +530,7 @@ impl Engine {
     fn prefetch_event(&self, k: usize) {
         self.prefetch_neighbours(k);
         if let Ev::Pair { j, .. } = self.nb.event(k) {
-            huge::prefetch(&self.p[j as usize]);
+            demcon_core::mem::prefetch(&self.p[j as usize]);
             self.nb.prefetch(j as usize);
         }
     }
@@ -540,7 +539,7 @@ impl Engine {
     #[inline]
     fn prefetch_neighbours(&self, k: usize) {
         for &j in self.nb.inline_ids(k) {
-            huge::prefetch(&self.p[j as usize]);
+            demcon_core::mem::prefetch(&self.p[j as usize]);
         }
     }
 
@@ -666,7 +665,7 @@ impl Engine {
             // on memory at random places; these hints keep several loads in flight.
             let ru = self.queue.runner_up();
             if let Some(k) = ru {
-                huge::prefetch(&self.p[k]);
+                demcon_core::mem::prefetch(&self.p[k]);
                 self.nb.prefetch(k);
             }
             match self.nb.event(i) {

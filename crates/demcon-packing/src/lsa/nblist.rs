@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use demcon_core::Vec3;
 
 use super::Ev;
-use super::huge::{huge_filled, prefetch};
+use demcon_core::mem::{huge_filled, prefetch};
 
 /// Neighbour ids stored in the block itself. Lists at φ ≈ 0.63 hold ~11 ids on average
 /// (Gaussian 0.3, skin 0.4); a few % of the particles hold more than 20.

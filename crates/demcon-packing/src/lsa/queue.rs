@@ -23,7 +23,7 @@
 //! are dropped when their list is sorted out. The width is chosen at every rebuild (the packer
 //! rebuilds at each thermostat rescale) so that about [`NEAR`] events fall in a bucket.
 
-use super::huge::{huge_filled, prefetch};
+use demcon_core::mem::{huge_filled, prefetch};
 
 /// Children per heap node.
 const D: usize = 8;

@@ -1,17 +1,18 @@
-//! Memory helpers of the event loop: vectors backed by transparent huge pages where the
+//! Memory helpers of the hot loops: vectors backed by transparent huge pages where the
 //! system allows it, and a cache prefetch.
 //!
-//! The packer's arrays are read at random places (events come in time order, i.e. anywhere
-//! in the box): at 10⁶ particles its ~200 MB in 4 KiB pages miss the TLB on almost every
-//! access, and each miss walks page tables that are themselves out of cache. In 2 MiB pages
-//! the same arrays need ~100 TLB entries. Linux hands out such pages for ranges marked with
-//! `madvise(MADV_HUGEPAGE)` before they are first touched (the usual setting of
-//! `/sys/kernel/mm/transparent_hugepage/enabled` is `madvise`). Elsewhere this is a plain
-//! `collect`.
+//! Arrays read at random places miss the TLB: the packer's event loop (events come in time
+//! order, i.e. anywhere in the box: at 10⁶ particles its ~200 MB in 4 KiB pages miss the TLB
+//! on almost every access, and each miss walks page tables that are themselves out of
+//! cache) and the explicit heat step's gathers of the neighbours' temperatures (8 MB at 10⁶
+//! particles). In 2 MiB pages the same arrays need a few hundred TLB entries. Linux hands
+//! out such pages for ranges marked with `madvise(MADV_HUGEPAGE)` before they are first
+//! touched (the usual setting of `/sys/kernel/mm/transparent_hugepage/enabled` is
+//! `madvise`). Elsewhere these are plain vectors. Nothing here changes a value.
 
 /// Collects `items` into a vector whose memory was advised for huge pages before the items
 /// were written (only the whole 2 MiB pages inside it; small vectors are left alone).
-pub(crate) fn huge_vec<T>(items: impl ExactSizeIterator<Item = T>) -> Vec<T> {
+pub fn huge_vec<T>(items: impl ExactSizeIterator<Item = T>) -> Vec<T> {
     let mut v = Vec::with_capacity(items.len());
     advise(v.as_mut_ptr() as usize, v.capacity() * std::mem::size_of::<T>());
     v.extend(items);
@@ -19,14 +20,19 @@ pub(crate) fn huge_vec<T>(items: impl ExactSizeIterator<Item = T>) -> Vec<T> {
 }
 
 /// `n` copies of `value` in a vector advised as in [`huge_vec`].
-pub(crate) fn huge_filled<T: Clone>(n: usize, value: T) -> Vec<T> {
+pub fn huge_filled<T: Clone>(n: usize, value: T) -> Vec<T> {
     huge_vec(std::iter::repeat_n(value, n))
+}
+
+/// A copy of `x` in a vector advised as in [`huge_vec`].
+pub fn huge_copy<T: Copy>(x: &[T]) -> Vec<T> {
+    huge_vec(x.iter().copied())
 }
 
 /// Asks the processor to start loading the cache line holding `*x` (no effect on results;
 /// a no-op off x86-64).
 #[inline(always)]
-pub(crate) fn prefetch<T>(x: &T) {
+pub fn prefetch<T>(x: &T) {
     #[cfg(target_arch = "x86_64")]
     #[allow(unsafe_code)]
     // SAFETY: a prefetch is a hint that never faults and writes nothing; the address comes
@@ -73,5 +79,6 @@ mod tests {
         assert_eq!(v.len(), 3_000_000);
         assert_eq!(v[1_234_567], 2_469_134);
         assert_eq!(huge_filled(5, 7u8), vec![7u8; 5]);
+        assert_eq!(huge_copy(&v[..]), v);
     }
 }
