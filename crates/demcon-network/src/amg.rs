@@ -52,7 +52,7 @@ use rayon::prelude::*;
 use crate::csr::{Accumulator, Csr, Value};
 use crate::error::SolveError;
 use crate::par::{CHUNK, chunks_map, chunks_map2, dot, ordered_sum, ordered_sums};
-use crate::sell::{NO_GROUP, RowSell, Sell};
+use crate::sell::{NO_GROUP, PREFETCH_AHEAD, PREFETCH_MIN_COLS, RowSell, SELL_LANES, Sell, prefetch_gathers};
 
 /// Largest level solved directly by dense Cholesky (unknowns).
 pub(crate) const MAX_COARSE: usize = 400;
@@ -208,10 +208,17 @@ impl Transfer {
             }
             Self::Plain { aggs, .. } => {
                 let (ptr, members) = (&aggs.ptr, &aggs.members);
+                let ahead = r.len() >= PREFETCH_MIN_COLS;
                 chunks_map(bc, |c, out| {
                     let base = c * CHUNK;
                     for (k, o) in out.iter_mut().enumerate() {
                         let (lo, hi) = (ptr[base + k] as usize, ptr[base + k + 1] as usize);
+                        if ahead {
+                            // The members PREFETCH_AHEAD entries on (a later aggregate's).
+                            for at in (lo..hi).step_by(SELL_LANES) {
+                                prefetch_gathers(members, at + PREFETCH_AHEAD, r);
+                            }
+                        }
                         *o = members[lo..hi].iter().map(|&i| r[i as usize]).sum();
                     }
                 });

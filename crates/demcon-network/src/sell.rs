@@ -31,6 +31,29 @@ const LANES: usize = SELL_LANES;
 const WINDOW: usize = SELL_WINDOW;
 const _: () = assert!(CHUNK.is_multiple_of(WINDOW) && WINDOW.is_multiple_of(LANES));
 
+/// How far ahead (stored entries, about 16 rows) a sliced sweep over a large vector
+/// prefetches the x_j it will gather: at 10⁶ unknowns x (8 MB) is out of cache, and the
+/// gathers of the columns far away in the index space wait on memory. The explicit heat
+/// step does the same (`demcon-thermal`, 128 entries ahead, `docs/performance.md`,
+/// seventeenth session).
+pub(crate) const PREFETCH_AHEAD: usize = 128;
+
+/// Fewest columns (x's length) from which a sweep prefetches its gathers (1 MB of x); below,
+/// x stays in cache and the hints would only cost instructions.
+pub(crate) const PREFETCH_MIN_COLS: usize = 1 << 17;
+
+/// Starts loading `x[idx[at..at + SELL_LANES]]` where those indices exist (a hint only).
+#[inline(always)]
+pub(crate) fn prefetch_gathers(idx: &[u32], at: usize, x: &[f64]) {
+    if let Some(ahead) = idx.get(at..at + LANES) {
+        for &q in ahead {
+            if let Some(v) = x.get(q as usize) {
+                demcon_core::mem::prefetch(v);
+            }
+        }
+    }
+}
+
 /// The sliced layout of `n` rows of `len(p)` entries: the row at each sorted position
 /// (longest first within windows of [`SELL_WINDOW`] rows, ties by index) and the start of
 /// each slice's entries ([`SELL_LANES`] rows per slice, padded to the slice's longest row;
@@ -132,8 +155,27 @@ impl Sell {
     /// `vals` (`self.vals`, or other values laid out alike: [`Sell::from_csr_with_f64`]);
     /// returns, per [`CHUNK`] of rows in chunk order, the sum of `g(i, out[i])` (new value)
     /// over the chunk's rows in their sorted order (a number, or several: [`Sums`]).
+    /// Where `x` is larger than the caches ([`PREFETCH_MIN_COLS`] columns or more), the
+    /// sweep prefetches the x_j it will gather [`PREFETCH_AHEAD`] entries ahead.
     #[inline(always)]
     pub fn map_rows_with<V: Value, S: Sums>(
+        &self,
+        vals: &[V],
+        x: &[f64],
+        out: &mut [f64],
+        f: impl Fn(usize, f64, f64) -> f64 + Sync + Send,
+        g: impl Fn(usize, f64) -> S + Sync + Send,
+    ) -> Vec<S> {
+        if self.ncols >= PREFETCH_MIN_COLS {
+            self.sweep::<true, V, S>(vals, x, out, f, g)
+        } else {
+            self.sweep::<false, V, S>(vals, x, out, f, g)
+        }
+    }
+
+    /// [`Self::map_rows_with`], prefetching or not.
+    #[inline(always)]
+    fn sweep<const PREFETCH: bool, V: Value, S: Sums>(
         &self,
         vals: &[V],
         x: &[f64],
@@ -149,10 +191,14 @@ impl Sell {
             for s in base / LANES..end.div_ceil(LANES) {
                 let (lo, hi) = (self.slice_ptr[s], self.slice_ptr[s + 1]);
                 let mut acc = [0.0f64; LANES];
-                for (cj, vj) in self.cols[lo..hi]
+                for (k, (cj, vj)) in self.cols[lo..hi]
                     .chunks_exact(LANES)
                     .zip(vals[lo..hi].chunks_exact(LANES))
+                    .enumerate()
                 {
+                    if PREFETCH {
+                        prefetch_gathers(&self.cols, lo + LANES * k + PREFETCH_AHEAD, x);
+                    }
                     for ((a, &v), &q) in acc.iter_mut().zip(vj).zip(cj) {
                         *a += v.into() * x[q as usize];
                     }
