@@ -31,15 +31,17 @@ const LANES: usize = SELL_LANES;
 const WINDOW: usize = SELL_WINDOW;
 const _: () = assert!(CHUNK.is_multiple_of(WINDOW) && WINDOW.is_multiple_of(LANES));
 
-/// How far ahead (stored entries, about 16 rows) a sliced sweep over a large vector
+/// How far ahead (stored entries, about 30 rows) a sliced sweep over a large vector
 /// prefetches the x_j it will gather: at 10⁶ unknowns x (8 MB) is out of cache, and the
-/// gathers of the columns far away in the index space wait on memory. The explicit heat
-/// step does the same (`demcon-thermal`, 128 entries ahead, `docs/performance.md`,
-/// seventeenth session).
-pub(crate) const PREFETCH_AHEAD: usize = 128;
+/// gathers of the columns far away in the index space wait on memory. The 10⁶ electric
+/// solve, 36 solves each (`docs/performance.md`, seventeenth session): solve median 0.75 s
+/// at 64 or 128 entries ahead, 0.68–0.70 s at 256 or 512, 0.82 s without. The explicit heat
+/// step does the same (`demcon-thermal`).
+pub(crate) const PREFETCH_AHEAD: usize = 256;
 
 /// Fewest columns (x's length) from which a sweep prefetches its gathers (1 MB of x); below,
-/// x stays in cache and the hints would only cost instructions.
+/// x stays in cache and the hints only cost instructions (from 16 384 columns, so on level
+/// 1 too: no faster).
 pub(crate) const PREFETCH_MIN_COLS: usize = 1 << 17;
 
 /// Starts loading `x[idx[at..at + SELL_LANES]]` where those indices exist (a hint only).
