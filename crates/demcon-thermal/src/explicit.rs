@@ -117,8 +117,8 @@ const LANES: usize = SELL_LANES;
 /// reads a u32 column and an f64 weight (12 bytes) and gathers T_q (from cache when the
 /// particles are in a space-filling order); per row a u32 permutation index, c_p, T_p and
 /// T'_p (and s_p only when some source is non-zero). Fixed and excluded rows carry no entry.
-/// The entry streams live in huge pages, and the sweep prefetches the T_q it will gather
-/// 128 entries ahead (results unchanged: both are hints to the machine).
+/// The entry streams live in huge pages, and from 2¹⁷ rows on the sweep prefetches the T_q
+/// it will gather 128 entries ahead (results unchanged: both are hints to the machine).
 #[derive(Debug, Clone)]
 pub struct ExplicitStepper<'a> {
     net: std::marker::PhantomData<&'a Network>,
@@ -362,6 +362,15 @@ impl<'a> ExplicitStepper<'a> {
     /// If `t_old` or `t_new` does not have one value per node (an internal invariant of
     /// [`run_explicit`]).
     pub fn step(&self, t_old: &[f64], t_new: &mut [f64]) -> (f64, f64, bool) {
+        if self.n >= PREFETCH_MIN_ROWS {
+            self.sweep::<true>(t_old, t_new)
+        } else {
+            self.sweep::<false>(t_old, t_new)
+        }
+    }
+
+    /// [`Self::step`], prefetching the gathers or not.
+    fn sweep<const PREFETCH: bool>(&self, t_old: &[f64], t_new: &mut [f64]) -> (f64, f64, bool) {
         let n = self.n;
         assert!(t_old.len() == n && t_new.len() == n, "one temperature per node");
         let partials: Vec<(f64, f64, bool)> = t_new
@@ -389,7 +398,9 @@ impl<'a> ExplicitStepper<'a> {
                                 .zip(w[a..b].chunks_exact(LANES))
                                 .enumerate()
                             {
-                                self.prefetch_ahead(a + LANES * k, t_old);
+                                if PREFETCH {
+                                    self.prefetch_ahead(a + LANES * k, t_old);
+                                }
                                 for ((v, &w), &q) in acc.iter_mut().zip(wj).zip(cj) {
                                     *v += w * t_old[q as usize];
                                 }
@@ -405,7 +416,9 @@ impl<'a> ExplicitStepper<'a> {
                                 .zip(h[a..b].chunks_exact(LANES))
                                 .enumerate()
                             {
-                                self.prefetch_ahead(a + LANES * k, t_old);
+                                if PREFETCH {
+                                    self.prefetch_ahead(a + LANES * k, t_old);
+                                }
                                 for (((v, &h), &q), &t) in acc.iter_mut().zip(hj).zip(cj).zip(&tp) {
                                     *v += f64::from(h) * (t_old[q as usize] - t);
                                 }
@@ -443,6 +456,11 @@ impl<'a> ExplicitStepper<'a> {
 /// 10.5–11.1·10⁸; 32, 64 or 256 ahead gained less or the same. In the solver benchmark at
 /// 10⁶: 5.5–5.7 → 8.1–8.3·10⁸ contacts/s (`docs/performance.md`, seventeenth session).
 const PREFETCH_AHEAD: usize = 128;
+
+/// Fewest rows from which the sweep prefetches (1 MB of temperatures). Below, the
+/// temperatures stay in cache and the hints only cost instructions: at 10⁵ particles the
+/// step was 13–17 % slower with them (`docs/performance.md`, seventeenth session).
+const PREFETCH_MIN_ROWS: usize = 1 << 17;
 
 /// Full steps of `dt` in a segment of length `span` (s), and whether a shortened last step
 /// is needed.
