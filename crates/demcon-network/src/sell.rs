@@ -46,7 +46,7 @@ pub(crate) const PREFETCH_MIN_COLS: usize = 1 << 17;
 
 /// Starts loading `x[idx[at..at + SELL_LANES]]` where those indices exist (a hint only).
 #[inline(always)]
-pub(crate) fn prefetch_gathers(idx: &[u32], at: usize, x: &[f64]) {
+pub(crate) fn prefetch_gathers<T>(idx: &[u32], at: usize, x: &[T]) {
     if let Some(ahead) = idx.get(at..at + LANES) {
         for &q in ahead {
             if let Some(v) = x.get(q as usize) {
@@ -463,10 +463,15 @@ impl Grouper {
         }
         let lanes = LANES.min(a.nrows - s * LANES);
         let mut count = [0usize; LANES];
-        for (cj, vj) in a.cols[lo..hi]
+        let ahead = group.len() >= PREFETCH_MIN_COLS;
+        for (k, (cj, vj)) in a.cols[lo..hi]
             .chunks_exact(LANES)
             .zip(vals[lo..hi].chunks_exact(LANES))
+            .enumerate()
         {
+            if ahead {
+                prefetch_gathers(&a.cols, lo + LANES * k + PREFETCH_AHEAD, group);
+            }
             for l in 0..lanes {
                 let (k, v) = (group[cj[l] as usize], vj[l].into());
                 if v == 0.0 || k == NO_GROUP {
