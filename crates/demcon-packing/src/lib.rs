@@ -49,7 +49,7 @@ pub use params::{
 pub use radius::{DEFAULT_TRUNCATION_SIGMAS, MIN_RATIO_FLOOR, RadiusDistribution, jamming_estimate};
 pub use report::{PackingReport, PackingSummary, RadiusSummary, bulk_phi, max_overlap, summarize};
 pub use stress::{STRESS_GROWTH_RATES, StressFailure, StressReport, stress_packings};
-pub use tile::{Repeat, tile, tiled_count};
+pub use tile::{Repeat, TILE_BYTES_PER_PARTICLE, check_tile_memory, tile, tiled_count};
 pub use xyzr::{
     INSIDE_TOLERANCE, MAX_FILE_PHI, XyzrFile, check_inside, check_writable, format_xyzr, parse_xyzr,
     read_xyzr, read_xyzr_container, read_xyzr_file, write_atomic, write_atomic_all, write_xyzr,

@@ -54,13 +54,33 @@ pub const DEFAULT_MEMORY_LIMIT: u64 = 64 << 30;
 /// Largest particle count (ids are `u32`).
 pub const MAX_COUNT: usize = u32::MAX as usize - 1;
 
-/// Where a memory limit comes from, for the message of [`PackingParams::check_memory`].
+/// Where a memory limit comes from, for the messages of [`PackingParams::check_memory`] and
+/// [`crate::check_tile_memory`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MemoryLimit {
     /// Available memory as measured (e.g. `MemAvailable` of `/proc/meminfo`), bytes.
     Available(u64),
     /// The fixed [`DEFAULT_MEMORY_LIMIT`], when nothing was measured.
     Fixed,
+}
+
+impl MemoryLimit {
+    /// The memory available to a new process: `MemAvailable` of `/proc/meminfo` where it can
+    /// be read ([`demcon_core::available_memory`]), else [`Self::Fixed`].
+    pub fn current() -> Self {
+        demcon_core::available_memory().map_or(Self::Fixed, Self::Available)
+    }
+
+    /// The limit (bytes) and where it comes from, in words.
+    pub fn bytes_and_source(self) -> (u64, &'static str) {
+        match self {
+            Self::Available(b) => (b, "available memory (MemAvailable in /proc/meminfo)"),
+            Self::Fixed => (
+                DEFAULT_MEMORY_LIMIT,
+                "fixed limit (the available memory is not known)",
+            ),
+        }
+    }
 }
 
 /// Parameters of a Lubachevsky–Stillinger packing. Build with [`PackingParams::new`] and
@@ -148,13 +168,7 @@ impl PackingParams {
     /// Refuses a `count` whose [`memory_estimate`](Self::memory_estimate) exceeds `limit`;
     /// the message gives both and says where the limit comes from.
     pub fn check_memory(&self, limit: MemoryLimit) -> Result<(), CoreError> {
-        let (bytes, source) = match limit {
-            MemoryLimit::Available(b) => (b, "available memory (MemAvailable in /proc/meminfo)"),
-            MemoryLimit::Fixed => (
-                DEFAULT_MEMORY_LIMIT,
-                "fixed limit (the available memory is not known)",
-            ),
-        };
+        let (bytes, source) = limit.bytes_and_source();
         let need = self.memory_estimate();
         if need > bytes {
             return Err(CoreError::invalid(

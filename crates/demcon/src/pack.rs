@@ -78,21 +78,6 @@ pub struct PackArgs {
     quiet: bool,
 }
 
-/// The memory available to a new process: `MemAvailable` of `/proc/meminfo` when it can be
-/// read, else the packing crate's fixed limit.
-fn memory_limit() -> MemoryLimit {
-    std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find_map(|l| l.strip_prefix("MemAvailable:"))
-                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
-        })
-        .map_or(MemoryLimit::Fixed, |kb| {
-            MemoryLimit::Available(kb.saturating_mul(1024))
-        })
-}
-
 /// Runs `demcon pack`.
 pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
     let container = a
@@ -160,7 +145,7 @@ pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
         params.compression_growth_rate = g;
     }
     params.validate()?;
-    params.check_memory(memory_limit())?;
+    params.check_memory(MemoryLimit::current())?;
     // Every output can be written: checked before the packing, not after it.
     check_writable(&a.out).context("--out")?;
     if let Some(path) = &a.report_json {

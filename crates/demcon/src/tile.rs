@@ -6,7 +6,10 @@ use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use demcon_packing::{check_writable, format_xyzr, read_xyzr_file, summarize, tile, write_atomic_all};
+use demcon_packing::{
+    MemoryLimit, check_tile_memory, check_writable, format_xyzr, read_xyzr_file, summarize, tile,
+    tiled_count, write_atomic_all,
+};
 
 /// Flags of `demcon tile`.
 #[derive(Debug, Args)]
@@ -37,6 +40,10 @@ pub fn run(a: TileArgs) -> anyhow::Result<ExitCode> {
             a.file.display()
         );
     };
+    // The count and its memory first: a tiling too large for this machine is refused with the
+    // estimate instead of being killed by the system half-way.
+    let total = tiled_count(f.particles.len(), [nx, ny, nz], "repeat").context("--repeat")?;
+    check_tile_memory(total, MemoryLimit::current(), "repeat").context("--repeat")?;
     let (tiled, big) = tile(&f.particles, &container, [nx, ny, nz]).context("--repeat")?;
     let mut notes = f.notes.clone();
     notes.push(format!(

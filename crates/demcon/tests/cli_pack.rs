@@ -218,6 +218,11 @@ fn tile_copies_a_periodic_file_and_refuses_what_it_cannot_tile() {
         (vec!["tile", p_s, "--repeat", "2,0,3"], "repeat[1] = 0"),
         (vec!["tile", p_s, "--repeat", "2,2"], "three counts"),
         (vec!["tile", b_s, "--repeat", "2,2,2"], "only a periodic packing"),
+        // 3·10⁹ particles: within the 32-bit ids, beyond any machine's memory.
+        (
+            vec!["tile", p_s, "--repeat", "1000,1000,10"],
+            "tiling needs ~160 bytes per particle of the result",
+        ),
     ] {
         let mut args = args;
         args.extend(["--out", t_s]);
