@@ -57,7 +57,7 @@ pub use flows::{boundary_flow, edge_flows};
 pub use homogenize::{Homogenized, homogenize};
 pub use network::Network;
 pub use par::{CHUNK, MIN_TASK_CHUNKS};
-pub use sell::{SELL_LANES, SELL_WINDOW, sliced_layout};
+pub use sell::{SELL_LANES, SELL_WINDOW, prefetch_gathers, sliced_layout};
 pub use solve::{
     AUTO_AMG_MIN_UNKNOWNS, LinearSystem, MAX_RHS_ENTRY, Method, STAGNATION_DECREASE, STAGNATION_WINDOW,
     Solution, SolveParams, SolveReport, solve_shifted, solve_steady,

@@ -44,9 +44,10 @@ pub(crate) const PREFETCH_AHEAD: usize = 256;
 /// 1 too: no faster).
 pub(crate) const PREFETCH_MIN_COLS: usize = 1 << 17;
 
-/// Starts loading `x[idx[at..at + SELL_LANES]]` where those indices exist (a hint only).
+/// Starts loading `x[idx[at..at + SELL_LANES]]` where those indices exist (a hint only): the
+/// prefetch of the sliced sweeps here and of the explicit heat step (`demcon-thermal`).
 #[inline(always)]
-pub(crate) fn prefetch_gathers<T>(idx: &[u32], at: usize, x: &[T]) {
+pub fn prefetch_gathers<T>(idx: &[u32], at: usize, x: &[T]) {
     if let Some(ahead) = idx.get(at..at + LANES) {
         for &q in ahead {
             if let Some(v) = x.get(q as usize) {

@@ -5,8 +5,10 @@
 use std::time::Instant;
 
 use demcon_core::check::{check_finite, check_len};
-use demcon_core::mem::{huge_copy, huge_filled, prefetch};
-use demcon_network::{CHUNK, MIN_TASK_CHUNKS, Network, NodeKind, SELL_LANES, sliced_layout};
+use demcon_core::mem::{huge_copy, huge_filled};
+use demcon_network::{
+    CHUNK, MIN_TASK_CHUNKS, Network, NodeKind, SELL_LANES, prefetch_gathers, sliced_layout,
+};
 use rayon::prelude::*;
 
 use crate::capacity::DtBound;
@@ -340,19 +342,6 @@ impl<'a> ExplicitStepper<'a> {
         }
     }
 
-    /// Starts loading T_q for the entries [`PREFETCH_AHEAD`] after entry `at` (in storage
-    /// order), so that the gathers of a later slice find them in cache. A hint only.
-    #[inline(always)]
-    fn prefetch_ahead(&self, at: usize, t: &[f64]) {
-        if let Some(ahead) = self.cols.get(at + PREFETCH_AHEAD..at + PREFETCH_AHEAD + LANES) {
-            for &q in ahead {
-                if let Some(x) = t.get(q as usize) {
-                    prefetch(x);
-                }
-            }
-        }
-    }
-
     /// One step from `t_old` into `t_new` (K); returns the (min, max) of `t_new` and
     /// whether a non-finite value appeared. At scale, keep both in huge pages
     /// ([`demcon_core::mem::huge_copy`], as [`run_explicit`] does): at 10⁶ particles the
@@ -399,7 +388,7 @@ impl<'a> ExplicitStepper<'a> {
                                 .enumerate()
                             {
                                 if PREFETCH {
-                                    self.prefetch_ahead(a + LANES * k, t_old);
+                                    prefetch_gathers(&self.cols, a + LANES * k + PREFETCH_AHEAD, t_old);
                                 }
                                 for ((v, &w), &q) in acc.iter_mut().zip(wj).zip(cj) {
                                     *v += w * t_old[q as usize];
@@ -417,7 +406,7 @@ impl<'a> ExplicitStepper<'a> {
                                 .enumerate()
                             {
                                 if PREFETCH {
-                                    self.prefetch_ahead(a + LANES * k, t_old);
+                                    prefetch_gathers(&self.cols, a + LANES * k + PREFETCH_AHEAD, t_old);
                                 }
                                 for (((v, &h), &q), &t) in acc.iter_mut().zip(hj).zip(cj).zip(&tp) {
                                     *v += f64::from(h) * (t_old[q as usize] - t);
