@@ -1,9 +1,11 @@
 //! `cargo xtask fuzz [--runs N] [--seed S] [--timeout SECS] [--out DIR]`: a fuzz campaign of
 //! the `demcon` binary. Each case mutates an input at random — an example scene (its particle
-//! count capped so a case runs in about a second), a packing file, or the flags of `pack` —
+//! count capped so a case runs in about a second), a packing file, a periodic packing file and
+//! the repeat counts of `tile`, or the flags of `pack` —
 //! and runs the release binary on it with a time limit, two cases at a time. The summary
 //! counts, beside the clean errors and the successes:
-//! - panics (exit code 101 or "panicked" on stderr),
+//! - panics (exit code 101 or "panicked" on stderr) and deaths by a signal (e.g. the
+//!   system's out-of-memory killer),
 //! - hangs (killed at the time limit),
 //! - non-finite outputs (a successful run whose outputs hold NaN/inf, or a null where a
 //!   number belongs in `summary.json`),
@@ -137,7 +139,7 @@ pub fn run(rest: &[String]) -> Result<()> {
     let c = counts.into_inner().unwrap();
     let summary = format!(
         "fuzz: {runs} cases (seed {seed}, timeout {timeout} s) in {:.0} s: {} ran, {} clean errors; \
-         panics {}, hangs {}, non-finite outputs {}, outputs left by failed runs {}",
+         panics or signals {}, hangs {}, non-finite outputs {}, outputs left by failed runs {}",
         start.elapsed().as_secs_f64(),
         c[Outcome::Ok as usize],
         c[Outcome::CleanError as usize],
@@ -159,10 +161,11 @@ pub fn run(rest: &[String]) -> Result<()> {
 }
 
 /// The inputs mutations start from: the example scenes (particle counts capped at 400,
-/// no VTK) and a small packing file written by `demcon pack`.
+/// no VTK) and two small packing files written by `demcon pack`, in a box and periodic.
 struct Corpus {
     scenes: Vec<(String, String)>,
     packing: String,
+    periodic: String,
 }
 
 fn corpus(bin: &Path, out: &Path) -> Result<Corpus> {
@@ -180,28 +183,24 @@ fn corpus(bin: &Path, out: &Path) -> Result<Corpus> {
         ));
     }
     scenes.sort();
-    let pk = out.join("corpus.xyzr");
-    let status = Command::new(bin)
-        .args([
-            "pack",
-            "--container",
-            "box",
-            "--size",
-            "0.01,0.01,0.01",
-            "--count",
-            "300",
-        ])
-        .args(["--phi", "0.55", "--seed", "3", "--out"])
-        .arg(&pk)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()?;
-    if !status.success() {
-        bail!("could not write the corpus packing");
-    }
+    let packing = |container: &str| -> Result<String> {
+        let pk = out.join(format!("corpus-{container}.xyzr"));
+        let status = Command::new(bin)
+            .args(["pack", "--container", container, "--size", "0.01,0.01,0.01"])
+            .args(["--count", "300", "--phi", "0.55", "--seed", "3", "--out"])
+            .arg(&pk)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()?;
+        if !status.success() {
+            bail!("could not write the corpus packing ({container})");
+        }
+        Ok(std::fs::read_to_string(&pk)?)
+    };
     Ok(Corpus {
         scenes,
-        packing: std::fs::read_to_string(&pk)?,
+        packing: packing("box")?,
+        periodic: packing("periodic")?,
     })
 }
 
@@ -327,6 +326,35 @@ fn mutate(c: &Corpus, rng: &mut Rng) -> Case {
                 }
             }
         }
+        // `tile` of the periodic packing file, mutated or not, each repeat count a small one
+        // or an extreme value.
+        8 => {
+            let file = if rng.below(2) == 0 {
+                edit(&c.periodic, rng)
+            } else {
+                c.periodic.clone().into_bytes()
+            };
+            // 3000 along two axes or more asks for ≥ 2.7·10⁹ particles: within the 32-bit
+            // ids, beyond any machine's memory (to be refused with the estimate).
+            let repeat: Vec<String> = (0..3)
+                .map(|_| match rng.below(6) {
+                    0 | 1 => EXTREMES[rng.below(EXTREMES.len())].to_string(),
+                    2 => "3000".to_string(),
+                    _ => (1 + rng.below(3)).to_string(),
+                })
+                .collect();
+            Case {
+                files: vec![("p.xyzr".into(), file)],
+                args: s(&[
+                    "tile",
+                    "{dir}/p.xyzr",
+                    "--repeat",
+                    &repeat.join(","),
+                    "--out",
+                    "{dir}/t.xyzr",
+                ]),
+            }
+        }
         // `pack` with one flag set to an extreme value.
         _ => {
             let mut args = s(&[
@@ -417,10 +445,12 @@ fn execute(bin: &Path, args: &[String], dir: &Path, timeout: f64) -> Outcome {
         use std::io::Read;
         let _ = e.read_to_string(&mut err);
     }
-    if status.code() == Some(101) || err.contains("panicked") {
+    // A panic, or a death by a signal this harness did not send (the system's out-of-memory
+    // killer, a crash): counted together.
+    if status.code() == Some(101) || status.code().is_none() || err.contains("panicked") {
         return Outcome::Panic;
     }
-    let outputs: Vec<PathBuf> = ["out", "p.xyzr"]
+    let outputs: Vec<PathBuf> = ["out", "p.xyzr", "t.xyzr"]
         .iter()
         .map(|f| dir.join(f))
         .filter(|p| p.exists())
@@ -431,8 +461,10 @@ fn execute(bin: &Path, args: &[String], dir: &Path, timeout: f64) -> Outcome {
         return Outcome::CleanError;
     }
     if !status.success() {
-        // A failed run leaves no output folder, a failed `pack` no packing file.
-        let left = dir.join("out").exists() || (args[0] == "pack" && dir.join("p.xyzr").exists());
+        // A failed run leaves no output folder, a failed `pack` or `tile` no packing file.
+        let left = dir.join("out").exists()
+            || (args[0] == "pack" && dir.join("p.xyzr").exists())
+            || dir.join("t.xyzr").exists();
         return if left {
             Outcome::LeftOutput
         } else {
@@ -462,6 +494,12 @@ fn non_finite(path: &Path) -> bool {
         };
         let lower = t.to_ascii_lowercase();
         let csv_bad = lower.contains(",nan") || lower.contains(",inf") || lower.contains(",-inf");
+        // A packing file: every number of a data line finite.
+        let xyzr_bad = f.extension().and_then(|e| e.to_str()) == Some("xyzr")
+            && t.lines().filter(|l| !l.starts_with('#')).any(|l| {
+                l.split_whitespace()
+                    .any(|w| w.parse::<f64>().is_ok_and(|v| !v.is_finite()))
+            });
         let json_bad = f.extension().and_then(|e| e.to_str()) == Some("json")
             && [
                 "\"value\": null",
@@ -471,6 +509,6 @@ fn non_finite(path: &Path) -> bool {
             ]
             .iter()
             .any(|k| t.contains(k));
-        csv_bad || json_bad
+        csv_bad || json_bad || xyzr_bad
     })
 }
