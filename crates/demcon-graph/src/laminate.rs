@@ -318,12 +318,20 @@ impl<'a> Laminates<'a> {
         }
     }
 
-    /// Volume fraction of each of `n_phases` phases carried by the particles:
+    /// Share of each of `n_phases` phases in the particles' own (sphere) volume:
     /// Σ_p v_p,phase V_p / Σ V_p.
     pub fn phase_fractions(&self, particles: &ParticleSet, n_phases: usize) -> Vec<f64> {
+        let spheres: Vec<f64> = (0..particles.len()).map(|p| particles.volume(p)).collect();
+        self.phase_fractions_by(particles, &spheres, n_phases)
+    }
+
+    /// Share of each of `n_phases` phases in the volumes `volumes` (m³ per particle, e.g. the
+    /// Laguerre cells: the body's volume fractions): Σ_p v_p,phase W_p / Σ W_p, a cut
+    /// particle split by its laminate fraction.
+    pub fn phase_fractions_by(&self, particles: &ParticleSet, volumes: &[f64], n_phases: usize) -> Vec<f64> {
+        debug_assert_eq!(volumes.len(), particles.len());
         let mut v = vec![0.0; n_phases];
-        for p in 0..particles.len() {
-            let vp = particles.volume(p);
+        for (p, &vp) in volumes.iter().enumerate() {
             let own = particles.phases[p] as usize;
             match self.get(p) {
                 Some(m) => {
@@ -338,7 +346,7 @@ impl<'a> Laminates<'a> {
                 None => {}
             }
         }
-        let total = particles.solid_volume();
+        let total: f64 = volumes.iter().sum();
         v.iter().map(|x| x / total).collect()
     }
 }

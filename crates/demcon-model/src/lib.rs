@@ -10,6 +10,8 @@
 //! - [`defects`]: imperfect interfaces, cracks, damage and broken bonds ([`DefectSpec`] in
 //!   [`ModelParams`], applied by [`build_model`]: cut contacts leave the graph, the others
 //!   carry series resistances and factors that both physics' conductances apply).
+//! - [`etc`]: the effective conductivity of a steady run from its two held sets
+//!   ([`effective_conductivity`]), refused where it is not defined.
 //! - [`calibrate`]: C_t on the model's own packing ([`calibrate_ct_with`]).
 //! - [`electric`]: an [`ElectricProblem`] → [`solve_electric`] (conductances with ρ_e(T),
 //!   electrodes on particles or faces, Joule power).
@@ -32,6 +34,7 @@ pub mod couple;
 pub mod defects;
 pub mod electric;
 mod error;
+pub mod etc;
 pub mod homogenize;
 pub mod model;
 pub mod thermal;
@@ -48,6 +51,7 @@ pub use electric::{
     electric_surface_model, particle_conductivities, solve_electric,
 };
 pub use error::ModelError;
+pub use etc::{EtcValue, effective_conductivity};
 pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogenize_thermal};
 pub use model::{
     CarveRule, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed, PhaseRule,

@@ -27,8 +27,11 @@ pub struct Model {
     pub particles: ParticleSet,
     /// The container the packing was made in (faces for boundary conditions).
     pub container: Container,
-    /// Volume of the solid the particles represent (m³): the container's, or the carved region's.
+    /// Volume of the solid the particles represent (m³): the container's, or the part of the
+    /// carving region inside it.
     pub domain_volume: f64,
+    /// The carving region the body was cut from, if any.
+    pub carve: Option<Region>,
     /// Solid fraction Σ V_p / domain volume, used for the representative volume V_p/φ.
     pub phi: f64,
     /// The materials, indexed by phase.
@@ -135,9 +138,13 @@ pub struct ModelReport {
     pub carved_away: usize,
     /// Particles per phase (by centre).
     pub phase_counts: Vec<usize>,
-    /// Volume fraction of the solid carried by each phase: Σ v_p V_p / Σ V_p (the
-    /// particles' own phases, and the laminate fractions of the cut ones).
+    /// Volume fraction of the body each phase carries: Σ v_p W_p / Σ W_p over the particles'
+    /// own phases and the laminate fractions of the cut ones, W_p the volume each particle
+    /// stands for (its Laguerre cell; V_p/φ, so the sphere share, under the contact models).
     pub phase_fractions: Vec<f64>,
+    /// The same share in the spheres' own volume V_p (a walled packing is looser at the walls,
+    /// so this differs from the body's fraction under the Laguerre cells).
+    pub sphere_phase_fractions: Vec<f64>,
     /// Particles cut by an interface (laminate rule).
     pub mixed_particles: usize,
     /// Inclusions placed (centres and radius), when asked for.
@@ -339,6 +346,35 @@ pub fn build_model(packed: Packed, params: &ModelParams) -> Result<Model, ModelE
     build_model_staged(packed, params, &mut Stages::default())
 }
 
+/// The volume (m³) of the part of carving region `region` inside `container`: exact when
+/// the region is a box or lies inside the container's box, else a 256³ midpoint grid over
+/// the intersection (relative error ~1/256).
+fn body_volume(container: &Container, region: &Region) -> f64 {
+    let b = container.bounds();
+    let r = region.bounds();
+    let inside = (0..3).all(|k| r.min[k] >= b.min[k] && r.max[k] <= b.max[k]);
+    match (region, container) {
+        _ if inside && !matches!(container, Container::Cylinder { .. } | Container::Sphere { .. }) => {
+            region.volume(256)
+        }
+        (Region::Box { min, max }, Container::Box { .. } | Container::Periodic { .. }) => (0..3)
+            .map(|k| (max[k].min(b.max[k]) - min[k].max(b.min[k])).max(0.0))
+            .product(),
+        _ => Region::Intersection(vec![region.clone(), container.region()]).volume(256),
+    }
+}
+
+/// The body's phase fractions from the Laguerre cells' volumes; `None` without cells.
+fn body_phase_fractions(
+    particles: &ParticleSet,
+    mixes: &[Mix],
+    graph: &ContactGraph,
+    n_phases: usize,
+) -> Option<Vec<f64>> {
+    let cells = graph.cells.as_deref()?;
+    Some(Laminates::new(particles.len(), mixes).phase_fractions_by(particles, &cells.volume, n_phases))
+}
+
 /// [`build_model`], timing its stages into `stages`: `phases` (carving and phase
 /// assignment), `tessellation` or `contacts`, and `network`.
 pub fn build_model_staged(
@@ -376,7 +412,7 @@ pub fn build_model_staged(
             }
             particles = kept;
             kept_ids = Some(ids);
-            domain_volume = region.volume(256);
+            domain_volume = body_volume(&container, region);
         }
         let mut mixes = Vec::new();
         let inclusions = apply_phases(params, &mut particles, &container, &materials, &mut mixes)?;
@@ -434,7 +470,9 @@ pub fn build_model_staged(
             imported_from,
             carved_away,
             phase_counts,
-            phase_fractions,
+            phase_fractions: body_phase_fractions(&particles, &mixes, &graph, n_phases)
+                .unwrap_or_else(|| phase_fractions.clone()),
+            sphere_phase_fractions: phase_fractions,
             mixed_particles: mixes.len(),
             inclusions,
             contacts: ContactSummary::from(&graph.report),
@@ -450,6 +488,7 @@ pub fn build_model_staged(
         particles,
         container,
         domain_volume,
+        carve: params.carve.as_ref().map(|(r, _)| r.clone()),
         phi,
         materials,
         mixes,
@@ -603,18 +642,33 @@ fn image_shifts(l: [f64; 3]) -> impl Iterator<Item = Vec3> {
 }
 
 /// Sets the particles in `region` to `phase` under `rule` (cut particles get a [`Mix`]).
-fn assign(particles: &mut ParticleSet, region: &Region, phase: u16, rule: PhaseRule, mixes: &mut Vec<Mix>) {
-    match rule {
-        PhaseRule::Centre => {
-            assign_phase(particles, region, phase);
-        }
-        PhaseRule::Laminate => {
-            assign_phase_laminate(particles, region, phase, mixes, HalfBond::Laminate);
-        }
-        PhaseRule::Segment => {
-            assign_phase_laminate(particles, region, phase, mixes, HalfBond::Segment);
-        }
-    }
+/// Returns how many particles the region claims: centres inside, plus particles it cuts under
+/// the laminate and segment rules.
+fn assign(
+    particles: &mut ParticleSet,
+    region: &Region,
+    phase: u16,
+    rule: PhaseRule,
+    mixes: &mut Vec<Mix>,
+) -> usize {
+    let mixed = mixes.len();
+    let inside = match rule {
+        PhaseRule::Centre => assign_phase(particles, region, phase),
+        PhaseRule::Laminate => assign_phase_laminate(particles, region, phase, mixes, HalfBond::Laminate),
+        PhaseRule::Segment => assign_phase_laminate(particles, region, phase, mixes, HalfBond::Segment),
+    };
+    inside + mixes.len().saturating_sub(mixed)
+}
+
+/// A phase entry that claims no particle: its region lies outside the body or falls between
+/// the particles' centres (smaller than they are).
+fn claims_nobody(i: usize, what: &str) -> ModelError {
+    ModelError::invalid(
+        &format!("phases[{i}]"),
+        what,
+        "claims no particle: no particle centre lies inside it (and it cuts none): it lies outside the body, \
+         or is smaller than the particles; move or enlarge it, or use more particles",
+    )
 }
 
 /// Applies the phase assignments in order.
@@ -635,7 +689,9 @@ fn apply_phases(
                 centres,
             } => {
                 let union = spheres_region(container, *radius, centres, &format!("phases[{i}]"))?;
-                assign(particles, &union, *phase, params.phase_rule, mixes);
+                if assign(particles, &union, *phase, params.phase_rule, mixes) == 0 {
+                    return Err(claims_nobody(i, "Spheres"));
+                }
                 inclusion_phase = Some(*phase);
                 inclusions = Some(InclusionReport {
                     count: centres.len(),
@@ -647,7 +703,9 @@ fn apply_phases(
                 });
             }
             PhaseSpec::Region { phase, region } => {
-                assign(particles, region, *phase, params.phase_rule, mixes)
+                if assign(particles, region, *phase, params.phase_rule, mixes) == 0 {
+                    return Err(claims_nobody(i, "Region"));
+                }
             }
             PhaseSpec::Inclusions {
                 phase,
@@ -661,7 +719,9 @@ fn apply_phases(
                         .map(|c| Region::Sphere { centre: *c, radius })
                         .collect(),
                 );
-                assign(particles, &union, *phase, params.phase_rule, mixes);
+                if assign(particles, &union, *phase, params.phase_rule, mixes) == 0 {
+                    return Err(claims_nobody(i, "Inclusions"));
+                }
                 let b = container.bounds();
                 inclusion_phase = Some(*phase);
                 inclusions = Some(InclusionReport {
@@ -704,7 +764,11 @@ pub fn set_region_phases(model: &mut Model, regions: &[(Region, u16)], rule: Pha
         }
     }
     model.report.phase_counts = counts;
-    model.report.phase_fractions = model.laminates().phase_fractions(&model.particles, n_phases);
+    let spheres = model.laminates().phase_fractions(&model.particles, n_phases);
+    model.report.phase_fractions =
+        body_phase_fractions(&model.particles, &model.mixes, &model.graph, n_phases)
+            .unwrap_or_else(|| spheres.clone());
+    model.report.sphere_phase_fractions = spheres;
     model.report.mixed_particles = model.mixes.len();
     update_interface_marks(
         &mut model.defects,
@@ -755,6 +819,7 @@ pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelErro
         particles: model.particles.clone(),
         container: model.container,
         domain_volume: model.domain_volume,
+        carve: model.carve.clone(),
         phi: model.phi,
         materials: model.materials.clone(),
         mixes: model.mixes.clone(),

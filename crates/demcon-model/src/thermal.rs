@@ -453,6 +453,9 @@ pub struct ThermalBcs {
     pub sources: Vec<f64>,
     /// The fixed sets in the order of the boundary conditions.
     pub fixed_sets: Vec<FixedSet>,
+    /// What the conditions do that is allowed but probably not meant (a source on a held
+    /// particle, whose heat the hold absorbs).
+    pub warnings: Vec<String>,
 }
 
 /// Resolves the boundary conditions and sources of `problem` on the model.
@@ -536,6 +539,18 @@ pub fn thermal_bcs(
             sources[p as usize] += src.power_density * model.solid_volume_of(p as usize);
         }
     }
+    let mut warnings = Vec::new();
+    let held_sourced = fixed_sets
+        .iter()
+        .flat_map(FixedSet::particles)
+        .filter(|&&p| sources[p as usize] != 0.0)
+        .count();
+    if held_sourced > 0 {
+        warnings.push(format!(
+            "thermal: {held_sourced} particle(s) held at a fixed temperature also receive a source or an imposed \
+             flux: the hold absorbs that heat (it never enters the body)"
+        ));
+    }
     let transient = problem.solver.is_transient();
     if fixed_sets.is_empty() && !transient {
         return Err(ModelError::invalid(
@@ -565,6 +580,7 @@ pub fn thermal_bcs(
         constraints,
         sources,
         fixed_sets,
+        warnings,
     })
 }
 

@@ -325,9 +325,11 @@ pub enum SurfaceConfig {
     Laguerre,
 }
 
+/// The recommended model is the default: exact in a homogeneous body, no calibration
+/// (docs/scenes.md, "Defaults").
 impl Default for SurfaceConfig {
     fn default() -> Self {
-        SurfaceConfig::Calibrated { c_t: CtConfig::Auto }
+        SurfaceConfig::Laguerre
     }
 }
 
@@ -655,9 +657,10 @@ pub struct ElectricConfig {
     /// Fraction η of the Joule power that heats the particles (in [0, 1]).
     #[serde(default = "default_eta")]
     pub eta: f64,
-    /// Transmission-surface model of the electric network (default: Terreros α, as Hubert 2017).
-    #[serde(default = "default_electric_surface")]
-    pub surface: SurfaceConfig,
+    /// Transmission-surface model of the electric network; `None` (the default): the thermal
+    /// network's `surface`, so both physics share one network.
+    #[serde(default)]
+    pub surface: Option<SurfaceConfig>,
     /// Re-solve the potential when temperatures moved by more than this (K), for ρ_e(T).
     #[serde(default)]
     pub recouple_tolerance: Option<f64>,
@@ -670,10 +673,6 @@ pub struct ElectricConfig {
 
 fn default_eta() -> f64 {
     1.0
-}
-
-fn default_electric_surface() -> SurfaceConfig {
-    SurfaceConfig::TerrerosAlpha
 }
 
 /// A fixed potential: either on particles (`select`: the selected particles are held at the

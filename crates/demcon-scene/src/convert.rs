@@ -390,8 +390,14 @@ pub fn uses_laguerre(cfg: &SceneConfig) -> bool {
     let electric = cfg
         .electric
         .as_ref()
-        .is_some_and(|e| matches!(e.surface, SurfaceConfig::Laguerre));
+        .is_some_and(|e| matches!(electric_surface(cfg, e), SurfaceConfig::Laguerre));
     thermal || electric
+}
+
+/// The electric network's surface model: its own, or the thermal network's `surface` when it
+/// sets none.
+pub fn electric_surface(cfg: &SceneConfig, e: &ElectricConfig) -> SurfaceConfig {
+    e.surface.unwrap_or(cfg.surface)
 }
 
 /// The thermal problem of the scene.
@@ -510,7 +516,7 @@ pub fn electric_problem(
         });
     }
     Ok(ElectricProblem {
-        surface: surface(&e.surface),
+        surface: surface(&electric_surface(cfg, e)),
         interface: interface(cfg.interface),
         electrodes,
         eta: e.eta,
@@ -672,7 +678,7 @@ pub fn homogenize_plan(cfg: &SceneConfig) -> Option<HomogenizePlan> {
             .electric
             .as_ref()
             .filter(|e| e.homogenize)
-            .map(|e| (surface(&e.surface), interface(cfg.interface))),
+            .map(|e| (surface(&electric_surface(cfg, e)), interface(cfg.interface))),
         solve: solve_params(&cfg.linear_solver),
     })
 }

@@ -30,6 +30,9 @@ pub enum SceneError {
         /// What would be accepted.
         allowed: String,
     },
+    /// Several refusals of one scene, reported together (each as it would be alone).
+    #[error("{} problems in the scene:{}", .0.len(), numbered(.0))]
+    Several(Vec<SceneError>),
     /// A lower-level input error, with the scene field it came from.
     #[error("scene field `{field}`: {source}")]
     Core {
@@ -123,6 +126,15 @@ fn scene_terms(e: &impl std::fmt::Display) -> String {
     text
 }
 
+/// Each error on its own line, numbered.
+fn numbered(errors: &[SceneError]) -> String {
+    errors
+        .iter()
+        .enumerate()
+        .map(|(i, e)| format!("\n  {}. {e}", i + 1))
+        .collect()
+}
+
 macro_rules! from_lower {
     ($($variant:ident($t:ty)),*) => {$(
         impl From<$t> for SceneError {
@@ -158,6 +170,23 @@ impl SceneError {
         Self::Core {
             field: field.into(),
             source,
+        }
+    }
+
+    /// The errors one by one: those of [`SceneError::Several`], or this one.
+    pub fn each(&self) -> Vec<&SceneError> {
+        match self {
+            Self::Several(v) => v.iter().collect(),
+            e => vec![e],
+        }
+    }
+
+    /// `Ok` without errors, the error alone, or [`SceneError::Several`].
+    pub fn all(mut errors: Vec<SceneError>) -> Result<(), SceneError> {
+        match errors.len() {
+            0 => Ok(()),
+            1 => Err(errors.remove(0)),
+            _ => Err(Self::Several(errors)),
         }
     }
 }

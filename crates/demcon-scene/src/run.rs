@@ -9,11 +9,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use demcon_core::{Axis, StageObserver, Stages, Vec3};
+use demcon_core::{StageObserver, Stages, Vec3};
 use demcon_model::{
-    Checkpointing, ElectricRun, ExtraSources, HomogenizeRun, Model, ModelError, RunCheckpoint, ThermalBcs,
-    ThermalProblem, ThermalRun, ThermalSetup, couple_checkpointed, homogenize_electric, homogenize_thermal,
-    solve_electric, solve_thermal_checkpointed, thermal_bcs, thermal_setup,
+    Checkpointing, ElectricRun, EtcValue, ExtraSources, HomogenizeRun, Model, ModelError, RunCheckpoint,
+    ThermalBcs, ThermalProblem, ThermalRun, ThermalSetup, couple_checkpointed, homogenize_electric,
+    homogenize_thermal, solve_electric, solve_thermal_checkpointed, thermal_bcs, thermal_setup,
 };
 use demcon_post::{
     Domain, HaloReport, ProbeIndex, halo_flux_blocked, particle_dipoles, particle_dipoles_levers,
@@ -133,23 +133,6 @@ pub struct ProfileValues {
     pub points: Vec<(f64, f64)>,
     /// Per point: read from solved particles only (see [`ProbeValue::solved`]).
     pub solved: Vec<bool>,
-}
-
-/// Effective conductivity of a steady run.
-#[derive(Debug, Clone, Serialize)]
-pub struct EtcValue {
-    /// Axis.
-    pub axis: String,
-    /// Heat flow through the hot face (W).
-    pub heat_flow_w: f64,
-    /// Cross-section (m²).
-    pub area_m2: f64,
-    /// Length (m).
-    pub length_m: f64,
-    /// Temperature difference (K).
-    pub delta_t: f64,
-    /// λ_e = (Q/A) L / ΔT (W/(m·K)).
-    pub lambda_e: f64,
 }
 
 /// Everything a run produced, in memory.
@@ -378,7 +361,8 @@ fn run_stages(
     if let Some(t) = problem.thermal.as_mut() {
         t.progress = progress;
     }
-    let mut diagnostics = model_diagnostics(&model);
+    let mut diagnostics = crate::validate::scene_warnings(cfg);
+    diagnostics.extend(model_diagnostics(&model));
     if let Some(plan) = &problem.homogenize {
         let h = stages.time("homogenize", || homogenize(&model, plan))?;
         let cells = cell_polyhedra(&mut stages, &model, &problem)?;
@@ -435,6 +419,9 @@ fn run_stages(
             el: electric.as_ref(),
         },
     )?;
+    if let Some(e) = &post.etc {
+        diagnostics.extend(e.warnings.iter().cloned());
+    }
     Ok(RunResult {
         model,
         thermal_setup,
@@ -495,6 +482,18 @@ fn model_diagnostics(model: &Model) -> Vec<String> {
                 r.broken_not_contacts
             ));
         }
+        if !model.defects.spec.interfaces.is_empty() && r.interface_contacts == 0 {
+            d.push(
+                "interfaces: no contact crosses a listed interface (the materials never meet in this body): \
+                 the interface resistances change nothing"
+                    .into(),
+            );
+        }
+        if !model.defects.spec.damage.is_empty() && r.damaged_contacts == 0 {
+            d.push(
+                "damage: no contact lies in a damage region (outside the body?): nothing is damaged".into(),
+            );
+        }
         d.extend(r.warnings.iter().cloned());
     }
     d
@@ -514,6 +513,7 @@ fn setup_thermal(
         ));
     }
     let bcs = thermal_bcs(model, &setup, tp)?;
+    diagnostics.extend(bcs.warnings.iter().cloned());
     diagnostics.extend(
         bcs.constraints
             .diagnostics()
@@ -779,8 +779,17 @@ fn probes_and_fields(
         el,
     } = *inp;
     let plan = &problem.post;
+    // Joule heat enters the thermal balance as sources the resolved conditions do not show.
+    let joule = problem.electric.as_ref().is_some_and(|e| e.eta > 0.0);
     let etc = match (plan.etc_axis, th, setup, bcs) {
-        (Some(ax), Some(th), Some(s), Some(b)) => Some(effective_conductivity(model, ax, th, s, b)?),
+        (Some(ax), Some(th), Some(s), Some(b)) => Some(demcon_model::effective_conductivity(
+            model,
+            ax,
+            s,
+            b,
+            &th.node_temperatures(),
+            joule,
+        )?),
         _ => None,
     };
     let final_time = problem.thermal.as_ref().map_or(0.0, |t| t.solver.final_time());
@@ -926,56 +935,4 @@ fn heat_dipoles(model: &Model, s: &ThermalSetup, nodes: &[f64]) -> Result<Vec<Ve
     };
     s.walls.add_dipoles(s.wall_conductances(), nodes, &mut d);
     Ok(d)
-}
-
-/// λ_e = (Q/A) L / ΔT along `axis` from a steady run with fixed temperatures on the two
-/// faces normal to it: Q is the heat flow out of the hot fixed set, ΔT the difference of the
-/// two fixed values, L and A the container's length and cross-section.
-fn effective_conductivity(
-    model: &Model,
-    axis: Axis,
-    th: &ThermalRun,
-    s: &ThermalSetup,
-    b: &ThermalBcs,
-) -> Result<EtcValue, SceneError> {
-    // Checked by `validate` when the container is known before packing (not for a file
-    // without a container in the scene).
-    let (area, length) = model.container.section_and_length(axis).ok_or_else(|| {
-        SceneError::invalid(
-            "outputs.etc_axis",
-            format!("{axis:?}"),
-            "the container has no flat faces normal to this axis",
-        )
-    })?;
-    let [first, second] = b.fixed_sets.as_slice() else {
-        return Err(SceneError::invalid(
-            "outputs.etc_axis",
-            format!("{axis:?}"),
-            format!(
-                "ETC needs exactly two fixed-temperature sets (found {})",
-                b.fixed_sets.len()
-            ),
-        ));
-    };
-    let (hot, cold) = if first.value >= second.value {
-        (first, second)
-    } else {
-        (second, first)
-    };
-    let q = demcon_network::boundary_flow(
-        s.network(model),
-        &s.conductances,
-        &th.node_temperatures(),
-        &hot.nodes(&s.walls),
-    )?;
-    let delta_t = hot.value - cold.value;
-    let lambda_e = demcon_post::effective_conductivity(q, area, length, delta_t)?;
-    Ok(EtcValue {
-        axis: format!("{axis:?}"),
-        heat_flow_w: q,
-        area_m2: area,
-        length_m: length,
-        delta_t,
-        lambda_e,
-    })
 }

@@ -11,54 +11,193 @@ use crate::config::*;
 use crate::convert;
 use crate::error::SceneError;
 
-/// Checks the whole scene; relative paths resolve against `base_dir`.
+/// The refusals of a scene, gathered so that one run reports them all.
+#[derive(Default)]
+struct Refusals(Vec<SceneError>);
+
+impl Refusals {
+    /// Keeps the error of a check.
+    fn check<T>(&mut self, r: Result<T, SceneError>) -> Option<T> {
+        r.map_err(|e| self.push(e)).ok()
+    }
+
+    /// Keeps a refusal (each of several), once: two checks that meet the same bad value
+    /// report it once.
+    fn push(&mut self, e: SceneError) {
+        let errors = match e {
+            SceneError::Several(v) => v,
+            e => vec![e],
+        };
+        for e in errors {
+            let text = e.to_string();
+            if !self.0.iter().any(|k| k.to_string() == text) {
+                self.0.push(e);
+            }
+        }
+    }
+}
+
+/// Checks the whole scene; relative paths resolve against `base_dir`. Every refusal is
+/// reported at once ([`SceneError::Several`] when there are more than one), each check group
+/// naming its first bad value.
 pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
+    let mut r = Refusals::default();
     // Materials, contacts, carving, phases, selectors, electrodes' select/face: by conversion.
-    convert::problem(c)?;
-    let container = known_container(c, base_dir)?;
-    if let Some(n) = known_count(&c.packing, "packing")? {
+    r.check(convert::problem(c));
+    let container = r.check(known_container(c, base_dir)).flatten();
+    if let Some(Some(n)) = r.check(known_count(&c.packing, "packing")) {
         let field = match c.packing {
             PackingConfig::Tile { .. } => "packing.repeat",
             _ => "packing.count",
         };
-        check_run_memory(n, c, field)?;
+        r.check(check_run_memory(n, c, field));
     }
-    check_contacts(&c.contacts)?;
-    check_defects(c, base_dir)?;
-    check_linear_solver(&c.linear_solver)?;
-    check_probes(c, container.as_ref())?;
+    r.check(check_contacts(&c.contacts));
+    r.check(check_defects(c, base_dir));
+    r.check(check_linear_solver(&c.linear_solver));
+    r.check(check_probes(c, container.as_ref()));
     if c.thermal.is_none() && c.electric.is_none() {
-        return Err(SceneError::invalid(
+        r.push(SceneError::invalid(
             "thermal",
             "none",
             "a scene needs `thermal`, `electric` or both",
         ));
     }
-    check_surface("surface", &c.surface)?;
-    check_tile_walls(c)?;
+    r.check(check_surface("surface", &c.surface));
+    r.check(check_tile_walls(c));
     if let Some(k) = container.as_ref() {
-        check_sphere_centres(c, k)?;
+        r.check(check_sphere_centres(c, k));
     }
     if convert::is_homogenization(c) {
-        check_homogenization(c, container.as_ref())?;
+        check_homogenization(c, container.as_ref(), &mut r);
     }
     if let (Some(_), Some(e)) = (&c.thermal, &c.electric)
-        && matches!(c.surface, SurfaceConfig::Laguerre) != matches!(e.surface, SurfaceConfig::Laguerre)
+        && let Some(es) = e.surface
+        && matches!(c.surface, SurfaceConfig::Laguerre) != matches!(es, SurfaceConfig::Laguerre)
     {
-        return Err(SceneError::invalid(
+        r.push(SceneError::invalid(
             "electric.surface",
-            format!("{:?} (thermal `surface`: {:?})", e.surface, c.surface),
+            format!("{es:?} (thermal `surface`: {:?})", c.surface),
             "Laguerre cells replace the contacts, so both physics must use them or neither: set `surface` and \
-             `electric.surface` both to Laguerre, or both to contact models",
+             `electric.surface` both to Laguerre, or both to contact models (or leave `electric.surface` out: \
+             it then follows `surface`)",
         ));
     }
     if let Some(t) = &c.thermal {
-        check_thermal(c, t, container.as_ref())?;
+        r.check(check_thermal(c, t, container.as_ref()));
+        check_thermal_conflicts(t, &mut r);
     }
     if let Some(e) = &c.electric {
-        check_electric(c, e, container.as_ref())?;
+        r.check(check_electric(c, e, container.as_ref()));
     }
-    check_outputs(c, container.as_ref())
+    r.check(check_outputs(c, container.as_ref()));
+    check_names(c, &mut r);
+    SceneError::all(r.0)
+}
+
+/// What a scene asks for that is allowed but probably not meant: warnings for
+/// `summary.json`'s `diagnostics` (and the terminal), found without packing.
+pub fn scene_warnings(c: &SceneConfig) -> Vec<String> {
+    let mut w = Vec::new();
+    let mut used = vec![false; c.materials.len()];
+    if let Some(u) = used.first_mut() {
+        *u = true; // the matrix: every particle no phase claims
+    }
+    let mut mark = |name: &str| {
+        if let Some(k) = c.materials.iter().position(|m| m.name == name) {
+            used[k] = true;
+        }
+    };
+    for ph in &c.phases {
+        match ph {
+            PhaseConfig::Region { material, .. }
+            | PhaseConfig::Inclusions { material, .. }
+            | PhaseConfig::Spheres { material, .. } => mark(material),
+        }
+    }
+    for (k, m) in c.materials.iter().enumerate() {
+        if !used[k] {
+            w.push(format!(
+                "materials[{k}] (`{}`) is used by no phase: only the first material and those `phases` name \
+                 are in the body",
+                m.name
+            ));
+        }
+    }
+    for (i, it) in c.interfaces.iter().enumerate() {
+        for name in [&it.between.0, &it.between.1] {
+            if let Some(k) = c.materials.iter().position(|m| &m.name == name)
+                && !used[k]
+            {
+                w.push(format!(
+                    "interfaces[{i}]: material `{name}` is used by no phase, so this interface is never met"
+                ));
+            }
+        }
+    }
+    w
+}
+
+/// Two probes or two profiles with one name: their rows could not be told apart.
+fn check_names(c: &SceneConfig, r: &mut Refusals) {
+    let o = &c.outputs;
+    let groups: [(&str, Vec<&str>); 2] = [
+        (
+            "outputs.probes",
+            o.probes.iter().map(|p| p.name.as_str()).collect(),
+        ),
+        (
+            "outputs.profiles",
+            o.profiles.iter().map(|p| p.name.as_str()).collect(),
+        ),
+    ];
+    for (field, names) in groups {
+        for (i, n) in names.iter().enumerate() {
+            if let Some(j) = names[..i].iter().position(|m| m == n) {
+                r.push(SceneError::invalid(
+                    &format!("{field}[{i}].name"),
+                    format!("{n:?}"),
+                    format!("{field}[{j}] has this name already: give each a name of its own"),
+                ));
+            }
+        }
+    }
+}
+
+/// Boundary conditions that contradict each other: two conditions on one face (two held
+/// temperatures, a flux and a temperature, two fluxes — counting `FixedTemperature` on the
+/// particles of a face as a condition on that face).
+fn check_thermal_conflicts(t: &ThermalConfig, r: &mut Refusals) {
+    let face_of = |bc: &ThermalBcConfig| match bc {
+        ThermalBcConfig::WallTemperature { face, .. } | ThermalBcConfig::HeatFlux { face, .. } => {
+            Some(convert::face(*face))
+        }
+        ThermalBcConfig::FixedTemperature {
+            select: SelectorConfig::Face(face),
+            ..
+        } => Some(convert::face(*face)),
+        ThermalBcConfig::FixedTemperature { .. } => None,
+    };
+    let kind = |bc: &ThermalBcConfig| match bc {
+        ThermalBcConfig::WallTemperature { .. } => "WallTemperature",
+        ThermalBcConfig::HeatFlux { .. } => "HeatFlux",
+        ThermalBcConfig::FixedTemperature { .. } => "FixedTemperature",
+    };
+    for (i, bc) in t.bcs.iter().enumerate() {
+        let Some(f) = face_of(bc) else { continue };
+        if let Some(j) = t.bcs[..i].iter().position(|o| face_of(o) == Some(f)) {
+            r.push(SceneError::invalid(
+                &format!("thermal.bcs[{i}]"),
+                format!("{} on {}", kind(bc), f.name()),
+                format!(
+                    "thermal.bcs[{j}] ({}) is already on face {}: one face takes one condition (merge them, or \
+                     move one to another face)",
+                    kind(&t.bcs[j]),
+                    f.name()
+                ),
+            ));
+        }
+    }
 }
 
 /// The container, when it is known before packing: a generated packing's, the one the scene
@@ -419,7 +558,7 @@ fn check_sphere_centres(c: &SceneConfig, container: &Container) -> Result<(), Sc
 /// A periodic homogenisation: a periodic container, no boundary conditions, sources or
 /// electrodes, both physics homogenised (or one absent), and no output that needs a field
 /// under boundary conditions.
-fn check_homogenization(c: &SceneConfig, container: Option<&Container>) -> Result<(), SceneError> {
+fn check_homogenization(c: &SceneConfig, container: Option<&Container>, r: &mut Refusals) {
     let thermal_h = c
         .thermal
         .as_ref()
@@ -433,7 +572,7 @@ fn check_homogenization(c: &SceneConfig, container: Option<&Container>) -> Resul
     if let Some(k) = container
         && k.period().is_none()
     {
-        return Err(SceneError::invalid(
+        r.push(SceneError::invalid(
             field,
             if thermal_h == Some(true) {
                 "Homogenize"
@@ -449,7 +588,7 @@ fn check_homogenization(c: &SceneConfig, container: Option<&Container>) -> Resul
     }
     match (thermal_h, electric_h) {
         (Some(false), Some(true)) => {
-            return Err(SceneError::invalid(
+            r.push(SceneError::invalid(
                 "thermal.solver",
                 "not Homogenize",
                 "`electric.homogenize: true` homogenises the whole scene: give `thermal.solver: Homogenize` too, \
@@ -457,7 +596,7 @@ fn check_homogenization(c: &SceneConfig, container: Option<&Container>) -> Resul
             ));
         }
         (Some(true), Some(false)) => {
-            return Err(SceneError::invalid(
+            r.push(SceneError::invalid(
                 "electric.homogenize",
                 "false",
                 "`thermal.solver: Homogenize` homogenises the whole scene: set `electric.homogenize: true` too, \
@@ -468,21 +607,21 @@ fn check_homogenization(c: &SceneConfig, container: Option<&Container>) -> Resul
     }
     if let Some(t) = &c.thermal {
         if !t.bcs.is_empty() {
-            return Err(SceneError::invalid(
+            r.push(SceneError::invalid(
                 "thermal.bcs",
                 format!("{} boundary condition(s)", t.bcs.len()),
                 "a homogenisation imposes mean gradients on a periodic cell: give `bcs: []`",
             ));
         }
         if !t.sources.is_empty() {
-            return Err(SceneError::invalid(
+            r.push(SceneError::invalid(
                 "thermal.sources",
                 format!("{} source(s)", t.sources.len()),
                 "a homogenisation has no sources: give `sources: []`",
             ));
         }
         if t.checkpoint.is_some() {
-            return Err(SceneError::invalid(
+            r.push(SceneError::invalid(
                 "thermal.checkpoint",
                 "Some(..)",
                 "a homogenisation has nothing to checkpoint",
@@ -492,7 +631,7 @@ fn check_homogenization(c: &SceneConfig, container: Option<&Container>) -> Resul
     if let Some(e) = &c.electric
         && !e.electrodes.is_empty()
     {
-        return Err(SceneError::invalid(
+        r.push(SceneError::invalid(
             "electric.electrodes",
             format!("{} electrode(s)", e.electrodes.len()),
             "a homogenisation imposes mean gradients on a periodic cell: give `electrodes: []`",
@@ -510,15 +649,14 @@ fn check_homogenization(c: &SceneConfig, container: Option<&Container>) -> Resul
         // Its plots would have nothing to draw: no probes, profiles, temperature or potential.
         ("outputs.plots", o.plots),
     ];
-    if let Some((f, _)) = refused.iter().find(|(_, set)| *set) {
-        return Err(SceneError::invalid(
+    for (f, _) in refused.iter().filter(|(_, set)| *set) {
+        r.push(SceneError::invalid(
             f,
             "set",
             "a homogenisation gives the tensor (`etc_tensor`, `conductivity_tensor` in summary.json) and the \
              fluctuation fields (vtk, particles_csv), not fields under boundary conditions: remove it",
         ));
     }
-    Ok(())
 }
 
 /// Checkpoints: of a transient only, with at least one period, each valid.
@@ -565,7 +703,9 @@ fn check_electric(
     if !(0.0..=1.0).contains(&e.eta) {
         return Err(SceneError::invalid("electric.eta", e.eta, "must be in [0, 1]"));
     }
-    check_surface("electric.surface", &e.surface)?;
+    if let Some(es) = &e.surface {
+        check_surface("electric.surface", es)?;
+    }
     if let Some(tol) = e.recouple_tolerance {
         if !(tol.is_finite() && tol > 0.0) {
             return Err(SceneError::invalid(
@@ -678,39 +818,123 @@ fn check_outputs(c: &SceneConfig, container: Option<&Container>) -> Result<(), S
             return Err(SceneError::invalid(&field, r, "the ball radius must be > 0 (m)"));
         }
     }
-    if let Some(ax) = o.etc_axis {
-        if let Some(t) = &c.thermal
-            && !matches!(t.solver, ThermalSolverConfig::Steady)
-        {
-            return Err(SceneError::invalid(
-                "outputs.etc_axis",
-                format!("{ax:?}"),
-                "the effective conductivity needs a steady state: use `solver: Steady` (a transient's \
-                 boundary flow is not λ_e ΔT A / L until it has settled)",
+    if let Some(t) = &c.thermal
+        && matches!(t.solver, ThermalSolverConfig::Steady)
+        && !o.times.is_empty()
+    {
+        return Err(SceneError::invalid(
+            "outputs.times",
+            format!("{:?}", o.times),
+            "a steady solve has no time: output times belong to a transient (`Explicit` or `Implicit`); \
+             remove them",
+        ));
+    }
+    if let Some(ax) = o.etc_axis
+        && !convert::is_homogenization(c)
+    {
+        check_etc(c, convert::axis(ax), container)?;
+    }
+    Ok(())
+}
+
+/// `outputs.etc_axis`: λ_e needs a steady run between exactly two held sets at different
+/// temperatures facing each other along the axis, with no heat entering elsewhere (no flux,
+/// source or Joule heat), in a walled container (docs/scenes.md, "Effective conductivity").
+fn check_etc(
+    c: &SceneConfig,
+    axis: demcon_core::Axis,
+    container: Option<&Container>,
+) -> Result<(), SceneError> {
+    let ax = format!("{axis:?}");
+    let refuse = |why: String| Err(SceneError::invalid("outputs.etc_axis", &ax, why));
+    let Some(t) = &c.thermal else {
+        return refuse("the effective conductivity is a thermal figure: the scene has no `thermal`".into());
+    };
+    if !matches!(t.solver, ThermalSolverConfig::Steady) {
+        return refuse(
+            "the effective conductivity needs a steady state: use `solver: Steady` (a transient's boundary flow \
+             is not λ_e ΔT A / L until it has settled)"
+                .into(),
+        );
+    }
+    if let Some(k) = container
+        && k.period().is_some()
+    {
+        return refuse(
+            "a periodic box conducts round its period as well as between held sets, so no λ_e along one axis \
+             follows from them: use `thermal.solver: Homogenize` (with `bcs: []`) for the effective tensor"
+                .into(),
+        );
+    }
+    if let Some((i, _)) = t
+        .bcs
+        .iter()
+        .enumerate()
+        .find(|(_, b)| matches!(b, ThermalBcConfig::HeatFlux { .. }))
+    {
+        return refuse(format!(
+            "thermal.bcs[{i}] imposes a heat flux: heat then enters elsewhere than through the two held sets and \
+             no single λ_e describes the body; an ETC run holds two faces and nothing else"
+        ));
+    }
+    if !t.sources.is_empty() {
+        return refuse(format!(
+            "thermal.sources adds heat inside the body ({} source(s)): the heat through the two held sets then \
+             differs and no single λ_e describes it; remove the sources for an ETC run",
+            t.sources.len()
+        ));
+    }
+    if let Some(e) = &c.electric
+        && e.eta > 0.0
+    {
+        return refuse(format!(
+            "Joule heating (electric.eta = {}) adds heat inside the body: the heat through the two held sets \
+             then differs; set `electric.eta: 0.0` or drop `etc_axis`",
+            e.eta
+        ));
+    }
+    let held: Vec<(usize, f64)> = t
+        .bcs
+        .iter()
+        .enumerate()
+        .filter_map(|(i, b)| match b {
+            ThermalBcConfig::FixedTemperature { value, .. }
+            | ThermalBcConfig::WallTemperature { value, .. } => Some((i, *value)),
+            ThermalBcConfig::HeatFlux { .. } => None,
+        })
+        .collect();
+    let [(i, a), (j, b)] = held[..] else {
+        return refuse(format!(
+            "ETC needs exactly two fixed-temperature sets (found {}): the body between two held faces",
+            held.len()
+        ));
+    };
+    if a == b {
+        return refuse(format!(
+            "thermal.bcs[{i}] and thermal.bcs[{j}] hold the same temperature ({a} °C): λ_e needs a difference"
+        ));
+    }
+    for (i, b) in t.bcs.iter().enumerate() {
+        let face = match b {
+            ThermalBcConfig::WallTemperature { face, .. }
+            | ThermalBcConfig::FixedTemperature {
+                select: SelectorConfig::Face(face),
+                ..
+            } => convert::face(*face),
+            _ => continue,
+        };
+        if face.axis() != Some(axis) {
+            return refuse(format!(
+                "thermal.bcs[{i}] holds face {}, which is not normal to {ax}: the held sets face each other along \
+                 another axis; set `etc_axis` to theirs",
+                face.name()
             ));
         }
-        let fixed = c.thermal.as_ref().map_or(0, |t| {
-            t.bcs
-                .iter()
-                .filter(|b| !matches!(b, ThermalBcConfig::HeatFlux { .. }))
-                .count()
-        });
-        if fixed != 2 {
-            return Err(SceneError::invalid(
-                "outputs.etc_axis",
-                format!("{ax:?}"),
-                format!("ETC needs exactly two fixed-temperature sets (found {fixed})"),
-            ));
-        }
-        if let Some(cont) = container
-            && cont.section_and_length(convert::axis(ax)).is_none()
-        {
-            return Err(SceneError::invalid(
-                "outputs.etc_axis",
-                format!("{ax:?}"),
-                "the container has no flat faces normal to this axis",
-            ));
-        }
+    }
+    if let Some(cont) = container
+        && cont.section_and_length(axis).is_none()
+    {
+        return refuse("the container has no flat faces normal to this axis".into());
     }
     Ok(())
 }

@@ -12,7 +12,7 @@ use demcon_scene::{RunOptions, Scene, SceneError, run};
 /// A small two-phase scene with `defects` spliced in at the top level (RON text).
 fn text(defects: &str, electric: bool) -> String {
     let electric = if electric {
-        "electric: (electrodes: [(face: YMin, potential: 0.0), (face: YMax, potential: 1.0)], surface: Laguerre),"
+        "electric: (electrodes: [(face: YMin, potential: 0.0), (face: YMax, potential: 1.0)], surface: Laguerre, eta: 0.0),"
     } else {
         ""
     };

@@ -110,7 +110,7 @@ fn what_a_homogenisation_cannot_take_is_refused_by_name() {
             text(
                 PERIODIC,
                 THERMAL_H,
-                "Some((electrodes: [], homogenize: true))",
+                "Some((electrodes: [], homogenize: true, surface: TerrerosAlpha))",
                 "",
             ),
             "electric.surface",

@@ -44,7 +44,8 @@ fn a_homogeneous_box_gives_the_exact_conductivity_and_flux_in_every_particle() {
 fn one_network_for_both_physics() {
     let mixed = scene(
         "Laguerre",
-        "Some((electrodes: [(face: Some(XMin), potential: 0.0), (face: Some(XMax), potential: 1.0)]))",
+        "Some((electrodes: [(face: Some(XMin), potential: 0.0), (face: Some(XMax), potential: 1.0)], \
+         surface: TerrerosAlpha, eta: 0.0))",
     );
     let e = Scene::parse(&mixed, Path::new("l.ron"), PathBuf::new())
         .unwrap_err()

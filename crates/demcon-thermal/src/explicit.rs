@@ -627,7 +627,6 @@ pub fn run_explicit_from(
         (heat_rate, cool_rate)
     };
     let (mut heat_rate, mut cool_rate) = rates(&sources);
-    let rounding = 1e-9 * (lo0.abs() + hi0.abs() + (hi0 - lo0)) + f64::MIN_POSITIVE;
     let unstable = dt > bound.dt_max;
 
     let edges_b = boundary_edges(net, conductances, constraints);
@@ -702,6 +701,9 @@ pub fn run_explicit_from(
             let heat = heat_base + (t_now - t_change) * heat_rate;
             let cool = cool_base + (t_now - t_change) * cool_rate;
             let width = (hi0 - lo0) + heat + cool;
+            // Round-off of the values the envelope now spans (not only of the initial ones:
+            // a body heated from 0 K by a source has an initial range of zero width).
+            let rounding = 1e-9 * ((lo0 - cool).abs() + (hi0 + heat).abs() + width) + f64::MIN_POSITIVE;
             let margin = rounding + if unstable { width } else { 0.0 };
             let (env_lo, env_hi) = (lo0 - cool - margin, hi0 + heat + margin);
             if bad || lo < env_lo || hi > env_hi {
@@ -754,7 +756,18 @@ pub fn run_explicit_from(
     } else {
         0.0
     };
-    close_ledger(&mut report, constraints, capacities, &t0, &cur, turnover);
+    let unit_roundoff = match stepper.precision() {
+        WeightPrecision::F64 => f64::EPSILON / 2.0,
+        WeightPrecision::F32 => f64::from(f32::EPSILON) / 2.0,
+    };
+    close_ledger(
+        &mut report,
+        constraints,
+        capacities,
+        (&t0, &cur),
+        turnover,
+        unit_roundoff,
+    );
     Ok(Transient {
         temperatures: cur,
         report,

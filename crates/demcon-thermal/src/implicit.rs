@@ -323,7 +323,14 @@ pub fn run_implicit_from(
     debug_assert!(kinds.len() == n);
     report.t_end = params.t_end;
     report.wall_s = prior_wall_s + clock.elapsed().as_secs_f64();
-    close_ledger(&mut report, constraints, capacities, &t0, &cur, turnover);
+    close_ledger(
+        &mut report,
+        constraints,
+        capacities,
+        (&t0, &cur),
+        turnover,
+        f64::EPSILON / 2.0,
+    );
     Ok(Transient {
         temperatures: cur,
         report,

@@ -104,7 +104,7 @@ pub fn with_surface_model(cfg: &SceneConfig, s: Surface, c_t: Option<f64>) -> Sc
     let mut c = cfg.clone();
     c.surface = s.config(c_t);
     if let Some(e) = c.electric.as_mut() {
-        e.surface = s.config(c_t);
+        e.surface = Some(s.config(c_t));
     }
     c
 }

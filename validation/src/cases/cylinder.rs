@@ -175,7 +175,7 @@ pub fn electric_scene(
         electric: Some(ElectricConfig {
             electrodes: end_electrodes(v0),
             eta: 1.0,
-            surface,
+            surface: Some(surface),
             recouple_tolerance: None,
             homogenize: false,
         }),

@@ -133,7 +133,7 @@ fn lattice_scene(
         electric: Some(ElectricConfig {
             electrodes: face_electrodes(V0),
             eta: 1.0,
-            surface,
+            surface: Some(surface),
             recouple_tolerance: tol,
             homogenize: false,
         }),
