@@ -13,6 +13,10 @@
 //!
 //! Each offending input is kept under `<out>/failures/` with the command that ran it. The
 //! campaign is deterministic for a seed (the mutations, not the timings).
+//!
+//! `cargo xtask fuzz --metamorphic [--runs N]` runs instead the metamorphic suite
+//! (`crates/demcon-scene/tests/metamorphic.rs`: invariances the physics guarantees, on random
+//! small scenes) with N random cases per property (default 200) in release mode.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -79,6 +83,9 @@ enum Outcome {
 
 /// Runs the campaign.
 pub fn run(rest: &[String]) -> Result<()> {
+    if rest.iter().any(|a| a == "--metamorphic") {
+        return metamorphic(rest);
+    }
     let mut runs = 500usize;
     let mut seed = 1u64;
     let mut timeout = 30.0f64;
@@ -511,4 +518,44 @@ fn non_finite(path: &Path) -> bool {
             .any(|k| t.contains(k));
         csv_bad || json_bad || xyzr_bad
     })
+}
+
+/// `--metamorphic [--runs N]`: the metamorphic suite with N random cases per property.
+fn metamorphic(rest: &[String]) -> Result<()> {
+    let mut runs = 200u32;
+    let mut it = rest.iter().filter(|a| *a != "--metamorphic");
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--runs" => {
+                runs = it
+                    .next()
+                    .context("--runs needs a value")?
+                    .parse()
+                    .context("--runs: a count")?
+            }
+            other => bail!("unknown option `{other}` with --metamorphic (--runs N)"),
+        }
+    }
+    if runs == 0 {
+        bail!("--runs must be ≥ 1");
+    }
+    let start = Instant::now();
+    crate::run(
+        crate::cargo()
+            .args([
+                "test",
+                "--release",
+                "-q",
+                "-p",
+                "demcon-scene",
+                "--test",
+                "metamorphic",
+            ])
+            .env("DEMCON_METAMORPHIC_CASES", runs.to_string()),
+    )?;
+    println!(
+        "metamorphic suite: {runs} random cases per property, all held ({:.0} s)",
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
 }

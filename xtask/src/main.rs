@@ -10,7 +10,8 @@
 //! - `cargo xtask bench [NAME]` — the criterion benchmarks.
 //! - `cargo xtask fuzz [--runs N] [--seed S] [--timeout SECS]` — a fuzz campaign of the
 //!   binary on mutated scenes, packing files and `pack` flags (counts panics, hangs,
-//!   non-finite outputs, outputs left by failed runs).
+//!   non-finite outputs, outputs left by failed runs); `fuzz --metamorphic [--runs N]` runs
+//!   the metamorphic suite (physics invariances on random scenes) with N cases per property.
 
 mod ci;
 mod fuzz;
@@ -38,7 +39,7 @@ fn main() -> Result<()> {
                  tidy                       layer rules of the crate graph, file headers\n  \
                  validate [CASE…] [--quick|--full] [--out DIR] [--list]\n                             run the validation cases (release build)\n  \
                  bench [NAME]               run the criterion benchmarks (all, or benches/NAME.rs)\n  \
-                 fuzz [--runs N] [--seed S] [--timeout SECS] [--out DIR]\n                             fuzz the binary (mutated scenes, packings, pack flags)"
+                 fuzz [--runs N] [--seed S] [--timeout SECS] [--out DIR]\n                             fuzz the binary (mutated scenes, packings, pack flags)\n  fuzz --metamorphic [--runs N]\n                             physics invariances on N random scenes per property"
             );
             Ok(())
         }

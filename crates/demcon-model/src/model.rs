@@ -574,7 +574,10 @@ pub fn place_inclusions(
 }
 
 /// The region of the spheres of one radius at `centres` (m) in `container`, with the periodic
-/// images that reach the cell in a periodic container. `field` names the phase in errors.
+/// images that come within `reach` (m) of the cell in a periodic container: pass the largest
+/// particle radius, since a particle whose centre lies in the cell reaches out that far and
+/// an image can cut it (the laminate and segment rules; translating a periodic
+/// microstructure must not change its answer). `field` names the phase in errors.
 ///
 /// Errors: a radius that is not finite and > 0, a centre outside the container's bounding box
 /// (named by its index).
@@ -582,6 +585,7 @@ pub fn spheres_region(
     container: &Container,
     radius: f64,
     centres: &[Vec3],
+    reach: f64,
     field: &str,
 ) -> Result<Region, ModelError> {
     if !(radius.is_finite() && radius > 0.0) {
@@ -610,13 +614,13 @@ pub fn spheres_region(
             Some(l) => {
                 for shift in image_shifts(l) {
                     let image = c + shift;
-                    // An image counts when it reaches the cell.
+                    // An image counts when it comes within `reach` of the cell.
                     let gap = (0..3)
                         .map(|k| (b.min[k] - image[k]).max(image[k] - b.max[k]).max(0.0))
                         .map(|g| g * g)
                         .sum::<f64>()
                         .sqrt();
-                    if gap < radius {
+                    if gap < radius + reach.max(0.0) {
                         spheres.push(Region::Sphere {
                             centre: image,
                             radius,
@@ -681,6 +685,7 @@ fn apply_phases(
 ) -> Result<Option<InclusionReport>, ModelError> {
     let mut inclusions = None;
     let mut inclusion_phase = None;
+    let reach = particles.radii.iter().copied().fold(0.0, f64::max);
     for (i, ph) in params.phases.iter().enumerate() {
         match ph {
             PhaseSpec::Spheres {
@@ -688,7 +693,7 @@ fn apply_phases(
                 radius,
                 centres,
             } => {
-                let union = spheres_region(container, *radius, centres, &format!("phases[{i}]"))?;
+                let union = spheres_region(container, *radius, centres, reach, &format!("phases[{i}]"))?;
                 if assign(particles, &union, *phase, params.phase_rule, mixes) == 0 {
                     return Err(claims_nobody(i, "Spheres"));
                 }
@@ -713,12 +718,7 @@ fn apply_phases(
                 size_ratio,
             } => {
                 let (centres, radius) = place_inclusions(container, *fraction, *size_ratio, params.seed)?;
-                let union = Region::Union(
-                    centres
-                        .iter()
-                        .map(|c| Region::Sphere { centre: *c, radius })
-                        .collect(),
-                );
+                let union = spheres_region(container, radius, &centres, reach, &format!("phases[{i}]"))?;
                 if assign(particles, &union, *phase, params.phase_rule, mixes) == 0 {
                     return Err(claims_nobody(i, "Inclusions"));
                 }

@@ -549,7 +549,7 @@ fn check_sphere_centres(c: &SceneConfig, container: &Container) -> Result<(), Sc
     for (i, ph) in c.phases.iter().enumerate() {
         if let PhaseConfig::Spheres { radius, centres, .. } = ph {
             let centres: Vec<Vec3> = centres.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
-            demcon_model::spheres_region(container, *radius, &centres, &format!("phases[{i}]"))?;
+            demcon_model::spheres_region(container, *radius, &centres, 0.0, &format!("phases[{i}]"))?;
         }
     }
     Ok(())

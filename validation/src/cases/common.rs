@@ -529,8 +529,14 @@ pub fn set_phases_like(model: &mut Model, cfg: &SceneConfig) -> anyhow::Result<(
             .iter()
             .map(|&(x, y, z)| demcon_core::Vec3::new(x, y, z))
             .collect();
-        let region =
-            demcon_model::spheres_region(&model.container, *radius, &centres, &format!("phases[{i}]"))?;
+        let reach = model.particles.radii.iter().copied().fold(0.0, f64::max);
+        let region = demcon_model::spheres_region(
+            &model.container,
+            *radius,
+            &centres,
+            reach,
+            &format!("phases[{i}]"),
+        )?;
         regions.push((region, phase as u16));
     }
     set_region_phases(model, &regions, cfg.phase_rule);
