@@ -92,7 +92,7 @@ pub struct ElectricRun {
     pub walls: WallContacts,
     /// The transmission-surface model of the electric network (C_t resolved).
     pub surface: SurfaceModel,
-    /// Joule power per particle (W), η applied.
+    /// Joule power per particle (W), η applied: the heat the particle receives.
     pub joule: Vec<f64>,
     /// Summary.
     pub report: ElectricReport,
@@ -111,8 +111,12 @@ pub struct ElectricReport {
     pub current_out: f64,
     /// |I_in − I_out| / I_in.
     pub current_mismatch: f64,
-    /// Total Joule power (W).
+    /// Total Joule power (W): Σ I²/G over the branches (contacts and electrode links), the
+    /// power the current dissipates, = ΔV·I between two electrodes; whatever η.
     pub joule_w: f64,
+    /// The part of it that heats the particles (W): η · `joule_w`, = Σ of the per-particle
+    /// Joule power.
+    pub joule_heat_w: f64,
     /// Solver.
     pub method: String,
     /// CG iterations.
@@ -288,6 +292,16 @@ pub fn solve_electric(
     };
     let sol = solve_potential(net, &g, &electrodes, &params)?;
     let mut joule = joule_power(net, &g, &sol.potentials, problem.eta)?;
+    // The power dissipated, Σ G Δu² over every branch (electrode links included), whatever η.
+    let dissipated: f64 = net
+        .edges()
+        .iter()
+        .zip(&g)
+        .map(|(&[p, q], g)| {
+            let du = sol.potentials[p as usize] - sol.potentials[q as usize];
+            g * du * du
+        })
+        .sum();
     // A wall link's power: the half booked to the wall node goes to the particle too.
     for (k, w) in walls.wall_of_links().enumerate() {
         let p = walls.particle[k] as usize;
@@ -304,7 +318,8 @@ pub fn solve_electric(
             current_in: sol.current_in,
             current_out: sol.current_out,
             current_mismatch: sol.current_mismatch,
-            joule_w: joule.iter().sum(),
+            joule_w: dissipated,
+            joule_heat_w: joule.iter().sum(),
             method: r.method.to_string(),
             iterations: r.iterations,
             residual: r.relative_residual,

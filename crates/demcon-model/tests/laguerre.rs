@@ -250,3 +250,37 @@ fn a_homogeneous_cylinder_between_its_end_walls_is_exact() {
     assert!(t.volume_error > 0.0 && t.volume_error < 1e-3, "{t:?}");
     assert!(t.max_area_mismatch < 1e-9, "{t:?}");
 }
+
+#[test]
+fn the_joule_power_is_what_the_current_dissipates_and_eta_of_it_heats() {
+    // ΔV = 1 mV across a bar of resistance R: the current dissipates ΔV²/R = ΔV·I whatever η
+    // (`joule_w`, and Σ I²/G over the branches: contacts.vtp's sum); η = 0.5 of it heats the
+    // particles (`joule_heat_w`, Σ of the per-particle power).
+    let m = model(
+        Container::Box {
+            size: [2e-3, 2e-3, 4e-3],
+        },
+        1000,
+        8,
+    );
+    let mut e = z_face_electrodes(SurfaceSpec::Laguerre, 1e-3);
+    e.eta = 0.5;
+    let el = solve_electric(&m, &e, None).unwrap();
+    let r = el.report.resistance_ohm.unwrap();
+    assert_relative_eq!(el.report.joule_w, 1e-6 / r, max_relative = 1e-9);
+    assert_relative_eq!(
+        el.report.joule_w,
+        1e-3 * el.report.current_in,
+        max_relative = 1e-9
+    );
+    let branches: f64 = el
+        .branch_currents
+        .iter()
+        .zip(&el.conductances)
+        .map(|(i, g)| i * i / g)
+        .sum();
+    assert_relative_eq!(branches, el.report.joule_w, max_relative = 1e-9);
+    let heat: f64 = el.joule.iter().sum();
+    assert_relative_eq!(el.report.joule_heat_w, heat, max_relative = 1e-12);
+    assert_relative_eq!(heat, 0.5 * el.report.joule_w, max_relative = 1e-9);
+}
