@@ -13,6 +13,8 @@
 //! - [`calibrate`]: C_t on the model's own packing ([`calibrate_ct_with`]).
 //! - [`electric`]: an [`ElectricProblem`] → [`solve_electric`] (conductances with ρ_e(T),
 //!   electrodes on particles or faces, Joule power).
+//! - [`flux`]: the per-particle flux densities of a solved network, heat or current
+//!   ([`flux_dipoles`], [`flux_density`], [`ElectricRun::current_density`]).
 //! - [`couple`](mod@couple): the electro-thermal coupling ([`couple()`]: one-way, steady fixed
 //!   point, or time-accurate re-solves in a transient).
 //! - [`homogenize`](mod@homogenize): the effective conductivity tensors of a periodic packing
@@ -32,6 +34,7 @@ pub mod couple;
 pub mod defects;
 pub mod electric;
 mod error;
+pub mod flux;
 pub mod homogenize;
 pub mod model;
 pub mod thermal;
@@ -48,6 +51,7 @@ pub use electric::{
     electric_surface_model, particle_conductivities, solve_electric,
 };
 pub use error::ModelError;
+pub use flux::{flux_density, flux_dipoles};
 pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogenize_thermal};
 pub use model::{
     CarveRule, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed, PhaseRule,
