@@ -222,6 +222,40 @@ impl ContactGraph {
         0.5 * (radii[p as usize] + radii[q as usize])
     }
 
+    /// Adds each contact's share to the particle dipoles D_p = Σ_q g_pq (u_q − u_p) ℓ_pq (W·m
+    /// for heat, A·m for current), ℓ_pq the branch. With Laguerre cells each flow acts at its
+    /// facet's centroid a_pq (from p): p receives 2 g (u_q − u_p) a_pq and q receives
+    /// 2 g (u_q − u_p) (ℓ_pq − a_pq), which makes −D_p / (2 V_cell,p) exact for a linear field
+    /// (Σ_facets S (c_f − x_p) ⊗ n = V_cell I, wall facets included:
+    /// [`crate::WallContacts::add_dipoles`]); without cells both ends receive g (u_q − u_p) ℓ_pq.
+    /// The construction of `demcon_post::particle_dipoles_levers` and `particle_dipoles`, on
+    /// the graph's own arrays. `g` per contact (W/K or S), `values` per node (K or V; the
+    /// particles first, as many as the graph has). Sequential in contact order: deterministic.
+    pub fn add_dipoles(&self, g: &[f64], values: &[f64], dipoles: &mut [Vec3]) {
+        assert!(
+            g.len() == self.len() && values.len() >= self.n_particles && dipoles.len() >= self.n_particles
+        );
+        match self.cells.as_deref() {
+            Some(cells) => {
+                for (k, &[p, q]) in self.pairs.iter().enumerate() {
+                    let (p, q) = (p as usize, q as usize);
+                    let flow = 2.0 * g[k] * (values[q] - values[p]);
+                    let a = cells.centroid[k];
+                    dipoles[p] += flow * a;
+                    dipoles[q] += flow * (self.branch(k) - a);
+                }
+            }
+            None => {
+                for (k, &[p, q]) in self.pairs.iter().enumerate() {
+                    let (p, q) = (p as usize, q as usize);
+                    let term = (g[k] * (values[q] - values[p])) * self.branch(k);
+                    dipoles[p] += term;
+                    dipoles[q] += term;
+                }
+            }
+        }
+    }
+
     /// Where contact `k`'s branch is split between its two particles: h_p/d_pq from p (the
     /// Laguerre facet's position), or 0.5 for contacts without cells.
     pub fn split(&self, k: usize) -> f64 {

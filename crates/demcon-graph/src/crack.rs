@@ -210,7 +210,20 @@ impl CrackShape {
     /// 0 when the branch does not cross the crack's plane (the half-open rule of the module
     /// doc). With `rho` = 0 it is the segment rule: 1 when [`CrackShape::crossing`] finds a
     /// crossing, else 0.
-    pub fn blocked_fraction(&self, a: &Vec3, b: &Vec3, centre: &Vec3, rho: f64) -> f64 {
+    ///
+    /// With a `domain` (a walled container), only the tubes that lie in it count: a sample
+    /// whose point on the facet's disc, or whose point on the crack's plane, is outside the
+    /// container is no part of the facet (the disc reaches past the wall that clips the real
+    /// facet), so a crack that ends at a wall covers the facets along that wall wholly. When
+    /// no sample is inside, the segment rule decides.
+    pub fn blocked_fraction(
+        &self,
+        a: &Vec3,
+        b: &Vec3,
+        centre: &Vec3,
+        rho: f64,
+        domain: Option<&Container>,
+    ) -> f64 {
         let (c, n) = self.plane();
         let (sa, sb) = (n.dot(&(a - c)), n.dot(&(b - c)));
         if (sa > 0.0) == (sb > 0.0) {
@@ -226,38 +239,49 @@ impl CrackShape {
         let helper = if e.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
         let s1 = e.cross(&helper).normalize();
         let s2 = e.cross(&s1);
-        let mut inside = 0usize;
+        let in_domain = |x: &Vec3| domain.is_none_or(|d| d.wall_distance(x) >= 0.0);
+        let (mut inside, mut counted) = (0usize, 0usize);
         for i in 0..FOOTPRINT_RINGS {
             let r = rho * ((i as f64 + 0.5) / FOOTPRINT_RINGS as f64).sqrt();
             for j in 0..FOOTPRINT_ANGLES {
                 let t = std::f64::consts::TAU * (j as f64 + 0.5 * (i % 2) as f64) / FOOTPRINT_ANGLES as f64;
                 let y = centre + (s1 * t.cos() + s2 * t.sin()) * r;
                 let x = y - e * (n.dot(&(y - c)) / slope);
+                if !(in_domain(&y) && in_domain(&x)) {
+                    continue;
+                }
+                counted += 1;
                 if self.contains_planar(&n, &x) {
                     inside += 1;
                 }
             }
         }
-        inside as f64 / (FOOTPRINT_RINGS * FOOTPRINT_ANGLES) as f64
+        if counted == 0 {
+            return self.blocked_fraction(a, b, centre, 0.0, None);
+        }
+        inside as f64 / counted as f64
     }
 
-    /// [`CrackShape::blocked_fraction`] over the crack and its periodic images when `period`
-    /// (m) is given (the images' fractions add up, at most 1).
-    pub fn blocked_fraction_periodic(
+    /// [`CrackShape::blocked_fraction`] in `container`: over the crack and its periodic images
+    /// in a periodic box (the images' fractions add up, at most 1), else over the tubes inside
+    /// the container's walls.
+    pub fn blocked_fraction_in(
         &self,
         a: &Vec3,
         b: &Vec3,
         centre: &Vec3,
         rho: f64,
-        period: Option<[f64; 3]>,
+        container: &Container,
     ) -> f64 {
+        let period = container.period();
+        let domain = period.is_none().then_some(container);
         let (bc, br) = self.bounding_ball();
         let reach = br + rho * (1.0 + 1.0 / MIN_OBLIQUITY);
         let at = |s: &Vec3| {
             if segment_ball_distance(a, b, &(bc + s)) > reach {
                 0.0
             } else {
-                self.blocked_fraction(&(a - s), &(b - s), &(centre - s), rho)
+                self.blocked_fraction(&(a - s), &(b - s), &(centre - s), rho, domain)
             }
         };
         match period {
@@ -413,13 +437,12 @@ pub fn blocked_contacts(
     if cracks.is_empty() {
         return vec![None; graph.len()];
     }
-    let period = container.period();
     map_branches(graph, particles, |k, a, b| {
         let centre = a + cells.centroid[k];
         let rho = (cells.facet_area[k] / std::f64::consts::PI).sqrt();
         let mut cover: Option<CrackCover> = None;
         for (i, c) in cracks.iter().enumerate() {
-            let f = c.blocked_fraction_periodic(&a, &b, &centre, rho, period);
+            let f = c.blocked_fraction_in(&a, &b, &centre, rho, container);
             if f <= 0.0 {
                 continue;
             }
@@ -494,8 +517,9 @@ mod tests {
             normal: v(0.0, 0.0, 1.0),
             radius: 1.0,
         };
-        let f =
-            |x: f64, rho: f64| d.blocked_fraction(&v(x, 0.0, -0.5), &v(x, 0.0, 0.5), &v(x, 0.0, 0.0), rho);
+        let f = |x: f64, rho: f64| {
+            d.blocked_fraction(&v(x, 0.0, -0.5), &v(x, 0.0, 0.5), &v(x, 0.0, 0.0), rho, None)
+        };
         // Inside, far from the rim: covered wholly; far outside: not at all.
         assert_eq!(f(0.0, 0.3), 1.0);
         assert_eq!(f(1.5, 0.3), 0.0);
@@ -506,7 +530,7 @@ mod tests {
         assert!(0.0 < less && less < half, "{less}");
         // A branch that does not reach the plane is not blocked.
         assert_eq!(
-            d.blocked_fraction(&v(0.0, 0.0, 0.1), &v(0.0, 0.0, 0.5), &v(0.0, 0.0, 0.3), 0.3),
+            d.blocked_fraction(&v(0.0, 0.0, 0.1), &v(0.0, 0.0, 0.5), &v(0.0, 0.0, 0.3), 0.3, None),
             0.0
         );
         // Without a facet it is the segment rule.
@@ -523,19 +547,56 @@ mod tests {
                 &v(x + 0.5, 0.0, 0.5),
                 &v(x, 0.0, 0.0),
                 0.3,
+                None,
             )
         };
         assert_eq!(oblique(0.0), 1.0);
         assert!(oblique(1.3) > f(1.3, 0.3), "{} {}", oblique(1.3), f(1.3, 0.3));
         // Periodic images add up: the same disc one period away covers the facet wholly.
-        let p = d.blocked_fraction_periodic(
+        let p = d.blocked_fraction_in(
             &v(4.0, 0.0, -0.5),
             &v(4.0, 0.0, 0.5),
             &v(4.0, 0.0, 0.0),
             0.3,
-            Some([4.0; 3]),
+            &Container::Periodic { size: [4.0; 3] },
         );
         assert_eq!(p, 1.0);
+    }
+
+    #[test]
+    fn a_crack_that_ends_at_a_wall_covers_the_facets_along_it_wholly() {
+        // The plane z = 0 over the box's section x ∈ [0, 2] exactly; a facet (disc of radius
+        // 0.3) centred 0.1 from the wall x = 0 reaches 0.2 past it, where the real facet does
+        // not exist: only its tubes inside the box count.
+        let c = CrackShape::Polygon {
+            points: vec![
+                v(0.0, 0.0, 0.0),
+                v(2.0, 0.0, 0.0),
+                v(2.0, 2.0, 0.0),
+                v(0.0, 2.0, 0.0),
+            ],
+        };
+        let box_ = Container::Box {
+            size: [2.0, 2.0, 2.0],
+        };
+        let (a, b, centre) = (v(0.1, 1.0, -0.5), v(0.1, 1.0, 0.5), v(0.1, 1.0, 0.0));
+        let free = c.blocked_fraction(&a, &b, &centre, 0.3, None);
+        assert!(free < 0.9, "{free}");
+        assert_eq!(c.blocked_fraction(&a, &b, &centre, 0.3, Some(&box_)), 1.0);
+        // The same for an oblique branch whose tubes meet the plane past the wall.
+        let (a, b) = (v(0.2, 1.0, -0.5), v(0.0, 1.0, 0.5));
+        assert_eq!(c.blocked_fraction_in(&a, &b, &centre, 0.3, &box_), 1.0);
+        // A crack that stops short of the wall still leaves the rest of the facet open.
+        let short = CrackShape::Polygon {
+            points: vec![
+                v(0.1, 0.0, 0.0),
+                v(2.0, 0.0, 0.0),
+                v(2.0, 2.0, 0.0),
+                v(0.1, 2.0, 0.0),
+            ],
+        };
+        let half = short.blocked_fraction_in(&v(0.1, 1.0, -0.5), &v(0.1, 1.0, 0.5), &centre, 0.3, &box_);
+        assert!((0.5..0.9).contains(&half), "{half}");
     }
 
     #[test]

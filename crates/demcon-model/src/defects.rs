@@ -26,12 +26,16 @@
 //!   ([`demcon_graph::blocked_contacts`]: the facet's disc projected along the branch onto the
 //!   crack's plane): a facet covered wholly is cut, one covered in part keeps the open part of
 //!   its conductances ([`MARK_PARTLY_CUT`]), so the crack's edge is not rounded to whole
-//!   facets (`whole_facet_cuts` restores the segment rule). Or, for a filled
-//!   crack (`gap_conductance`), given the series resistance 1/(h_gap S) (and r_gap/S
-//!   electrically, which a filled crack must give when the scene is electric). Wall links whose
-//!   segment (centre to face) a crack crosses are treated the same way. A cluster that a crack
-//!   separates from every boundary value is a floating cluster like any other (excluded and
-//!   reported, or refused, by the scene's `floating` policy).
+//!   facets (`whole_facet_cuts` restores the segment rule). A filled crack
+//!   (`gap_conductance`) is an interface on a surface: on the part of each facet it covers (the
+//!   same covered part) the contact gets the series resistance 1/(h_gap S |e·n|) (and
+//!   r_gap/(S |e·n|) electrically, which a filled crack must give when the scene is electric),
+//!   n the crack's normal — the term of an interface crossing (`crossing_resistance`), which
+//!   makes a crack across a section of a Laguerre bar exact. Wall links whose segment (centre
+//!   to face) a crack crosses are cut by an open crack, given the gap of a filled one (divided
+//!   by |e·n| too, e the face's normal), whole (the segment rule), and count as the crack's
+//!   hits. A cluster that a crack separates from every boundary value is a floating cluster
+//!   like any other (excluded and reported, or refused, by the scene's `floating` policy).
 //! - **Damage** ([`Damage`]): the conductances (both physics) of the contacts whose branch
 //!   midpoint lies in the region are multiplied by the factor, in (0, 1]; overlapping regions
 //!   multiply. A contact is "in" a region by its midpoint (the minimum-image midpoint, wrapped
@@ -51,8 +55,7 @@ use std::collections::HashMap;
 
 use demcon_core::{Container, ParticleSet, Region, Vec3};
 use demcon_graph::{
-    ContactGraph, CrackShape, HalfBond, Laminates, Mix, WallContacts, blocked_contacts, crossed_contacts,
-    first_crossing,
+    ContactGraph, CrackShape, HalfBond, Laminates, Mix, WallContacts, blocked_contacts, first_crossing,
 };
 use serde::Serialize;
 
@@ -113,9 +116,10 @@ pub struct DefectSpec {
     pub damage: Vec<Damage>,
     /// Broken bonds: particle index pairs (before carving).
     pub cut_pairs: Vec<[u32; 2]>,
-    /// Open cracks cut a Laguerre facet only where its segment crosses them, whole or not at
-    /// all (the segment rule of the contact models), instead of by the covered part of the
-    /// facet. For comparisons; `false` by default.
+    /// Cracks take a Laguerre facet only where its segment crosses them, whole
+    /// or not at all (the segment rule of the contact models), instead of by the covered part
+    /// of the facet: an open crack cuts it, a filled one puts its gap on all of it. For
+    /// comparisons; `false` by default.
     pub whole_facet_cuts: bool,
 }
 
@@ -259,6 +263,9 @@ pub struct DefectReport {
     pub partly_cut_by_cracks: usize,
     /// Contacts crossed by filled cracks (kept with the gap resistance).
     pub filled_crack_contacts: usize,
+    /// Wall links (to any face of the container) whose segment a crack crosses: cut by an open
+    /// crack, given a filled crack's gap, when their face is held at a value.
+    pub crack_wall_links: usize,
     /// Broken bonds cut (pairs of `cut_pairs` that were contacts).
     pub broken_bonds: usize,
     /// Pairs of `cut_pairs` that are not contacts of the graph (or lost a particle to carving).
@@ -286,12 +293,17 @@ pub struct Defects {
     /// Per contact: the factor on its conductances, the damage regions' factors times the open
     /// part of a facet an open crack covers in part (empty when neither: all 1).
     pub damage: Vec<f64>,
-    /// Per contact: the thermal series resistance per area of the filled cracks it crosses
+    /// Per contact: the thermal series resistance per area of the filled cracks it crosses,
+    /// each divided by |e·n| (e the branch, n the crack's normal, as an interface crossing is)
     /// (m²·K/W; empty when none).
     pub gap_thermal: Vec<f64>,
     /// Per contact: the electric series resistance per area of the filled cracks it crosses
-    /// (Ω·m²; empty when none).
+    /// (Ω·m², each divided by |e·n| like `gap_thermal`; empty when none).
     pub gap_electric: Vec<f64>,
+    /// Per contact: the part of its facet the filled cracks cover, in [0, 1] (1 without cells;
+    /// the largest of the cracks'), on which `gap_thermal` and `gap_electric` apply (empty when
+    /// no filled crack crosses a contact).
+    pub gap_cover: Vec<f64>,
     /// Contacts removed from the graph (open cracks, broken bonds).
     pub cut: Vec<CutContact>,
     /// Particles on a crack face, ascending.
@@ -383,6 +395,7 @@ pub(crate) fn apply_defects(
     // whatever filled cracks it also crosses; two filled cracks add up).
     let mut gap_thermal = Vec::new();
     let mut gap_electric = Vec::new();
+    let mut gap_cover = Vec::new();
     let mut marks = vec![0u8; m];
     let mut face = vec![false; particles.len()];
     let mut crack_hits = vec![0usize; spec.cracks.len()];
@@ -418,16 +431,21 @@ pub(crate) fn apply_defects(
             point: [x.point.x, x.point.y, x.point.z],
         });
     }
+    // Filled cracks: an interface on a surface. On the part of a facet it covers (the whole
+    // contact without cells), each adds its gap's resistance per area divided by |e·n| (n the
+    // crack's normal, e the branch), the term an interface crossing gets (`crossing_resistance`).
     for (i, crack) in spec.cracks.iter().enumerate() {
         let Some(h) = crack.gap_conductance else { continue };
-        let shape = [crack.shape.clone()];
-        for (k, x) in crossed_contacts(&graph, particles, container, &shape)
-            .iter()
-            .enumerate()
-        {
-            if x.is_none() {
-                continue;
-            }
+        let (_, normal) = crack.shape.plane();
+        let covers = blocked_contacts(
+            &graph,
+            particles,
+            container,
+            std::slice::from_ref(&crack.shape),
+            spec.whole_facet_cuts,
+        );
+        for (k, x) in covers.iter().enumerate() {
+            let Some(x) = x else { continue };
             crack_hits[i] += 1;
             let [p, q] = graph.pairs[k];
             face[p as usize] = true;
@@ -438,19 +456,32 @@ pub(crate) fn apply_defects(
             if gap_thermal.is_empty() {
                 gap_thermal = vec![0.0; m];
                 gap_electric = vec![0.0; m];
+                gap_cover = vec![0.0; m];
             }
-            gap_thermal[k] += 1.0 / h;
-            gap_electric[k] += crack.gap_electric_resistance.unwrap_or(0.0);
+            let cos = graph.geometry[k].normal.dot(&normal).abs();
+            gap_thermal[k] += crossing_resistance(1.0 / h, cos);
+            gap_electric[k] += crossing_resistance(crack.gap_electric_resistance.unwrap_or(0.0), cos);
+            gap_cover[k] = f64::max(gap_cover[k], x.fraction);
             if marks[k] & MARK_FILLED_CRACK == 0 {
                 report.filled_crack_contacts += 1;
             }
             marks[k] |= MARK_FILLED_CRACK;
         }
     }
+    // Wall links (of every face the container has) count as hits too: a crack lying between
+    // a face and the centres next to it crosses no contact but cuts (or fills) those links.
+    for (i, n) in wall_links_crossed(&graph, particles, container, &spec.cracks)
+        .into_iter()
+        .enumerate()
+    {
+        crack_hits[i] += n;
+        report.crack_wall_links += n;
+    }
     for (i, &hits) in crack_hits.iter().enumerate() {
         if hits == 0 {
             report.warnings.push(format!(
-                "cracks[{i}] crosses no contact (outside the domain, or smaller than a particle)"
+                "cracks[{i}] crosses no contact or wall link (outside the domain, or smaller than a \
+                 particle)"
             ));
         }
     }
@@ -486,7 +517,12 @@ pub(crate) fn apply_defects(
             (0..m).filter(|&k| !remove[k]).map(|k| v[k]).collect()
         }
     };
-    let (gap_thermal, gap_electric, damage) = (keep(gap_thermal), keep(gap_electric), keep(damage));
+    let (gap_thermal, gap_electric, gap_cover, damage) = (
+        keep(gap_thermal),
+        keep(gap_electric),
+        keep(gap_cover),
+        keep(damage),
+    );
     let marks: Vec<u8> = (0..m).filter(|&k| !remove[k]).map(|k| marks[k]).collect();
     let graph = if cut.is_empty() {
         graph
@@ -502,6 +538,7 @@ pub(crate) fn apply_defects(
         damage,
         gap_thermal,
         gap_electric,
+        gap_cover,
         cut,
         crack_face,
         report,
@@ -523,6 +560,76 @@ fn wrap(container: &Container, x: Vec3) -> Vec3 {
 
 /// Smallest |e·n| an interface crossing is divided by (a branch almost along the interface).
 const MIN_CROSSING_COSINE: f64 = 1e-3;
+
+/// The series term, per area of the branch's transmission surface S, of a surface of
+/// resistance `r` per area (an interface: 1/h in m²·K/W or r_c in Ω·m²; a filled crack's gap)
+/// that a branch crosses at |e·n| = `cos` (e the branch, n the surface's normal): r / |e·n|,
+/// so that the branch's resistance gains r/(S |e·n|) (|e·n| floored at
+/// [`MIN_CROSSING_COSINE`]).
+///
+/// Why |e·n|: across a plane surface carrying the flux q, the continuum has the jump q r and
+/// passes q (e·n) S through a facet of normal e. A branch reproduces both only if its surface
+/// term is r/(S |e·n|); with the series rule for the bulk parts its flow is then exactly
+/// q·(S e), and Σ S e = 0 per closed cell makes the piecewise-linear continuum field an exact
+/// solution of the Laguerre network, wherever the plane cuts the cells. The one code path for
+/// interfaces (phase changes along a branch, [`path_resistance`]) and filled cracks (a
+/// surface the branch crosses, [`apply_defects`]).
+fn crossing_resistance(r: f64, cos: f64) -> f64 {
+    r / cos.max(MIN_CROSSING_COSINE)
+}
+
+/// A conductance `g` (W/K or S) in series with the resistance per area `r` (m²·K/W or Ω·m²)
+/// over the surface `area` (m²): 1/(1/g + r/S); `g` unchanged when any of them is not > 0.
+fn in_series(g: f64, r: f64, area: f64) -> f64 {
+    if r > 0.0 && g > 0.0 && area > 0.0 {
+        1.0 / (1.0 / g + r / area)
+    } else {
+        g
+    }
+}
+
+/// A conductance `g` (W/K or S) whose surface `area` (m²) a filled crack covers in the part
+/// `cover` (in [0, 1]) with the gap resistance per area `gap` (m²·K/W or Ω·m², |e·n|
+/// included): the covered part in series with the gap, the rest as it was, in parallel —
+/// (1 − f) g + f / (1/g + r/S), which is 1/(1/g + r/S) for a facet covered wholly.
+fn with_gap(g: f64, gap: f64, cover: f64, area: f64) -> f64 {
+    if cover >= 1.0 {
+        in_series(g, gap, area)
+    } else {
+        (1.0 - cover) * g + cover * in_series(g, gap, area)
+    }
+}
+
+/// For each of `cracks`, the wall links it crosses (the segment from a particle's centre to
+/// its face, [`CrackShape::crossing_periodic`]) among the links every face of the container
+/// could have ([`WallContacts::for_graph`] per face; a face no particle touches has none).
+fn wall_links_crossed(
+    graph: &ContactGraph,
+    particles: &ParticleSet,
+    container: &Container,
+    cracks: &[Crack],
+) -> Vec<usize> {
+    let mut hits = vec![0; cracks.len()];
+    if cracks.is_empty() {
+        return hits;
+    }
+    let period = container.period();
+    for &face in container.faces() {
+        let Ok(walls) = WallContacts::for_graph(graph, particles, container, &[face], "cracks") else {
+            continue;
+        };
+        for k in 0..walls.len() {
+            let a = particles.centres[walls.particle[k] as usize];
+            let b = a + walls.half_length[k] * walls.normal[k];
+            for (i, c) in cracks.iter().enumerate() {
+                if c.shape.crossing_periodic(&a, &b, period).is_some() {
+                    hits[i] += 1;
+                }
+            }
+        }
+    }
+    hits
+}
 
 /// The phase at the end of particle `p`'s half-bond along the unit vector `e` over `length`
 /// (m), and |e·n| of the interface plane it crosses: the other phase when the segment rule
@@ -551,25 +658,18 @@ fn end_phase(lam: &Laminates<'_>, phases: &[u16], p: usize, e: &Vec3, length: f6
 }
 
 /// Sum of the interface resistances (thermal m²·K/W, electric Ω·m²) over the steps (from
-/// phase, to phase, |e·n| of the crossing) of a path, each divided by its |e·n|, and the
-/// number of listed interfaces crossed.
-///
-/// Why |e·n|: a branch of direction e crossing a plane interface of normal n carries, in the
-/// continuum, the flux q (e·n) S through its facet, while the temperature jump across the
-/// interface is q/h: the branch reproduces both (with the series rule for the bulk parts) only
-/// when the interface term of its resistance is 1/(h S |e·n|). A Laguerre network with the
-/// segment rule is then exact for a layered body with interface resistances, wherever the
-/// planes cut the cells (the network's own consistency argument: Σ S e = 0 per cell). By
-/// centre, the facet between two cells is the interface (|e·n| = 1).
+/// phase, to phase, |e·n| of the crossing) of a path, each divided by its |e·n|
+/// ([`crossing_resistance`]), and the number of listed interfaces crossed. A crossing inside a
+/// cut particle (segment rule) takes n from the particle's plane; by centre, the facet between
+/// two cells is the interface.
 fn path_resistance(table: &[Option<(f64, f64)>], n: usize, steps: &[(u16, u16, f64)]) -> (f64, f64, u32) {
     let mut r = (0.0, 0.0, 0);
     for &(a, b, cos) in steps {
         if a != b
             && let Some(Some((t, e))) = table.get(a as usize * n + b as usize)
         {
-            let c = cos.max(MIN_CROSSING_COSINE);
-            r.0 += t / c;
-            r.1 += e / c;
+            r.0 += crossing_resistance(*t, cos);
+            r.1 += crossing_resistance(*e, cos);
             r.2 += 1;
         }
     }
@@ -676,7 +776,9 @@ pub(crate) enum Physics {
 
 /// Adds the interface and filled-crack series resistances per area to contact conductances
 /// `g` (W/K or S) of surfaces `areas` (m²) and applies the damage factors:
-/// G = f / (1/G₀ + (Σ r_interface + r_gap)/S).
+/// G = f / (1/G₀ + (Σ r_interface + r_gap)/S) on a facet a filled crack covers wholly (each
+/// r already divided by its |e·n|), G = f ((1 − c) G₁ + c / (1/G₁ + r_gap/S)) with
+/// G₁ = 1/(1/G₀ + Σ r_interface/S) on one it covers in the part c ([`with_gap`]).
 pub(crate) fn apply_to_contacts(model: &Model, areas: &[f64], g: &mut [f64], physics: Physics) {
     let (defects, graph, phases, mixes) = (
         &model.defects,
@@ -697,17 +799,21 @@ pub(crate) fn apply_to_contacts(model: &Model, areas: &[f64], g: &mut [f64], phy
     let interfaces = !defects.spec.interfaces.is_empty();
     let normals = interfaces.then(|| phase_normals(graph, phases, areas));
     for k in 0..g.len() {
-        let mut r = gap.get(k).copied().unwrap_or(0.0);
+        let mut r = 0.0;
         if interfaces {
             let (t, e, _) = contact_interface(graph, phases, &lam, &table, n_phases, k, normals.as_deref());
-            r += match physics {
+            r = match physics {
                 Physics::Thermal => t,
                 Physics::Electric => e,
             };
         }
-        if r > 0.0 && g[k] > 0.0 && areas[k] > 0.0 {
-            g[k] = 1.0 / (1.0 / g[k] + r / areas[k]);
-        }
+        let r_gap = gap.get(k).copied().unwrap_or(0.0);
+        let cover = defects.gap_cover.get(k).copied().unwrap_or(1.0);
+        g[k] = if cover >= 1.0 {
+            in_series(g[k], r + r_gap, areas[k])
+        } else {
+            with_gap(in_series(g[k], r, areas[k]), r_gap, cover, areas[k])
+        };
         if let Some(f) = defects.damage.get(k) {
             g[k] *= f;
         }
@@ -743,8 +849,8 @@ pub(crate) fn cut_wall_links(
 }
 
 /// The wall-link counterpart of [`apply_to_contacts`]: the interface a half-bond crosses
-/// inside its particle (segment rule), filled cracks on the link's segment, damage by the
-/// half-bond's midpoint.
+/// inside its particle (segment rule), filled cracks on the link's segment (each gap divided
+/// by |e·n|, e the face's normal), damage by the half-bond's midpoint.
 pub(crate) fn apply_to_walls(
     model: &Model,
     walls: &WallContacts,
@@ -769,23 +875,25 @@ pub(crate) fn apply_to_walls(
         let b = a + h * n;
         let (end, cos) = end_phase(&lam, &particles.phases, p, &n, h);
         let (t, e, _) = path_resistance(&table, n_phases, &[(particles.phases[p], end, cos)]);
-        let mut r = match physics {
+        let r = match physics {
             Physics::Thermal => t,
             Physics::Electric => e,
         };
+        // A filled crack on the link's segment (the segment rule, as open cracks cut links):
+        // its gap over the link's surface, divided by |e·n| with e the face's normal.
+        let mut r_gap = 0.0;
         for c in &spec.cracks {
             if let Some(hg) = c.gap_conductance
                 && c.shape.crossing_periodic(&a, &b, period).is_some()
             {
-                r += match physics {
+                let gap = match physics {
                     Physics::Thermal => 1.0 / hg,
                     Physics::Electric => c.gap_electric_resistance.unwrap_or(0.0),
                 };
+                r_gap += crossing_resistance(gap, n.dot(&c.shape.plane().1).abs());
             }
         }
-        if r > 0.0 && g[k] > 0.0 && surfaces[k] > 0.0 {
-            g[k] = 1.0 / (1.0 / g[k] + r / surfaces[k]);
-        }
+        g[k] = in_series(g[k], r + r_gap, surfaces[k]);
         let mid = wrap(container, a + 0.5 * h * n);
         for d in &spec.damage {
             if d.region.contains_point(&mid) {

@@ -4,7 +4,10 @@
 
 use demcon_core::{Face, Selector, Vec3};
 use demcon_electric::{ElectricParams, joule_power, solve_potential};
-use demcon_graph::{InterfaceRule, Mix, SurfaceModel, WallContacts, contact_surfaces, interface_value_split};
+use demcon_graph::{
+    InterfaceRule, Mix, SurfaceModel, WallContacts, contact_surfaces, interface_value_split,
+    representative_volumes,
+};
 use demcon_network::FloatingPolicy;
 use serde::Serialize;
 
@@ -90,14 +93,36 @@ pub struct ElectricRun {
     pub conductances: Vec<f64>,
     /// The face electrodes and their links.
     pub walls: WallContacts,
+    /// The potential of each face electrode (V), in the order of `walls`.
+    pub wall_potentials: Vec<f64>,
     /// The transmission-surface model of the electric network (C_t resolved).
     pub surface: SurfaceModel,
-    /// Joule power per particle (W), η applied.
+    /// Representative volume per particle under `surface` (m³): the Laguerre cell's, or
+    /// V_p/φ (calibrated), V_p/f_v(n_p) (Terreros α).
+    pub rep_volumes: Vec<f64>,
+    /// Joule power per particle (W), η applied: the heat the particle receives.
     pub joule: Vec<f64>,
     /// Summary.
     pub report: ElectricReport,
     /// Findings (floating clusters…).
     pub diagnostics: Vec<String>,
+}
+
+impl ElectricRun {
+    /// Potentials of every node of the electric network (V): the particles, then the face
+    /// electrodes.
+    pub fn node_potentials(&self) -> Vec<f64> {
+        [&self.potentials[..], &self.wall_potentials[..]].concat()
+    }
+
+    /// The current density j_p of every particle (A/m², the direction the current flows: from
+    /// high to low potential), by the heat flux's construction ([`crate::flux_dipoles`] over
+    /// the contacts and the electrode links, divided by twice [`ElectricRun::rep_volumes`]):
+    /// exact in a uniform field on Laguerre cells. 0 on excluded (floating) particles.
+    pub fn current_density(&self, model: &Model) -> Vec<Vec3> {
+        let d = crate::flux_dipoles(model, &self.walls, &self.conductances, &self.node_potentials());
+        crate::flux_density(&d, &self.rep_volumes)
+    }
 }
 
 /// Summary of an electric solve.
@@ -111,8 +136,12 @@ pub struct ElectricReport {
     pub current_out: f64,
     /// |I_in − I_out| / I_in.
     pub current_mismatch: f64,
-    /// Total Joule power (W).
+    /// Total Joule power (W): Σ I²/G over the branches (contacts and electrode links), the
+    /// power the current dissipates, = ΔV·I between two electrodes; whatever η.
     pub joule_w: f64,
+    /// The part of it that heats the particles (W): η · `joule_w`, = Σ of the per-particle
+    /// Joule power.
+    pub joule_heat_w: f64,
     /// Solver.
     pub method: String,
     /// CG iterations.
@@ -288,6 +317,16 @@ pub fn solve_electric(
     };
     let sol = solve_potential(net, &g, &electrodes, &params)?;
     let mut joule = joule_power(net, &g, &sol.potentials, problem.eta)?;
+    // The power dissipated, Σ G Δu² over every branch (electrode links included), whatever η.
+    let dissipated: f64 = net
+        .edges()
+        .iter()
+        .zip(&g)
+        .map(|(&[p, q], g)| {
+            let du = sol.potentials[p as usize] - sol.potentials[q as usize];
+            g * du * du
+        })
+        .sum();
     // A wall link's power: the half booked to the wall node goes to the particle too.
     for (k, w) in walls.wall_of_links().enumerate() {
         let p = walls.particle[k] as usize;
@@ -296,7 +335,8 @@ pub fn solve_electric(
     }
     joule.truncate(n);
     let mut potentials = sol.potentials;
-    potentials.truncate(n);
+    let wall_potentials = potentials.split_off(n);
+    let rep_volumes = representative_volumes(&model.graph, &model.particles, &sm, model.phi)?;
     let r = &sol.report;
     Ok(ElectricRun {
         report: ElectricReport {
@@ -304,7 +344,8 @@ pub fn solve_electric(
             current_in: sol.current_in,
             current_out: sol.current_out,
             current_mismatch: sol.current_mismatch,
-            joule_w: joule.iter().sum(),
+            joule_w: dissipated,
+            joule_heat_w: joule.iter().sum(),
             method: r.method.to_string(),
             iterations: r.iterations,
             residual: r.relative_residual,
@@ -318,7 +359,9 @@ pub fn solve_electric(
         branch_currents: sol.branch_currents,
         conductances: g,
         walls,
+        wall_potentials,
         surface: sm,
+        rep_volumes,
         joule,
     })
 }

@@ -15,6 +15,8 @@
 //! - [`calibrate`]: C_t on the model's own packing ([`calibrate_ct_with`]).
 //! - [`electric`]: an [`ElectricProblem`] → [`solve_electric`] (conductances with ρ_e(T),
 //!   electrodes on particles or faces, Joule power).
+//! - [`flux`]: the per-particle flux densities of a solved network, heat or current
+//!   ([`flux_dipoles`], [`flux_density`], [`ElectricRun::current_density`]).
 //! - [`couple`](mod@couple): the electro-thermal coupling ([`couple()`]: one-way, steady fixed
 //!   point, or time-accurate re-solves in a transient).
 //! - [`homogenize`](mod@homogenize): the effective conductivity tensors of a periodic packing
@@ -35,6 +37,7 @@ pub mod defects;
 pub mod electric;
 mod error;
 pub mod etc;
+pub mod flux;
 pub mod homogenize;
 pub mod model;
 pub mod thermal;
@@ -52,6 +55,7 @@ pub use electric::{
 };
 pub use error::ModelError;
 pub use etc::{EtcValue, effective_conductivity};
+pub use flux::{flux_density, flux_dipoles};
 pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogenize_thermal};
 pub use model::{
     CarveRule, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed, PhaseRule,

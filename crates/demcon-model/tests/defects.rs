@@ -11,6 +11,7 @@ use demcon_core::{Container, Face, Material, MaterialTable, ParticleSet, Region,
 use demcon_graph::{ContactParams, CrackShape, InterfaceRule, LaguerreParams};
 use demcon_model::*;
 use demcon_network::FloatingPolicy;
+use std::sync::OnceLock;
 
 const LAMBDA: [f64; 2] = [10.0, 2.0];
 const RHO_E: [f64; 2] = [2.0e-7, 5.0e-6];
@@ -554,6 +555,10 @@ fn a_crack_between_the_face_and_the_first_layer_cuts_the_wall_links() {
         };
         let m = lattice([3, 6, 3], None, PhaseRule::Centre, laguerre, defects).unwrap();
         assert!(m.cut_contacts().is_empty());
+        // It crosses the wall links, so it is no crack "that crosses nothing".
+        let report = m.report.defects.as_ref().unwrap();
+        assert_eq!(report.crack_wall_links, 9);
+        assert!(report.warnings.is_empty(), "{:?}", report.warnings);
         let problem = steady(laguerre, FloatingPolicy::Fail);
         let setup = thermal_setup(&m, &problem).unwrap();
         assert_eq!(setup.walls.len(), 9);
@@ -608,4 +613,175 @@ fn an_open_crack_cuts_whatever_filled_cracks_the_segment_also_crosses() {
         9.0 / (6.0 / LAMBDA[0] + 1.0 / h1 + 1.0 / h2),
         max_relative = 1e-9
     );
+}
+
+/// The bar of the random-packing tests (m): 40 × 100 × 40 mm, the gradient along y.
+const BAR: [f64; 3] = [0.04, 0.1, 0.04];
+
+/// A Gaussian-0.3 LS packing of 2000 spheres in [`BAR`] (made once), tessellated, material a,
+/// with `defects`.
+fn laguerre_bar(defects: DefectSpec) -> Model {
+    use demcon_packing::{PackingParams, RadiusDistribution, pack};
+    static PACKING: OnceLock<ParticleSet> = OnceLock::new();
+    let container = Container::Box { size: BAR };
+    let particles = PACKING.get_or_init(|| {
+        let params = PackingParams::new(container, 2000, 0.55, RadiusDistribution::gaussian(0.3));
+        pack(&params, 1, None).unwrap().0
+    });
+    let packed = Packed {
+        particles: particles.clone(),
+        container,
+        report: None,
+        imported_from: None,
+        pack_s: 0.0,
+    };
+    let params = ModelParams {
+        materials: materials(),
+        carve: None,
+        phases: Vec::new(),
+        phase_rule: PhaseRule::Centre,
+        contacts: ContactParams::default(),
+        laguerre: Some(LaguerreParams::default()),
+        defects,
+        seed: 1,
+    };
+    build_model(packed, &params).unwrap()
+}
+
+/// The plane y = `y` over the bar's section, reaching `margin` (m) past its side walls (0:
+/// exactly the section).
+fn bar_section(y: f64, margin: f64) -> CrackShape {
+    let (lo, x, z) = (-margin, BAR[0] + margin, BAR[2] + margin);
+    CrackShape::Polygon {
+        points: vec![
+            Vec3::new(lo, y, lo),
+            Vec3::new(x, y, lo),
+            Vec3::new(x, y, z),
+            Vec3::new(lo, y, z),
+        ],
+    }
+}
+
+#[test]
+fn an_open_crack_over_exactly_the_section_of_a_random_bar_passes_no_heat() {
+    // The facets along the side walls, read as discs of their area, reach past the walls; only
+    // their tubes inside the bar count, so a crack that ends at the walls covers them wholly
+    // (before: 36 % of the uncracked heat flow passed).
+    for margin in [0.0, 0.01] {
+        let m = laguerre_bar(DefectSpec {
+            cracks: vec![Crack {
+                shape: bar_section(0.0503, margin),
+                gap_conductance: None,
+                gap_electric_resistance: None,
+            }],
+            ..DefectSpec::default()
+        });
+        assert_eq!(m.defects.report.partly_cut_by_cracks, 0, "margin {margin}");
+        assert_eq!(m.defects.report.components_after_cuts, 2);
+        let q = heat_flow(&m, FloatingPolicy::Fail).unwrap();
+        assert!(q.abs() < 1e-12, "margin {margin}: {q} W");
+    }
+}
+
+/// Electrodes on the faces YMin (0 V) and YMax (1 V) of the Laguerre cells.
+fn y_face_electrodes() -> ElectricProblem {
+    let mut e = common::z_face_electrodes(SurfaceSpec::Laguerre, 1.0);
+    e.electrodes[0].at = ElectrodeAt::Face(Face::YMin);
+    e.electrodes[1].at = ElectrodeAt::Face(Face::YMax);
+    e
+}
+
+#[test]
+fn a_filled_crack_across_a_random_bar_is_the_exact_series() {
+    // A filled crack over the whole section is an interface on a surface: each branch it
+    // crosses gets 1/(h S |e·n|) (r_gap/(S |e·n|)), so the piecewise-linear continuum field
+    // solves the Laguerre network exactly (Σ S e = 0 per cell), wherever the plane cuts the
+    // cells. λ_e = L/(L/λ + 1/h) and R = (ρ_e L + r_gap)/A, with the gap half of the total.
+    //
+    // Tolerance: 1e-9 relative, as the homogeneous bars (the solve's residual, 1e-10). An
+    // a-priori 0.5 % would already have caught the error this test was written for: without
+    // |e·n| the gap's resistance was too small on every oblique branch, λ_e +18.4 % and R
+    // −31 % on this bar (19.54 for 16.5 at λ = 33, h = 330, the figures of issue 31).
+    let l = BAR[1];
+    let area = BAR[0] * BAR[2];
+    let h = LAMBDA[0] / l;
+    let r_gap = RHO_E[0] * l;
+    let lambda_e = l / (l / LAMBDA[0] + 1.0 / h);
+    let resistance = (RHO_E[0] * l + r_gap) / area;
+    // Mid-length, over exactly the section and reaching past it; and between the face YMin
+    // and the nearest centres, where it crosses wall links as well as contacts.
+    for (y, margin) in [(0.0503, 0.0), (0.0503, 0.01), (0.001, 0.0)] {
+        let m = laguerre_bar(DefectSpec {
+            cracks: vec![Crack {
+                shape: bar_section(y, margin),
+                gap_conductance: Some(h),
+                gap_electric_resistance: Some(r_gap),
+            }],
+            ..DefectSpec::default()
+        });
+        let report = m.report.defects.as_ref().unwrap();
+        assert!(
+            report.filled_crack_contacts > 0 && report.warnings.is_empty(),
+            "{report:?}"
+        );
+        assert_eq!(report.crack_wall_links > 0, y < 0.01, "{report:?}");
+        let q = heat_flow(&m, FloatingPolicy::Fail).unwrap();
+        assert_relative_eq!(q * l / area, lambda_e, max_relative = 1e-9);
+        let run = solve_electric(&m, &y_face_electrodes(), None).unwrap();
+        assert_relative_eq!(
+            run.report.resistance_ohm.unwrap(),
+            resistance,
+            max_relative = 1e-9
+        );
+    }
+}
+
+#[test]
+fn a_filled_crack_between_the_face_and_the_first_layer_fills_the_wall_links() {
+    // The plane y = 0.25 crosses only the 9 wall links of YMin: the chain is 6/λ + 1/h.
+    let h = 4.0;
+    for laguerre in [true, false] {
+        let defects = DefectSpec {
+            cracks: vec![Crack {
+                shape: plane_y(0.25),
+                gap_conductance: Some(h),
+                gap_electric_resistance: None,
+            }],
+            ..DefectSpec::default()
+        };
+        let m = lattice([3, 6, 3], None, PhaseRule::Centre, laguerre, defects).unwrap();
+        let report = m.report.defects.as_ref().unwrap();
+        assert_eq!((report.filled_crack_contacts, report.crack_wall_links), (0, 9));
+        assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+        let q = heat_flow(&m, FloatingPolicy::Fail).unwrap();
+        assert_relative_eq!(q, 9.0 / (6.0 / LAMBDA[0] + 1.0 / h), max_relative = 1e-9);
+    }
+}
+
+#[test]
+fn a_filled_crack_covers_laguerre_facets_in_part() {
+    // As the open crack above: the edge x = 2.5 through the middle of the third column's
+    // facets puts the gap on about half of each (in parallel with the open half), between the
+    // edges x = 2 and x = 3; the whole-facet rule puts it on the whole facet or none.
+    let spec = |edge: f64, whole: bool| DefectSpec {
+        cracks: vec![Crack {
+            shape: half_plane_y(edge),
+            gap_conductance: Some(0.5),
+            gap_electric_resistance: None,
+        }],
+        whole_facet_cuts: whole,
+        ..DefectSpec::default()
+    };
+    let flow = |edge: f64, whole: bool| {
+        let m = lattice([4, 6, 4], None, PhaseRule::Centre, true, spec(edge, whole)).unwrap();
+        (heat_flow(&m, FloatingPolicy::Fail).unwrap(), m)
+    };
+    let (q_half, m) = flow(2.5, false);
+    assert_eq!(m.defects.report.filled_crack_contacts, 12);
+    let (q_two, _) = flow(2.0, false);
+    let (q_three, _) = flow(3.0, false);
+    assert!(q_three < q_half && q_half < q_two, "{q_three} {q_half} {q_two}");
+    let (q_whole, whole) = flow(2.4, true);
+    assert_eq!(whole.defects.report.filled_crack_contacts, 8);
+    assert!(q_whole > q_half, "{q_whole} {q_half}");
 }

@@ -250,3 +250,86 @@ fn a_homogeneous_cylinder_between_its_end_walls_is_exact() {
     assert!(t.volume_error > 0.0 && t.volume_error < 1e-3, "{t:?}");
     assert!(t.max_area_mismatch < 1e-9, "{t:?}");
 }
+
+#[test]
+fn the_heat_flux_and_the_current_density_are_exact_in_every_particle() {
+    // One construction for both fields (flux_dipoles: contacts at their facets' centroids, wall
+    // links, divided by twice the cell volume): in a uniform field every particle's flux is
+    // −λ∇T, every particle's current density −∇u/ρ_e, along the bar, wall cells included.
+    // Solved to 1e-13 so that round-off, not the solve, bounds them: 1e-9 relative.
+    let m = model(
+        Container::Box {
+            size: [2e-3, 4e-3, 2e-3],
+        },
+        1500,
+        7,
+    );
+    let tight = demcon_network::SolveParams {
+        method: demcon_network::Method::Auto {
+            rel_tol: 1e-13,
+            max_iter: 200_000,
+        },
+    };
+    let check = |what: &str, field: &[demcon_core::Vec3], exact: f64| {
+        for (p, f) in field.iter().enumerate() {
+            assert!(
+                (f.y / exact - 1.0).abs() < 1e-9
+                    && f.x.abs() < 1e-9 * exact.abs()
+                    && f.z.abs() < 1e-9 * exact.abs(),
+                "{what} of particle {p}: {f} for {exact} along y"
+            );
+        }
+    };
+    // Heat: 0 °C on YMin, 4 °C on YMax: q = −λ ∂T/∂y = −10 · 1000 W/m².
+    let p = ThermalProblem {
+        solve: tight,
+        ..problem(two_walls(Face::YMin, 0.0, Face::YMax, 4.0), ThermalSolver::Steady)
+    };
+    let setup = thermal_setup(&m, &p).unwrap();
+    let bcs = thermal_bcs(&m, &setup, &p).unwrap();
+    let run = solve_thermal(&m, &setup, &bcs, &p).unwrap();
+    let d = flux_dipoles(&m, &setup.walls, &setup.conductances, &run.node_temperatures());
+    check("heat flux", &flux_density(&d, &setup.rep_volumes), -1e4);
+    // Current: 0 V on YMin, 1 mV on YMax: j = −(1 mV / 4 mm) / ρ_e, from YMax to YMin.
+    let mut e = z_face_electrodes(SurfaceSpec::Laguerre, 1e-3);
+    e.electrodes[0].at = ElectrodeAt::Face(Face::YMin);
+    e.electrodes[1].at = ElectrodeAt::Face(Face::YMax);
+    e.solve = tight;
+    let el = solve_electric(&m, &e, None).unwrap();
+    assert_eq!(el.rep_volumes, m.graph.cells.as_ref().unwrap().volume);
+    check("current density", &el.current_density(&m), -0.25 / 2.0e-7);
+}
+
+#[test]
+fn the_joule_power_is_what_the_current_dissipates_and_eta_of_it_heats() {
+    // ΔV = 1 mV across a bar of resistance R: the current dissipates ΔV²/R = ΔV·I whatever η
+    // (`joule_w`, and Σ I²/G over the branches: contacts.vtp's sum); η = 0.5 of it heats the
+    // particles (`joule_heat_w`, Σ of the per-particle power).
+    let m = model(
+        Container::Box {
+            size: [2e-3, 2e-3, 4e-3],
+        },
+        1000,
+        8,
+    );
+    let mut e = z_face_electrodes(SurfaceSpec::Laguerre, 1e-3);
+    e.eta = 0.5;
+    let el = solve_electric(&m, &e, None).unwrap();
+    let r = el.report.resistance_ohm.unwrap();
+    assert_relative_eq!(el.report.joule_w, 1e-6 / r, max_relative = 1e-9);
+    assert_relative_eq!(
+        el.report.joule_w,
+        1e-3 * el.report.current_in,
+        max_relative = 1e-9
+    );
+    let branches: f64 = el
+        .branch_currents
+        .iter()
+        .zip(&el.conductances)
+        .map(|(i, g)| i * i / g)
+        .sum();
+    assert_relative_eq!(branches, el.report.joule_w, max_relative = 1e-9);
+    let heat: f64 = el.joule.iter().sum();
+    assert_relative_eq!(el.report.joule_heat_w, heat, max_relative = 1e-12);
+    assert_relative_eq!(heat, 0.5 * el.report.joule_w, max_relative = 1e-9);
+}

@@ -5,6 +5,7 @@
 //! Values that are not results (particles excluded from a solve) are never written as NaN: a
 //! `solved` column flags them.
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use demcon_core::StageRecord;
@@ -343,7 +344,7 @@ pub(crate) struct ParticleFields<'a> {
     /// Scalar fields (name, value per particle).
     pub(crate) scalars: Vec<(&'static str, Vec<f64>)>,
     /// Vector fields (name, value per particle).
-    pub(crate) vectors: Vec<(&'static str, &'a [demcon_core::Vec3])>,
+    pub(crate) vectors: Vec<(&'static str, Cow<'a, [Vec3]>)>,
     /// 1 where the particle's Halo is cut by the boundary.
     halo_cut: Option<Vec<i32>>,
     /// 1 where the particle is on a crack face (an end of a contact a crack crosses), when the
@@ -391,27 +392,32 @@ impl<'a> ParticleFields<'a> {
                 .map(|p| lam.get(p).map_or(m.particles.phases[p], |x| x.other_phase) as f64)
                 .collect(),
         ));
+        // The volume each particle stands for (m³): the Laguerre cell's, or the representative
+        // volume of the contact models (V_p/φ, V_p/f_v): the thermal network's when the run has
+        // heat (its capacities and flux divide by it), else the electric network's.
+        let volume: Vec<f64> = match (&r.thermal_setup, &r.electric) {
+            (Some(s), _) => s.rep_volumes.clone(),
+            (None, Some(e)) => e.rep_volumes.clone(),
+            (None, None) => (0..n).map(|p| m.solid_volume_of(p)).collect(),
+        };
         if let Some(t) = &r.thermal {
             let temps = at.map_or(&t.temperatures, |e| &t.snapshots[e.snapshot].1);
             scalars.push(("temperature", temps.clone()));
         }
+        let mut vectors: Vec<(&str, Cow<'a, [Vec3]>)> = Vec::new();
         if let Some(e) = r.electric.as_ref().filter(|_| at.is_none_or(|e| e.electric)) {
             scalars.push(("potential", e.potentials.clone()));
             scalars.push(("joule_power", e.joule.clone()));
-            // Current density magnitude from the branch currents, as the flux of eq. 20:
-            // j_p = (1/(2 V_rep)) |Σ_q I_pq ℓ_pq|.
-            let mut d = vec![demcon_core::Vec3::zeros(); n];
-            for (k, &[p, q]) in m.graph.pairs.iter().enumerate() {
-                let l = m.graph.branch(k) * e.branch_currents[k];
-                d[p as usize] += l;
-                d[q as usize] += l;
-            }
-            let vrep: Vec<f64> = (0..n).map(|p| m.solid_volume_of(p)).collect();
+            // W per particle is no density: a slice would show large particles as hot spots.
             scalars.push((
-                "current_density",
-                d.iter().zip(&vrep).map(|(v, w)| v.norm() / (2.0 * w)).collect(),
+                "joule_power_density",
+                e.joule.iter().zip(&volume).map(|(w, v)| w / v).collect(),
             ));
+            // The heat flux's construction (contacts at their facets' centroids, electrode
+            // links, the electric network's representative volumes): exact in a uniform field.
+            vectors.push(("current_density", Cow::Owned(e.current_density(m))));
         }
+        scalars.push(("volume", volume));
         if let Some(t) = r.homogenization.as_ref().and_then(|h| h.thermal.as_ref()) {
             // The temperature fluctuation under a unit mean gradient along each axis (m = K per K/m).
             let [x, y, z] = &t.fluctuations;
@@ -419,16 +425,15 @@ impl<'a> ParticleFields<'a> {
             scalars.push(("fluctuation_gy", y.clone()));
             scalars.push(("fluctuation_gz", z.clone()));
         }
-        let mut vectors: Vec<(&str, &[demcon_core::Vec3])> = Vec::new();
         let (flux, halo) = match at {
             Some(e) => (e.flux.as_deref(), e.halo.as_ref().map(|(h, cut)| (h, cut))),
             None => (r.flux.as_deref(), r.halo.as_ref().map(|(h, cut, _)| (h, cut))),
         };
         if let Some(f) = flux {
-            vectors.push(("heat_flux", f));
+            vectors.push(("heat_flux", Cow::Borrowed(f)));
         }
         if let Some((h, _)) = halo {
-            vectors.push(("halo_flux", h));
+            vectors.push(("halo_flux", Cow::Borrowed(h)));
         }
         let halo_cut = halo.map(|(_, cut)| cut.iter().map(|&b| i32::from(b)).collect());
         let on_crack = m.crack_face_particles();

@@ -244,6 +244,39 @@ fn steady_writes_contacts_whose_wall_flows_carry_the_joule_heat_and_cells_that_f
 }
 
 #[test]
+fn with_eta_one_half_the_lines_still_add_up_to_the_power_dissipated() {
+    // `joule_power` of contacts.vtp is I²/G, before η; `electric.joule_w` is the power the
+    // current dissipates, whatever η; the particles (and so the walls, in steady state) get
+    // η of it (`joule_heat_w`).
+    let mut s = scene("Steady", "[]");
+    s.config.electric.as_mut().unwrap().eta = 0.5;
+    let (r, dir) = run_and_write(&s, "eta-half");
+    let e = &r.electric.as_ref().unwrap().report;
+    let heat: f64 = r.electric.as_ref().unwrap().joule.iter().sum();
+    assert!(
+        close(heat, 0.5 * e.joule_w, 1e-9) && close(e.joule_heat_w, heat, 1e-12),
+        "{e:?}"
+    );
+    let Some(c) = vtk_read(&dir.join("contacts.vtp")) else {
+        return;
+    };
+    check_contacts(&c, &r);
+    let cd = &c["cell_data"];
+    let (kind, flow) = (values(cd, "kind"), values(cd, "heat_flow"));
+    let walls: f64 = kind
+        .iter()
+        .zip(&flow)
+        .filter(|(k, _)| **k == 1.0)
+        .map(|(_, f)| f)
+        .sum();
+    assert!(
+        close(walls, e.joule_heat_w, 1e-6),
+        "the walls take {walls} W, the Joule heat is {} W",
+        e.joule_heat_w
+    );
+}
+
+#[test]
 fn cells_need_laguerre_cells() {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
