@@ -9,7 +9,9 @@
 //! - hangs (killed at the time limit),
 //! - non-finite outputs (a successful run whose outputs hold NaN/inf, or a null where a
 //!   number belongs in `summary.json`),
-//! - outputs left behind by a failed run.
+//! - outputs left behind by a failed run;
+//! - error messages that name a Rust type (`SceneConfig`, `RegionConfig::Difference`) instead
+//!   of a scene field, or say one file path twice.
 //!
 //! Each offending input is kept under `<out>/failures/` with the command that ran it. The
 //! campaign is deterministic for a seed (the mutations, not the timings).
@@ -79,6 +81,8 @@ enum Outcome {
     Hang,
     NonFinite,
     LeftOutput,
+    TypeName,
+    RepeatedPath,
 }
 
 /// Runs the campaign.
@@ -113,7 +117,7 @@ pub fn run(rest: &[String]) -> Result<()> {
     let corpus = corpus(&bin, &out)?;
     let mut rng = Rng(seed);
     let cases: Vec<Case> = (0..runs).map(|_| mutate(&corpus, &mut rng)).collect();
-    let counts = Mutex::new([0usize; 6]);
+    let counts = Mutex::new([0usize; 8]);
     let next = Mutex::new(0usize);
     let start = Instant::now();
     std::thread::scope(|s| {
@@ -146,7 +150,8 @@ pub fn run(rest: &[String]) -> Result<()> {
     let c = counts.into_inner().unwrap();
     let summary = format!(
         "fuzz: {runs} cases (seed {seed}, timeout {timeout} s) in {:.0} s: {} ran, {} clean errors; \
-         panics or signals {}, hangs {}, non-finite outputs {}, outputs left by failed runs {}",
+         panics or signals {}, hangs {}, non-finite outputs {}, outputs left by failed runs {}, messages naming \
+         a Rust type {}, messages saying a path twice {}",
         start.elapsed().as_secs_f64(),
         c[Outcome::Ok as usize],
         c[Outcome::CleanError as usize],
@@ -154,13 +159,17 @@ pub fn run(rest: &[String]) -> Result<()> {
         c[Outcome::Hang as usize],
         c[Outcome::NonFinite as usize],
         c[Outcome::LeftOutput as usize],
+        c[Outcome::TypeName as usize],
+        c[Outcome::RepeatedPath as usize],
     );
     println!("{summary}");
     std::fs::write(out.join("summary.txt"), format!("{summary}\n"))?;
     let bad = c[Outcome::Panic as usize]
         + c[Outcome::Hang as usize]
         + c[Outcome::NonFinite as usize]
-        + c[Outcome::LeftOutput as usize];
+        + c[Outcome::LeftOutput as usize]
+        + c[Outcome::TypeName as usize]
+        + c[Outcome::RepeatedPath as usize];
     if bad > 0 {
         bail!("{bad} failing cases, kept in {}", out.join("failures").display());
     }
@@ -474,6 +483,10 @@ fn execute(bin: &Path, args: &[String], dir: &Path, timeout: f64) -> Outcome {
             || dir.join("t.xyzr").exists();
         return if left {
             Outcome::LeftOutput
+        } else if names_a_type(&err) {
+            Outcome::TypeName
+        } else if says_a_path_twice(&err) {
+            Outcome::RepeatedPath
         } else {
             Outcome::CleanError
         };
@@ -484,6 +497,29 @@ fn execute(bin: &Path, args: &[String], dir: &Path, timeout: f64) -> Outcome {
         }
     }
     Outcome::Ok
+}
+
+/// Whether a message names a Rust type of the scene schema (`…Config`, or a `Type::Variant`
+/// path) where a user should read a scene field.
+fn names_a_type(message: &str) -> bool {
+    message
+        .split(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
+        .any(|w| {
+            (w.len() > 6 && w.ends_with("Config") && w.starts_with(char::is_uppercase)) || w.contains("::")
+        })
+}
+
+/// Whether a line of a message says one file path twice (`reading p.xyzr: p.xyzr:3: …`).
+fn says_a_path_twice(message: &str) -> bool {
+    message.lines().any(|line| {
+        let paths: Vec<&str> = line
+            .split_whitespace()
+            .map(|w| w.trim_end_matches(':').split(':').next().unwrap_or(""))
+            .filter(|w| w.len() > 1 && w.contains('.') && w.parse::<f64>().is_err() && !w.starts_with('`'))
+            .filter(|w| w.contains('/') || w.ends_with(".ron") || w.ends_with(".xyzr") || w.ends_with(".txt"))
+            .collect();
+        paths.iter().enumerate().any(|(i, p)| paths[..i].contains(p))
+    })
 }
 
 /// Whether an output (a file or a folder of files) holds a non-finite number.

@@ -264,7 +264,9 @@ fn bad_input_is_named() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("particles[0] and particles[1]") && e.contains("max_overlap"),
+        e.contains("particles[0] and particles[1]")
+            && e.contains("an overlap of 1.000")
+            && e.contains("at most 0.1"),
         "{e}"
     );
     // Outside the container.

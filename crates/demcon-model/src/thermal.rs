@@ -576,6 +576,23 @@ pub fn thermal_bcs(
     if !(transient && (heated || fixed_sets.is_empty())) {
         constraints = resolve_fixed(net, &sets, problem.floating)?;
     }
+    // Heat imposed on particles left out of the solve never enters the body: say how much.
+    let excluded: Vec<u32> = constraints
+        .excluded()
+        .iter()
+        .copied()
+        .filter(|&p| sources[p as usize] != 0.0)
+        .collect();
+    if !excluded.is_empty() {
+        let lost: f64 = excluded.iter().map(|&p| sources[p as usize]).sum();
+        let total: f64 = sources.iter().map(|q| q.abs()).sum();
+        warnings.push(format!(
+            "thermal: {lost:.6e} W of imposed flux and sources ({:.3} % of {total:.6e} W) falls on {} particle(s) \
+             excluded from the solve (floating clusters, rattlers) and does not enter the body",
+            100.0 * lost.abs() / total,
+            excluded.len()
+        ));
+    }
     Ok(ThermalBcs {
         constraints,
         sources,

@@ -15,9 +15,7 @@ use demcon_model::{
     ThermalBcs, ThermalProblem, ThermalRun, ThermalSetup, couple_checkpointed, homogenize_electric,
     homogenize_thermal, solve_electric, solve_thermal_checkpointed, thermal_bcs, thermal_setup,
 };
-use demcon_post::{
-    Domain, HaloReport, ProbeIndex, halo_flux_blocked, particle_dipoles, particle_dipoles_levers,
-};
+use demcon_post::{Domain, HaloReport, ProbeIndex, halo_flux_blocked};
 use demcon_thermal::CheckpointEvery;
 use serde::Serialize;
 
@@ -99,8 +97,66 @@ fn parse_message(code: &ron::error::Error) -> String {
         ron::error::Error::ExceededRecursionLimit => {
             "the scene is nested too deeply (regions within regions, more than the parser's limit)".into()
         }
-        other => other.to_string(),
+        other => scene_words(&other.to_string()),
     }
+}
+
+/// The scene's words for the parser's type names: what a user writes, not the Rust types
+/// that read it (`in \`MaterialConfig\`` → `in a material (materials[..])`,
+/// `\`RegionConfig::Difference\`` → `region \`Difference\``).
+fn scene_words(message: &str) -> String {
+    const NAMES: &[(&str, &str)] = &[
+        ("SceneConfig", "the scene"),
+        ("LinearSolverConfig", "`linear_solver`"),
+        ("LinearMethodConfig", "`linear_solver.method`"),
+        ("PackingConfig", "`packing`"),
+        ("CarveRuleConfig", "`carve_rule`"),
+        ("PhaseRuleConfig", "`phase_rule`"),
+        ("ContainerConfig", "a container"),
+        ("AxisConfig", "an axis"),
+        ("RegionConfig", "a region"),
+        ("ContactsConfig", "`contacts`"),
+        ("CtConfig", "`c_t`"),
+        ("SurfaceConfig", "a surface model"),
+        ("MaterialConfig", "a material (`materials`)"),
+        ("PhaseConfig", "a phase (`phases`)"),
+        ("InterfaceResistanceConfig", "an interface (`interfaces`)"),
+        ("CrackConfig", "a crack (`cracks`)"),
+        ("DamageConfig", "a damage region (`damage`)"),
+        ("CutContactsConfig", "`cut_contacts`"),
+        ("InterfaceConfig", "`interface`"),
+        ("FloatingConfig", "`floating`"),
+        ("FaceConfig", "a face"),
+        ("SelectorConfig", "a selector"),
+        ("ThermalConfig", "`thermal`"),
+        ("ThermalBcConfig", "a thermal boundary condition (`thermal.bcs`)"),
+        ("SourceConfig", "a source (`thermal.sources`)"),
+        ("TimeStepConfig", "a time step (`dt`)"),
+        ("ImplicitSchemeConfig", "an implicit scheme"),
+        ("ThermalSolverConfig", "a thermal solver (`thermal.solver`)"),
+        ("CheckpointConfig", "`thermal.checkpoint`"),
+        ("ElectricConfig", "`electric`"),
+        ("ElectrodeConfig", "an electrode (`electric.electrodes`)"),
+        ("ProbeMethodConfig", "a probe method"),
+        ("HaloPhasesConfig", "`halo_phases`"),
+        ("ProbeConfig", "a probe (`outputs.probes`)"),
+        ("ProfileConfig", "a profile (`outputs.profiles`)"),
+        ("OutputsConfig", "`outputs`"),
+    ];
+    let mut text = message.replace("in enum `", "in `");
+    for (rust, scene) in NAMES {
+        // A variant first (`RegionConfig::Difference`), then the bare type.
+        let variant = format!("`{rust}::");
+        while let Some(k) = text.find(&variant) {
+            let start = k + variant.len();
+            let end = text[start..].find('`').map_or(text.len(), |e| start + e);
+            let name = text[start..end].to_string();
+            let what = scene.trim_start_matches("a ").trim_start_matches("an ");
+            text.replace_range(k..(end + 1).min(text.len()), &format!("{what} `{name}`"));
+        }
+        text = text.replace(&format!("`{rust}`"), scene);
+    }
+    text
 }
 
 /// A probe reading.
@@ -654,8 +710,10 @@ fn post_process(stages: &mut Stages, inp: &PostInputs<'_>) -> Result<Post, Scene
     };
     let (mut flux, mut halo) = (None, None);
     if let (true, Some(th), Some(s)) = (plan.flux, th, setup) {
-        let d = stages.time("flux", || heat_dipoles(model, s, &th.node_temperatures()))?;
-        flux = Some(flux_of(&d, s));
+        let d = stages.time("flux", || {
+            demcon_model::flux_dipoles(model, &s.walls, &s.conductances, &th.node_temperatures())
+        });
+        flux = Some(demcon_model::flux_density(&d, &s.rep_volumes));
         if let Some(params) = &plan.halo {
             halo = Some(stages.time("halo", || halo_of(model, &d, s, &domain, params))?);
         }
@@ -731,19 +789,11 @@ fn flux_and_halo(
     halo: Option<&demcon_post::HaloParams>,
     domain: &Domain,
 ) -> Result<(Vec<Vec3>, Option<Halo>), SceneError> {
-    let d = heat_dipoles(model, s, nodes)?;
+    let d = demcon_model::flux_dipoles(model, &s.walls, &s.conductances, nodes);
     let halo = halo
         .map(|params| halo_of(model, &d, s, domain, params))
         .transpose()?;
-    Ok((flux_of(&d, s), halo))
-}
-
-/// The per-particle heat flux q_p = −D_p / (2 V_p) (W/m²) of the dipoles `d` (W·m).
-fn flux_of(d: &[Vec3], s: &ThermalSetup) -> Vec<Vec3> {
-    d.iter()
-        .zip(&s.rep_volumes)
-        .map(|(d, v)| -d / (2.0 * v))
-        .collect()
+    Ok((demcon_model::flux_density(&d, &s.rep_volumes), halo))
 }
 
 /// The Halo average of the flux of the dipoles `d`.
@@ -826,7 +876,15 @@ fn probes_and_fields(
         }
     }
     if let Some(el) = el {
-        field("potential", 0.0, el.potentials.clone(), &electric_solved);
+        // The potential in force at the end: solved once at t = 0, unless a transient re-solves
+        // it as ρ_e(T) follows the temperatures (then it is the end state's).
+        let recoupled = problem.thermal.as_ref().is_some_and(|t| t.solver.is_transient())
+            && problem
+                .electric
+                .as_ref()
+                .is_some_and(|e| e.recouple_tolerance.is_some());
+        let t = if recoupled { final_time } else { 0.0 };
+        field("potential", t, el.potentials.clone(), &electric_solved);
     }
     if let Some(f) = &flux {
         let v = f.iter().map(|v| v.norm()).collect();
@@ -907,32 +965,4 @@ fn sample(
         }
     }
     Ok((probes, profiles))
-}
-
-/// Particle dipoles D_p = Σ_q H_pq (T_q − T_p) ℓ_pq of the contacts and the wall links (each
-/// flow acting at its Laguerre facet's centroid with cells).
-/// `nodes`: the temperatures of every node (particles, then walls; °C).
-fn heat_dipoles(model: &Model, s: &ThermalSetup, nodes: &[f64]) -> Result<Vec<Vec3>, SceneError> {
-    let temperatures = &nodes[..model.particles.len()];
-    let branches: Vec<Vec3> = (0..model.graph.pairs.len())
-        .map(|k| model.graph.branch(k))
-        .collect();
-    let mut d = match model.graph.cells.as_deref() {
-        // Laguerre cells: each flow acts at its facet's centroid (exact for a linear field).
-        Some(cells) => particle_dipoles_levers(
-            &model.graph.pairs,
-            &branches,
-            s.contact_conductances(),
-            temperatures,
-            &cells.centroid,
-        )?,
-        None => particle_dipoles(
-            &model.graph.pairs,
-            &branches,
-            s.contact_conductances(),
-            temperatures,
-        )?,
-    };
-    s.walls.add_dipoles(s.wall_conductances(), nodes, &mut d);
-    Ok(d)
 }

@@ -8,7 +8,8 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use demcon_packing::{
-    ImportFormat, check_imported, check_writable, format_xyzr, import_packing, summarize, write_atomic,
+    ImportFormat, check_imported, check_writable, format_xyzr, import_packing, max_overlap, summarize,
+    write_atomic,
 };
 
 use crate::container::ContainerFlags;
@@ -49,7 +50,15 @@ pub struct ImportArgs {
     /// The container, replacing the source's (coordinates are kept as imported).
     #[command(flatten)]
     container: ContainerFlags,
+    /// Accept spheres that overlap by more than the Laguerre cells allow (the file is then
+    /// usable by the contact models only).
+    #[arg(long)]
+    allow_overlap: bool,
 }
+
+/// Exit status when the imported spheres overlap by more than the Laguerre cells allow and
+/// `--allow-overlap` was not given (the file is written all the same).
+pub const EXIT_OVERLAP: u8 = 4;
 
 /// Runs `demcon import`.
 pub fn run(a: ImportArgs) -> anyhow::Result<ExitCode> {
@@ -88,5 +97,25 @@ pub fn run(a: ImportArgs) -> anyhow::Result<ExitCode> {
     write_atomic(&a.out, text.as_bytes()).context("writing the imported packing")?;
     println!("{}", summarize(&imported.particles, &container, 2.0));
     println!("written            {}", a.out.display());
+    // Pairs only (and their periodic images): a sphere may stick out of a wall, the cells
+    // are clipped there.
+    let overlap = max_overlap(
+        &imported.particles,
+        container.period().is_some().then_some(&container),
+    );
+    let limit = demcon_graph::LaguerreParams::default().max_overlap;
+    if overlap > limit {
+        eprintln!(
+            "{}: two spheres overlap by {overlap:.3} × the smaller radius, above the {limit} the Laguerre cells \
+             (`surface: Laguerre`, the default) accept: check the source's units (positions and radii alike?) \
+             or its state (a soft-sphere DEM run compressed that far?); only the contact models can use this \
+             file",
+            if a.allow_overlap { "warning" } else { "error" }
+        );
+        if !a.allow_overlap {
+            eprintln!("pass --allow-overlap to accept it");
+            return Ok(ExitCode::from(EXIT_OVERLAP));
+        }
+    }
     Ok(ExitCode::SUCCESS)
 }

@@ -104,5 +104,50 @@ fn error_chain(e: &anyhow::Error) -> String {
             msg.push_str(&c);
         }
     }
-    msg
+    path_once(&msg)
+}
+
+/// `msg` with a file path said once where a context names it right before the error that
+/// names it again (`reading p.xyzr: p.xyzr:3: …` → `reading p.xyzr:3: …`).
+fn path_once(msg: &str) -> String {
+    let mut out = String::with_capacity(msg.len());
+    let mut rest = msg;
+    while let Some(k) = rest.find(": ") {
+        let (head, tail) = (&rest[..k], &rest[k + 2..]);
+        let path = head.rsplit(' ').next().unwrap_or("");
+        let path_like =
+            path.len() > 1 && (path.contains('/') || path.contains('.')) && path.parse::<f64>().is_err();
+        if path_like && tail.starts_with(path) {
+            out.push_str(&head[..head.len() - path.len()]);
+            rest = tail;
+        } else {
+            out.push_str(head);
+            out.push_str(": ");
+            rest = tail;
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::path_once;
+
+    #[test]
+    fn a_path_named_twice_in_a_row_is_said_once() {
+        assert_eq!(
+            path_once("running scene s.ron: packing: reading p.xyzr: p.xyzr:3: `x` is not a finite number"),
+            "running scene s.ron: packing: reading p.xyzr:3: `x` is not a finite number"
+        );
+        assert_eq!(
+            path_once("loading scene /a/b.ron: /a/b.ron:3:80: unknown field"),
+            "loading scene /a/b.ron:3:80: unknown field"
+        );
+        assert_eq!(
+            path_once("value 0.5: 0.5 is too small"),
+            "value 0.5: 0.5 is too small"
+        );
+        assert_eq!(path_once("a: b: c"), "a: b: c");
+    }
 }

@@ -142,3 +142,38 @@ fn info_with_container_flags_gives_phi_of_a_bare_file() {
         text(&o)
     );
 }
+
+#[test]
+fn spheres_overlapping_past_what_the_cells_accept_exit_non_zero() {
+    // Two spheres of radius 0.1 whose centres are 0.02 apart: an overlap of 1.8 radii (as a
+    // file in mm read as m, or a compressed soft-sphere state would have).
+    let d = scratch("import", "overlap");
+    let src = d.join("export.txt");
+    std::fs::write(&src, "#format x_y_z_r\n0.5\t0.5\t0.5\t0.1\n0.52\t0.5\t0.5\t0.1\n").unwrap();
+    let out = d.join("p.xyzr");
+    let args = |extra: &[&'static str]| {
+        let mut a = vec![
+            "import",
+            "--from",
+            "yade-text",
+            src.to_str().unwrap(),
+            "--container",
+            "box",
+        ];
+        a.extend(["--size", "1,1,1", "--out", out.to_str().unwrap()]);
+        a.extend(extra);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let run = |a: Vec<String>| demcon(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let o = run(args(&[]));
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(4), "{t}");
+    assert!(
+        t.contains("1.800 × the smaller radius") && t.contains("--allow-overlap"),
+        "{t}"
+    );
+    assert!(out.exists(), "the file is written all the same");
+    let o = run(args(&["--allow-overlap"]));
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("warning"), "{}", text(&o));
+}

@@ -422,7 +422,14 @@ struct Setup<'a> {
 impl Setup<'_> {
     /// The error of a failed cell, naming the particle.
     fn error(&self, p: usize, e: CellFail) -> GraphError {
-        cell_error(p, e, self.pos, self.radii, self.container)
+        cell_error(
+            p,
+            e,
+            self.pos,
+            self.radii,
+            self.container,
+            self.params.max_overlap,
+        )
     }
 
     /// Builds the cell of site `p` into `cell`.
@@ -950,7 +957,14 @@ fn with_setup<R>(
 }
 
 /// The error of a failed cell, naming the particle.
-fn cell_error(p: usize, e: CellFail, pos: &[Vec3], radii: &[f64], container: &Container) -> GraphError {
+fn cell_error(
+    p: usize,
+    e: CellFail,
+    pos: &[Vec3],
+    radii: &[f64],
+    container: &Container,
+    max_overlap: f64,
+) -> GraphError {
     let at = |i: usize| {
         format!(
             "centre ({:e}, {:e}, {:e}) m, radius {:e} m",
@@ -963,15 +977,23 @@ fn cell_error(p: usize, e: CellFail, pos: &[Vec3], radii: &[f64], container: &Co
             q: (p as u32).max(q),
             distance,
         },
-        CellFail::Overlap { q, distance } => CoreError::invalid(
-            format!("particles[{p}] and particles[{q}]"),
-            format!(
-                "distance {distance:e} m, radii {:e} m and {:e} m",
-                radii[p], radii[q as usize]
-            ),
-            "the Laguerre cells need spheres that overlap by at most laguerre.max_overlap × the smaller radius",
-        )
-        .into(),
+        CellFail::Overlap { q, distance } => {
+            let (rp, rq) = (radii[p], radii[q as usize]);
+            CoreError::invalid(
+                format!("particles[{p}] and particles[{q}]"),
+                format!(
+                    "distance {distance:e} m, radii {rp:e} m and {rq:e} m: an overlap of {:.3} × the smaller radius",
+                    (rp + rq - distance) / rp.min(rq)
+                ),
+                format!(
+                    "the Laguerre cells need spheres that overlap by at most {} × the smaller radius (a packing \
+                     file whose positions and radii are in different units, or a soft-sphere DEM state compressed \
+                     past that: check the file with `demcon info`)",
+                    max_overlap
+                ),
+            )
+            .into()
+        }
         CellFail::Empty => CoreError::invalid(
             format!("particles[{p}]"),
             at(p),
