@@ -266,3 +266,52 @@ fn phase_fractions_are_the_bodys() {
     let s = &r.model.report.sphere_phase_fractions;
     assert!((s[0] + s[1] - 1.0).abs() < 1e-12, "{s:?}");
 }
+
+#[test]
+fn heat_imposed_on_a_cluster_left_out_of_the_solve_is_reported() {
+    // An open crack across the whole section cuts the slab y > 0.04 off the held face: that
+    // cluster floats (excluded) and the flux imposed on its face never enters the body. The
+    // energy ledger of the solved part balances, so only a warning says where it went.
+    let cut = "cracks: [Polygon(points: [(-0.01, 0.04, -0.01), (0.11, 0.04, -0.01), (0.11, 0.04, 0.21), (-0.01, 0.04, 0.21)])],";
+    let bcs =
+        "bcs: [WallTemperature(face: YMin, value: 20.0), HeatFlux(face: YMax, flux: 1000.0)], solver: Steady";
+    let r = run_text(&scene_text(BOX, cut, bcs, "")).unwrap();
+    let d = r.diagnostics.join("\n");
+    assert_mentions(
+        &d,
+        &[
+            "W of imposed flux and sources",
+            "(100.000 % of",
+            "excluded from the solve",
+        ],
+    );
+}
+
+#[test]
+fn a_recoupled_transients_potential_probe_is_labelled_with_the_end_time() {
+    let electric = "electric: (electrodes: [(face: ZMin, potential: 0.0), (face: ZMax, potential: 0.001)], \
+                    recouple_tolerance: Some(0.01)),";
+    let materials = r#"materials: [(name: "steel", conductivity: 33.0, density: 7800.0, specific_heat: 500.0,
+        resistivity: Some(1.0e-6), resistivity_temp_coeff: 0.004, resistivity_ref_temp: 20.0)],"#;
+    let transient = "initial_temperature: 20.0, bcs: [WallTemperature(face: ZMin, value: 20.0)], \
+                     solver: Implicit(t_end: 50.0, dt: 10.0, scheme: BackwardEuler)";
+    let text = scene_text(
+        BOX,
+        electric,
+        transient,
+        r#"probes: [(name: "c", point: (0.05, 0.025, 0.1), method: Ball(0.02))]"#,
+    )
+    .replace(&format!("materials: [{STEEL}],"), materials);
+    let r = run_text(&text).unwrap();
+    let p = r.probes.iter().find(|p| p.field == "potential").unwrap();
+    assert_eq!(p.t, 50.0, "{p:?}");
+}
+
+#[test]
+fn parse_errors_name_scene_words_not_rust_types() {
+    let text =
+        scene_text(BOX, "", WALLS_Y, "").replace("specific_heat: 500.0,", "specific_heat: 500.0, colour: 3,");
+    let m = refused_on_reading(&text);
+    assert_mentions(&m, &["`colour`", "a material (`materials`)"]);
+    assert!(!m.contains("Config"), "{m}");
+}
