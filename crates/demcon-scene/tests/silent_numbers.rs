@@ -315,3 +315,25 @@ fn parse_errors_name_scene_words_not_rust_types() {
     assert_mentions(&m, &["`colour`", "a material (`materials`)"]);
     assert!(!m.contains("Config"), "{m}");
 }
+
+#[test]
+fn a_homogenisations_refusals_come_in_one_run() {
+    let text = scene_text(
+        "Periodic(size: (0.1, 0.05, 0.2))",
+        "",
+        "bcs: [WallTemperature(face: YMin, value: 0.0)], sources: [(select: All, power_density: 1.0)], solver: Homogenize",
+        r#"halo: Some(3.0), flux: true, probes: [(name: "p", point: (0.05, 0.02, 0.1))]"#,
+    );
+    let e = parse(&text).unwrap_err();
+    let all = e.to_string();
+    for field in [
+        "thermal.bcs",
+        "thermal.sources",
+        "outputs.halo",
+        "outputs.probes",
+        "outputs.flux",
+    ] {
+        assert!(all.contains(&format!("`{field}`")), "{field} missing: {all}");
+    }
+    assert!(e.each().len() >= 5, "{all}");
+}
