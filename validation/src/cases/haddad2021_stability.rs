@@ -125,7 +125,8 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let n = ctx.pick(10_000, 100_000);
     let model = model_of(&scene(n, ctx.seed, slab::explicit()))?;
     // The bound and the paper's estimate, from the steady run's report.
-    let probe_cfg = scene(n, ctx.seed, ThermalSolverConfig::Steady);
+    let mut probe_cfg = scene(n, ctx.seed, ThermalSolverConfig::Steady);
+    probe_cfg.outputs.times.clear(); // a steady solve has no time
     let probe = run_with(&probe_cfg, &model)?;
     let rep = &probe.thermal.as_ref().expect("thermal").report;
     let dt_bound = rep.dt_bound;
