@@ -113,6 +113,15 @@ fn scene_terms(e: &impl std::fmt::Display) -> String {
         ("FloatingPolicy::Fail", "`floating: Fail`"),
         ("use TimeStep::Auto", "use `dt: Auto(safety: ..)`"),
         ("TimeStep::Auto", "`dt: Auto(safety: ..)`"),
+        (
+            "a looser tolerance or Method::Cholesky",
+            "a looser `linear_solver.rel_tol` or `method: Cholesky`",
+        ),
+        ("Method::Cholesky", "`linear_solver: (method: Cholesky)`"),
+        (
+            "or allow_unstable to insist",
+            "or `dt: Fixed(dt: .., allow_unstable: true)` to insist",
+        ),
         ("raise max_epsilon, or", "give `contacts.tolerance` instead, or"),
         ("tolerance.target_coordination", "contacts.coordination"),
         ("tolerance.relative", "contacts.tolerance"),

@@ -145,16 +145,25 @@ fn scene_words(message: &str) -> String {
     ];
     let mut text = message.replace("in enum `", "in `");
     for (rust, scene) in NAMES {
-        // A variant first (`RegionConfig::Difference`), then the bare type.
-        let variant = format!("`{rust}::");
+        // A variant first (`RegionConfig::Difference`, quoted or not), then the bare type.
+        let variant = format!("{rust}::");
         while let Some(k) = text.find(&variant) {
+            let quoted = k > 0 && text.as_bytes()[k - 1] == b'`';
             let start = k + variant.len();
-            let end = text[start..].find('`').map_or(text.len(), |e| start + e);
+            let end = text[start..]
+                .find(|c: char| !(c.is_alphanumeric() || c == '_'))
+                .map_or(text.len(), |e| start + e);
             let name = text[start..end].to_string();
             let what = scene.trim_start_matches("a ").trim_start_matches("an ");
-            text.replace_range(k..(end + 1).min(text.len()), &format!("{what} `{name}`"));
+            let (from, to) = if quoted && text[end..].starts_with('`') {
+                (k - 1, end + 1)
+            } else {
+                (k, end)
+            };
+            text.replace_range(from..to, &format!("{what} `{name}`"));
         }
         text = text.replace(&format!("`{rust}`"), scene);
+        text = text.replace(rust, scene);
     }
     text
 }
