@@ -2,7 +2,8 @@
 //! materials, the error type for bad input, and the stages of a run (time and memory).
 //!
 //! Every other crate builds on these plain types; none of them does file I/O (the stages
-//! only read the process's own memory figures from `/proc`).
+//! only read the process's own memory figures from `/proc`, and the available memory its
+//! limits from `/proc` and `/sys/fs/cgroup`).
 //!
 //! ```
 //! use demcon_core::{Container, Face, ParticleSet, Selector, Vec3};
@@ -19,6 +20,7 @@
 //! ```
 #![warn(missing_docs)]
 
+mod available;
 pub mod check;
 mod components;
 mod diagnostic;
@@ -32,6 +34,7 @@ mod selector;
 mod shape;
 mod stages;
 
+pub use available::{AvailableMemory, MemoryBound, available_memory, available_memory_bound};
 pub use components::Components;
 pub use diagnostic::Diagnostic;
 pub use error::{CoreError, short_number};
@@ -42,8 +45,7 @@ pub use region::Region;
 pub use selector::{DEFAULT_FACE_GAP, Face, Selector};
 pub use shape::{Aabb, Axis, Container};
 pub use stages::{
-    StageObserver, StageRecord, Stages, available_memory, release_free_memory, reset_peak_resident,
-    resident_bytes,
+    StageObserver, StageRecord, Stages, release_free_memory, reset_peak_resident, resident_bytes,
 };
 
 /// A point or vector in 3-D space (m).

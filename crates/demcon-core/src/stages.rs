@@ -143,17 +143,6 @@ pub fn reset_peak_resident() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
 }
 
-/// Memory available to a new allocation (bytes): `MemAvailable` of `/proc/meminfo`, `None`
-/// where that file does not exist.
-pub fn available_memory() -> Option<u64> {
-    std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
-        t.lines()
-            .find_map(|l| l.strip_prefix("MemAvailable:"))
-            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
-            .map(|kb| kb.saturating_mul(1024))
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

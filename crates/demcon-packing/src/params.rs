@@ -1,6 +1,6 @@
 //! Inputs of a packing run, its stop reasons and the progress it reports while running.
 
-use demcon_core::{Container, CoreError};
+use demcon_core::{AvailableMemory, Container, CoreError, MemoryBound};
 use serde::Serialize;
 
 use crate::radius::{RadiusDistribution, jamming_estimate};
@@ -56,28 +56,34 @@ pub const MAX_COUNT: usize = u32::MAX as usize - 1;
 
 /// Where a memory limit comes from, for the messages of [`PackingParams::check_memory`] and
 /// [`crate::check_tile_memory`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum MemoryLimit {
-    /// Available memory as measured (e.g. `MemAvailable` of `/proc/meminfo`), bytes.
+    /// The machine's available memory (`MemAvailable` of `/proc/meminfo`), bytes.
     Available(u64),
+    /// What this process may still allocate and what bounds it: the least of `MemAvailable`,
+    /// its address-space limit (`ulimit -v`) and its cgroup's memory limit
+    /// ([`demcon_core::available_memory_bound`]).
+    Bounded(AvailableMemory),
     /// The fixed [`DEFAULT_MEMORY_LIMIT`], when nothing was measured.
     Fixed,
 }
 
 impl MemoryLimit {
-    /// The memory available to a new process: `MemAvailable` of `/proc/meminfo` where it can
-    /// be read ([`demcon_core::available_memory`]), else [`Self::Fixed`].
+    /// The memory this process may still allocate ([`demcon_core::available_memory_bound`]:
+    /// the machine's, its own address-space limit's or its cgroup's, whichever is least) where
+    /// it can be read, else [`Self::Fixed`].
     pub fn current() -> Self {
-        demcon_core::available_memory().map_or(Self::Fixed, Self::Available)
+        demcon_core::available_memory_bound().map_or(Self::Fixed, Self::Bounded)
     }
 
     /// The limit (bytes) and where it comes from, in words.
-    pub fn bytes_and_source(self) -> (u64, &'static str) {
+    pub fn bytes_and_source(&self) -> (u64, String) {
         match self {
-            Self::Available(b) => (b, "available memory (MemAvailable in /proc/meminfo)"),
+            Self::Available(b) => (*b, MemoryBound::MemAvailable.to_string()),
+            Self::Bounded(a) => (a.bytes, a.bound.to_string()),
             Self::Fixed => (
                 DEFAULT_MEMORY_LIMIT,
-                "fixed limit (the available memory is not known)",
+                "fixed limit (the available memory is not known)".into(),
             ),
         }
     }
@@ -167,7 +173,7 @@ impl PackingParams {
 
     /// Refuses a `count` whose [`memory_estimate`](Self::memory_estimate) exceeds `limit`;
     /// the message gives both and says where the limit comes from.
-    pub fn check_memory(&self, limit: MemoryLimit) -> Result<(), CoreError> {
+    pub fn check_memory(&self, limit: &MemoryLimit) -> Result<(), CoreError> {
         let (bytes, source) = limit.bytes_and_source();
         let need = self.memory_estimate();
         if need > bytes {
@@ -201,7 +207,7 @@ impl PackingParams {
                 format!("must be between 1 and {MAX_COUNT}"),
             ));
         }
-        self.check_memory(MemoryLimit::Fixed)?;
+        self.check_memory(&MemoryLimit::Fixed)?;
         let phi_max = jamming_estimate(&self.radii) + MAX_PHI_ABOVE_JAMMING;
         if !(self.target_phi.is_finite() && self.target_phi >= MIN_PHI && self.target_phi <= phi_max) {
             return Err(CoreError::invalid(

@@ -53,7 +53,7 @@ pub fn tiled_count(count: usize, repeat: Repeat, field: &str) -> Result<usize, C
 /// Refuses a tiling into `total` particles whose memory (`total` ×
 /// [`TILE_BYTES_PER_PARTICLE`]) exceeds `limit`, before any copy is made; the error names
 /// `field` and gives the estimate, the limit and the largest count that fits.
-pub fn check_tile_memory(total: usize, limit: MemoryLimit, field: &str) -> Result<(), CoreError> {
+pub fn check_tile_memory(total: usize, limit: &MemoryLimit, field: &str) -> Result<(), CoreError> {
     let (bytes, source) = limit.bytes_and_source();
     let need = (total as u64).saturating_mul(TILE_BYTES_PER_PARTICLE);
     if need > bytes {
@@ -131,8 +131,8 @@ mod tests {
     #[test]
     fn a_tiling_larger_than_the_memory_is_refused_with_the_estimate() {
         let limit = MemoryLimit::Available(1 << 30);
-        assert!(check_tile_memory(1_000_000, limit, "repeat").is_ok());
-        let e = check_tile_memory(100_000_000, limit, "repeat")
+        assert!(check_tile_memory(1_000_000, &limit, "repeat").is_ok());
+        let e = check_tile_memory(100_000_000, &limit, "repeat")
             .unwrap_err()
             .to_string();
         assert!(e.contains("repeat") && e.contains("100000000 particles"), "{e}");

@@ -454,7 +454,7 @@ fn count_is_bounded_by_the_memory_estimate() {
     assert!(e.contains("fixed limit"), "{e}");
     let small = PackingParams { count: 1000, ..p };
     let e = small
-        .check_memory(demcon_packing::MemoryLimit::Available(100_000))
+        .check_memory(&demcon_packing::MemoryLimit::Available(100_000))
         .unwrap_err()
         .to_string();
     assert!(
@@ -462,6 +462,6 @@ fn count_is_bounded_by_the_memory_estimate() {
         "{e}"
     );
     small
-        .check_memory(demcon_packing::MemoryLimit::Available(1 << 30))
+        .check_memory(&demcon_packing::MemoryLimit::Available(1 << 30))
         .unwrap();
 }

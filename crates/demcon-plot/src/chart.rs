@@ -5,7 +5,8 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::{PlotError, with_png};
+use crate::ticks::Ticked;
+use crate::{PlotError, nice_ticks, tick_labels, with_png};
 
 /// One curve of a chart.
 #[derive(Debug, Clone)]
@@ -142,6 +143,26 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
         chart.y_scale,
     );
     let legend = legend_position(chart, (x0, x1), (y0, y1));
+    // A linear y axis gets our ticks, labelled with the digits that tell them apart (a probe
+    // over a millikelvin at 263 °C reads 262.9392, 262.9394, …), light lines at fifths.
+    let y_ticks = nice_ticks(y0, y1, 10);
+    let y_labels = tick_labels(&y_ticks);
+    let y_light: Vec<f64> = match y_ticks[..] {
+        [a, b, ..] => {
+            let fifth = (b - a) / 5.0;
+            let first = (y0 / fifth).ceil() as i64;
+            let last = (y1 / fifth).floor() as i64;
+            (first..=last).map(|k| k as f64 * fifth).collect()
+        }
+        _ => Vec::new(),
+    };
+    let y_tick = |v: &f64| {
+        y_ticks
+            .iter()
+            .position(|t| t == v)
+            .map_or_else(|| crate::fmt_tick(*v), |k| y_labels[k].clone())
+    };
+    let y_linear = || Ticked::new(y0..y1, y_ticks.clone(), y_light.clone());
     // Categories: one tick per category (0.5 … n + 0.5 with n ticks puts them at 1 … n).
     let x_ticks = match chart.x_scale {
         Scale::Categories => chart.series.len(),
@@ -156,7 +177,7 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
                 ctx.configure_mesh()
                     .x_labels(x_ticks)
                     .x_label_formatter(&x_tick)
-                    .y_label_formatter(&|v: &f64| crate::fmt_tick(*v))
+                    .y_label_formatter(&y_tick)
                     .x_desc(chart.x_label.as_str())
                     .y_desc(chart.y_label.as_str())
                     .label_style(("sans-serif", 14))
@@ -200,10 +221,10 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
             .y_label_area_size(70);
         match (chart.x_scale, chart.y_scale) {
             (Scale::Linear | Scale::Categories, Scale::Linear | Scale::Categories) => {
-                body!(builder.build_cartesian_2d(x0..x1, y0..y1)?)
+                body!(builder.build_cartesian_2d(x0..x1, y_linear())?)
             }
             (Scale::Log, Scale::Linear | Scale::Categories) => {
-                body!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)?)
+                body!(builder.build_cartesian_2d((x0..x1).log_scale(), y_linear())?)
             }
             (Scale::Linear | Scale::Categories, Scale::Log) => {
                 body!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())?)

@@ -23,9 +23,11 @@
 
 mod chart;
 mod raster;
+mod ticks;
 
 pub use chart::{Chart, Scale, Series, draw};
 pub use raster::{Raster, RasterReport, colormap, draw_raster};
+pub use ticks::{MAX_DIGITS, nice_ticks, tick_labels};
 
 use std::path::{Path, PathBuf};
 

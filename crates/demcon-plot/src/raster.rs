@@ -6,6 +6,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
+use crate::ticks::Ticked;
 use crate::{PlotError, fmt_tick, with_png};
 
 /// A raster to draw: `nx` × `ny` square cells, row-major (`cells[j · nx + i]`), row 0 at the
@@ -67,8 +68,11 @@ const EMPTY: RGBColor = RGBColor(200, 200, 200);
 const SIDE: f64 = 640.0;
 /// The least width of the picture's plotting area (pixels).
 const MIN_WIDTH: u32 = 420;
-/// Width of the colour-bar panel (pixels).
+/// Width of the colour-bar panel (pixels), with labels of up to 6 characters.
 const BAR_PANEL: u32 = 150;
+/// Width of the colour bar's label area (tick labels and the field's name, pixels), grown
+/// for longer labels.
+const BAR_LABEL_AREA: u32 = 75;
 
 /// Draws `r` to a PNG: the raster with its axes in mm (cells square, the longer side 640
 /// pixels, a narrow raster centred in a plotting area 420 pixels wide), and a colour bar on the right spanning `r.range` (or the cells' range).
@@ -117,7 +121,19 @@ pub fn draw_raster(r: &Raster, path: &Path) -> Result<RasterReport, PlotError> {
     let widen = MIN_WIDTH.saturating_sub(pw);
     pw += widen;
     let (margin, left, bottom, caption) = (15u32, 75u32, 55u32, 25u32);
-    let width = margin + left + pw + margin + BAR_PANEL;
+    // The colour bar's ticks, labelled with the digits that tell them apart; the bar's label
+    // area widens for long labels (a value in full before offsets: `262.939177`, `+2e-8`).
+    let (blo, bhi) = if hi > lo { (lo, hi) } else { (lo - 0.5, hi + 0.5) };
+    let bar_ticks = if hi > lo {
+        crate::nice_ticks(blo, bhi, (ph / 60).clamp(3, 10) as usize)
+    } else {
+        vec![lo]
+    };
+    let bar_labels = crate::tick_labels(&bar_ticks);
+    let longest = bar_labels.iter().map(|l| l.chars().count()).max().unwrap_or(0) as u32;
+    let bar_label_area = BAR_LABEL_AREA.max(longest * 8 + 20);
+    let bar_panel = BAR_PANEL + (bar_label_area - BAR_LABEL_AREA);
+    let width = margin + left + pw + margin + bar_panel;
     let height = margin + caption + ph + bottom + margin;
     let mm = |m: f64| m * 1e3;
     let (u0, v0) = (mm(r.origin[0]), mm(r.origin[1]));
@@ -134,7 +150,7 @@ pub fn draw_raster(r: &Raster, path: &Path) -> Result<RasterReport, PlotError> {
     with_png(path, |tmp| {
         let root = BitMapBackend::new(tmp, (width, height)).into_drawing_area();
         root.fill(&WHITE)?;
-        let (main, bar) = root.split_horizontally(width - BAR_PANEL);
+        let (main, bar) = root.split_horizontally(width - bar_panel);
         let mut chart = ChartBuilder::on(&main)
             .caption(r.title.as_str(), ("sans-serif", 20))
             .margin(margin)
@@ -165,18 +181,23 @@ pub fn draw_raster(r: &Raster, path: &Path) -> Result<RasterReport, PlotError> {
         }))?;
 
         // The colour bar, level with the picture: a column of 256 bands from lo to hi.
-        let (blo, bhi) = if hi > lo { (lo, hi) } else { (lo - 0.5, hi + 0.5) };
         let mut cb = ChartBuilder::on(&bar)
             .margin_top(margin + caption)
             .margin_bottom(margin + bottom)
             .margin_left(10)
             .margin_right(20)
-            .set_label_area_size(LabelAreaPosition::Right, 75)
-            .build_cartesian_2d(0f64..1f64, blo..bhi)?;
+            .set_label_area_size(LabelAreaPosition::Right, bar_label_area)
+            .build_cartesian_2d(0f64..1f64, Ticked::new(blo..bhi, bar_ticks.clone(), Vec::new()))?;
+        let bar_label = |v: &f64| {
+            bar_ticks
+                .iter()
+                .position(|t| t == v)
+                .map_or_else(|| fmt_tick(*v), |k| bar_labels[k].clone())
+        };
         cb.configure_mesh()
             .disable_mesh()
             .disable_x_axis()
-            .y_label_formatter(&|v: &f64| fmt_tick(*v))
+            .y_label_formatter(&bar_label)
             .y_desc(r.bar_label.as_str())
             .label_style(("sans-serif", 14))
             .draw()?;

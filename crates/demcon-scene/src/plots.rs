@@ -62,6 +62,31 @@ pub struct ParticleData<'a> {
     pub solved: Vec<bool>,
     /// Where the data came from (a file, or "the run"), for messages.
     pub source: String,
+    /// When the fields were taken (slices say it in their titles).
+    pub time: FieldTime,
+}
+
+/// When a run's particle fields were taken.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FieldTime {
+    /// The steady state (a steady run, or one without time).
+    Steady,
+    /// A transient at this time (s).
+    At(f64),
+    /// The end of a transient whose files do not say when (`particles.csv` without
+    /// `particles.pvd`, probes or profiles).
+    End,
+}
+
+impl FieldTime {
+    /// `t = 0.2 s`, `the end of the transient`, or nothing for a steady state.
+    fn words(self) -> Option<String> {
+        match self {
+            Self::Steady => None,
+            Self::At(t) => Some(format!("t = {} s", demcon_plot::fmt_tick(t))),
+            Self::End => Some("end of the transient".into()),
+        }
+    }
 }
 
 impl ParticleData<'_> {
@@ -89,6 +114,8 @@ pub struct PlotData<'a> {
     pub etc_axis: Option<Axis>,
     /// The folder the data was read from, for messages (`None` for a run in memory).
     pub folder: Option<PathBuf>,
+    /// Whether the run is a transient (its probes and profiles are at times), or steady.
+    pub transient: bool,
 }
 
 /// What to draw.
@@ -96,9 +123,10 @@ pub struct PlotData<'a> {
 pub struct PlotParams {
     /// Fields to slice; empty: `temperature` (or `potential`), and `halo_flux` when present.
     pub slices: Vec<String>,
-    /// The slice plane's normal; `None`: z, or x when the field changes most along z (the ETC
-    /// axis if the run has one, else the steepest axis of the field's least-squares fit), so
-    /// that the plane contains the gradient.
+    /// The slice plane's normal; `None`: chosen by [`slice_normal`] from the run's main field
+    /// (temperature, else potential, else the first field sliced), one plane for all slices:
+    /// the plane contains the axis along which that field varies most (the ETC axis when the
+    /// run has one), or the domain's longest axis when it varies along none.
     pub axis: Option<Axis>,
     /// The slice plane's position along its normal (m); `None`: the middle of the domain.
     pub at: Option<f64>,
@@ -115,6 +143,15 @@ impl Default for PlotParams {
             resolution: 200,
         }
     }
+}
+
+/// What [`write_plots`] did.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Plots {
+    /// The PNGs written, in order.
+    pub files: Vec<PlotFile>,
+    /// Charts left out and why (e.g. a single probe read at a single time: one point).
+    pub skipped: Vec<String>,
 }
 
 /// One PNG written.
@@ -166,6 +203,7 @@ pub fn plot_data_of<'a>(r: &'a RunResult, outputs: &OutputsConfig) -> PlotData<'
             vectors,
             solved: f.solved.iter().map(|&s| s != 0).collect(),
             source: "the run".into(),
+            time: r.t_end.map_or(FieldTime::Steady, FieldTime::At),
         }),
         domain: Some(r.domain.clone()),
         etc_axis: outputs.etc_axis.map(|a| match a {
@@ -174,15 +212,12 @@ pub fn plot_data_of<'a>(r: &'a RunResult, outputs: &OutputsConfig) -> PlotData<'
             AxisConfig::Z => Axis::Z,
         }),
         folder: None,
+        transient: r.t_end.is_some(),
     }
 }
 
 /// Writes the default plots of a run in memory into `dir` (created if needed).
-pub fn write_run_plots(
-    r: &RunResult,
-    outputs: &OutputsConfig,
-    dir: &Path,
-) -> Result<Vec<PlotFile>, SceneError> {
+pub fn write_run_plots(r: &RunResult, outputs: &OutputsConfig, dir: &Path) -> Result<Plots, SceneError> {
     write_plots(&plot_data_of(r, outputs), &PlotParams::default(), dir)
 }
 
@@ -224,13 +259,41 @@ pub fn read_run_folder(dir: &Path) -> Result<PlotData<'static>, SceneError> {
         p if p.is_file() => read_profiles(&p)?,
         _ => Vec::new(),
     };
+    // A transient's scheme is a time scheme; a steady run's is `steady`.
+    let transient = json["thermal"]["scheme"].as_str().is_some_and(|s| s != "steady");
+    let series = match dir.join("particles.pvd") {
+        p if p.is_file() => read_pvd(&p)?,
+        _ => Vec::new(),
+    };
+    // The end of a transient: the series' last time, else the last probe or profile time.
+    let end = if !transient {
+        FieldTime::Steady
+    } else if let Some((t, _)) = series.last() {
+        FieldTime::At(*t)
+    } else {
+        let last = probes
+            .iter()
+            .map(|p| p.t)
+            .chain(profiles.iter().map(|p| p.t))
+            .fold(f64::NEG_INFINITY, f64::max);
+        if last.is_finite() {
+            FieldTime::At(last)
+        } else {
+            FieldTime::End
+        }
+    };
     let (csv, vtu) = (dir.join("particles.csv"), dir.join("particles.vtu"));
     let particles = if csv.is_file() {
-        Some(read_particles_csv(&csv)?)
+        Some(read_particles_csv(&csv, end)?)
     } else if vtu.is_file() {
-        Some(read_particles_vtu(&vtu)?)
+        Some(read_particles_vtu(&vtu, end)?)
     } else if let Some(last) = last_snapshot(dir)? {
-        Some(read_particles_vtu(&last)?)
+        let name = last.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        let time = series
+            .iter()
+            .find(|(_, f)| f == name)
+            .map_or(FieldTime::End, |(t, _)| FieldTime::At(*t));
+        Some(read_particles_vtu(&last, time)?)
     } else {
         None
     };
@@ -241,7 +304,32 @@ pub fn read_run_folder(dir: &Path) -> Result<PlotData<'static>, SceneError> {
         domain: None,
         etc_axis,
         folder: Some(dir.into()),
+        transient,
     })
+}
+
+/// The entries (time in s, file) of a ParaView collection as `demcon run` writes it.
+fn read_pvd(path: &Path) -> Result<Vec<(f64, String)>, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(io(path))?;
+    let attr = |line: &str, name: &str| -> Option<String> {
+        let start = line.find(&format!("{name}=\""))? + name.len() + 2;
+        let len = line[start..].find('"')?;
+        Some(line[start..start + len].to_string())
+    };
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if !line.contains("<DataSet") {
+            continue;
+        }
+        let (Some(t), Some(file)) = (attr(line, "timestep"), attr(line, "file")) else {
+            return Err(input(
+                path,
+                format!("line {}: a DataSet without timestep or file", i + 1),
+            ));
+        };
+        out.push((number(path, i + 1, "timestep", &t)?, file));
+    }
+    Ok(out)
 }
 
 /// The last of a transient's per-time files `particles_<k>.vtu` (greatest k), if any.
@@ -345,7 +433,7 @@ fn particle_set(path: &Path, centres: Vec<Vec3>, radii: Vec<f64>) -> Result<Part
 }
 
 /// `particles.csv`: `x,y,z,radius,phase,solved`, scalars, vector components `<name>_x|y|z`.
-fn read_particles_csv(path: &Path) -> Result<ParticleData<'static>, SceneError> {
+fn read_particles_csv(path: &Path, time: FieldTime) -> Result<ParticleData<'static>, SceneError> {
     let (header, cols) = read_csv(path)?;
     let col = |name: &str| header.iter().position(|h| h == name).map(|k| &cols[k]);
     let (Some(x), Some(y), Some(z), Some(r)) = (col("x"), col("y"), col("z"), col("radius")) else {
@@ -387,11 +475,12 @@ fn read_particles_csv(path: &Path) -> Result<ParticleData<'static>, SceneError> 
         vectors,
         solved,
         source: path.display().to_string(),
+        time,
     })
 }
 
 /// `particles.vtu` (our own format): points, radius, every point array (vectors by magnitude).
-fn read_particles_vtu(path: &Path) -> Result<ParticleData<'static>, SceneError> {
+fn read_particles_vtu(path: &Path, time: FieldTime) -> Result<ParticleData<'static>, SceneError> {
     let d = read_vtu(path)?;
     let radius = d
         .array("radius")
@@ -417,6 +506,7 @@ fn read_particles_vtu(path: &Path) -> Result<ParticleData<'static>, SceneError> 
         vectors,
         solved,
         source: path.display().to_string(),
+        time,
     })
 }
 
@@ -438,14 +528,11 @@ fn axis_name(a: Axis) -> &'static str {
 }
 
 /// Draws every plot `data` allows into `dir` (created if needed): one chart of probes per
-/// field, one chart per profile and field, and the slices of `params`. Errors name what is
-/// missing: nothing to plot at all, a slice asked for without particle fields, or a field the
-/// data does not have (the message lists those it has).
-pub fn write_plots(
-    data: &PlotData<'_>,
-    params: &PlotParams,
-    dir: &Path,
-) -> Result<Vec<PlotFile>, SceneError> {
+/// field (against time; at a single time, one point per probe, and no chart for a single
+/// probe), one chart per profile and field, and the slices of `params`, all on one plane.
+/// Errors name what is missing: nothing to plot at all, a slice asked for without particle
+/// fields, or a field the data does not have (the message lists those it has).
+pub fn write_plots(data: &PlotData<'_>, params: &PlotParams, dir: &Path) -> Result<Plots, SceneError> {
     let here = data.folder.as_deref().unwrap_or(Path::new("the run"));
     let slices = slice_fields(data, params, here)?;
     if data.probes.is_empty() && data.profiles.is_empty() && slices.is_empty() {
@@ -457,14 +544,37 @@ pub fn write_plots(
         ));
     }
     std::fs::create_dir_all(dir).map_err(io(dir))?;
-    let mut files = plot_probes(&data.probes, dir)?;
-    files.extend(plot_profiles(&data.profiles, dir)?);
-    if let Some(p) = &data.particles {
+    let mut out = plot_probes(&data.probes, data.transient, dir)?;
+    out.files
+        .extend(plot_profiles(&data.profiles, data.transient, dir)?);
+    if let (Some(p), Some(first)) = (&data.particles, slices.first()) {
+        let domain = match &data.domain {
+            Some(d) => d.clone(),
+            None => Domain::around(&p.particles)?,
+        };
+        let axis = match params.axis {
+            Some(a) => a,
+            None => {
+                // One plane for every slice, chosen from the run's main field.
+                let main = ["temperature", "potential"]
+                    .into_iter()
+                    .find(|f| p.field(f).is_some())
+                    .unwrap_or(first);
+                let values = p.field(main).expect("slice fields are checked");
+                let b = domain.region.bounds();
+                let extent = [0, 1, 2].map(|k| b.max[k] - b.min[k]);
+                slice_normal(
+                    slab_f_ratios(&p.particles, values, &p.solved),
+                    extent,
+                    data.etc_axis,
+                )
+            }
+        };
         for field in &slices {
-            files.push(plot_slice(data, p, field, params, dir)?);
+            out.files.push(plot_slice(p, &domain, field, axis, params, dir)?);
         }
     }
-    Ok(files)
+    Ok(out)
 }
 
 /// The fields to slice: those asked for (each checked), or the defaults present.
@@ -500,16 +610,19 @@ fn slice_fields(data: &PlotData<'_>, params: &PlotParams, here: &Path) -> Result
     Ok(params.slices.clone())
 }
 
-/// One chart per probe field: each probe against time (a transient), or each probe's value
-/// as a point (a single time: the steady state).
-fn plot_probes(probes: &[ProbeValue], dir: &Path) -> Result<Vec<PlotFile>, SceneError> {
+/// One chart per probe field: each probe against time. When every probe of the field has a
+/// single reading (a steady run, or a field read only at the end, like a transient's
+/// potential), there is no time to draw against: the probes' values side by side, one point
+/// per probe, and nothing at all for a single probe (one point says no more than the number
+/// in `probes.csv`), which [`Plots::skipped`] names.
+fn plot_probes(probes: &[ProbeValue], transient: bool, dir: &Path) -> Result<Plots, SceneError> {
     let mut fields: Vec<&str> = Vec::new();
     for p in probes {
         if !fields.contains(&p.field.as_str()) {
             fields.push(&p.field);
         }
     }
-    let mut files = Vec::new();
+    let mut out = Plots::default();
     for field in fields {
         let rows: Vec<&ProbeValue> = probes.iter().filter(|p| p.field == field).collect();
         let mut names: Vec<&str> = Vec::new();
@@ -518,9 +631,26 @@ fn plot_probes(probes: &[ProbeValue], dir: &Path) -> Result<Vec<PlotFile>, Scene
                 names.push(&r.name);
             }
         }
-        let steady = names
+        let single = names
             .iter()
             .all(|n| rows.iter().filter(|r| r.name == *n).count() == 1);
+        // A single reading per probe: when (the same for all, or several).
+        let when = if !transient {
+            "steady state".to_string()
+        } else {
+            match rows.first().map(|r| r.t) {
+                Some(t) if rows.iter().all(|r| r.t == t) => format!("t = {} s", demcon_plot::fmt_tick(t)),
+                _ => "each probe's last time".into(),
+            }
+        };
+        if single && names.len() < 2 {
+            out.skipped.push(format!(
+                "probes_{}.png: probe {} read {field} once ({when}): one point, no chart",
+                file_part(field),
+                names.join(", ")
+            ));
+            continue;
+        }
         let series = names
             .iter()
             .enumerate()
@@ -532,7 +662,7 @@ fn plot_probes(probes: &[ProbeValue], dir: &Path) -> Result<Vec<PlotFile>, Scene
                 } else {
                     n.to_string()
                 };
-                if steady {
+                if single {
                     Series::markers(&label, mine.map(|r| ((k + 1) as f64, r.value)).collect())
                 } else {
                     Series::line(&label, mine.map(|r| (r.t, r.value)).collect())
@@ -542,27 +672,39 @@ fn plot_probes(probes: &[ProbeValue], dir: &Path) -> Result<Vec<PlotFile>, Scene
         let name = format!("probes_{}.png", file_part(field));
         draw(
             &Chart {
-                title: format!("probes: {}{}", field, if steady { " (final state)" } else { "" }),
-                x_label: if steady { "probe".into() } else { "t (s)".into() },
+                title: if single {
+                    format!("probes: {field} ({when})")
+                } else {
+                    format!("probes: {field}")
+                },
+                x_label: if single { "probe".into() } else { "t (s)".into() },
                 y_label: labelled(field),
-                x_scale: if steady { Scale::Categories } else { Scale::Linear },
+                x_scale: if single { Scale::Categories } else { Scale::Linear },
                 y_scale: Scale::Linear,
                 series,
             },
             &dir.join(&name),
         )?;
-        files.push(PlotFile {
+        out.files.push(PlotFile {
             name,
-            what: format!("{} probe(s) of {field}", names.len()),
+            what: if single {
+                format!("{} probe(s) of {field}, {when}", names.len())
+            } else {
+                format!("{} probe(s) of {field} against time", names.len())
+            },
             range: None,
         });
     }
-    Ok(files)
+    Ok(out)
 }
 
 /// One chart per profile and field: the value against the distance along the line (mm),
 /// one curve per time.
-fn plot_profiles(profiles: &[ProfileValues], dir: &Path) -> Result<Vec<PlotFile>, SceneError> {
+fn plot_profiles(
+    profiles: &[ProfileValues],
+    transient: bool,
+    dir: &Path,
+) -> Result<Vec<PlotFile>, SceneError> {
     let mut keys: Vec<(&str, &str)> = Vec::new();
     for p in profiles {
         if !keys.contains(&(p.name.as_str(), p.field.as_str())) {
@@ -578,10 +720,10 @@ fn plot_profiles(profiles: &[ProfileValues], dir: &Path) -> Result<Vec<PlotFile>
         let series = curves
             .iter()
             .map(|c| {
-                let label = if curves.len() == 1 {
-                    "final state".to_string()
-                } else {
+                let label = if transient {
                     format!("t = {} s", demcon_plot::fmt_tick(c.t))
+                } else {
+                    "steady state".to_string()
                 };
                 Series::line(&label, c.points.iter().map(|&(d, v)| (d * 1e3, v)).collect())
             })
@@ -607,62 +749,141 @@ fn plot_profiles(profiles: &[ProfileValues], dir: &Path) -> Result<Vec<PlotFile>
     Ok(files)
 }
 
-/// The axis along which `values` change most over the solved particles: the least-squares
-/// slope along each axis times the particles' extent along it (z on a tie or a constant field).
-fn steepest_axis(particles: &ParticleSet, values: &[f64], solved: &[bool]) -> Axis {
+/// An F ratio above which a field is taken to vary along an axis (its slab means differ by
+/// more than the scatter within the slabs explains; for pure scatter the ratio is about 1, and
+/// above 4 with 10 slabs and 300 particles by chance about once in 10⁴).
+const SIGNIFICANT_F: f64 = 4.0;
+
+/// How clearly `values` vary along x, y and z over the solved particles: for each axis the
+/// F ratio of a one-way analysis of variance with the particles grouped by their centres into
+/// slabs across the axis (3 to 10 slabs, about 30 particles each): the spread of the slab
+/// means over the scatter within the slabs. Unlike a linear fit it sees a field that rises
+/// and falls again (a bump in the middle, a parabola); a field that does not vary scores
+/// about 1, and 0 when there is nothing to tell (fewer than two particles per slab, or a
+/// constant field).
+fn slab_f_ratios(particles: &ParticleSet, values: &[f64], solved: &[bool]) -> [f64; 3] {
     let ok: Vec<usize> = (0..values.len())
         .filter(|&i| solved[i] && values[i].is_finite())
         .collect();
-    let n = ok.len().max(1) as f64;
-    let mean_v = ok.iter().map(|&i| values[i]).sum::<f64>() / n;
-    let change = |k: usize| {
-        let x: Vec<f64> = ok.iter().map(|&i| particles.centres[i][k]).collect();
-        let mean_x = x.iter().sum::<f64>() / n;
-        let (mut sxv, mut sxx) = (0.0, 0.0);
-        for (xi, &i) in x.iter().zip(&ok) {
-            sxv += (xi - mean_x) * (values[i] - mean_v);
-            sxx += (xi - mean_x) * (xi - mean_x);
-        }
-        let extent = x.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
-            - x.iter().fold(f64::INFINITY, |a, &b| a.min(b));
-        if sxx > 0.0 {
-            (sxv / sxx).abs() * extent
-        } else {
-            0.0
-        }
-    };
-    let c = [change(0), change(1), change(2)];
-    if c[0] > c[1] && c[0] > c[2] {
-        Axis::X
-    } else if c[1] > c[2] && c[1] >= c[0] {
-        Axis::Y
-    } else {
-        Axis::Z
+    let n = ok.len();
+    let slabs = (n / 30).clamp(3, 10);
+    if n < 2 * slabs {
+        return [0.0; 3];
     }
+    let mean = ok.iter().map(|&i| values[i]).sum::<f64>() / n as f64;
+    let total: f64 = ok.iter().map(|&i| (values[i] - mean).powi(2)).sum();
+    if total <= 0.0 {
+        return [0.0; 3];
+    }
+    [0, 1, 2].map(|k| {
+        let (lo, hi) = ok.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| {
+            let x = particles.centres[i][k];
+            (a.min(x), b.max(x))
+        });
+        if hi <= lo {
+            return 0.0;
+        }
+        let mut sum = vec![0.0; slabs];
+        let mut count = vec![0usize; slabs];
+        for &i in &ok {
+            let s = (((particles.centres[i][k] - lo) / (hi - lo) * slabs as f64) as usize).min(slabs - 1);
+            sum[s] += values[i];
+            count[s] += 1;
+        }
+        let between: f64 = (0..slabs)
+            .filter(|&s| count[s] > 0)
+            .map(|s| count[s] as f64 * (sum[s] / count[s] as f64 - mean).powi(2))
+            .sum();
+        let groups = count.iter().filter(|&&c| c > 0).count();
+        if groups < 2 {
+            return 0.0;
+        }
+        let within = (total - between).max(0.0);
+        let ratio = (between / (groups - 1) as f64) / (within / (n - groups) as f64);
+        if ratio.is_nan() { 0.0 } else { ratio }
+    })
 }
 
-/// The slice of `field` on the plane of `params`; the colour bar spans the field's range
-/// over the solved particles, cells in the pores and on unsolved particles are grey.
+/// The normal of the default slice plane, from the F ratios of the field along x, y, z
+/// ([`slab_f_ratios`]) and the domain's extents (m). The plane contains:
+/// 1. the axis the field varies along: the ETC axis when the run has one, else the axis of
+///    the largest F ratio above [`SIGNIFICANT_F`], else (a field that varies along none, like
+///    the nearly uniform temperature of a cylinder heated evenly by Joule heating) the
+///    domain's longest axis (z on a near tie, then y): a cylinder along z is cut through its
+///    axis;
+/// 2. of the two other axes, the one the field varies along too (the larger F ratio when it
+///    varies along both, as a radial field in a cylinder: the plane across the axis shows the
+///    rings), else the longer one, else on a near tie (5 %) x or y, so that the normal is z,
+///    or x when the plane must contain z.
+pub fn slice_normal(f: [f64; 3], extent: [f64; 3], etc_axis: Option<Axis>) -> Axis {
+    let varies = |k: usize| f[k] > SIGNIFICANT_F;
+    let near = |a: f64, b: f64| (a - b).abs() <= 0.05 * a.abs().max(b.abs());
+    // Preference on ties: z, then y, then x.
+    let prefer = [2usize, 1, 0];
+    let along = match etc_axis {
+        Some(a) => a.index(),
+        None if (0..3).any(varies) => prefer
+            .into_iter()
+            .filter(|&k| varies(k))
+            .fold(None, |best: Option<usize>, k| match best {
+                Some(b) if f[b] >= f[k] => Some(b),
+                _ => Some(k),
+            })
+            .expect("one axis varies"),
+        None => {
+            let longest = extent.iter().copied().fold(0.0, f64::max);
+            prefer
+                .into_iter()
+                .find(|&k| near(extent[k], longest))
+                .unwrap_or(2)
+        }
+    };
+    let [a, b] = match along {
+        0 => [1, 2],
+        1 => [0, 2],
+        _ => [0, 1],
+    };
+    let normal = match (varies(a), varies(b)) {
+        (true, false) => b,
+        (false, true) => a,
+        (true, true) => {
+            if f[a] < f[b] {
+                a
+            } else {
+                b
+            }
+        }
+        (false, false) if near(extent[a], extent[b]) => {
+            if b == 2 {
+                2
+            } else {
+                a
+            }
+        }
+        (false, false) => {
+            if extent[a] < extent[b] {
+                a
+            } else {
+                b
+            }
+        }
+    };
+    [Axis::X, Axis::Y, Axis::Z][normal]
+}
+
+/// The slice of `field` on the plane normal to `axis` (at `params.at`, else the middle); the
+/// colour bar spans the field's range over the solved particles, cells in the pores and on
+/// unsolved particles are grey; the title says the time of a transient's fields.
 fn plot_slice(
-    data: &PlotData<'_>,
     p: &ParticleData<'_>,
+    domain: &Domain,
     field: &str,
+    axis: Axis,
     params: &PlotParams,
     dir: &Path,
 ) -> Result<PlotFile, SceneError> {
     let values = p.field(field).expect("slice fields are checked");
     let source = Path::new(&p.source);
-    let domain = match &data.domain {
-        Some(d) => d.clone(),
-        None => Domain::around(&p.particles)?,
-    };
-    // The default plane contains the direction along which the field changes most.
-    let along = data
-        .etc_axis
-        .unwrap_or_else(|| steepest_axis(&p.particles, values, &p.solved));
-    let axis = params
-        .axis
-        .unwrap_or(if along == Axis::Z { Axis::X } else { Axis::Z });
     let b = domain.region.bounds();
     let a = axis.index();
     let position = params.at.unwrap_or_else(|| {
@@ -693,7 +914,7 @@ fn plot_slice(
     let g = slice_grid(
         &p.particles,
         &finite,
-        &domain,
+        domain,
         &SliceParams {
             plane: Plane { axis, position },
             resolution: params.resolution,
@@ -726,11 +947,14 @@ fn plot_slice(
         Some(u) => format!("{what} ({u})"),
         None => what.clone(),
     };
-    let plane = format!(
+    let mut plane = format!(
         "plane {} = {} mm",
         axis_name(axis),
         demcon_plot::fmt_tick(position * 1e3)
     );
+    if let Some(when) = p.time.words() {
+        plane = format!("{plane}, {when}");
+    }
     let name = format!("slice_{}_{}.png", file_part(field), axis_name(axis));
     let rep = draw_raster(
         &Raster {
@@ -793,20 +1017,127 @@ mod tests {
         assert_eq!(file_part("y axis/1"), "y-axis-1");
     }
 
-    #[test]
-    fn the_steepest_axis_follows_the_field() {
-        let centres: Vec<Vec3> = (0..27)
-            .map(|i| Vec3::new((i % 3) as f64, ((i / 3) % 3) as f64, (i / 9) as f64))
-            .collect();
-        let p = ParticleSet::new(centres.clone(), vec![0.4; 27]).unwrap();
-        let all = vec![true; 27];
-        for (k, axis) in [(0, Axis::X), (1, Axis::Y), (2, Axis::Z)] {
-            let v: Vec<f64> = centres
-                .iter()
-                .map(|c| 3.0 * c[k] + 0.1 * c[(k + 1) % 3])
-                .collect();
-            assert_eq!(steepest_axis(&p, &v, &all), axis);
+    /// Points in a cylinder along z (radius 1, length 5) or a unit cube, from a fixed
+    /// generator; and a noise of the given size per point.
+    fn cloud(cylinder: bool, n: usize) -> (ParticleSet, Vec<f64>) {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut centres = Vec::new();
+        let mut noise = Vec::new();
+        while centres.len() < n {
+            let c = if cylinder {
+                Vec3::new(2.0 * next() - 1.0, 2.0 * next() - 1.0, 5.0 * next())
+            } else {
+                Vec3::new(next(), next(), next())
+            };
+            if !cylinder || c.x * c.x + c.y * c.y <= 1.0 {
+                centres.push(c);
+                noise.push(next() - 0.5);
+            }
         }
-        assert_eq!(steepest_axis(&p, &[1.0; 27], &all), Axis::Z);
+        (ParticleSet::new(centres, vec![0.05; n]).unwrap(), noise)
+    }
+
+    fn normal_of(p: &ParticleSet, v: &[f64], extent: [f64; 3]) -> Axis {
+        slice_normal(slab_f_ratios(p, v, &vec![true; v.len()]), extent, None)
+    }
+
+    /// The joule-transient case: a cylinder along z heated evenly, its temperature a scatter
+    /// of a millikelvin, was cut across its axis (a uniform disc); it is cut through its axis,
+    /// as is a field that varies along the axis. A radial field is cut across the axis.
+    #[test]
+    fn a_cylinder_is_cut_through_its_axis_unless_its_field_is_radial() {
+        let (p, noise) = cloud(true, 2000);
+        let extent = [2.0, 2.0, 5.0];
+        let scatter: Vec<f64> = noise.iter().map(|e| 262.94 + 1e-3 * e).collect();
+        assert_eq!(normal_of(&p, &scatter, extent), Axis::X);
+        let along_z: Vec<f64> = p.centres.iter().zip(&noise).map(|(c, e)| c.z + 0.3 * e).collect();
+        assert_eq!(normal_of(&p, &along_z, extent), Axis::X);
+        let f = slab_f_ratios(&p, &along_z, &vec![true; 2000]);
+        assert!(
+            f[2] > 100.0 && f[0] < SIGNIFICANT_F && f[1] < SIGNIFICANT_F,
+            "{f:?}"
+        );
+        // A field along the axis that rises and falls again (ends held cold): a linear fit
+        // sees nothing, the slabs do.
+        let bump: Vec<f64> = p.centres.iter().map(|c| c.z * (5.0 - c.z)).collect();
+        assert_eq!(normal_of(&p, &bump, extent), Axis::X);
+        let radial: Vec<f64> = p
+            .centres
+            .iter()
+            .zip(&noise)
+            .map(|(c, e)| c.x * c.x + c.y * c.y + 0.01 * e)
+            .collect();
+        assert_eq!(normal_of(&p, &radial, extent), Axis::Z);
+    }
+
+    #[test]
+    fn a_box_is_cut_along_its_gradient() {
+        let (p, noise) = cloud(false, 1000);
+        let cube = [1.0; 3];
+        for (k, normal) in [(0, Axis::Z), (1, Axis::Z), (2, Axis::X)] {
+            let v: Vec<f64> = p
+                .centres
+                .iter()
+                .zip(&noise)
+                .map(|(c, e)| c[k] + 0.1 * e)
+                .collect();
+            assert_eq!(normal_of(&p, &v, cube), normal, "gradient along {k}");
+        }
+        // Nothing varies: the plane through the longest side (z on a tie, normal x).
+        assert_eq!(normal_of(&p, &noise, cube), Axis::X);
+        assert_eq!(normal_of(&p, &vec![1.0; 1000], cube), Axis::X);
+        assert_eq!(normal_of(&p, &noise, [10.0, 1.0, 1.0]), Axis::Z);
+        assert_eq!(normal_of(&p, &noise, [1.0, 1.0, 0.2]), Axis::Z);
+        assert_eq!(normal_of(&p, &noise, [1.0, 0.2, 1.0]), Axis::Y);
+        // The ETC axis wins over the field.
+        let f = [1.0, 500.0, 1.0];
+        assert_eq!(slice_normal(f, cube, Some(Axis::Z)), Axis::X);
+        assert_eq!(slice_normal(f, cube, None), Axis::Z);
+        // Two axes vary: the plane holds both.
+        assert_eq!(slice_normal([90.0, 1.0, 40.0], cube, None), Axis::Y);
+    }
+
+    #[test]
+    fn field_times_read() {
+        assert_eq!(FieldTime::Steady.words(), None);
+        assert_eq!(FieldTime::At(260.0).words().unwrap(), "t = 260 s");
+        assert_eq!(FieldTime::At(0.2).words().unwrap(), "t = 0.2 s");
+    }
+
+    #[test]
+    fn a_single_probe_read_once_draws_nothing() {
+        let dir = std::env::temp_dir().join(format!("demcon-scene-probes-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let reading = |name: &str, t: f64, value: f64| ProbeValue {
+            name: name.into(),
+            field: "potential".into(),
+            t,
+            value,
+            solved: true,
+        };
+        // A transient's potential read at the end only: one point.
+        let one = [reading("centre", 260.0, 0.005)];
+        let out = plot_probes(&one, true, &dir).unwrap();
+        assert!(out.files.is_empty(), "{out:?}");
+        assert!(
+            out.skipped[0].contains("centre") && out.skipped[0].contains("t = 260 s"),
+            "{out:?}"
+        );
+        assert!(!dir.join("probes_potential.png").exists());
+        // Two probes of a steady run: their values side by side, no time axis.
+        let two = [reading("a", 0.0, 0.002), reading("b", 0.0, 0.008)];
+        let out = plot_probes(&two, false, &dir).unwrap();
+        assert_eq!(out.files[0].what, "2 probe(s) of potential, steady state");
+        // Against time when there is time.
+        let series = [reading("a", 1.0, 0.002), reading("a", 2.0, 0.004)];
+        let out = plot_probes(&series, true, &dir).unwrap();
+        assert_eq!(out.files[0].what, "1 probe(s) of potential against time");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

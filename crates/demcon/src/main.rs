@@ -9,6 +9,7 @@ mod pack;
 mod plot;
 mod progress;
 mod run;
+mod signals;
 mod tile;
 
 use std::process::ExitCode;
@@ -68,6 +69,8 @@ fn main() -> ExitCode {
         Command::Calibrate(args) => calibrate::run(args),
         Command::Plot(args) => plot::run(args),
     };
+    // A run stopped by a signal exits from the signal thread once it has cleaned up.
+    signals::hold_if_stopping();
     match result {
         Ok(code) => code,
         Err(e) => {

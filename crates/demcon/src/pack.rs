@@ -145,7 +145,7 @@ pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
         params.compression_growth_rate = g;
     }
     params.validate()?;
-    params.check_memory(MemoryLimit::current())?;
+    params.check_memory(&MemoryLimit::current())?;
     // Every output can be written: checked before the packing, not after it.
     check_writable(&a.out).context("--out")?;
     if let Some(path) = &a.report_json {

@@ -29,7 +29,9 @@ pub struct PlotArgs {
     /// temperature (or potential), and halo_flux when the run has it.
     #[arg(long = "slice", value_name = "FIELD")]
     slices: Vec<String>,
-    /// Normal of the slice plane (default: z, or x when the field changes most along z).
+    /// Normal of the slice plane (default: the plane contains the axis along which the
+    /// temperature, else the potential, varies most, or the domain's longest axis when it
+    /// varies along none: a cylinder along z is cut through its axis).
     #[arg(long, value_enum)]
     axis: Option<AxisArg>,
     /// Position of the slice plane along its normal (m; default: the middle of the particles).
@@ -69,12 +71,15 @@ pub fn run(a: PlotArgs) -> anyhow::Result<ExitCode> {
         resolution: a.resolution,
     };
     let dir = a.out.unwrap_or_else(|| a.run.join("plots"));
-    let files = write_plots(&data, &params, &dir).with_context(|| format!("plotting {}", a.run.display()))?;
-    for f in &files {
+    let plots = write_plots(&data, &params, &dir).with_context(|| format!("plotting {}", a.run.display()))?;
+    for f in &plots.files {
         let range = f
             .range
             .map_or(String::new(), |(lo, hi)| format!(", colour bar {lo} … {hi}"));
         println!("{}: {}{range}", dir.join(&f.name).display(), f.what);
+    }
+    for s in &plots.skipped {
+        println!("not drawn: {s}");
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -1,7 +1,7 @@
 //! `demcon run SCENE.ron`: load a scene, run it, print a summary, write the outputs. A
 //! transient whose scene sets `thermal.checkpoint` writes `OUT.checkpoint` beside the output
 //! folder as it goes; `--resume` continues a killed run from it, and a completed run removes
-//! it.
+//! it. SIGINT or SIGTERM stops a run without leaving half-written outputs (`signals.rs`).
 
 use std::cell::Cell;
 use std::ops::ControlFlow;
@@ -103,6 +103,16 @@ fn run_in(
     let out = args.out.unwrap_or_else(|| PathBuf::from("out").join(&stem));
     check_output_dir(&out).with_context(|| format!("output folder {}", out.display()))?;
     let checkpoint = checkpoint_path(&out).with_context(|| format!("output folder {}", out.display()))?;
+    // From here on a SIGINT or SIGTERM removes the half-written outputs (keeping a
+    // checkpoint) and exits with 130 or 143.
+    crate::signals::clean_up_on_signals(
+        crate::signals::RunFiles {
+            out: out.clone(),
+            checkpoint: checkpoint.clone(),
+        },
+        !rank0,
+    )
+    .context("installing the SIGINT/SIGTERM handlers")?;
     let wants_checkpoints = scene.config.thermal.as_ref().and_then(|t| t.checkpoint).is_some();
     if session.is_some() && wants_checkpoints && rank0 && !args.quiet {
         eprintln!(

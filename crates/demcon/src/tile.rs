@@ -43,7 +43,7 @@ pub fn run(a: TileArgs) -> anyhow::Result<ExitCode> {
     // The count and its memory first: a tiling too large for this machine is refused with the
     // estimate instead of being killed by the system half-way.
     let total = tiled_count(f.particles.len(), [nx, ny, nz], "repeat").context("--repeat")?;
-    check_tile_memory(total, MemoryLimit::current(), "repeat").context("--repeat")?;
+    check_tile_memory(total, &MemoryLimit::current(), "repeat").context("--repeat")?;
     let (tiled, big) = tile(&f.particles, &container, [nx, ny, nz]).context("--repeat")?;
     let mut notes = f.notes.clone();
     notes.push(format!(

@@ -233,3 +233,42 @@ fn tile_copies_a_periodic_file_and_refuses_what_it_cannot_tile() {
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// Under `ulimit -v 4000000` (4 GB of address space) `demcon tile --repeat 50,50,50` passed
+/// its memory check against MemAvailable (~24 GB) and was then aborted by a failed 3 GB
+/// allocation (SIGABRT, exit 134). The check now takes the process's own limit: a refusal,
+/// exit 1, naming the limit.
+#[test]
+fn tile_refuses_what_its_address_space_limit_cannot_hold() {
+    let d = common::scratch("clipack", "ulimit");
+    let (p, t) = (d.join("p.xyzr"), d.join("t.xyzr"));
+    let (p_s, t_s) = (p.to_str().unwrap(), t.to_str().unwrap());
+    let o = pack(p_s, &["--container", "periodic", "--size", "0.001,0.001,0.001"]);
+    assert!(o.status.success(), "{}", text(&o));
+    // 300 × 125 000 = 3.75·10⁷ particles, ~6 GB at 160 bytes each.
+    let o = std::process::Command::new("sh")
+        .args([
+            "-c",
+            "ulimit -v 4000000 && exec \"$0\" \"$@\"",
+            env!("CARGO_BIN_EXE_demcon"),
+            "tile",
+            p_s,
+            "--repeat",
+            "50,50,50",
+            "--out",
+            t_s,
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let said = text(&o);
+    assert!(
+        said.contains("tiling needs ~160 bytes per particle")
+            && said.contains("RLIMIT_AS")
+            && said.contains("ulimit -v")
+            && said.contains("at most"),
+        "{said}"
+    );
+    assert!(!t.exists());
+    std::fs::remove_dir_all(&d).unwrap();
+}
