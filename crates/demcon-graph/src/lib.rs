@@ -60,6 +60,7 @@
 #![warn(missing_docs)]
 
 mod calibrated;
+mod conform;
 mod contact;
 mod crack;
 mod error;
@@ -73,6 +74,9 @@ mod terreros;
 mod wall;
 
 pub use calibrated::surface_calibrated;
+pub use conform::{
+    ConformParams, ConformReport, Conformed, SphereSurface, conforming_sites, fibonacci_sphere,
+};
 pub use contact::{
     ContactGeometry, ContactGraph, ContactParams, ContactReport, ContactTolerance, CoordinationPoint,
     Diagnostic, coordination_curve, detect_contacts,

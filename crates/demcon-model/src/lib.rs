@@ -58,9 +58,9 @@ pub use etc::{EtcValue, effective_conductivity};
 pub use flux::{flux_density, flux_dipoles};
 pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogenize_thermal};
 pub use model::{
-    CarveRule, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed, PhaseRule,
-    PhaseSpec, TessellationSummary, build_model, build_model_staged, place_inclusions, set_region_phases,
-    spheres_region, with_defects,
+    CarveRule, ConformSummary, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed,
+    PhaseRule, PhaseSpec, TessellationSummary, build_model, build_model_staged, place_inclusions,
+    set_region_phases, spheres_region, with_defects,
 };
 pub use thermal::{
     CtSpec, ExtraSourceUpdate, ExtraSources, FixedSet, FixedTarget, SurfaceSpec, ThermalBc, ThermalBcs,

@@ -7,8 +7,9 @@ use std::time::Instant;
 
 use demcon_core::{Container, Face, MaterialTable, ParticleSet, Region, Stages, Vec3};
 use demcon_graph::{
-    ContactGraph, ContactParams, ContactReport, HalfBond, LaguerreParams, Laminates, Mix, TessellationReport,
-    WallContacts, assign_phase, assign_phase_laminate, detect_contacts, tessellate,
+    ConformParams, ConformReport, ContactGraph, ContactParams, ContactReport, HalfBond, LaguerreParams,
+    Laminates, Mix, SphereSurface, TessellationReport, WallContacts, assign_phase, assign_phase_laminate,
+    conforming_sites, detect_contacts, tessellate,
 };
 use demcon_network::Network;
 use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReason, carve, pack};
@@ -32,6 +33,9 @@ pub struct Model {
     pub domain_volume: f64,
     /// The carving region the body was cut from, if any.
     pub carve: Option<Region>,
+    /// Conforming seeds at the end of `particles` (`PhaseRule::Conforming`; 0 otherwise): the
+    /// sites that put the spheres' surfaces on facets, not particles of the packing.
+    pub seeds: usize,
     /// Solid fraction Σ V_p / domain volume, used for the representative volume V_p/φ.
     pub phi: f64,
     /// The materials, indexed by phase.
@@ -147,6 +151,8 @@ pub struct ModelReport {
     pub sphere_phase_fractions: Vec<f64>,
     /// Particles cut by an interface (laminate rule).
     pub mixed_particles: usize,
+    /// The conforming seeds placed (`PhaseRule::Conforming`).
+    pub conform: Option<ConformSummary>,
     /// Inclusions placed (centres and radius), when asked for.
     pub inclusions: Option<InclusionReport>,
     /// Contact detection summary (the facet graph's, for a tessellation).
@@ -161,6 +167,36 @@ pub struct ModelReport {
     pub contacts_s: f64,
     /// Network structure (s).
     pub network_s: f64,
+}
+
+/// What the conforming seeds did (`PhaseRule::Conforming`), for `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct ConformSummary {
+    /// Spheres whose surfaces the cells follow.
+    pub spheres: usize,
+    /// The mean site spacing h the sampling was scaled by (m).
+    pub spacing_m: f64,
+    /// Seeds placed (pairs across the surfaces, less those dropped).
+    pub seeds: usize,
+    /// Seeds dropped: near another sphere's surface, overlapping a seed, outside the box.
+    pub dropped_seeds: usize,
+    /// Packing particles removed next to a surface.
+    pub removed_particles: usize,
+    /// Largest 1 − r'/r of the tangent-plane radius correction.
+    pub max_radius_correction: f64,
+}
+
+impl From<&ConformReport> for ConformSummary {
+    fn from(r: &ConformReport) -> Self {
+        Self {
+            spheres: r.spheres,
+            spacing_m: r.spacing_m,
+            seeds: r.seeds,
+            dropped_seeds: r.dropped_seeds,
+            removed_particles: r.removed_sites,
+            max_radius_correction: r.max_radius_correction,
+        }
+    }
 }
 
 /// The inclusions of a multi-inclusion composite.
@@ -261,6 +297,11 @@ pub enum PhaseRule {
     Laminate,
     /// Each half-bond mixes what lies along its own segment, in series.
     Segment,
+    /// The Laguerre cells follow the spheres' surfaces: seeds mirrored across each sphere
+    /// phase's surface put facets on it, the packing's sites next to it are removed
+    /// ([`demcon_graph::conforming_sites`]), and every cell is of one phase (its centre's).
+    /// Needs the Laguerre cells; phases that are not spheres are assigned by centre.
+    Conforming,
 }
 
 /// Which particles carving keeps.
@@ -364,6 +405,57 @@ fn body_volume(container: &Container, region: &Region) -> f64 {
     }
 }
 
+/// The conforming seeds of `params`' sphere phases on `particles` (the Laguerre cells only):
+/// every `Spheres` and `Inclusions` phase and every `Region(Sphere)`; the site spacing h is
+/// (domain volume / particles)^{1/3}.
+fn conform(
+    params: &ModelParams,
+    particles: &ParticleSet,
+    container: &Container,
+    domain_volume: f64,
+) -> Result<demcon_graph::Conformed, ModelError> {
+    if params.laguerre.is_none() {
+        return Err(ModelError::invalid(
+            "phase_rule",
+            "Conforming",
+            "conforming seeds shape the Laguerre cells: set `surface: Laguerre`",
+        ));
+    }
+    let mut spheres = Vec::new();
+    for ph in &params.phases {
+        match ph {
+            PhaseSpec::Spheres { radius, centres, .. } => {
+                spheres.extend(centres.iter().map(|c| SphereSurface {
+                    centre: *c,
+                    radius: *radius,
+                }))
+            }
+            PhaseSpec::Inclusions {
+                fraction, size_ratio, ..
+            } => {
+                let (centres, radius) = place_inclusions(container, *fraction, *size_ratio, params.seed)?;
+                spheres.extend(centres.into_iter().map(|centre| SphereSurface { centre, radius }));
+            }
+            PhaseSpec::Region {
+                region: Region::Sphere { centre, radius },
+                ..
+            } => spheres.push(SphereSurface {
+                centre: *centre,
+                radius: *radius,
+            }),
+            PhaseSpec::Region { .. } => {}
+        }
+    }
+    let h = (domain_volume / particles.len().max(1) as f64).cbrt();
+    Ok(conforming_sites(
+        particles,
+        container,
+        &spheres,
+        h,
+        &ConformParams::default(),
+    )?)
+}
+
 /// The body's phase fractions from the Laguerre cells' volumes; `None` without cells.
 fn body_phase_fractions(
     particles: &ParticleSet,
@@ -394,32 +486,50 @@ pub fn build_model_staged(
     params.defects.validate(n_phases)?;
     let n_before = particles.len();
     let mut kept_ids = None;
-    let (domain_volume, carved_away, mixes, inclusions, phase_fractions) = stages.time("phases", || {
-        let mut domain_volume = container.volume();
-        let mut carved_away = 0;
-        if let Some((region, rule)) = &params.carve {
-            let (kept, ids) = match rule {
-                CarveRule::WholeSphere => carve(&particles, region),
-                CarveRule::Centre => particles.retain(|i| region.contains_point(&particles.centres[i])),
-            };
-            carved_away = particles.len() - kept.len();
-            if kept.is_empty() {
-                return Err(ModelError::invalid(
-                    "carve",
-                    "region",
-                    "no particle lies inside the carving region",
-                ));
+    let (domain_volume, carved_away, mixes, inclusions, phase_fractions, conformed) =
+        stages.time("phases", || {
+            let mut domain_volume = container.volume();
+            let mut carved_away = 0;
+            if let Some((region, rule)) = &params.carve {
+                let (kept, ids) = match rule {
+                    CarveRule::WholeSphere => carve(&particles, region),
+                    CarveRule::Centre => particles.retain(|i| region.contains_point(&particles.centres[i])),
+                };
+                carved_away = particles.len() - kept.len();
+                if kept.is_empty() {
+                    return Err(ModelError::invalid(
+                        "carve",
+                        "region",
+                        "no particle lies inside the carving region",
+                    ));
+                }
+                particles = kept;
+                kept_ids = Some(ids);
+                domain_volume = body_volume(&container, region);
             }
-            particles = kept;
-            kept_ids = Some(ids);
-            domain_volume = body_volume(&container, region);
-        }
-        let mut mixes = Vec::new();
-        let inclusions = apply_phases(params, &mut particles, &container, &materials, &mut mixes)?;
-        let phase_fractions =
-            Laminates::new(particles.len(), &mixes).phase_fractions(&particles, materials.materials.len());
-        Ok((domain_volume, carved_away, mixes, inclusions, phase_fractions))
-    })?;
+            let mut conformed = None;
+            if params.phase_rule == PhaseRule::Conforming {
+                let c = conform(params, &particles, &container, domain_volume)?;
+                kept_ids = Some(match kept_ids.take() {
+                    Some(ids) => c.kept.iter().map(|&k| ids[k as usize]).collect(),
+                    None => c.kept.clone(),
+                });
+                particles = c.particles;
+                conformed = Some((c.n_seeds, c.report));
+            }
+            let mut mixes = Vec::new();
+            let inclusions = apply_phases(params, &mut particles, &container, &materials, &mut mixes)?;
+            let phase_fractions = Laminates::new(particles.len(), &mixes)
+                .phase_fractions(&particles, materials.materials.len());
+            Ok((
+                domain_volume,
+                carved_away,
+                mixes,
+                inclusions,
+                phase_fractions,
+                conformed,
+            ))
+        })?;
     let t1 = Instant::now();
     let graph = match &params.laguerre {
         Some(lp) => stages.time("tessellation", || {
@@ -474,6 +584,7 @@ pub fn build_model_staged(
                 .unwrap_or_else(|| phase_fractions.clone()),
             sphere_phase_fractions: phase_fractions,
             mixed_particles: mixes.len(),
+            conform: conformed.as_ref().map(|c| ConformSummary::from(&c.1)),
             inclusions,
             contacts: ContactSummary::from(&graph.report),
             tessellation: graph
@@ -489,6 +600,7 @@ pub fn build_model_staged(
         container,
         domain_volume,
         carve: params.carve.as_ref().map(|(r, _)| r.clone()),
+        seeds: conformed.map_or(0, |c| c.0),
         phi,
         materials,
         mixes,
@@ -657,7 +769,7 @@ fn assign(
 ) -> usize {
     let mixed = mixes.len();
     let inside = match rule {
-        PhaseRule::Centre => assign_phase(particles, region, phase),
+        PhaseRule::Centre | PhaseRule::Conforming => assign_phase(particles, region, phase),
         PhaseRule::Laminate => assign_phase_laminate(particles, region, phase, mixes, HalfBond::Laminate),
         PhaseRule::Segment => assign_phase_laminate(particles, region, phase, mixes, HalfBond::Segment),
     };
@@ -820,6 +932,7 @@ pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelErro
         container: model.container,
         domain_volume: model.domain_volume,
         carve: model.carve.clone(),
+        seeds: model.seeds,
         phi: model.phi,
         materials: model.materials.clone(),
         mixes: model.mixes.clone(),

@@ -209,6 +209,11 @@ pub enum PhaseRuleConfig {
     /// is the series mix of the part of its segment on either side of the interface (a
     /// plane at the particle): branches along the interface see the centre's phase.
     Segment,
+    /// The Laguerre cells follow the spheres' surfaces (`Spheres`, `Inclusions` and
+    /// `Region(Sphere(..))` phases): seed pairs mirrored across each surface put facets on
+    /// it, the packing's particles next to it give way, and every cell is of one phase
+    /// (`surface: Laguerre` only; other regions are assigned by centre).
+    Conforming,
 }
 
 /// A container (m). A box spans `[0, size]`; a cylinder is along z from z = 0 with its axis at

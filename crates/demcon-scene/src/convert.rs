@@ -205,6 +205,7 @@ pub fn phase_rule(r: PhaseRuleConfig) -> PhaseRule {
         PhaseRuleConfig::Centre => PhaseRule::Centre,
         PhaseRuleConfig::Laminate => PhaseRule::Laminate,
         PhaseRuleConfig::Segment => PhaseRule::Segment,
+        PhaseRuleConfig::Conforming => PhaseRule::Conforming,
     }
 }
 

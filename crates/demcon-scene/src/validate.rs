@@ -64,6 +64,14 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
         ));
     }
     r.check(check_surface("surface", &c.surface));
+    if matches!(c.phase_rule, PhaseRuleConfig::Conforming) && !convert::uses_laguerre(c) {
+        r.push(SceneError::invalid(
+            "phase_rule",
+            "Conforming",
+            "conforming seeds shape the Laguerre cells: set `surface: Laguerre` (the default), or use \
+             `Centre`, `Segment` or `Laminate` with the contact models",
+        ));
+    }
     r.check(check_tile_walls(c));
     if let Some(k) = container.as_ref() {
         r.check(check_sphere_centres(c, k));
@@ -317,21 +325,22 @@ pub const RUN_BYTES_PER_PARTICLE_CONTACTS: u64 = 1300;
 /// the memory available now (`MemAvailable`; no check where it is unknown). `field` names
 /// what set the count.
 pub fn check_run_memory(n: usize, c: &SceneConfig, field: &str) -> Result<(), SceneError> {
-    let Some(available) = demcon_core::available_memory() else {
+    let Some(available) = demcon_core::available_memory_bound() else {
         return Ok(());
     };
     let per = run_bytes_per_particle(c);
     let need = (n as u64).saturating_mul(per);
-    if need > available {
+    if need > available.bytes {
         return Err(SceneError::invalid(
             field,
             format!("{n} particles"),
             format!(
                 "a run needs about {per} bytes per particle ({:.1} GB for {n} particles), but only {:.1} GB \
-                 of memory is available (MemAvailable in /proc/meminfo): at most ~{} particles",
+                 is left: the {}: at most ~{} particles",
                 need as f64 / 1e9,
-                available as f64 / 1e9,
-                available / per
+                available.bytes as f64 / 1e9,
+                available.bound,
+                available.bytes / per
             ),
         ));
     }

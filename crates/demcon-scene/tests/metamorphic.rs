@@ -141,7 +141,7 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol * a.abs().max(b.abs())
 }
 
-const RULES: [&str; 3] = ["Centre", "Segment", "Laminate"];
+const RULES: [&str; 4] = ["Centre", "Segment", "Laminate", "Conforming"];
 
 proptest! {
     #![proptest_config(config())]

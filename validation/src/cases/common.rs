@@ -32,12 +32,13 @@ impl RuleVariant {
         Self { surface, rule }
     }
 
-    /// Its id: the surface's, `sep`, the rule's (`centre`, `laminate`, `segment`).
+    /// Its id: the surface's, `sep`, the rule's (`centre`, `laminate`, `segment`, `conforming`).
     pub fn id(self, sep: &str) -> String {
         let rule = match self.rule {
             PhaseRuleConfig::Centre => "centre",
             PhaseRuleConfig::Laminate => "laminate",
             PhaseRuleConfig::Segment => "segment",
+            PhaseRuleConfig::Conforming => "conforming",
         };
         format!("{}{sep}{rule}", self.surface.id())
     }

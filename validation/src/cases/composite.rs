@@ -230,6 +230,7 @@ impl Variant {
                 PhaseRuleConfig::Centre => "centre",
                 PhaseRuleConfig::Laminate => "laminate",
                 PhaseRuleConfig::Segment => "segment",
+                PhaseRuleConfig::Conforming => "conforming",
             }
         )
     }

@@ -77,6 +77,25 @@ impl LaguerreParams {
     }
 }
 
+/// Volume of the polyhedron {x : n_k·x ≤ 1 for every k} cut by the tangent planes at the unit
+/// normals `normals` around the unit sphere (dimensionless; ∞ when they do not close it). For
+/// the conforming seeds' radius correction ([`crate::conforming_sites`]).
+pub(crate) fn tangent_polyhedron_volume(normals: &[Vec3]) -> f64 {
+    let mut c = Cell::default();
+    // A box the polyhedron of well-spread normals fits in (its vertices lie within ~√3).
+    let b = 4.0;
+    c.reset_box(Vec3::repeat(-b), Vec3::repeat(b), [BOUND; 6]);
+    for (k, n) in normals.iter().enumerate() {
+        if c.clip(n, 1.0, k as Tag, 1e-12).is_err() {
+            return f64::INFINITY;
+        }
+    }
+    if c.tags.contains(&BOUND) {
+        return f64::INFINITY;
+    }
+    c.volume()
+}
+
 /// What bounds a wall facet of a cell.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CellWall {
