@@ -392,6 +392,14 @@ impl<'a> ParticleFields<'a> {
                 .map(|p| lam.get(p).map_or(m.particles.phases[p], |x| x.other_phase) as f64)
                 .collect(),
         ));
+        // Conforming seeds (the last `m.seeds` particles) are sites that put the spheres'
+        // surfaces on facets, not particles of the packing: 1 marks them.
+        if m.seeds > 0 {
+            scalars.push((
+                "surface_seed",
+                (0..n).map(|p| f64::from(u8::from(p + m.seeds >= n))).collect(),
+            ));
+        }
         // The volume each particle stands for (m³): the Laguerre cell's, or the representative
         // volume of the contact models (V_p/φ, V_p/f_v): the thermal network's when the run has
         // heat (its capacities and flux divide by it), else the electric network's.

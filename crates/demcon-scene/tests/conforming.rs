@@ -1,0 +1,70 @@
+//! `phase_rule: Conforming` from a scene: the seeds are counted in `summary.json` and flagged
+//! in the particle files, a homogeneous body split by a sphere of the same material stays
+//! exact, and the rule is refused without the Laguerre cells.
+
+use std::path::{Path, PathBuf};
+
+use demcon_scene::{RunOptions, Scene, run, summary_json};
+
+fn scene(surface: &str, lambda_b: f64) -> String {
+    format!(
+        r#"(
+    seed: 2,
+    packing: Generate(container: Box(size: (1.0, 1.0, 1.0)), count: 3000, phi: 0.55, radius_cov: 0.3),
+    surface: {surface},
+    materials: [
+        (name: "a", conductivity: 2.0, density: 1000.0, specific_heat: 500.0),
+        (name: "b", conductivity: {lambda_b:e}, density: 1000.0, specific_heat: 500.0),
+    ],
+    phases: [Spheres(material: "b", radius: 0.3, centres: [(0.5, 0.5, 0.5)])],
+    phase_rule: Conforming,
+    thermal: (bcs: [WallTemperature(face: XMin, value: 0.0), WallTemperature(face: XMax, value: 1.0)], solver: Steady),
+    linear_solver: (method: Auto, rel_tol: 1e-12, max_iter: 200000),
+    outputs: (etc_axis: Some(X), vtk: false, particles_csv: true),
+)"#
+    )
+}
+
+fn parse(text: &str) -> Scene {
+    Scene::parse(text, Path::new("c.ron"), PathBuf::new()).unwrap()
+}
+
+#[test]
+fn seeds_are_counted_flagged_and_a_same_material_sphere_changes_nothing() {
+    let s = parse(&scene("Laguerre", 2.0));
+    let r = run(&s, &RunOptions::default()).unwrap();
+    assert!((r.etc.as_ref().unwrap().lambda_e / 2.0 - 1.0).abs() < 1e-9);
+    let j = summary_json("c", &r);
+    let seeds = j["build"]["conform"]["seeds"].as_u64().unwrap() as usize;
+    assert!(seeds > 100 && seeds == r.model.seeds, "{}", j["build"]["conform"]);
+    assert!(j["build"]["conform"]["removed_particles"].as_u64().unwrap() > 0);
+    let dir = std::env::temp_dir().join(format!("demcon-conforming-{}", std::process::id()));
+    demcon_scene::write_outputs("c", &s.config.outputs, &r, &dir).unwrap();
+    let (header, cols) = demcon_post::read_csv(dir.join("particles.csv")).unwrap();
+    let k = header
+        .iter()
+        .position(|h| h == "surface_seed")
+        .expect("surface_seed column");
+    let flagged = cols[k].iter().filter(|&&v| v == 1.0).count();
+    assert_eq!(flagged, seeds);
+    // The seeds are the last particles, and the inner ones carry the sphere's phase.
+    let n = r.model.particles.len();
+    assert!(cols[k][n - seeds..].iter().all(|&v| v == 1.0));
+    let inner = r.model.particles.phases[n - seeds..]
+        .iter()
+        .filter(|&&p| p == 1)
+        .count();
+    assert!(inner > 0 && inner < seeds, "{inner} of {seeds}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_conducting_sphere_raises_the_conductivity_and_the_rule_needs_the_cells() {
+    let r = run(&parse(&scene("Laguerre", 20.0)), &RunOptions::default()).unwrap();
+    assert!(r.etc.as_ref().unwrap().lambda_e > 2.0);
+    let e = Scene::parse(&scene("TerrerosAlpha", 20.0), Path::new("c.ron"), PathBuf::new())
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(e.contains("phase_rule") && e.contains("Laguerre"), "{e}");
+}
