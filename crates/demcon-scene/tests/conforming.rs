@@ -63,8 +63,7 @@ fn a_conducting_sphere_raises_the_conductivity_and_the_rule_needs_the_cells() {
     let r = run(&parse(&scene("Laguerre", 20.0)), &RunOptions::default()).unwrap();
     assert!(r.etc.as_ref().unwrap().lambda_e > 2.0);
     let e = Scene::parse(&scene("TerrerosAlpha", 20.0), Path::new("c.ron"), PathBuf::new())
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string();
     assert!(e.contains("phase_rule") && e.contains("Laguerre"), "{e}");
 }
