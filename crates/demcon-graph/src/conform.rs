@@ -14,16 +14,21 @@
 //! left is wholly on one side. Every cell is then of one phase, its facets perpendicular to their branches: a
 //! homogeneous body stays exact, and the interface law sits on facets that lie on the surface.
 //!
-//! Where two surfaces come closer than the seeds' spacing (nearly touching spheres), a seed
-//! within δ of another sphere's surface is dropped, and so is a seed closer than 1.9 δ to a seed
-//! already placed (their spheres of radius δ would overlap): the gap between the two spheres
-//! keeps the outer seeds that fit. In a periodic box the seeds are wrapped into the cell and the
+//! Where another sphere comes within 2.5 δ of a sample point, the pair closes in on the surface
+//! (its offset, and its seeds' radius, 0.4 × the gap): both spheres' outer seeds then fit in the
+//! gap, so the matrix between nearly touching spheres keeps cells of its own. A pair squeezed
+//! below 0.05 δ, a sample inside another sphere, and a pair that would overlap a seed already
+//! placed are dropped (counted). In a periodic box the seeds are wrapped into the cell and the
 //! distances to the surfaces are minimum-image; in a walled box, seeds outside the container
 //! are dropped. Every drop is counted in the report.
 
 use demcon_core::{Container, CoreError, ParticleSet, Vec3};
 
 use crate::error::GraphError;
+
+/// The smallest seed offset, as a fraction of δ: a pair squeezed closer than this to its
+/// surface (two spheres almost touching) is dropped and the gap left to the cells around.
+const MIN_OFFSET: f64 = 0.05;
 
 /// Parameters of [`conforming_sites`], as fractions of the mean site spacing h.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,6 +71,8 @@ pub struct ConformReport {
     pub dropped_seeds: usize,
     /// Packing sites removed because their sphere came within 2δ of a surface.
     pub removed_sites: usize,
+    /// Seed pairs placed closer to their surface than δ, where another sphere came near.
+    pub narrowed_pairs: usize,
     /// Largest relative correction 1 − r'/r of a sphere's tangent-plane radius.
     pub max_radius_correction: f64,
 }
@@ -179,24 +186,47 @@ pub fn conforming_sites(
     // The seeds.
     let bounds = container.bounds();
     let mut seeds: Vec<Vec3> = Vec::new();
-    let mut grid = SeedGrid::new(1.9 * delta, period);
+    let mut grid = SeedGrid::new(2.0 * delta, period);
+    let mut seed_radii: Vec<f64> = Vec::new();
     for (si, (s, (normals, r_t))) in spheres.iter().zip(&sampled).enumerate() {
         let r_t = *r_t;
         report.max_radius_correction = report.max_radius_correction.max(1.0 - r_t / s.radius);
         for n in normals {
-            for side in [-1.0, 1.0] {
-                let x = wrap(s.centre + n * (r_t + side * delta));
-                let inside_box = (0..3).all(|k| x[k] >= bounds.min[k] && x[k] <= bounds.max[k]);
-                let crowded = spheres
+            // Where another sphere comes close, the pair closes in on the surface: δ at most
+            // 0.4 × the gap to that sphere (so the other sphere's seeds fit in the gap too);
+            // a sample inside another sphere is no interface and gets no pair.
+            let at = s.centre + n * r_t;
+            let gap = spheres
+                .iter()
+                .enumerate()
+                .filter(|&(o, _)| o != si)
+                .map(|(_, other)| surface_distance(&at, other))
+                .fold(f64::INFINITY, f64::min);
+            if gap <= 0.0 {
+                report.dropped_seeds += 2;
+                continue;
+            }
+            let d = delta.min(0.4 * gap);
+            let pair = [-1.0, 1.0].map(|side| wrap(s.centre + n * (r_t + side * d)));
+            let inside_box = pair
+                .iter()
+                .all(|x| (0..3).all(|k| x[k] >= bounds.min[k] && x[k] <= bounds.max[k]));
+            if !inside_box
+                || d < MIN_OFFSET * delta
+                || pair
                     .iter()
-                    .enumerate()
-                    .any(|(o, other)| o != si && surface_distance(&x, other).abs() < delta);
-                if !inside_box || crowded || grid.too_close(&x, &seeds, &offset) {
-                    report.dropped_seeds += 1;
-                    continue;
-                }
+                    .any(|x| grid.too_close(x, d, &seeds, &seed_radii, &offset))
+            {
+                report.dropped_seeds += 2;
+                continue;
+            }
+            if d < delta {
+                report.narrowed_pairs += 1;
+            }
+            for x in pair {
                 grid.insert(&x, seeds.len());
                 seeds.push(x);
+                seed_radii.push(d);
             }
         }
     }
@@ -205,7 +235,7 @@ pub fn conforming_sites(
     let mut radii: Vec<f64> = kept.iter().map(|&p| particles.radii[p as usize]).collect();
     let mut phases: Vec<u16> = kept.iter().map(|&p| particles.phases[p as usize]).collect();
     centres.extend_from_slice(&seeds);
-    radii.extend(std::iter::repeat_n(delta, seeds.len()));
+    radii.extend_from_slice(&seed_radii);
     phases.extend(std::iter::repeat_n(0, seeds.len()));
     let mut out = ParticleSet::new(centres, radii)?;
     out.phases = phases;
@@ -278,10 +308,10 @@ pub fn fibonacci_sphere(n: usize) -> Vec<Vec3> {
         .collect()
 }
 
-/// A hash grid of the seeds placed, to refuse a seed closer than `min` to another (minimum
-/// image in a periodic box: the grid's cells then tile each period and wrap).
+/// A hash grid of the seeds placed, cells at least `min` wide (the largest distance at which
+/// two seeds can overlap), to refuse a seed that would overlap another (minimum image in a
+/// periodic box: the grid's cells then tile each period and wrap).
 struct SeedGrid {
-    min: f64,
     /// Cell size and, for a periodic box, the cells per period along each axis.
     cell: [f64; 3],
     cells: Option<[i64; 3]>,
@@ -301,7 +331,6 @@ impl SeedGrid {
             None => ([min; 3], None),
         };
         Self {
-            min,
             cell,
             cells,
             map: std::collections::BTreeMap::new(),
@@ -326,8 +355,16 @@ impl SeedGrid {
         self.map.entry(k).or_default().push(id);
     }
 
-    /// Whether a seed already placed lies closer than the grid's distance to `x`.
-    fn too_close(&self, x: &Vec3, seeds: &[Vec3], offset: &dyn Fn(&Vec3, &Vec3) -> Vec3) -> bool {
+    /// Whether a seed already placed would overlap a seed of radius `r` at `x` (their
+    /// distance below the sum of their radii).
+    fn too_close(
+        &self,
+        x: &Vec3,
+        r: f64,
+        seeds: &[Vec3],
+        radii: &[f64],
+        offset: &dyn Fn(&Vec3, &Vec3) -> Vec3,
+    ) -> bool {
         let [i, j, k] = self.key(x);
         let mut seen = std::collections::BTreeSet::new();
         for di in -1..=1 {
@@ -338,7 +375,7 @@ impl SeedGrid {
                         continue;
                     }
                     if let Some(ids) = self.map.get(&key)
-                        && ids.iter().any(|&s| offset(&seeds[s], x).norm() < self.min)
+                        && ids.iter().any(|&s| offset(&seeds[s], x).norm() < r + radii[s])
                     {
                         return true;
                     }

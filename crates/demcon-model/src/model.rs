@@ -182,6 +182,8 @@ pub struct ConformSummary {
     pub dropped_seeds: usize,
     /// Packing particles removed next to a surface.
     pub removed_particles: usize,
+    /// Seed pairs closed in on their surface where another sphere came near.
+    pub narrowed_pairs: usize,
     /// Largest 1 − r'/r of the tangent-plane radius correction.
     pub max_radius_correction: f64,
 }
@@ -194,6 +196,7 @@ impl From<&ConformReport> for ConformSummary {
             seeds: r.seeds,
             dropped_seeds: r.dropped_seeds,
             removed_particles: r.removed_sites,
+            narrowed_pairs: r.narrowed_pairs,
             max_radius_correction: r.max_radius_correction,
         }
     }
