@@ -196,12 +196,24 @@ pub fn conforming_sites(
             // 0.4 × the gap to that sphere (so the other sphere's seeds fit in the gap too);
             // a sample inside another sphere is no interface and gets no pair.
             let at = s.centre + n * r_t;
-            let gap = spheres
+            let others = spheres
                 .iter()
                 .enumerate()
                 .filter(|&(o, _)| o != si)
-                .map(|(_, other)| surface_distance(&at, other))
-                .fold(f64::INFINITY, f64::min);
+                .map(|(_, other)| surface_distance(&at, other));
+            // In a periodic box the sphere's own images are neighbours too.
+            let images = period.into_iter().flat_map(|l| {
+                (0..27).filter(|&k| k != 13).map(move |k| {
+                    let shift = Vec3::new(
+                        (k % 3) as f64 - 1.0,
+                        ((k / 3) % 3) as f64 - 1.0,
+                        (k / 9) as f64 - 1.0,
+                    )
+                    .component_mul(&Vec3::new(l[0], l[1], l[2]));
+                    (at - s.centre - shift).norm() - s.radius
+                })
+            });
+            let gap = others.chain(images).fold(f64::INFINITY, f64::min);
             if gap <= 0.0 {
                 report.dropped_seeds += 2;
                 continue;
