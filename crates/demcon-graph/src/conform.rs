@@ -150,6 +150,8 @@ pub fn conforming_sites(
     };
     // Each sphere's samples and tangent-plane radius r'.
     let sample = params.spacing * h;
+    // The tangent polyhedron's volume depends on the sample count alone: once per count.
+    let mut volumes = std::collections::BTreeMap::new();
     let sampled: Vec<(Vec<Vec3>, f64)> = spheres
         .iter()
         .map(|s| {
@@ -158,7 +160,9 @@ pub fn conforming_sites(
                 .round()
                 .max(12.0) as usize;
             let local = fibonacci_sphere(count);
-            let v1 = crate::laguerre::tangent_polyhedron_volume(&local);
+            let v1 = *volumes
+                .entry(count)
+                .or_insert_with(|| crate::laguerre::tangent_polyhedron_volume(&local));
             let frame = sampling_frame(particles, &s.centre, &offset);
             let normals = local
                 .iter()
