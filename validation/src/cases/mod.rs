@@ -31,6 +31,7 @@ pub mod ligament_holm;
 pub mod multi_inclusion_interface;
 pub mod multi_inclusion_periodic;
 pub mod packing_stress;
+pub mod sphere_arrays;
 
 use crate::Case;
 
@@ -96,6 +97,11 @@ pub fn registry() -> Vec<Case> {
             id: "multi-inclusion-etc",
             about: "Haddad 2021 §5.1: epoxy/silica ETC against f vs FFT, Maxwell, third order; N ladder",
             run: haddad2021_multi_inclusion_etc::run,
+        },
+        Case {
+            id: "sphere-arrays",
+            about: "issue 32: SC, BCC, FCC sphere arrays (f = 0.3 and nearly touching) vs a multipole solution; conforming cells, centre, segment",
+            run: sphere_arrays::run,
         },
         Case {
             id: "multi-inclusion-fields",
