@@ -8,7 +8,9 @@
 //! homogenised (`thermal.solver: Homogenize`); λ_xx, λ_yy, λ_zz are each compared with the
 //! reference (the tensor is isotropic for the three lattices), on three packings. Cases: each
 //! lattice at f = 0.3 and nearly touching (SC 0.5, BCC 0.65, FCC 0.7; gaps 3–4 % of the
-//! radius), contrast 10, and SC f = 0.3 at contrast 0.1. Models: the Laguerre cells with the
+//! radius), contrast 10, SC f = 0.3 at contrast 0.1, and SC f = 0.3, contrast 10 with an interface
+//! conductance h (h a/λ_m = 1 and 0.1; their tolerance, f = 0.3's, after seeing h a/λ_m = 1 on one
+//! packing at 10⁴: −0.016 %). Models: the Laguerre cells with the
 //! phase by centre, the segment rule and the conforming seeds (issue 32's rule).
 //!
 //! Tolerance of the conforming rule, on the largest error over the three packings and three
@@ -44,50 +46,73 @@ struct Array {
     contrast: f64,
     /// Nearly touching (the looser tolerance).
     touching: bool,
+    /// An interface conductance h, as h a / λ_m (`None`: perfect interface).
+    interface: Option<f64>,
 }
 
-const ARRAYS: [Array; 7] = [
+const ARRAYS: [Array; 9] = [
     Array {
         lattice: "sc",
         f: 0.3,
         contrast: 10.0,
         touching: false,
+        interface: None,
     },
     Array {
         lattice: "sc",
         f: 0.5,
         contrast: 10.0,
         touching: true,
+        interface: None,
     },
     Array {
         lattice: "bcc",
         f: 0.3,
         contrast: 10.0,
         touching: false,
+        interface: None,
     },
     Array {
         lattice: "bcc",
         f: 0.65,
         contrast: 10.0,
         touching: true,
+        interface: None,
     },
     Array {
         lattice: "fcc",
         f: 0.3,
         contrast: 10.0,
         touching: false,
+        interface: None,
     },
     Array {
         lattice: "fcc",
         f: 0.7,
         contrast: 10.0,
         touching: true,
+        interface: None,
     },
     Array {
         lattice: "sc",
         f: 0.3,
         contrast: 0.1,
         touching: false,
+        interface: None,
+    },
+    Array {
+        lattice: "sc",
+        f: 0.3,
+        contrast: 10.0,
+        touching: false,
+        interface: Some(1.0),
+    },
+    Array {
+        lattice: "sc",
+        f: 0.3,
+        contrast: 10.0,
+        touching: false,
+        interface: Some(0.1),
     },
 ];
 
@@ -100,7 +125,12 @@ const RULES: [(&str, PhaseRuleConfig); 3] = [
 
 /// The reference λ_e/λ_m and the cell side over the radius of one array.
 fn reference(refs: &Value, a: &Array) -> anyhow::Result<(f64, f64)> {
-    refs["rows"]
+    let table = if a.interface.is_some() {
+        "interface_rows"
+    } else {
+        "rows"
+    };
+    refs[table]
         .as_array()
         .into_iter()
         .flatten()
@@ -108,7 +138,10 @@ fn reference(refs: &Value, a: &Array) -> anyhow::Result<(f64, f64)> {
             r["lattice"] == a.lattice
                 && (r["f"].as_f64().unwrap_or(-1.0) - a.f).abs() < 1e-12
                 && (r["contrast"].as_f64().unwrap_or(-1.0) - a.contrast).abs() < 1e-12
-                && r["h_a_over_lambda_m"].is_null()
+                && match a.interface {
+                    None => r["h_a_over_lambda_m"].is_null(),
+                    Some(h) => (r["h_a_over_lambda_m"].as_f64().unwrap_or(-1.0) - h).abs() < 1e-12,
+                }
         })
         .and_then(|r| {
             Some((
@@ -177,6 +210,14 @@ fn scene(a: &Array, side_over_radius: f64, n: usize, seed: u64, rule: PhaseRuleC
             .collect(),
     }];
     s.phase_rule = rule;
+    if let Some(h) = a.interface {
+        // h a / λ_m given: h = that × λ_m / a (W/(m²·K)).
+        s.interfaces = vec![InterfaceResistanceConfig {
+            between: ("matrix".into(), "spheres".into()),
+            conductance: h * LAMBDA_M * side_over_radius / CELL,
+            electric_resistance: None,
+        }];
+    }
     s.outputs = OutputsConfig::default();
     s
 }
@@ -206,7 +247,10 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
                 errors[m].extend(h.report.axes.iter().map(|x| x / LAMBDA_M / lambda - 1.0));
             }
         }
-        let id = format!("{}_f{}_c{}", a.lattice, a.f, a.contrast);
+        let id = match a.interface {
+            None => format!("{}_f{}_c{}", a.lattice, a.f, a.contrast),
+            Some(h) => format!("{}_f{}_c{}_ha{}", a.lattice, a.f, a.contrast, h),
+        };
         for (m, (name, _)) in RULES.iter().enumerate() {
             let abs = Spread::of(errors[m].iter().map(|e| e.abs()));
             let bias = errors[m].iter().sum::<f64>() / errors[m].len() as f64;
@@ -222,8 +266,11 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         };
         out.compare(Comparison::at_most(
             &format!(
-                "{} f = {} contrast {}: max |λ/λ_ref − 1| (conforming, 3 packings × 3 axes)",
-                a.lattice, a.f, a.contrast
+                "{} f = {} contrast {}{}: max |λ/λ_ref − 1| (conforming, 3 packings × 3 axes)",
+                a.lattice,
+                a.f,
+                a.contrast,
+                a.interface.map_or(String::new(), |h| format!(", h a/λ_m = {h}"))
             ),
             conforming.max,
             tol,
@@ -236,6 +283,9 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         .column("lattice", |r: &Row<'_>| r.0.lattice.to_string())
         .column("f", |r: &Row<'_>| format!("{}", r.0.f))
         .column("contrast", |r: &Row<'_>| format!("{}", r.0.contrast))
+        .column("h a/λ_m", |r: &Row<'_>| {
+            r.0.interface.map_or("—".into(), |h| format!("{h}"))
+        })
         .column("λ_e/λ_m (multipole)", |r: &Row<'_>| format!("{:.6}", r.1));
     let mut table = cols.table(
         format!("Sphere arrays at N = {n}: mean signed error / largest |error| over 3 packings × 3 axes"),
