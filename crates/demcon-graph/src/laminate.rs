@@ -24,6 +24,7 @@
 use demcon_core::{CoreError, ParticleSet, Region, Vec3};
 
 use crate::error::{GraphError, same_len};
+use crate::phase::RegionQuery;
 use crate::{ContactGraph, InterfaceRule, interface_value_split};
 
 /// A particle cut by a phase interface.
@@ -196,9 +197,14 @@ pub fn assign_phase_laminate(
     let mut count = 0;
     let mut new = Vec::new();
     let mut touched = Vec::new();
+    // Everything below reads the region within r (and the normal's step, 1e-3 r) of a centre.
+    let reach = 1.01 * particles.radii.iter().copied().fold(0.0, f64::max);
+    let query = RegionQuery::new(region, reach);
     for p in 0..particles.len() {
         let c = particles.centres[p];
         let r = particles.radii[p];
+        let near = query.near(&c);
+        let region = near.as_ref();
         let s = region.signed_distance(&c);
         if s >= r {
             continue; // wholly outside: unchanged
