@@ -68,11 +68,50 @@ pub struct SphereSurface {
     pub radius: f64,
 }
 
+/// A plane patch the tessellation must follow: a rectangle normal to coordinate axis `axis`
+/// at `at` along it (m), covering `[lo, hi]` (m) on the two other axes in cyclic order
+/// (axis + 1, axis + 2). A face of an axis-aligned box region, clipped to the container.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlanePatch {
+    /// The normal axis (0, 1, 2 for x, y, z).
+    pub axis: usize,
+    /// Position along the normal axis (m).
+    pub at: f64,
+    /// Lower corner on the axes (axis + 1, axis + 2) mod 3 (m).
+    pub lo: [f64; 2],
+    /// Upper corner on the same axes (m).
+    pub hi: [f64; 2],
+}
+
+impl PlanePatch {
+    /// The in-plane axes, in cyclic order.
+    fn tangents(&self) -> [usize; 2] {
+        [(self.axis + 1) % 3, (self.axis + 2) % 3]
+    }
+
+    /// Distance (m) from `x` to the patch; `offset` gives the minimum-image vector between two
+    /// points, so a patch that spans a period is met through the box's faces.
+    fn distance(&self, x: &Vec3, offset: &dyn Fn(&Vec3, &Vec3) -> Vec3) -> f64 {
+        let [u, v] = self.tangents();
+        let mut centre = Vec3::zeros();
+        centre[self.axis] = self.at;
+        centre[u] = 0.5 * (self.lo[0] + self.hi[0]);
+        centre[v] = 0.5 * (self.lo[1] + self.hi[1]);
+        let d = offset(&centre, x);
+        let out = |k: usize, half: f64| (d[k].abs() - half).max(0.0);
+        let du = out(u, 0.5 * (self.hi[0] - self.lo[0]));
+        let dv = out(v, 0.5 * (self.hi[1] - self.lo[1]));
+        (d[self.axis].powi(2) + du * du + dv * dv).sqrt()
+    }
+}
+
 /// What [`conforming_sites`] did.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ConformReport {
     /// Spheres followed.
     pub spheres: usize,
+    /// Plane patches followed.
+    pub planes: usize,
     /// The mean site spacing h (m) the sampling was scaled by.
     pub spacing_m: f64,
     /// Seeds placed.
@@ -111,6 +150,7 @@ pub fn conforming_sites(
     particles: &ParticleSet,
     container: &Container,
     spheres: &[SphereSurface],
+    planes: &[PlanePatch],
     h: f64,
     params: &ConformParams,
 ) -> Result<Conformed, GraphError> {
@@ -134,6 +174,16 @@ pub fn conforming_sites(
     {
         return Err(CoreError::invalid(format!("spheres[{i}].radius"), s.radius, "must be > 0 (m)").into());
     }
+    if let Some((i, p)) = planes.iter().enumerate().find(|(_, p)| {
+        !(p.axis < 3 && p.at.is_finite() && (0..2).all(|k| p.lo[k].is_finite() && p.hi[k] > p.lo[k]))
+    }) {
+        return Err(CoreError::invalid(
+            format!("planes[{i}]"),
+            format!("{p:?}"),
+            "must have an axis 0–2, a finite position and a non-empty rectangle (m)",
+        )
+        .into());
+    }
     let delta = params.offset * h;
     let period = container.period();
     // Minimum-image offset from a to b.
@@ -156,6 +206,7 @@ pub fn conforming_sites(
     let surface_distance = |x: &Vec3, s: &SphereSurface| offset(&s.centre, x).norm() - s.radius;
     let mut report = ConformReport {
         spheres: spheres.len(),
+        planes: planes.len(),
         spacing_m: h,
         ..ConformReport::default()
     };
@@ -201,7 +252,7 @@ pub fn conforming_sites(
         let near = index.near(&wrap(*x)).any(|k| {
             let (s, (_, r_t)) = (&spheres[k], &sampled[k]);
             (offset(&s.centre, x).norm() - r_t).abs() < reach
-        });
+        }) || planes.iter().any(|pl| pl.distance(x, &offset) < reach);
         if near {
             report.removed_sites += 1;
         } else {
@@ -213,13 +264,52 @@ pub fn conforming_sites(
     let mut seeds: Vec<Vec3> = Vec::new();
     let mut grid = SeedGrid::new(2.0 * delta, period);
     let mut seed_radii: Vec<f64> = Vec::new();
+    // Places the pair of a sample `at` on a surface of normal `n` whose nearest other surface is
+    // `gap` away (≤ 0: inside another sphere, no interface there).
+    let mut place = |at: Vec3, n: Vec3, gap: f64, report: &mut ConformReport| {
+        if gap <= 0.0 {
+            report.dropped_seeds += 2;
+            return;
+        }
+        let d = delta.min(NARROW * gap);
+        let pair = [-1.0, 1.0].map(|side| wrap(at + n * (side * d)));
+        let inside_box = pair
+            .iter()
+            .all(|x| (0..3).all(|k| x[k] >= bounds.min[k] && x[k] <= bounds.max[k]));
+        if !inside_box
+            || d < MIN_OFFSET * delta
+            || pair
+                .iter()
+                .any(|x| grid.too_close(x, d, &seeds, &seed_radii, &offset))
+        {
+            report.dropped_seeds += 2;
+            return;
+        }
+        if d < delta {
+            report.narrowed_pairs += 1;
+        }
+        for x in pair {
+            grid.insert(&x, seeds.len());
+            seeds.push(x);
+            seed_radii.push(d);
+        }
+    };
+    // The unsigned distance from `at` to the plane patches other than `skip`.
+    let plane_gap = |at: &Vec3, skip: Option<usize>| {
+        planes
+            .iter()
+            .enumerate()
+            .filter(|&(k, _)| Some(k) != skip)
+            .map(|(_, pl)| pl.distance(at, &offset))
+            .fold(f64::INFINITY, f64::min)
+    };
     for (si, (s, (normals, r_t))) in spheres.iter().zip(&sampled).enumerate() {
         let r_t = *r_t;
         report.max_radius_correction = report.max_radius_correction.max(1.0 - r_t / s.radius);
         for n in normals {
-            // Where another sphere comes close, the pair closes in on the surface: δ at most
-            // NARROW × the gap to that sphere (so the other sphere's pair fits in the gap too);
-            // a sample inside another sphere is no interface and gets no pair.
+            // Where another surface comes close, the pair closes in on the surface: δ at most
+            // NARROW × the gap to it (so the other surface's pair fits in the gap too); a
+            // sample inside another sphere is no interface and gets no pair.
             let at = s.centre + n * r_t;
             // Spheres farther than δ / NARROW leave the pair at δ: only the near ones are read.
             let others = index
@@ -238,32 +328,29 @@ pub fn conforming_sites(
                     (at - s.centre - shift).norm() - s.radius
                 })
             });
-            let gap = others.chain(images).fold(f64::INFINITY, f64::min);
-            if gap <= 0.0 {
-                report.dropped_seeds += 2;
-                continue;
-            }
-            let d = delta.min(NARROW * gap);
-            let pair = [-1.0, 1.0].map(|side| wrap(s.centre + n * (r_t + side * d)));
-            let inside_box = pair
-                .iter()
-                .all(|x| (0..3).all(|k| x[k] >= bounds.min[k] && x[k] <= bounds.max[k]));
-            if !inside_box
-                || d < MIN_OFFSET * delta
-                || pair
-                    .iter()
-                    .any(|x| grid.too_close(x, d, &seeds, &seed_radii, &offset))
-            {
-                report.dropped_seeds += 2;
-                continue;
-            }
-            if d < delta {
-                report.narrowed_pairs += 1;
-            }
-            for x in pair {
-                grid.insert(&x, seeds.len());
-                seeds.push(x);
-                seed_radii.push(d);
+            let gap = others.chain(images).fold(plane_gap(&at, None), f64::min);
+            place(at, *n, gap, &mut report);
+        }
+    }
+    // The planes: a square lattice of samples, cell centres of an equal division of the
+    // rectangle (so a patch spanning a period repeats with it), spacing at most the spheres'.
+    for (pi, pl) in planes.iter().enumerate() {
+        let [u, v] = pl.tangents();
+        let counts = [0, 1].map(|k| (((pl.hi[k] - pl.lo[k]) / sample).ceil() as usize).max(1));
+        let mut n = Vec3::zeros();
+        n[pl.axis] = 1.0;
+        for i in 0..counts[0] {
+            for j in 0..counts[1] {
+                let mut at = Vec3::zeros();
+                at[pl.axis] = pl.at;
+                at[u] = pl.lo[0] + (i as f64 + 0.5) * (pl.hi[0] - pl.lo[0]) / counts[0] as f64;
+                at[v] = pl.lo[1] + (j as f64 + 0.5) * (pl.hi[1] - pl.lo[1]) / counts[1] as f64;
+                let spheres_gap = index
+                    .near(&wrap(at))
+                    .map(|o| surface_distance(&at, &spheres[o]).abs())
+                    .fold(f64::INFINITY, f64::min);
+                let gap = spheres_gap.min(plane_gap(&at, Some(pi)));
+                place(at, n, gap, &mut report);
             }
         }
     }
@@ -589,7 +676,7 @@ mod tests {
             radius: 0.3,
         };
         let h = 1.0 / n as f64;
-        let c = conforming_sites(&p, &cell, &[sphere], h, &ConformParams::default()).unwrap();
+        let c = conforming_sites(&p, &cell, &[sphere], &[], h, &ConformParams::default()).unwrap();
         let delta = 0.25 * h;
         let image = |x: &Vec3| {
             let mut d = x - sphere.centre;
@@ -642,7 +729,7 @@ mod tests {
             },
         ];
         let h = 1.0 / n as f64;
-        let c = conforming_sites(&p, &cell, &spheres, h, &ConformParams::default()).unwrap();
+        let c = conforming_sites(&p, &cell, &spheres, &[], h, &ConformParams::default()).unwrap();
         assert_eq!(c.report.dropped_seeds, 0, "{:?}", c.report);
         assert!(c.report.narrowed_pairs > 0, "{:?}", c.report);
         let seeds = &c.particles.centres[c.kept.len()..];

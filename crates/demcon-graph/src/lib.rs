@@ -75,7 +75,7 @@ mod wall;
 
 pub use calibrated::surface_calibrated;
 pub use conform::{
-    ConformParams, ConformReport, Conformed, SphereSurface, conforming_sites, fibonacci_sphere,
+    ConformParams, ConformReport, Conformed, PlanePatch, SphereSurface, conforming_sites, fibonacci_sphere,
 };
 pub use contact::{
     ContactGeometry, ContactGraph, ContactParams, ContactReport, ContactTolerance, CoordinationPoint,

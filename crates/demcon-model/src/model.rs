@@ -8,8 +8,8 @@ use std::time::Instant;
 use demcon_core::{Container, Face, MaterialTable, ParticleSet, Region, Stages, Vec3};
 use demcon_graph::{
     ConformParams, ConformReport, ContactGraph, ContactParams, ContactReport, HalfBond, LaguerreParams,
-    Laminates, Mix, SphereSurface, TessellationReport, WallContacts, assign_phase, assign_phase_laminate,
-    conforming_sites, detect_contacts, tessellate,
+    Laminates, Mix, PlanePatch, SphereSurface, TessellationReport, WallContacts, assign_phase,
+    assign_phase_laminate, conforming_sites, detect_contacts, tessellate,
 };
 use demcon_network::Network;
 use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReason, carve, pack};
@@ -174,6 +174,8 @@ pub struct ModelReport {
 pub struct ConformSummary {
     /// Spheres whose surfaces the cells follow.
     pub spheres: usize,
+    /// Plane patches (faces of box regions inside the body) the cells follow.
+    pub planes: usize,
     /// The mean site spacing h the sampling was scaled by (m).
     pub spacing_m: f64,
     /// Seeds placed (pairs across the surfaces, less those dropped).
@@ -195,6 +197,7 @@ impl From<&ConformReport> for ConformSummary {
             spacing_m: r.spacing_m,
             seeds: r.seeds,
             dropped_seeds: r.dropped_seeds,
+            planes: r.planes,
             removed_particles: r.removed_sites,
             narrowed_pairs: r.narrowed_pairs,
             max_radius_correction: r.max_radius_correction,
@@ -425,6 +428,7 @@ fn conform(
         ));
     }
     let mut spheres = Vec::new();
+    let mut planes = Vec::new();
     for ph in &params.phases {
         match ph {
             PhaseSpec::Spheres { radius, centres, .. } => {
@@ -446,6 +450,10 @@ fn conform(
                 centre: *centre,
                 radius: *radius,
             }),
+            PhaseSpec::Region {
+                region: Region::Box { min, max },
+                ..
+            } => planes.extend(box_faces(min, max, container)),
             PhaseSpec::Region { .. } => {}
         }
     }
@@ -454,9 +462,38 @@ fn conform(
         particles,
         container,
         &spheres,
+        &planes,
         h,
         &ConformParams::default(),
     )?)
+}
+
+/// The faces of the box `[min, max]` (m) that separate it from the rest of the body, clipped
+/// to the container: in a walled container a face on or beyond a wall separates nothing; in a
+/// periodic one a face is taken at its position in the cell, and a box spanning a period along
+/// an axis has no face across it.
+fn box_faces(min: &Vec3, max: &Vec3, container: &Container) -> Vec<PlanePatch> {
+    let b = container.bounds();
+    let period = container.period();
+    let mut faces = Vec::new();
+    for axis in 0..3 {
+        let [u, v] = [(axis + 1) % 3, (axis + 2) % 3];
+        let lo = [min[u].max(b.min[u]), min[v].max(b.min[v])];
+        let hi = [max[u].min(b.max[u]), max[v].min(b.max[v])];
+        if !(hi[0] > lo[0] && hi[1] > lo[1]) {
+            continue;
+        }
+        for at in [min[axis], max[axis]] {
+            let at = match period {
+                Some(l) if max[axis] - min[axis] >= l[axis] => continue,
+                Some(l) => at.rem_euclid(l[axis]),
+                None if at <= b.min[axis] || at >= b.max[axis] => continue,
+                None => at,
+            };
+            faces.push(PlanePatch { axis, at, lo, hi });
+        }
+    }
+    faces
 }
 
 /// The body's phase fractions from the Laguerre cells' volumes; `None` without cells.

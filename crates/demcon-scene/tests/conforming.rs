@@ -67,3 +67,83 @@ fn a_conducting_sphere_raises_the_conductivity_and_the_rule_needs_the_cells() {
         .to_string();
     assert!(e.contains("phase_rule") && e.contains("Laguerre"), "{e}");
 }
+
+/// A layer of `b` (λ = 7) between z = 0.37 and 0.71 in a unit cube of `a` (λ = 2), with an
+/// interface conductance `h` (W/(m²·K); `None`: perfect), in a walled box with the gradient
+/// along `axis` or in a periodic cell homogenised.
+fn layers(container: &str, h: Option<f64>, thermal: &str) -> String {
+    let interfaces = h.map_or(String::new(), |h| {
+        format!("interfaces: [(between: (\"a\", \"b\"), conductance: {h:e})],")
+    });
+    format!(
+        r#"(
+    seed: 3,
+    packing: Generate(container: {container}(size: (1.0, 1.0, 1.0)), count: 3000, phi: 0.55, radius_cov: 0.3),
+    materials: [
+        (name: "a", conductivity: 2.0, density: 1000.0, specific_heat: 500.0),
+        (name: "b", conductivity: 7.0, density: 1000.0, specific_heat: 500.0),
+    ],
+    phases: [Region(material: "b", region: Box(min: (-1.0, -1.0, 0.37), max: (2.0, 2.0, 0.71)))],
+    {interfaces}
+    phase_rule: Conforming,
+    thermal: {thermal},
+    linear_solver: (method: Auto, rel_tol: 1e-13, max_iter: 200000),
+    outputs: (vtk: false),
+)"#
+    )
+}
+
+/// The layered answers: parallel (λ along the layers), series (across, with 2/h for the two
+/// interfaces).
+fn layered(h: Option<f64>) -> (f64, f64) {
+    let parallel = 2.0 * 0.66 + 7.0 * 0.34;
+    let series = 1.0 / (0.66 / 2.0 + 0.34 / 7.0 + h.map_or(0.0, |h| 2.0 / h));
+    (parallel, series)
+}
+
+#[test]
+fn layers_in_series_and_in_parallel_are_exact_with_and_without_an_interface() {
+    for h in [None, Some(20.0)] {
+        let (parallel, series) = layered(h);
+        for (axis, want) in [("X", parallel), ("Z", series)] {
+            let thermal = format!(
+                "(bcs: [WallTemperature(face: {axis}Min, value: 0.0), WallTemperature(face: {axis}Max, value: 1.0)], \
+                 solver: Steady)"
+            );
+            let text = layers("Box", h, &thermal).replace(
+                "outputs: (vtk: false)",
+                &format!("outputs: (etc_axis: Some({axis}), vtk: false)"),
+            );
+            let r = run(&parse(&text), &RunOptions::default()).unwrap();
+            let got = r.etc.as_ref().unwrap().lambda_e;
+            assert!(
+                (got / want - 1.0).abs() < 1e-9,
+                "h {h:?}, {axis}: {got} for {want}"
+            );
+            let c = r.model.report.conform.as_ref().unwrap();
+            assert_eq!((c.planes, c.dropped_seeds), (2, 0), "{c:?}");
+        }
+        // Periodic: the layer's faces at 0.37 and 0.71 are the cell's two interfaces.
+        let r = run(
+            &parse(&layers("Periodic", h, "(bcs: [], solver: Homogenize)")),
+            &RunOptions::default(),
+        )
+        .unwrap();
+        let t = r
+            .homogenization
+            .as_ref()
+            .unwrap()
+            .thermal
+            .as_ref()
+            .unwrap()
+            .report
+            .tensor;
+        for (k, want) in [(0, parallel), (1, parallel), (2, series)] {
+            assert!(
+                (t[k][k] / want - 1.0).abs() < 1e-9,
+                "h {h:?}, periodic {k}: {} for {want}",
+                t[k][k]
+            );
+        }
+    }
+}
