@@ -184,6 +184,18 @@ pub fn conforming_sites(
         )
         .into());
     }
+    if spheres.is_empty() && planes.is_empty() {
+        // Nothing to follow: every site stays.
+        return Ok(Conformed {
+            particles: particles.clone(),
+            kept: (0..particles.len() as u32).collect(),
+            n_seeds: 0,
+            report: ConformReport {
+                spacing_m: h,
+                ..ConformReport::default()
+            },
+        });
+    }
     let delta = params.offset * h;
     let period = container.period();
     // Minimum-image offset from a to b.

@@ -36,7 +36,8 @@ pub struct Model {
     /// Conforming seeds at the end of `particles` (`PhaseRule::Conforming`; 0 otherwise): the
     /// sites that put the spheres' surfaces on facets, not particles of the packing.
     pub seeds: usize,
-    /// Solid fraction Σ V_p / domain volume, used for the representative volume V_p/φ.
+    /// Solid fraction Σ V_p / domain volume of the packing's particles (the conforming seeds
+    /// are sites, not grains), used for the representative volume V_p/φ.
     pub phi: f64,
     /// The materials, indexed by phase.
     pub materials: MaterialTable,
@@ -140,6 +141,8 @@ pub struct ModelReport {
     pub imported_from: Option<String>,
     /// Particles removed by carving.
     pub carved_away: usize,
+    /// How the phases treat the particles their surfaces cut.
+    pub phase_rule: PhaseRule,
     /// Particles per phase (by centre).
     pub phase_counts: Vec<usize>,
     /// Volume fraction of the body each phase carries: Σ v_p W_p / Σ W_p over the particles'
@@ -214,9 +217,12 @@ pub struct InclusionReport {
     pub radius: f64,
     /// Volume fraction of the inclusion spheres in the box.
     pub fraction: f64,
-    /// Fraction of the solid (by volume) the model carries in the inclusion phase (by
+    /// Fraction of the body the model carries in the inclusion phase: its Laguerre cells'
+    /// share of the volume, or under the contact models the spheres' share of the solid (by
     /// centre, or with the laminate fractions under the laminate rule).
     pub particle_fraction: f64,
+    /// The inclusions' phase (index into the material table).
+    pub phase: u16,
     /// Centres (m).
     pub centres: Vec<[f64; 3]>,
 }
@@ -526,6 +532,7 @@ pub fn build_model_staged(
     params.defects.validate(n_phases)?;
     let n_before = particles.len();
     let mut kept_ids = None;
+    let mut packing_solid = 0.0;
     let (domain_volume, carved_away, mixes, inclusions, phase_fractions, conformed) =
         stages.time("phases", || {
             let mut domain_volume = container.volume();
@@ -548,6 +555,7 @@ pub fn build_model_staged(
                 domain_volume = body_volume(&container, region);
             }
             let mut conformed = None;
+            packing_solid = particles.solid_volume();
             if params.phase_rule == PhaseRule::Conforming {
                 let c = conform(params, &particles, &container, domain_volume)?;
                 kept_ids = Some(match kept_ids.take() {
@@ -613,15 +621,21 @@ pub fn build_model_staged(
     for &p in &particles.phases {
         phase_counts[p as usize] += 1;
     }
-    let phi = particles.solid_volume() / domain_volume;
+    // The packing's own solid fraction (the conforming seeds are sites, not grains).
+    let phi = packing_solid / domain_volume;
+    let body_fractions = body_phase_fractions(&particles, &mixes, &graph, n_phases);
+    let mut inclusions = inclusions;
+    if let (Some(inc), Some(f)) = (inclusions.as_mut(), body_fractions.as_ref()) {
+        inc.particle_fraction = f.get(inc.phase as usize).copied().unwrap_or(0.0);
+    }
     Ok(Model {
         report: ModelReport {
             packing,
             imported_from,
             carved_away,
+            phase_rule: params.phase_rule,
             phase_counts,
-            phase_fractions: body_phase_fractions(&particles, &mixes, &graph, n_phases)
-                .unwrap_or_else(|| phase_fractions.clone()),
+            phase_fractions: body_fractions.unwrap_or_else(|| phase_fractions.clone()),
             sphere_phase_fractions: phase_fractions,
             mixed_particles: mixes.len(),
             conform: conformed.as_ref().map(|c| ConformSummary::from(&c.1)),
@@ -856,6 +870,7 @@ fn apply_phases(
                     fraction: centres.len() as f64 * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
                         / container.bounds().volume(),
                     particle_fraction: 0.0, // set once all phases are applied
+                    phase: *phase,
                     centres: centres.iter().map(|c| [c.x, c.y, c.z]).collect(),
                 });
             }
@@ -882,6 +897,7 @@ fn apply_phases(
                     fraction: centres.len() as f64 * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
                         / b.volume(),
                     particle_fraction: 0.0, // set once all phases are applied
+                    phase: *phase,
                     centres: centres.iter().map(|c| [c.x, c.y, c.z]).collect(),
                 });
             }
@@ -902,7 +918,22 @@ fn apply_phases(
 /// to phase 0 with no mix, then each `(region, phase)` in order under `rule`; updates the
 /// report's phase counts, carried fractions and cut-particle count. For studies that compare
 /// phase layouts or rules on one packing.
-pub fn set_region_phases(model: &mut Model, regions: &[(Region, u16)], rule: PhaseRule) {
+///
+/// # Errors
+/// `rule` is `Conforming`, or the model was built with conforming cells: those cells are made
+/// for their surfaces (rebuild the model with the new phases instead).
+pub fn set_region_phases(
+    model: &mut Model,
+    regions: &[(Region, u16)],
+    rule: PhaseRule,
+) -> Result<(), ModelError> {
+    if rule == PhaseRule::Conforming || model.report.phase_rule == PhaseRule::Conforming {
+        return Err(ModelError::invalid(
+            "phase_rule",
+            "Conforming",
+            "conforming cells are built for their surfaces: build a new model with the new phases",
+        ));
+    }
     model.particles.phases.iter_mut().for_each(|p| *p = 0);
     model.mixes.clear();
     for (region, phase) in regions {
@@ -932,6 +963,8 @@ pub fn set_region_phases(model: &mut Model, regions: &[(Region, u16)], rule: Pha
     if let Some(r) = model.report.defects.as_mut() {
         r.interface_contacts = model.defects.report.interface_contacts;
     }
+    model.report.phase_rule = rule;
+    Ok(())
 }
 
 /// The model with the defects of `spec` (interfaces, cracks, damage, broken bonds by current

@@ -35,9 +35,11 @@ pub struct SceneConfig {
     /// Phase assignments applied in order on top of phase 0.
     #[serde(default)]
     pub phases: Vec<PhaseConfig>,
-    /// How `phases` treat the particles their interfaces cut.
+    /// How `phases` treat the particles their interfaces cut. `None` (the default):
+    /// `Conforming` when every network of the scene is the Laguerre cells' (the cells then
+    /// follow the surfaces), `Centre` with the contact models.
     #[serde(default)]
-    pub phase_rule: PhaseRuleConfig,
+    pub phase_rule: Option<PhaseRuleConfig>,
     /// Conductivity of contacts between two phases.
     #[serde(default)]
     pub interface: InterfaceConfig,
@@ -193,11 +195,10 @@ pub enum CarveRuleConfig {
 }
 
 /// How a phase assignment treats the particles cut by its region's boundary.
-#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 pub enum PhaseRuleConfig {
     /// A particle takes the phase of its centre: the interface is resolved to a particle
     /// size.
-    #[default]
     Centre,
     /// A particle cut by the interface (|signed distance of its centre| < R_p) keeps the
     /// phase of its centre and becomes a laminate of the two phases: its volume fraction in
@@ -209,10 +210,11 @@ pub enum PhaseRuleConfig {
     /// is the series mix of the part of its segment on either side of the interface (a
     /// plane at the particle): branches along the interface see the centre's phase.
     Segment,
-    /// The Laguerre cells follow the spheres' surfaces (`Spheres`, `Inclusions` and
-    /// `Region(Sphere(..))` phases): seed pairs mirrored across each surface put facets on
-    /// it, the packing's particles next to it give way, and every cell is of one phase
-    /// (`surface: Laguerre` only; other regions are assigned by centre).
+    /// The Laguerre cells follow the phases' surfaces (`Spheres`, `Inclusions`,
+    /// `Region(Sphere(..))` and the faces of `Region(Box(..))`): seed pairs mirrored across
+    /// each surface put facets on it, the packing's particles next to it give way, and every
+    /// cell is of one phase (every network `Laguerre`; other regions are assigned by centre).
+    /// The default with the Laguerre cells.
     Conforming,
 }
 

@@ -199,6 +199,16 @@ pub fn floating(f: FloatingConfig) -> FloatingPolicy {
     }
 }
 
+/// The scene's phase rule: its own, or by default `Conforming` when every network is the
+/// Laguerre cells' and `Centre` otherwise.
+pub fn phase_rule_of(cfg: &SceneConfig) -> PhaseRuleConfig {
+    cfg.phase_rule.unwrap_or(if only_laguerre(cfg) {
+        PhaseRuleConfig::Conforming
+    } else {
+        PhaseRuleConfig::Centre
+    })
+}
+
 /// The phase rule.
 pub fn phase_rule(r: PhaseRuleConfig) -> PhaseRule {
     match r {
@@ -272,7 +282,7 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
         materials,
         carve,
         phases,
-        phase_rule: phase_rule(cfg.phase_rule),
+        phase_rule: phase_rule(phase_rule_of(cfg)),
         contacts: contact_params(&cfg.contacts)?,
         laguerre: uses_laguerre(cfg).then(LaguerreParams::default),
         defects,
@@ -393,6 +403,17 @@ pub fn uses_laguerre(cfg: &SceneConfig) -> bool {
         .as_ref()
         .is_some_and(|e| matches!(electric_surface(cfg, e), SurfaceConfig::Laguerre));
     thermal || electric
+}
+
+/// Whether the scene has a network and every network is the Laguerre cells' (the conforming
+/// seeds are sites of the one model both physics share).
+pub fn only_laguerre(cfg: &SceneConfig) -> bool {
+    let thermal = cfg.thermal.is_none() || matches!(cfg.surface, SurfaceConfig::Laguerre);
+    let electric = cfg
+        .electric
+        .as_ref()
+        .is_none_or(|e| matches!(electric_surface(cfg, e), SurfaceConfig::Laguerre));
+    uses_laguerre(cfg) && thermal && electric
 }
 
 /// The electric network's surface model: its own, or the thermal network's `surface` when it

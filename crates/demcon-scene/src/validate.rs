@@ -64,12 +64,13 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
         ));
     }
     r.check(check_surface("surface", &c.surface));
-    if matches!(c.phase_rule, PhaseRuleConfig::Conforming) && !convert::uses_laguerre(c) {
+    if c.phase_rule == Some(PhaseRuleConfig::Conforming) && !convert::only_laguerre(c) {
         r.push(SceneError::invalid(
             "phase_rule",
             "Conforming",
-            "conforming seeds shape the Laguerre cells: set `surface: Laguerre` (the default), or use \
-             `Centre`, `Segment` or `Laminate` with the contact models",
+            "conforming seeds shape the Laguerre cells, and both physics share them: set `surface: \
+             Laguerre` (the default) for every network, or use `Centre`, `Segment` or `Laminate` with \
+             the contact models",
         ));
     }
     r.check(check_tile_walls(c));

@@ -115,11 +115,14 @@ fn halo_slab_scene_gives_the_uniform_flux() {
 fn single_inclusion_scene_concentrates_the_flux_in_the_inclusion() {
     let s = small("single-inclusion.ron", 4000, 3.0);
     let r = run(&s, &RunOptions::default()).unwrap();
-    let counts = &r.model.report.phase_counts;
-    assert_eq!(counts.len(), 2);
-    // About 15.5 % of the particles (by centre) fall in the sphere of radius L/3.
-    let frac = counts[1] as f64 / r.model.particles.len() as f64;
-    assert!((frac - 0.155).abs() < 0.03, "inclusion particles {frac}");
+    assert_eq!(r.model.report.phase_counts.len(), 2);
+    // The cells follow the sphere of radius L/3 (the default conforming cells): its share
+    // of the body is (4π/3)/27 = 0.1551 to the tangent polyhedron's volume correction.
+    let frac = r.model.report.phase_fractions[1];
+    assert!(
+        (frac / (4.0 * std::f64::consts::PI / 81.0) - 1.0).abs() < 0.01,
+        "inclusion share {frac}"
+    );
     // Symmetry: the centre sits at the mean temperature.
     let ta = probe(&r, "A", "temperature");
     assert!((ta - 30.0).abs() < 0.3, "T(A) = {ta}");
@@ -172,9 +175,10 @@ fn multi_inclusion_scene_places_the_silica() {
 fn laminate_rule_resolves_the_inclusion_below_a_particle() {
     use demcon_scene::build_model;
     use demcon_scene::config::PhaseRuleConfig;
-    let centre = small("single-inclusion.ron", 3000, 2.0);
+    let mut centre = small("single-inclusion.ron", 3000, 2.0);
+    centre.config.phase_rule = Some(PhaseRuleConfig::Centre);
     let mut lam = centre.clone();
-    lam.config.phase_rule = PhaseRuleConfig::Laminate;
+    lam.config.phase_rule = Some(PhaseRuleConfig::Laminate);
     let mc = build_model(&centre.config, &centre.base_dir, None).unwrap();
     let ml = build_model(&lam.config, &lam.base_dir, None).unwrap();
     // Same packing, same phases by centre; only the laminate model carries mixes.
@@ -232,7 +236,7 @@ fn laminate_rule_resolves_the_inclusion_below_a_particle() {
     // The segment rule cuts the same particles with the same fractions; its normals point
     // into the other phase and its offsets are the centres' distances to the sphere.
     let mut seg = centre.clone();
-    seg.config.phase_rule = PhaseRuleConfig::Segment;
+    seg.config.phase_rule = Some(PhaseRuleConfig::Segment);
     let ms = build_model(&seg.config, &seg.base_dir, None).unwrap();
     assert_eq!(ms.mixes.len(), ml.mixes.len());
     for (m, b) in ms.mixes.iter().zip(&ml.mixes) {
@@ -258,7 +262,7 @@ fn cut_particles_conduct_heat_and_current_alike_and_store_heat_by_volume() {
     use demcon_scene::config::{PhaseRuleConfig, SurfaceConfig};
     for rule in [PhaseRuleConfig::Laminate, PhaseRuleConfig::Segment] {
         let mut s = small("single-inclusion.ron", 2000, 2.0);
-        s.config.phase_rule = rule;
+        s.config.phase_rule = Some(rule);
         s.config.surface = SurfaceConfig::TerrerosAlpha;
         // ρ_e = 1/λ in each phase: the electric network must be the thermal one.
         for m in &mut s.config.materials {
@@ -330,7 +334,15 @@ fn paper_scale_scene_runs_shrunk() {
     assert!(*walls);
     s.config.outputs.halo = Some(2.0);
     let r = run(&s, &RunOptions::default()).unwrap();
-    assert_eq!(r.model.particles.len(), 8000);
+    // The 8000 particles, less those the conforming seeds replace, and the seeds.
+    let c = r
+        .model
+        .report
+        .conform
+        .as_ref()
+        .expect("conforming cells by default");
+    assert_eq!(r.model.particles.len(), 8000 - c.removed_particles + c.seeds);
+    assert_eq!(c.seeds, r.model.seeds);
     assert_eq!(r.model.report.inclusions.as_ref().unwrap().count, 83);
     let etc = r.etc.as_ref().unwrap().lambda_e;
     assert!(etc > 0.22 && etc < 0.36, "λ_e = {etc}");

@@ -155,7 +155,8 @@ fn listed_spheres_count_their_periodic_images() {
     assert_eq!(corners, [true; 8]);
     let f = r.model.report.inclusions.as_ref().unwrap().particle_fraction;
     let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.0006f64.powi(3) / 0.002f64.powi(3);
-    assert!((f / exact - 1.0).abs() < 0.25, "{f} vs {exact}");
+    // The cells follow the sphere and its images (the default conforming cells).
+    assert!((f / exact - 1.0).abs() < 0.02, "{f} vs {exact}");
     // The tensor is isotropic to the discretisation and above the matrix's.
     let axes = r.homogenization.unwrap().thermal.unwrap().report.axes;
     assert!(

@@ -134,7 +134,10 @@ pub fn rebuild_on(cfg: &SceneConfig, model: &Model) -> anyhow::Result<Model> {
 /// The Laguerre model of the packing of `model` for the scene `cfg` (its surface is set to
 /// Laguerre here): [`rebuild_on`].
 pub fn laguerre_model(cfg: &SceneConfig, model: &Model) -> anyhow::Result<Model> {
-    rebuild_on(&with_surface_model(cfg, Surface::Laguerre, None), model)
+    let mut cfg = with_surface_model(cfg, Surface::Laguerre, None);
+    // Re-phased under each rule by the callers: built by centre unless the scene says.
+    cfg.phase_rule.get_or_insert(PhaseRuleConfig::Centre);
+    rebuild_on(&cfg, model)
 }
 
 /// Σ area (m²) of the Laguerre cells' facets on `face`: the section the network actually has
@@ -236,8 +239,16 @@ impl Spread {
 }
 
 /// [`demcon_model::set_region_phases`] with the scene's phase rule.
-pub fn set_region_phases(model: &mut Model, regions: &[(demcon_core::Region, u16)], rule: PhaseRuleConfig) {
-    demcon_model::set_region_phases(model, regions, demcon_scene::convert::phase_rule(rule));
+pub fn set_region_phases(
+    model: &mut Model,
+    regions: &[(demcon_core::Region, u16)],
+    rule: PhaseRuleConfig,
+) -> anyhow::Result<()> {
+    Ok(demcon_model::set_region_phases(
+        model,
+        regions,
+        demcon_scene::convert::phase_rule(rule),
+    )?)
 }
 
 /// [`demcon_model::electric_conductances`] (S) with the scene's surface and interface rule.
@@ -330,7 +341,7 @@ pub fn thermal_scene(
         surface: SurfaceConfig::Calibrated { c_t: CtConfig::Auto },
         materials,
         phases: Vec::new(),
-        phase_rule: PhaseRuleConfig::Centre,
+        phase_rule: Some(PhaseRuleConfig::Centre),
         interface: InterfaceConfig::Harmonic,
         interfaces: Vec::new(),
         cracks: Vec::new(),
@@ -540,8 +551,7 @@ pub fn set_phases_like(model: &mut Model, cfg: &SceneConfig) -> anyhow::Result<(
         )?;
         regions.push((region, phase as u16));
     }
-    set_region_phases(model, &regions, cfg.phase_rule);
-    Ok(())
+    set_region_phases(model, &regions, demcon_scene::convert::phase_rule_of(cfg))
 }
 
 /// Sets the thermal conductance h (W/(m²·K); ∞ makes them perfect) of every listed interface

@@ -244,7 +244,7 @@ impl Variant {
                 Bc::Wall => vec![wall(FaceConfig::YMin, T_COLD), wall(FaceConfig::YMax, T_HOT)],
             };
         }
-        c.phase_rule = self.rule;
+        c.phase_rule = Some(self.rule);
         c
     }
 
@@ -311,16 +311,16 @@ pub struct ModelsByRule {
 
 impl ModelsByRule {
     /// Clones of `model` re-phased by `regions` under each rule.
-    pub fn new(model: &Model, regions: &[(Region, u16)]) -> Self {
+    pub fn new(model: &Model, regions: &[(Region, u16)]) -> anyhow::Result<Self> {
         let models = RULES
             .iter()
             .map(|&rule| {
                 let mut m = model.clone();
-                set_region_phases(&mut m, regions, rule);
-                m
+                set_region_phases(&mut m, regions, rule)?;
+                Ok(m)
             })
-            .collect();
-        Self { models }
+            .collect::<anyhow::Result<_>>()?;
+        Ok(Self { models })
     }
 
     /// The model under `rule`.
@@ -344,8 +344,8 @@ impl ModelSet {
     pub fn new(base: &SceneConfig, model: &Model, regions: &[(Region, u16)]) -> anyhow::Result<Self> {
         let laguerre = laguerre_model(base, model)?;
         Ok(Self {
-            contacts: ModelsByRule::new(model, regions),
-            cells: ModelsByRule::new(&laguerre, regions),
+            contacts: ModelsByRule::new(model, regions)?,
+            cells: ModelsByRule::new(&laguerre, regions)?,
             laguerre,
         })
     }
@@ -599,5 +599,5 @@ pub fn with_inclusions(model: &Model, f: f64, seed: u64) -> anyhow::Result<(Mode
             .map(|c| Region::Sphere { centre: *c, radius })
             .collect(),
     );
-    Ok((ModelsByRule::new(model, &[(union, 1)]), centres.len()))
+    Ok((ModelsByRule::new(model, &[(union, 1)])?, centres.len()))
 }

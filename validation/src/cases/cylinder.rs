@@ -163,7 +163,7 @@ pub fn electric_scene(
         surface: SurfaceConfig::TerrerosAlpha,
         materials: vec![steel_304l()],
         phases: Vec::new(),
-        phase_rule: PhaseRuleConfig::Centre,
+        phase_rule: Some(PhaseRuleConfig::Centre),
         interface: InterfaceConfig::Harmonic,
         interfaces: Vec::new(),
         cracks: Vec::new(),

@@ -307,7 +307,7 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
         let v = Variant::HEADLINE;
         let cfg = v.scene(&scene(sizes[0], ctx.seed + k, &points), 1.0);
         let model = model_of(&cfg)?;
-        let set = ModelsByRule::new(&model, &[(centred_sphere(), 1)]);
+        let set = ModelsByRule::new(&model, &[(centred_sphere(), 1)])?;
         let model = set.get(v.rule);
         let t1 = Instant::now();
         let r = run_with(&cfg, model)?;

@@ -84,7 +84,7 @@ fn scene(n: usize, seed: u64, rule: PhaseRuleConfig) -> SceneConfig {
     if let Some(t) = s.thermal.as_mut() {
         t.bcs = vec![wall(FaceConfig::YMin, 25.0), wall(FaceConfig::YMax, 35.0)];
     }
-    s.phase_rule = rule;
+    s.phase_rule = Some(rule);
     s.interfaces = vec![InterfaceResistanceConfig {
         between: ("matrix".into(), "inclusion".into()),
         conductance: 1.0,

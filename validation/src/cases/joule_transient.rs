@@ -108,7 +108,7 @@ fn lattice_scene(
         },
         carve: None,
         carve_rule: CarveRuleConfig::WholeSphere,
-        phase_rule: PhaseRuleConfig::Centre,
+        phase_rule: Some(PhaseRuleConfig::Centre),
         contacts: ContactsConfig {
             coordination: None,
             tolerance: Some(0.01),

@@ -8,30 +8,24 @@
 //!
 //! Models on each packing (one packing per realisation, so every headline figure is a mean
 //! and a max over 10 independent packings):
-//! - `laguerre-centre` — the headline: the Laguerre network (exact for a linear field,
-//!   chosen for that property before any number); the phase by the cell's centre. The
-//!   phase rule was chosen after seeing realisation 0 of f = 0.3 at 2·10⁴–10⁵ particles
-//!   (centre −0.2 … +0.4 %, segment −3.0 … −1.7 %, laminate +3.6 … +5.1 %), before any other
-//!   realisation was run.
+//! - `laguerre-conforming` — the headline, by design (issue 32, chosen before its numbers):
+//!   the Laguerre cells following the spheres' surfaces (`phase_rule: Conforming`, the
+//!   default with the Laguerre cells; seed pairs across each surface, docs/laguerre.md §4), so
+//!   every cell is of one phase.
+//! - `laguerre-centre` — the same network, the phase by the cell's centre (the headline until
+//!   issue 32; its rule was chosen after seeing realisation 0 of f = 0.3 at 2·10⁴–10⁵).
 //! - `laguerre-segment` — the same network, the interface where it crosses each centre line
 //!   (series rule).
 //! - `terreros-segment` — the walled case's recommended model (Terreros α, segment rule).
 //! - `calibrated-centre` — the paper's model (C_t calibrated on the packing by
 //!   homogenisation, phase by centre).
-//! - `laguerre-conforming` — the Laguerre cells following the spheres' surfaces
-//!   (`phase_rule: Conforming`, seed pairs across each surface; docs/laguerre.md §4), so every
-//!   cell is of one phase. Issue 32 makes it the headline by design; it is reported beside the
-//!   headline, not gated, until it beats it on these dense microstructures (at 2·10⁴ particles
-//!   an inclusion is ~4.5 sites across and nearly touching inclusions squeeze the seed pairs).
 //!
-//! Tolerance: the issue's target, 0.3 % per realisation at ≤ 10⁶ particles, scaled as an
-//! interface error ∝ particle size ∝ N^(-1/3) to the sweep's N, on the largest error over the
-//! ten realisations — chosen before the sweep's numbers. `--full` (2·10⁵: 0.51 %) keeps it.
-//! `--quick` (2·10⁴: 1.1 %) missed it on the first run (max 3.8 %, at f = 0.5 where the
-//! inclusions nearly touch and 2·10⁴ particles give about 4 particles per inclusion
-//! diameter, so silica cells bridge neighbouring inclusions); the quick check is since a
-//! regression bound of 5 %, set after that run and reported as such. `--full` also runs a
-//! ladder of N at f = 0.3 (realisation 0) to find where the headline converges.
+//! Tolerance: `--full` (2·10⁵) gates the issue's targets, chosen before any conforming run:
+//! the largest error ≤ 0.3 % over the realisations with f ≤ 0.4, ≤ 0.5 % at f = 0.5.
+//! `--quick` (2·10⁴, ~4.5 sites across an inclusion) gates a regression bound of 2 %, set
+//! after the headline's first quick run (max 1.23 %, mean 0.70 %, all low). The old scaled
+//! target 0.3 % × (10⁶/N)^(1/3) is reported as a metric. `--full` also runs a ladder of N at
+//! f = 0.3 (realisation 0) to show the convergence of every model.
 
 use std::time::Instant;
 
@@ -54,9 +48,16 @@ const PHI: f64 = 0.6;
 /// The interface-error target at 10⁶ particles (fraction).
 const TARGET: f64 = 0.003;
 
-/// The `--quick` regression bound on the largest error (fraction), set after the first quick
-/// run missed the scaled target (see the module notes).
-const QUICK_BOUND: f64 = 0.05;
+/// The issue's targets at 2·10⁵ (`--full`): the largest error for f ≤ 0.4 and at f = 0.5
+/// (fraction), chosen before any conforming run.
+const FULL_TARGETS: [f64; 2] = [0.003, 0.005];
+
+/// The `--quick` regression bound on the largest error (fraction), set after the headline's
+/// first quick run (max 1.23 % at 2·10⁴; see the module notes).
+const QUICK_BOUND: f64 = 0.02;
+
+/// The headline model (index into [`MODELS`]): the conforming cells.
+const HEADLINE: usize = 4;
 
 /// One realisation of the reference.
 struct Realisation {
@@ -185,7 +186,7 @@ fn scene(r: &Realisation, n: usize, seed: u64, m: &PeriodicModel) -> SceneConfig
                 .map(|c| (c[0] * CELL, c[1] * CELL, c[2] * CELL))
                 .collect(),
         }],
-        phase_rule: m.rule,
+        phase_rule: Some(m.rule),
         interface: InterfaceConfig::Harmonic,
         interfaces: Vec::new(),
         cracks: Vec::new(),
@@ -369,8 +370,8 @@ pub fn measure(ctx: &Ctx) -> anyhow::Result<Periodic> {
             eprintln!(
                 "   periodic ladder N = {}: λ_yy {:.5} ({:+.2} %), pack {:.1} s",
                 run.n,
-                run.points[0].lambda_y,
-                100.0 * run.error(0),
+                run.points[HEADLINE].lambda_y,
+                100.0 * run.error(HEADLINE),
                 run.pack_s
             );
             ladder.push(run);
@@ -383,9 +384,9 @@ pub fn measure(ctx: &Ctx) -> anyhow::Result<Periodic> {
             "   periodic f = {} realisation {}: λ_yy {:.5} against FFT {:.5} ({:+.2} %)",
             r.f,
             r.index,
-            run.points[0].lambda_y,
+            run.points[HEADLINE].lambda_y,
             r.fft_y,
-            100.0 * run.error(0)
+            100.0 * run.error(HEADLINE)
         );
         runs.push(run);
     }
@@ -400,7 +401,6 @@ pub fn measure(ctx: &Ctx) -> anyhow::Result<Periodic> {
 pub fn compare_and_report(ctx: &Ctx, p: &Periodic, out: &mut CaseOutcome) -> anyhow::Result<()> {
     let n = p.runs.first().map_or(p.n_sweep, |r| r.n);
     let scaled = TARGET * (1.0e6 / n as f64).cbrt().max(1.0);
-    let tol = ctx.pick(QUICK_BOUND, scaled);
     for (k, m) in MODELS.iter().enumerate() {
         let (mean, max) = p.stats(k);
         out.metric(&format!("periodic_{}_mean_abs_rel_error", m.id), mean);
@@ -408,27 +408,44 @@ pub fn compare_and_report(ctx: &Ctx, p: &Periodic, out: &mut CaseOutcome) -> any
         out.metric(&format!("periodic_{}_bias", m.id), p.bias(k));
         out.metric(&format!("periodic_{}_cost_s", m.id), p.cost(k));
     }
-    let (mean, max) = p.stats(0);
+    let (mean, max) = p.stats(HEADLINE);
     out.metric("periodic_n", n);
     out.metric("periodic_mean_abs_rel_error", mean);
     out.metric("periodic_max_abs_rel_error", max);
     out.reference("periodic_max_abs_rel_error", TARGET);
     out.metric("periodic_scaled_target", scaled);
-    out.compare(Comparison::at_most(
-        &format!("periodic max |λ_yy/FFT − 1| over 10 realisations ({})", MODELS[0].id),
-        max,
-        tol,
-        &ctx.pick(
-            format!(
-                "own FFT of each realisation; quick: regression bound 5 % set after the first quick run missed the \
-                 scaled target {:.2} %",
-                100.0 * scaled
+    // The issue's targets, per fraction range: f ≤ 0.4 and f = 0.5.
+    for (label, dense, target) in [
+        ("f ≤ 0.4", false, FULL_TARGETS[0]),
+        ("f = 0.5", true, FULL_TARGETS[1]),
+    ] {
+        let within = |f: f64| (f > 0.4 + 1e-9) == dense;
+        let max = p
+            .runs
+            .iter()
+            .filter(|r| within(r.f))
+            .map(|r| r.error(HEADLINE).abs())
+            .fold(0.0, f64::max);
+        out.compare(Comparison::at_most(
+            &format!(
+                "periodic max |λ_yy/FFT − 1|, {label} ({}, {} realisations)",
+                MODELS[HEADLINE].id,
+                p.runs.iter().filter(|r| within(r.f)).count()
             ),
-            "own FFT of each realisation (shared/refs/multi-inclusion-fft-realisations.json); tolerance = 0.3 % × \
-             (10⁶/N)^(1/3)"
-                .to_string(),
-        ),
-    ));
+            max,
+            ctx.pick(QUICK_BOUND, target),
+            &ctx.pick(
+                "own FFT of each realisation; quick (2·10⁴): regression bound 2 % set after the headline's first \
+                 quick run (max 1.23 %)"
+                    .to_string(),
+                format!(
+                    "own FFT of each realisation (shared/refs/multi-inclusion-fft-realisations.json); issue 32's \
+                     target at 2·10⁵, {:.1} %",
+                    100.0 * target
+                ),
+            ),
+        ));
+    }
     let rows: Vec<&RealisationRun> = p.runs.iter().collect();
     out.tables.push(
         Columns::new()
@@ -441,7 +458,7 @@ pub fn compare_and_report(ctx: &Ctx, p: &Periodic, out: &mut CaseOutcome) -> any
                 |&k, r: &&RealisationRun| format!("{:.5} ({:+.2} %)", r.points[k].lambda_y, 100.0 * r.error(k)),
             )
             .column("anisotropy x/y, z/y", |r: &&RealisationRun| {
-                let p = &r.points[0];
+                let p = &r.points[HEADLINE];
                 format!("{:.4}, {:.4}", p.lambda_xz[0] / p.lambda_y, p.lambda_xz[1] / p.lambda_y)
             })
             .table(
@@ -525,13 +542,12 @@ pub fn compare_and_report(ctx: &Ctx, p: &Periodic, out: &mut CaseOutcome) -> any
         "Periodic mode: the FFT microstructures themselves (realisations 0 and 1 of f = 0.1 … 0.5, exact \
          centres and diameter, periodic images), one periodic packing of N = {n} per realisation (φ = {PHI}, \
          Gaussian radii cov 0.3), `thermal.solver: Homogenize`; each λ_yy against its own FFT value \
-         (extrapolated to zero voxel size). Headline {}: mean |error| {:.2} %, max {:.2} % \
-         (scaled target {:.2} % = 0.3 % × (10⁶/N)^(1/3), chosen before the sweep; `--quick` checks a 5 % \
-         regression bound instead, set after its first run missed the \
-         target). laguerre-centre's phase rule was chosen after seeing realisation 0 of f = 0.3 at \
-         2·10⁴–10⁵ particles; laguerre-conforming (issue 32) is reported beside it, not gated. ETC = λ_yy \
-         directly: no walls, no one-phase normalisation.",
-        MODELS[0].id,
+         (extrapolated to zero voxel size). Headline {} (the conforming cells, the default; chosen by design \
+         before its numbers): mean |error| {:.2} %, max {:.2} % (the old scaled target 0.3 % × (10⁶/N)^(1/3) = \
+         {:.2} % is reported, not gated). `--full` gates issue 32's targets at 2·10⁵ (≤ 0.3 % for f ≤ 0.4, \
+         ≤ 0.5 % at f = 0.5, chosen before any conforming run); `--quick` a 2 % regression bound set after the \
+         headline's first quick run. ETC = λ_yy directly: no walls, no one-phase normalisation.",
+        MODELS[HEADLINE].id,
         100.0 * mean,
         100.0 * max,
         100.0 * scaled

@@ -209,7 +209,7 @@ fn scene(a: &Array, side_over_radius: f64, n: usize, seed: u64, rule: PhaseRuleC
             .map(|c| (c[0] * CELL, c[1] * CELL, c[2] * CELL))
             .collect(),
     }];
-    s.phase_rule = rule;
+    s.phase_rule = Some(rule);
     if let Some(h) = a.interface {
         // h a / λ_m given: h = that × λ_m / a (W/(m²·K)).
         s.interfaces = vec![InterfaceResistanceConfig {
