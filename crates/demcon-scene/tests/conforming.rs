@@ -147,3 +147,25 @@ fn layers_in_series_and_in_parallel_are_exact_with_and_without_an_interface() {
         }
     }
 }
+
+#[test]
+fn tangent_overlapping_and_wall_touching_spheres_are_counted_not_broken() {
+    // Two spheres touching each other, a third overlapping the second, a fourth touching the
+    // XMin wall: every pair that cannot be placed is dropped and counted, the run finishes
+    // with a finite conductivity between the phases'.
+    let text = scene("Laguerre", 20.0).replace(
+        "phases: [Spheres(material: \"b\", radius: 0.3, centres: [(0.5, 0.5, 0.5)])],",
+        "phases: [Spheres(material: \"b\", radius: 0.15, centres: [(0.3, 0.5, 0.5), (0.6, 0.5, 0.5), \
+         (0.7, 0.55, 0.5), (0.15, 0.2, 0.2)])],",
+    );
+    let r = run(&parse(&text), &RunOptions::default()).unwrap();
+    let c = r.model.report.conform.as_ref().unwrap();
+    assert!(c.dropped_seeds > 0 && c.narrowed_pairs > 0, "{c:?}");
+    let etc = r.etc.as_ref().unwrap().lambda_e;
+    assert!(etc.is_finite() && etc > 2.0 && etc < 20.0, "{etc}");
+    let t = &r.thermal.as_ref().unwrap().temperatures;
+    assert!(
+        t.iter()
+            .all(|v| v.is_finite() && (-1e-9..=1.0 + 1e-9).contains(v))
+    );
+}
