@@ -475,7 +475,7 @@ fn image_shifts(container: &Container) -> Vec<Vec3> {
 
 /// The seeded spheres (radius r') and their periodic images, indexed by their boxes inflated
 /// by a reach (rstar): [`SphereIndex::near`] yields every sphere whose surface may come
-/// within the reach of a point of the box, each once, in index order.
+/// within the reach of a point of the box.
 struct SphereIndex {
     tree: RTree<GeomWithData<Rectangle<[f64; 3]>, usize>>,
 }
@@ -502,16 +502,12 @@ impl SphereIndex {
         }
     }
 
-    /// The spheres near `x` (a point of the box), each once, in index order.
-    fn near(&self, x: &Vec3) -> impl Iterator<Item = usize> + use<> {
-        let mut ids: Vec<usize> = self
-            .tree
+    /// The spheres near `x` (a point of the box), in no particular order, a sphere once per
+    /// image near `x` (the callers take a minimum or an `any`, which neither changes).
+    fn near(&self, x: &Vec3) -> impl Iterator<Item = usize> + '_ {
+        self.tree
             .locate_in_envelope_intersecting(AABB::from_point([x.x, x.y, x.z]))
             .map(|g| g.data)
-            .collect();
-        ids.sort_unstable();
-        ids.dedup();
-        ids.into_iter()
     }
 }
 
@@ -583,7 +579,7 @@ struct SeedGrid {
     /// Cell size and, for a periodic box, the cells per period along each axis.
     cell: [f64; 3],
     cells: Option<[i64; 3]>,
-    map: std::collections::BTreeMap<[i64; 3], Vec<usize>>,
+    map: std::collections::HashMap<[i64; 3], Vec<usize>>,
 }
 
 impl SeedGrid {
@@ -601,7 +597,7 @@ impl SeedGrid {
         Self {
             cell,
             cells,
-            map: std::collections::BTreeMap::new(),
+            map: std::collections::HashMap::new(),
         }
     }
 
@@ -634,14 +630,16 @@ impl SeedGrid {
         offset: &dyn Fn(&Vec3, &Vec3) -> Vec3,
     ) -> bool {
         let [i, j, k] = self.key(x);
-        let mut seen = std::collections::BTreeSet::new();
+        // A periodic axis of fewer than three cells wraps onto a cell already visited.
+        let mut seen: Vec<[i64; 3]> = Vec::with_capacity(27);
         for di in -1..=1 {
             for dj in -1..=1 {
                 for dk in -1..=1 {
                     let key = self.wrapped([i + di, j + dj, k + dk]);
-                    if !seen.insert(key) {
+                    if seen.contains(&key) {
                         continue;
                     }
+                    seen.push(key);
                     if let Some(ids) = self.map.get(&key)
                         && ids.iter().any(|&s| offset(&seeds[s], x).norm() < r + radii[s])
                     {
