@@ -7,6 +7,11 @@
 //! whose cells are all alike; an LSA packing's cells vary more (Gaussian radii), see
 //! `docs/laguerre.md` for the figures measured on those.
 //!
+//! `conforming`: the conforming seeds (`demcon_graph::conforming_sites`) for a simple-cubic
+//! array of 27 spheres at f = 0.3 in the periodic box of the 10⁵ test set, alone and with the
+//! tessellation of the sites they leave — beside `laguerre/periodic/100000`, the same box
+//! without them (docs/performance.md, "Conforming cells").
+//!
 //! Run: `cargo bench -p demcon-benches --bench laguerre`.
 
 use std::hint::black_box;
@@ -14,7 +19,8 @@ use std::hint::black_box;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use demcon_benches::jittered_fcc;
 use demcon_core::Container;
-use demcon_graph::{LaguerreParams, tessellate};
+use demcon_core::Vec3;
+use demcon_graph::{ConformParams, LaguerreParams, SphereSurface, conforming_sites, tessellate};
 use demcon_network::{Method, Network, SolveParams, homogenize};
 
 fn laguerre(c: &mut Criterion) {
@@ -66,5 +72,40 @@ fn homogenisation(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, laguerre, homogenisation);
+fn conforming(c: &mut Criterion) {
+    let mut group = c.benchmark_group("conforming");
+    group.sample_size(10);
+    let (p, container) = jittered_fcc(100_000, 42);
+    let Container::Box { size } = container else {
+        unreachable!("jittered_fcc builds a box")
+    };
+    let periodic = Container::Periodic { size };
+    // A 3 × 3 × 3 simple-cubic array of spheres filling 30 % of the box.
+    let a = size[0] / 3.0;
+    let radius = a * (0.3 * 3.0 / (4.0 * std::f64::consts::PI)).cbrt();
+    let spheres: Vec<SphereSurface> = (0..27)
+        .map(|k| SphereSurface {
+            centre: Vec3::new(
+                (k % 3) as f64 + 0.5,
+                ((k / 3) % 3) as f64 + 0.5,
+                (k / 9) as f64 + 0.5,
+            ) * a,
+            radius,
+        })
+        .collect();
+    let h = (size[0] * size[1] * size[2] / p.len() as f64).cbrt();
+    let params = ConformParams::default();
+    group.bench_function(BenchmarkId::new("sites", p.len()), |b| {
+        b.iter(|| black_box(conforming_sites(&p, &periodic, &spheres, &[], h, &params).unwrap()))
+    });
+    group.bench_function(BenchmarkId::new("sites+tessellation", p.len()), |b| {
+        b.iter(|| {
+            let c = conforming_sites(&p, &periodic, &spheres, &[], h, &params).unwrap();
+            black_box(tessellate(&c.particles, &periodic, None, &LaguerreParams::default()).unwrap())
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, laguerre, homogenisation, conforming);
 criterion_main!(benches);
