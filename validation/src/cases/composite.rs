@@ -147,10 +147,17 @@ impl Variant {
     /// carries no bias and needs no calibration — before any of their numbers were seen), the
     /// temperatures held on the faces (the cells' wall facets: the Laguerre network is exact
     /// with walls, while particle-held temperatures put the isotherm at the particles'
-    /// centres) and the segment rule (the series rule along each half-bond, the rule the
-    /// contact models' comparison settled on; DESIGN.md §1 gives its interface error on the
-    /// Laguerre cells).
+    /// centres), the cells following the inclusion's surface (`Conforming`, issue 32's
+    /// headline by design, the default phase rule; until then the segment rule,
+    /// [`Variant::SEGMENT`]).
     pub const HEADLINE: Variant = Variant {
+        surface: Surface::Laguerre,
+        bc: Bc::Wall,
+        rule: PhaseRuleConfig::Conforming,
+    };
+
+    /// The Laguerre cells, walls, segment rule: the headline before the conforming cells.
+    pub const SEGMENT: Variant = Variant {
         surface: Surface::Laguerre,
         bc: Bc::Wall,
         rule: PhaseRuleConfig::Segment,
@@ -206,14 +213,16 @@ impl Variant {
         v
     }
 
-    /// One variant per surface model with the same boundary and rule (walls, segment rule), the
-    /// headline first: the three models side by side on equal terms.
-    pub fn side_by_side() -> [Variant; 3] {
-        Surface::ALL.map(|surface| Variant {
-            surface,
-            bc: Bc::Wall,
-            rule: PhaseRuleConfig::Segment,
-        })
+    /// The headline, then one variant per surface model with the same boundary and rule
+    /// (walls, segment rule): the three models side by side on equal terms.
+    pub fn side_by_side() -> Vec<Variant> {
+        std::iter::once(Self::HEADLINE)
+            .chain(Surface::ALL.map(|surface| Variant {
+                surface,
+                bc: Bc::Wall,
+                rule: PhaseRuleConfig::Segment,
+            }))
+            .collect()
     }
 
     /// Short id used in metric names: `terreros-wall-laminate`, `calibrated-particles-centre`,
@@ -336,22 +345,38 @@ pub struct ModelSet {
     cells: ModelsByRule,
     /// The Laguerre model with the scene's own phases (centre rule).
     pub laguerre: Model,
+    /// The Laguerre cells following the scene's own phases' surfaces (`Conforming`): a
+    /// tessellation of its own, built on the same packing.
+    pub conforming: Model,
 }
 
 impl ModelSet {
     /// The models of the scene `base` on the particles of `model` (built from `base` with
-    /// contacts), re-phased by `regions` under each rule.
+    /// contacts), re-phased by `regions` under each rule; the conforming cells follow `base`'s
+    /// own phases, which must be `regions`.
     pub fn new(base: &SceneConfig, model: &Model, regions: &[(Region, u16)]) -> anyhow::Result<Self> {
         let laguerre = laguerre_model(base, model)?;
+        let mut conforming = base.clone();
+        conforming.phase_rule = Some(PhaseRuleConfig::Conforming);
+        let conforming = laguerre_model(&conforming, model)?;
         Ok(Self {
             contacts: ModelsByRule::new(model, regions)?,
             cells: ModelsByRule::new(&laguerre, regions)?,
             laguerre,
+            conforming,
         })
     }
 
     /// The model a variant runs on.
     pub fn get(&self, v: &Variant) -> &Model {
+        if v.rule == PhaseRuleConfig::Conforming {
+            assert!(
+                v.surface.needs_cells(),
+                "conforming cells are Laguerre cells: {}",
+                v.id()
+            );
+            return &self.conforming;
+        }
         self.by_rule(v.surface).get(v.rule)
     }
 
