@@ -73,11 +73,21 @@ particles on three packings and 5e5 on one):
 Options shorten or extend the ladders (`--resolutions 17,33,65 --counts 5000,20000 --seeds 1
 --extra-counts ''`) and redirect the outputs (`--json`, `--png`); `--replot` redraws the chart and
 the table from an existing JSON without running anything.
+
+`--reuse-fft` reruns demcon only (about 7 minutes of the 15), e.g. for a new demcon binary: the
+muSpectre rows are taken from the existing `--json` (rescored against the current references;
+`--resolutions` is ignored) and the JSON records where each set of rows comes from: `machine` is
+this run's (the demcon rows': binary path, mtime and SHA-256, date, load average at start and end),
+`fft_origin` the run that made the muSpectre rows (its machine, date, load averages and muSpectre
+version, carried over unchanged when that JSON had itself reused them) and the demcon binary whose
+rows were replaced (`demcon_rows_replaced`). In a full run `fft_origin` is "this run". The chart's
+title and the table name the date of reused muSpectre rows.
 """
 
 import argparse
 import contextlib
 import datetime
+import hashlib
 import json
 import os
 import platform
@@ -153,6 +163,12 @@ def component(tensor, micro):
     """The compared scalar of a 3x3 tensor."""
     t = np.asarray(tensor, dtype=float)
     return float(np.trace(t) / 3.0) if micro == "sc" else float(t[1, 1])
+
+
+def score(row, micro, m):
+    """Sets a row's compared value and its signed relative error against the reference."""
+    row["value"] = component(row["tensor"], micro)
+    row["error"] = row["value"] / m["reference"] - 1.0
 
 
 # --------------------------------------------------------------------------------------------
@@ -319,7 +335,8 @@ def pack(demcon, count, seed, path):
 
 
 def run_demcon(demcon, ron, workdir, tag, threads):
-    """`demcon run` of one scene; the tensor, the stages and the times."""
+    """`demcon run` of one scene; the tensor, the stages and the times. The phase rule that ran
+    (summary.json's build.phase_rule; older binaries don't write it) must be the scene's."""
     scene = workdir / f"{tag}.ron"
     scene.write_text(ron)
     out = workdir / f"out-{tag}"
@@ -330,8 +347,13 @@ def run_demcon(demcon, ron, workdir, tag, threads):
     s = json.loads((out / "summary.json").read_text())
     stages = {st["stage"]: st["wall_s"] for st in s["stages"]}
     h = s["homogenization"]["thermal"]
+    ran = s["build"].get("phase_rule")
+    asked = re.search(r"phase_rule: (\w+)", ron)
+    if ran is not None and asked is not None and ran != asked.group(1):
+        raise RuntimeError(f"{tag}: the scene asks for phase_rule {asked.group(1)}, summary.json says {ran}")
     return {
         "n_particles": s["model"]["n_particles"],
+        "phase_rule": ran,
         "tensor": s["etc_tensor"],
         "stages_s": stages,
         "summary_wall_s": s["wall_s"],
@@ -460,15 +482,23 @@ def chart(result, path):
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=7, frameon=False)
     m = result["machine"]
-    fig.suptitle(f"Time to accuracy, periodic homogenisation: {m['nproc']} cores, {m['cpu_model']}, {m['date']}",
-                 fontsize=10)  # fmt: skip
+    fig.suptitle(f"Time to accuracy, periodic homogenisation: {m['nproc']} cores, {m['cpu_model']}, {m['date']}"
+                 + provenance(result), fontsize=10)  # fmt: skip
     fig.tight_layout(rect=(0, 0.08, 1, 1))
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=130)
 
 
+def provenance(result):
+    """'' when both tools ran together, else the date of the reused muSpectre rows."""
+    o = result.get("fft_origin")
+    return f" (muSpectre rows of {o['machine']['date']}, reused)" if isinstance(o, dict) else ""
+
+
 def table(result):
-    lines = []
+    m = result["machine"]
+    lines = [f"demcon: {m['demcon_binary']} ({m['date']}, load {m['load_average_at_start']:.2f} at start)"
+             + provenance(result), ""]  # fmt: skip
     for micro in ("sc", "random"):
         ms = result["microstructures"][micro]
         lines += [
@@ -516,6 +546,7 @@ def table(result):
 
 
 def machine(demcon):
+    """This run's machine, date, load and demcon binary (which made the demcon rows)."""
     cpu = "unknown"
     for ln in Path("/proc/cpuinfo").read_text().splitlines():
         if ln.startswith("model name"):
@@ -523,25 +554,73 @@ def machine(demcon):
             break
     nproc = subprocess.run(["nproc"], capture_output=True, text=True).stdout.strip()
     ver = subprocess.run([demcon, "--version"], capture_output=True, text=True).stdout.strip()
-    try:
-        from importlib.metadata import version
-
-        msp_ver = version("muspectre")
-    except Exception:  # pragma: no cover
-        msp_ver = "unknown"
     return {
         "nproc": int(nproc),
         "cpu_model": cpu,
         "date": datetime.date.today().isoformat(),
         "load_average_at_start": os.getloadavg()[0],
         "python": platform.python_version(),
-        "muspectre": msp_ver,
         "numpy": np.__version__,
         "demcon": ver,
         "demcon_binary": str(demcon),
         "demcon_binary_mtime": datetime.datetime.fromtimestamp(os.stat(demcon).st_mtime, datetime.timezone.utc)
         .isoformat(timespec="seconds"),
+        "demcon_binary_sha256": hashlib.sha256(Path(demcon).read_bytes()).hexdigest(),
     }
+
+
+def muspectre_version():
+    try:
+        from importlib.metadata import version
+
+        return version("muspectre")
+    except Exception:  # pragma: no cover
+        return "unknown"
+
+
+def run_fft_ladder(result, micros, resolutions, json_path):
+    """muSpectre on every grid of both microstructures: result["fft"] and result["fft_messages"]."""
+    import muSpectre as msp  # the scratch venv's
+
+    result["machine"]["muspectre"] = muspectre_version()
+    result["fft_origin"] = "this run (see 'machine')"
+    print(f"muSpectre {result['machine']['muspectre']}: grids {resolutions}", file=sys.stderr)
+    fft_messages = []
+    for micro, m in micros.items():
+        for n in resolutions:
+            with captured_fd1(fft_messages):
+                r = run_fft(n, m, msp)
+            r["micro"] = micro
+            score(r, micro, m)
+            result["fft"].append(r)
+            save(result, json_path)
+            print(f"  fft {micro:6s} {n:4d}^3 set-up {r['setup_s']:7.2f} s solve {r['solve_s']:7.2f} s "
+                  f"error {100 * r['error']:+.4f} %", file=sys.stderr)  # fmt: skip
+    result["fft_messages"] = sorted(set(fft_messages))
+    print(f"  muSpectre printed {len(fft_messages)} lines, distinct: {result['fft_messages']}", file=sys.stderr)
+
+
+def reuse_fft(result, micros, old, json_path):
+    """The muSpectre rows of an earlier JSON (`old`), rescored against the current references;
+    result["fft_origin"]: the run that made them (the earlier run's machine, date and load, or its
+    own 'fft_origin' when it had itself reused them) and the demcon binary of the rows replaced."""
+    if not old.get("fft"):
+        raise SystemExit(f"--reuse-fft: {json_path} has no muSpectre rows")
+    for r in old["fft"]:
+        score(r, r["micro"], micros[r["micro"]])
+    result["fft"] = old["fft"]
+    result["fft_messages"] = old["fft_messages"]
+    origin = old.get("fft_origin")
+    if not isinstance(origin, dict):  # the earlier run made them itself
+        path = json_path.resolve()
+        origin = {
+            "reused_from": str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else str(path),
+            "machine": {k: v for k, v in old["machine"].items() if not k.startswith("demcon")},
+        }
+    origin["demcon_rows_replaced"] = {k: v for k, v in old["machine"].items() if k.startswith("demcon") or k == "date"}
+    result["fft_origin"] = origin
+    grids = sorted({r["n"] for r in old["fft"]})
+    print(f"muSpectre rows reused from {json_path} ({origin['machine']['date']}; grids {grids})", file=sys.stderr)
 
 
 def ints(s):
@@ -559,6 +638,9 @@ def main():
     ap.add_argument("--json", type=Path, default=ROOT / "validation/data/time-to-accuracy.json")
     ap.add_argument("--png", type=Path, default=ROOT / "docs/img/time-to-accuracy.png")
     ap.add_argument("--replot", action="store_true", help="redraw the chart and table from --json, run nothing")
+    ap.add_argument("--reuse-fft", action="store_true",
+                    help="keep the muSpectre rows of --json (their machine, date and load recorded in 'fft_origin') "
+                    "and rerun demcon only; --resolutions is then ignored")  # fmt: skip
     ap.add_argument("--workdir", type=Path, default=None, help="keep packings and runs here (default: a temp dir)")
     args = ap.parse_args()
     if args.replot:
@@ -567,8 +649,7 @@ def main():
         print(table(result))
         return
     demcon = str(Path(args.demcon).resolve())
-
-    import muSpectre as msp  # the scratch venv's
+    old = json.loads(args.json.read_text()) if args.reuse_fft else None  # read before it is overwritten
 
     micros = microstructures()
     result = {
@@ -577,6 +658,7 @@ def main():
         "the same microstructures, on one machine (issue 32). Written by scripts/fft_time_to_accuracy.py; "
         "see its docstring for the method.",
         "machine": machine(demcon),
+        "fft_origin": None,  # set with the muSpectre rows: this run, or the earlier run they are reused from
         "settings": {
             "fft": "muSpectre MaterialLinearDiffusion_3d, SolverNewtonCG (1 Newton step, linear) with "
             "KrylovSolverCG rel. tol 1e-8; three load cases (unit mean gradient along x, y, z); voxel "
@@ -599,22 +681,10 @@ def main():
         k.pop("centres")  # the realisation's centres are in its own file
 
     # ---- muSpectre ----
-    print(f"muSpectre {result['machine']['muspectre']}: grids {args.resolutions}", file=sys.stderr)
-    fft_messages = []
-    for micro, m in micros.items():
-        for n in args.resolutions:
-            with captured_fd1(fft_messages):
-                r = run_fft(n, m, msp)
-            r["micro"] = micro
-            r["value"] = component(r["tensor"], micro)
-            r["error"] = r["value"] / m["reference"] - 1.0
-            result["fft"].append(r)
-            save(result, args.json)
-            print(f"  fft {micro:6s} {n:4d}^3 set-up {r['setup_s']:7.2f} s solve {r['solve_s']:7.2f} s "
-                  f"error {100 * r['error']:+.4f} %", file=sys.stderr)  # fmt: skip
-
-    result["fft_messages"] = sorted(set(fft_messages))
-    print(f"  muSpectre printed {len(fft_messages)} lines, distinct: {result['fft_messages']}", file=sys.stderr)
+    if old is None:
+        run_fft_ladder(result, micros, args.resolutions, args.json)
+    else:
+        reuse_fft(result, micros, old, args.json)
 
     # ---- demcon ----
     tmp = None
@@ -642,8 +712,7 @@ def main():
                     save(result, args.json)
                     continue
                 r.update(micro=micro, rule=rule, count=count, seed=seed, pack=pk, pack_s=pk["pack_s"])
-                r["value"] = component(r["tensor"], micro)
-                r["error"] = r["value"] / m["reference"] - 1.0
+                score(r, micro, m)
                 result["demcon"].append(r)
                 save(result, args.json)
                 print(f"  demcon {micro:6s} {rule:10s} {count:7d} seed {seed}: pack {pk['pack_s']:6.2f} s "
