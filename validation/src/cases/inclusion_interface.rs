@@ -13,14 +13,17 @@
 //!
 //! Temperatures held on YMin/YMax through wall links (the FEM's condition), steady state;
 //! λ_e/λ_hom with λ_hom measured on the same model with one phase. Models on the same packings:
-//! Laguerre cells with the segment rule (the headline; the interface crossing inside a cut
+//! Laguerre cells following the sphere (`Conforming`, the headline since issue 32, by design:
+//! the interface law on facets that lie on the tangent polyhedron), Laguerre cells with the
+//! segment rule (the headline before; the interface crossing inside a cut
 //! cell divided by |e·n|, n the sphere's normal there), Laguerre cells by centre (the interface
 //! on the facets between the phases), Terreros α with the segment rule. 3 packings at the
 //! largest N, mean and max.
 //!
-//! Tolerance, fixed before any number was seen: Laguerre-segment within 2.5 % of HJ at every
-//! contrast and α at 2·10⁴ (the quick regression bound of the perfect interface in
-//! `inclusion-etc`: the interface should add no error of its own); `--full` 1 %.
+//! Tolerance, fixed before any number was seen (for the segment-rule headline, kept for the
+//! conforming one): within 2.5 % of HJ at every contrast and α at 2·10⁴ (the quick regression
+//! bound of the perfect interface in `inclusion-etc`: the interface should add no error of its
+//! own); `--full` issue 32's 0.3 % at 1.5·10⁵ (was 1 %).
 
 use demcon_scene::config::*;
 use serde_json::{Map, Value};
@@ -56,7 +59,8 @@ fn conductance(alpha: f64) -> f64 {
 }
 
 /// The models run side by side (a surface model with a phase rule), the headline first.
-const VARIANTS: [Variant; 3] = [
+const VARIANTS: [Variant; 4] = [
+    Variant::new(Surface::Laguerre, PhaseRuleConfig::Conforming),
     Variant::new(Surface::Laguerre, PhaseRuleConfig::Segment),
     Variant::new(Surface::Laguerre, PhaseRuleConfig::Centre),
     Variant::new(Surface::Terreros, PhaseRuleConfig::Segment),
@@ -143,7 +147,7 @@ impl PackingRun {
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let ladder: Vec<usize> = ctx.pick(vec![5_000, 20_000], vec![20_000, 150_000]);
-    let tol = ctx.pick(0.025, 0.01);
+    let tol = ctx.pick(0.025, 0.003);
     let mut packings = Vec::new();
     for (i, &n) in ladder.iter().enumerate() {
         // Three packings at the largest N, one below it (the trend).
@@ -164,9 +168,11 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     let contacts = model_of(&with_surface_model(&segment, Surface::Terreros, None))?;
     let cells_segment = laguerre_model(&segment, &contacts)?;
     let cells_centre = laguerre_model(&scene(n, seed, PhaseRuleConfig::Centre), &contacts)?;
+    let cells_conforming = laguerre_model(&scene(n, seed, PhaseRuleConfig::Conforming), &contacts)?;
     let mut runs = Vec::new();
     for v in VARIANTS {
         let base = match (v.surface, v.rule) {
+            (Surface::Laguerre, PhaseRuleConfig::Conforming) => &cells_conforming,
             (Surface::Laguerre, PhaseRuleConfig::Segment) => &cells_segment,
             (Surface::Laguerre, _) => &cells_centre,
             _ => &contacts,
@@ -230,8 +236,9 @@ fn compare(ladder: &[usize], packings: &[PackingRun], tol: f64, out: &mut CaseOu
     out.metric("max_rel_error_vs_hj", e.json());
     out.compare(Comparison::at_most(
         &format!(
-            "Laguerre-wall-segment, N = {largest}: max over {} packings, contrasts 5 and 0.1, a_K/a = 0.1, 1, 10 of \
+            "{} (the headline), N = {largest}: max over {} packings, contrasts 5 and 0.1, a_K/a = 0.1, 1, 10 of \
              |λ_e/λ_hom / HJ − 1|",
+            variant_id(HEADLINE),
             e.count
         ),
         e.max,
