@@ -44,14 +44,19 @@ fn laguerre(c: &mut Criterion) {
     group.finish();
 }
 
-fn homogenisation(c: &mut Criterion) {
-    let mut group = c.benchmark_group("homogenize");
-    group.sample_size(10);
-    let (p, container) = jittered_fcc(100_000, 42);
+/// The jittered FCC test set of `n` particles in a periodic box: particles, box size (m), box.
+fn periodic_fcc(n: usize) -> (demcon_core::ParticleSet, [f64; 3], Container) {
+    let (p, container) = jittered_fcc(n, 42);
     let Container::Box { size } = container else {
         unreachable!("jittered_fcc builds a box")
     };
-    let periodic = Container::Periodic { size };
+    (p, size, Container::Periodic { size })
+}
+
+fn homogenisation(c: &mut Criterion) {
+    let mut group = c.benchmark_group("homogenize");
+    group.sample_size(10);
+    let (p, size, periodic) = periodic_fcc(100_000);
     let g = tessellate(&p, &periodic, None, &LaguerreParams::default()).unwrap();
     let cells = g.cells.as_ref().unwrap();
     let cond: Vec<f64> = (0..g.len())
@@ -75,11 +80,7 @@ fn homogenisation(c: &mut Criterion) {
 fn conforming(c: &mut Criterion) {
     let mut group = c.benchmark_group("conforming");
     group.sample_size(10);
-    let (p, container) = jittered_fcc(100_000, 42);
-    let Container::Box { size } = container else {
-        unreachable!("jittered_fcc builds a box")
-    };
-    let periodic = Container::Periodic { size };
+    let (p, size, periodic) = periodic_fcc(100_000);
     // A 3 × 3 × 3 simple-cubic array of spheres filling 30 % of the box.
     let a = size[0] / 3.0;
     let radius = a * (0.3 * 3.0 / (4.0 * std::f64::consts::PI)).cbrt();

@@ -678,22 +678,22 @@ mod tests {
         assert!((last / ball - 1.0) < 5e-3, "{last}");
     }
 
+    /// The points `at(i, j, k)` of an n³ lattice.
+    fn lattice(n: usize, at: impl Fn(usize, usize, usize) -> Vec3) -> Vec<Vec3> {
+        (0..n * n * n)
+            .map(|m| at(m / (n * n), (m / n) % n, m % n))
+            .collect()
+    }
+
     #[test]
     fn seeds_pair_across_the_surface_and_clear_the_packing_next_to_it() {
         // A jittered cubic lattice of 20³ sites of radius 0.01 in the unit periodic cell, a
         // sphere of radius 0.3 centred near a corner (its images cross three faces).
         let n = 20;
-        let mut centres = Vec::new();
-        for i in 0..n {
-            for j in 0..n {
-                for k in 0..n {
-                    let jitter = ((i * 7 + j * 13 + k * 29) % 10) as f64 * 1e-3;
-                    centres.push(
-                        Vec3::new(i as f64, j as f64, k as f64) * (1.0 / n as f64) + Vec3::repeat(jitter),
-                    );
-                }
-            }
-        }
+        let centres = lattice(n, |i, j, k| {
+            let jitter = ((i * 7 + j * 13 + k * 29) % 10) as f64 * 1e-3;
+            Vec3::new(i as f64, j as f64, k as f64) * (1.0 / n as f64) + Vec3::repeat(jitter)
+        });
         let p = ParticleSet::new(centres, vec![0.01; n * n * n]).unwrap();
         let cell = Container::Periodic { size: [1.0; 3] };
         let sphere = SphereSurface {
@@ -732,15 +732,9 @@ mod tests {
         // walled box, sites on a coarse lattice: both surfaces are sampled up to the gap and
         // no pair is dropped; the pairs facing each other do not overlap.
         let n = 20;
-        let mut centres = Vec::new();
-        for i in 0..n {
-            for j in 0..n {
-                for k in 0..n {
-                    centres
-                        .push(Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * (1.0 / n as f64));
-                }
-            }
-        }
+        let centres = lattice(n, |i, j, k| {
+            Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * (1.0 / n as f64)
+        });
         let p = ParticleSet::new(centres, vec![0.01; n * n * n]).unwrap();
         let cell = Container::Box { size: [1.0; 3] };
         let spheres = [
