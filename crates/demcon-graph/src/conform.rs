@@ -27,6 +27,7 @@ use demcon_core::{Container, CoreError, ParticleSet, Vec3};
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{AABB, RTree};
 
+use crate::crack::CrackShape;
 use crate::error::GraphError;
 
 /// The smallest seed offset, as a fraction of δ: a pair squeezed closer than this to its
@@ -83,40 +84,114 @@ pub struct SphereSurface {
     pub radius: f64,
 }
 
-/// A plane patch the tessellation must follow: a rectangle normal to coordinate axis `axis`
-/// at `at` along it (m), covering `[lo, hi]` (m) on the two other axes in cyclic order
-/// (axis + 1, axis + 2). A face of an axis-aligned box region, clipped to the container.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlanePatch {
-    /// The normal axis (0, 1, 2 for x, y, z).
-    pub axis: usize,
-    /// Position along the normal axis (m).
-    pub at: f64,
-    /// Lower corner on the axes (axis + 1, axis + 2) mod 3 (m).
-    pub lo: [f64; 2],
-    /// Upper corner on the same axes (m).
-    pub hi: [f64; 2],
+/// A flat surface the tessellation must follow.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PlanePatch {
+    /// A rectangle normal to coordinate axis `axis` at `at` along it (m), covering `[lo, hi]`
+    /// (m) on the two other axes in cyclic order (axis + 1, axis + 2): a face of an
+    /// axis-aligned box region, clipped to the container.
+    Rect {
+        /// The normal axis (0, 1, 2 for x, y, z).
+        axis: usize,
+        /// Position along the normal axis (m).
+        at: f64,
+        /// Lower corner on the axes (axis + 1, axis + 2) mod 3 (m).
+        lo: [f64; 2],
+        /// Upper corner on the same axes (m).
+        hi: [f64; 2],
+    },
+    /// A crack's surface (disc or plane polygon, any orientation).
+    Crack(CrackShape),
 }
 
 impl PlanePatch {
-    /// The in-plane axes, in cyclic order.
-    fn tangents(&self) -> [usize; 2] {
-        [(self.axis + 1) % 3, (self.axis + 2) % 3]
+    /// A point of the patch's plane (m), its unit normal and two unit tangents (u, v, n
+    /// right-handed).
+    fn frame(&self) -> (Vec3, Vec3, Vec3, Vec3) {
+        match self {
+            PlanePatch::Rect { axis, at, lo, hi } => {
+                let [u, v] = [(axis + 1) % 3, (axis + 2) % 3];
+                let mut origin = Vec3::zeros();
+                origin[*axis] = *at;
+                origin[u] = 0.5 * (lo[0] + hi[0]);
+                origin[v] = 0.5 * (lo[1] + hi[1]);
+                let unit = |k: usize| {
+                    let mut e = Vec3::zeros();
+                    e[k] = 1.0;
+                    e
+                };
+                (origin, unit(*axis), unit(u), unit(v))
+            }
+            PlanePatch::Crack(shape) => {
+                let (c, n) = shape.plane();
+                let origin = shape.bounding_ball().0;
+                let origin = origin - n * n.dot(&(origin - c));
+                let helper = if n.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+                let u = n.cross(&helper).normalize();
+                (origin, n, u, n.cross(&u))
+            }
+        }
+    }
+
+    /// Half-extents (m) along u and v of a box holding the patch around its origin.
+    fn half_extents(&self) -> [f64; 2] {
+        match self {
+            PlanePatch::Rect { lo, hi, .. } => [0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1])],
+            PlanePatch::Crack(shape) => [shape.bounding_ball().1; 2],
+        }
+    }
+
+    /// Whether the in-plane point at (a, b) (m, along u and v from the origin) is on the patch.
+    fn contains(&self, a: f64, b: f64) -> bool {
+        match self {
+            PlanePatch::Rect { .. } => {
+                let [hu, hv] = self.half_extents();
+                a.abs() <= hu && b.abs() <= hv
+            }
+            PlanePatch::Crack(shape) => {
+                let (origin, n, u, v) = self.frame();
+                shape.contains_planar(&n, &(origin + u * a + v * b))
+            }
+        }
     }
 
     /// Distance (m) from `x` to the patch; `offset` gives the minimum-image vector between two
-    /// points, so a patch that spans a period is met through the box's faces.
+    /// points, so a patch that spans a period is met through the box's faces. Exact for a
+    /// rectangle and a disc; for a polygon the distance to its bounding disc off the polygon.
     fn distance(&self, x: &Vec3, offset: &dyn Fn(&Vec3, &Vec3) -> Vec3) -> f64 {
-        let [u, v] = self.tangents();
-        let mut centre = Vec3::zeros();
-        centre[self.axis] = self.at;
-        centre[u] = 0.5 * (self.lo[0] + self.hi[0]);
-        centre[v] = 0.5 * (self.lo[1] + self.hi[1]);
-        let d = offset(&centre, x);
-        let out = |k: usize, half: f64| (d[k].abs() - half).max(0.0);
-        let du = out(u, 0.5 * (self.hi[0] - self.lo[0]));
-        let dv = out(v, 0.5 * (self.hi[1] - self.lo[1]));
-        (d[self.axis].powi(2) + du * du + dv * dv).sqrt()
+        let (origin, n, u, v) = self.frame();
+        let d = offset(&origin, x);
+        let (a, b, c) = (d.dot(&u), d.dot(&v), d.dot(&n));
+        let outside = match self {
+            PlanePatch::Rect { .. } => {
+                let [hu, hv] = self.half_extents();
+                let (du, dv) = ((a.abs() - hu).max(0.0), (b.abs() - hv).max(0.0));
+                (du * du + dv * dv).sqrt()
+            }
+            PlanePatch::Crack(_) if self.contains(a, b) => 0.0,
+            PlanePatch::Crack(_) => ((a * a + b * b).sqrt() - self.half_extents()[0]).max(0.0),
+        };
+        (c * c + outside * outside).sqrt()
+    }
+
+    /// The unit normal and the sample points (m): the cell centres of an equal division of
+    /// the patch's box in squares of side at most `spacing`, those on the patch (so a
+    /// rectangle spanning a period repeats with it).
+    fn samples(&self, spacing: f64) -> (Vec3, Vec<Vec3>) {
+        let (origin, n, u, v) = self.frame();
+        let half = self.half_extents();
+        let counts = half.map(|h| ((2.0 * h / spacing).ceil() as usize).max(1));
+        let mut points = Vec::with_capacity(counts[0] * counts[1]);
+        for i in 0..counts[0] {
+            for j in 0..counts[1] {
+                let a = -half[0] + (i as f64 + 0.5) * 2.0 * half[0] / counts[0] as f64;
+                let b = -half[1] + (j as f64 + 0.5) * 2.0 * half[1] / counts[1] as f64;
+                if self.contains(a, b) {
+                    points.push(origin + u * a + v * b);
+                }
+            }
+        }
+        (n, points)
     }
 }
 
@@ -125,7 +200,7 @@ impl PlanePatch {
 pub struct ConformReport {
     /// Spheres followed.
     pub spheres: usize,
-    /// Plane patches followed.
+    /// Plane patches followed (box faces, cracks).
     pub planes: usize,
     /// The mean site spacing h (m) the sampling was scaled by.
     pub spacing_m: f64,
@@ -189,8 +264,11 @@ pub fn conforming_sites(
     {
         return Err(CoreError::invalid(format!("spheres[{i}].radius"), s.radius, "must be > 0 (m)").into());
     }
-    if let Some((i, p)) = planes.iter().enumerate().find(|(_, p)| {
-        !(p.axis < 3 && p.at.is_finite() && (0..2).all(|k| p.lo[k].is_finite() && p.hi[k] > p.lo[k]))
+    if let Some((i, p)) = planes.iter().enumerate().find(|(_, p)| match p {
+        PlanePatch::Rect { axis, at, lo, hi } => {
+            !(*axis < 3 && at.is_finite() && (0..2).all(|k| lo[k].is_finite() && hi[k] > lo[k]))
+        }
+        PlanePatch::Crack(shape) => shape.validate("crack").is_err(),
     }) {
         return Err(CoreError::invalid(
             format!("planes[{i}]"),
@@ -359,26 +437,20 @@ pub fn conforming_sites(
             place(at, *n, gap, k, &mut report);
         }
     }
-    // The planes: a square lattice of samples, cell centres of an equal division of the
-    // rectangle (so a patch spanning a period repeats with it), spacing at most the spheres'.
+    // The planes: a square lattice of samples at the spheres' spacing.
     for (pi, pl) in planes.iter().enumerate() {
-        let [u, v] = pl.tangents();
-        let counts = [0, 1].map(|k| (((pl.hi[k] - pl.lo[k]) / sample).ceil() as usize).max(1));
-        let mut n = Vec3::zeros();
-        n[pl.axis] = 1.0;
-        for i in 0..counts[0] {
-            for j in 0..counts[1] {
-                let mut at = Vec3::zeros();
-                at[pl.axis] = pl.at;
-                at[u] = pl.lo[0] + (i as f64 + 0.5) * (pl.hi[0] - pl.lo[0]) / counts[0] as f64;
-                at[v] = pl.lo[1] + (j as f64 + 0.5) * (pl.hi[1] - pl.lo[1]) / counts[1] as f64;
-                let spheres_gap = index
-                    .near(&wrap(at))
-                    .map(|o| surface_distance(&at, &spheres[o]).abs())
-                    .fold(f64::INFINITY, f64::min);
-                let gap = spheres_gap.min(plane_gap(&at, Some(pi)));
-                place(at, n, gap, i * counts[1] + j, &mut report);
+        let (n, points) = pl.samples(sample);
+        for (k, at) in points.into_iter().enumerate() {
+            // A crack reaching past a wall: its part outside the body is no surface.
+            if period.is_none() && !(0..3).all(|a| at[a] >= bounds.min[a] && at[a] <= bounds.max[a]) {
+                continue;
             }
+            let spheres_gap = index
+                .near(&wrap(at))
+                .map(|o| surface_distance(&at, &spheres[o]).abs())
+                .fold(f64::INFINITY, f64::min);
+            let gap = spheres_gap.min(plane_gap(&at, Some(pi)));
+            place(at, n, gap, k, &mut report);
         }
     }
     report.seeds = seeds.len();

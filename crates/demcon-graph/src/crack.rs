@@ -191,7 +191,7 @@ const FOOTPRINT_ANGLES: usize = 12;
 
 impl CrackShape {
     /// Whether the point `x` of the crack's plane (unit normal `n`) lies inside the shape.
-    fn contains_planar(&self, n: &Vec3, x: &Vec3) -> bool {
+    pub(crate) fn contains_planar(&self, n: &Vec3, x: &Vec3) -> bool {
         match self {
             CrackShape::Disc { centre, radius, .. } => {
                 let r = x - centre;

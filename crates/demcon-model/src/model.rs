@@ -177,7 +177,7 @@ pub struct ModelReport {
 pub struct ConformSummary {
     /// Spheres whose surfaces the cells follow.
     pub spheres: usize,
-    /// Plane patches (faces of box regions inside the body) the cells follow.
+    /// Plane patches the cells follow: faces of box regions inside the body, and cracks.
     pub planes: usize,
     /// The mean site spacing h the sampling was scaled by (m).
     pub spacing_m: f64,
@@ -463,6 +463,14 @@ fn conform(
             PhaseSpec::Region { .. } => {}
         }
     }
+    // The cracks' surfaces: their law (open, filled) sits on the facets that lie on them.
+    planes.extend(
+        params
+            .defects
+            .cracks
+            .iter()
+            .map(|c| PlanePatch::Crack(c.shape.clone())),
+    );
     let h = (domain_volume / particles.len().max(1) as f64).cbrt();
     Ok(conforming_sites(
         particles,
@@ -496,7 +504,7 @@ fn box_faces(min: &Vec3, max: &Vec3, container: &Container) -> Vec<PlanePatch> {
                 None if at <= b.min[axis] || at >= b.max[axis] => continue,
                 None => at,
             };
-            faces.push(PlanePatch { axis, at, lo, hi });
+            faces.push(PlanePatch::Rect { axis, at, lo, hi });
         }
     }
     faces

@@ -169,3 +169,28 @@ fn tangent_overlapping_and_wall_touching_spheres_are_counted_not_broken() {
             .all(|v| v.is_finite() && (-1e-9..=1.0 + 1e-9).contains(v))
     );
 }
+
+#[test]
+fn an_open_crack_along_the_gradient_costs_nothing_under_the_conforming_cells() {
+    // A penny crack whose plane contains the gradient: the continuum passes the same heat
+    // with or without it. The cells follow its faces, so only the branches normal to it are
+    // cut; by centre the cut branches' obliquity costs a share of the flow.
+    let text = |rule: &str| {
+        scene("Laguerre", 2.0)
+            .replace(
+                "phases: [Spheres(material: \"b\", radius: 0.3, centres: [(0.5, 0.5, 0.5)])],",
+                "cracks: [Disc(centre: (0.5, 0.5, 0.5), normal: (0.0, 1.0, 0.0), radius: 0.3)],",
+            )
+            .replace("phase_rule: Conforming", &format!("phase_rule: {rule}"))
+    };
+    let loss = |rule: &str| {
+        let r = run(&parse(&text(rule)), &RunOptions::default()).unwrap();
+        1.0 - r.etc.as_ref().unwrap().lambda_e / 2.0
+    };
+    let (conforming, centre) = (loss("Conforming"), loss("Centre"));
+    assert!(conforming.abs() < 2e-4, "conforming: {conforming}");
+    assert!(
+        centre > 10.0 * conforming.abs(),
+        "centre {centre}, conforming {conforming}"
+    );
+}

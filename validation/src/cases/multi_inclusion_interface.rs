@@ -148,8 +148,8 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let ladder: Vec<usize> = ctx.pick(vec![10_000, 20_000], vec![20_000, 100_000]);
     let tol = ctx.pick(QUICK_BOUND, 0.015);
     let variants: Vec<Variant> = ctx.pick(
-        vec![Variant::HEADLINE],
-        vec![Variant::HEADLINE, Variant::RECOMMENDED],
+        vec![Variant::SEGMENT],
+        vec![Variant::SEGMENT, Variant::RECOMMENDED],
     );
     let mut packings = Vec::new();
     for &n in &ladder {
@@ -296,7 +296,7 @@ fn all_cells() -> impl Iterator<Item = (usize, usize)> {
 }
 
 fn compare(ctx: &Ctx, m: &Measured, variants: &[Variant], tol: f64, out: &mut CaseOutcome) {
-    let head = Variant::HEADLINE;
+    let head = Variant::SEGMENT;
     let mut by_model = Map::new();
     for &v in variants {
         let mut by_n = Map::new();
@@ -383,7 +383,7 @@ impl Line<'_> {
 }
 
 fn report(ctx: &Ctx, m: &Measured, variants: &[Variant], out: &mut CaseOutcome) -> anyhow::Result<()> {
-    let head = Variant::HEADLINE;
+    let head = Variant::SEGMENT;
     let lines: Vec<Line> = variants
         .iter()
         .flat_map(|&v| {
