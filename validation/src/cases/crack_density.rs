@@ -12,6 +12,12 @@
 //! non-interaction estimate holds to a few % of the reduction there). λ is the model's own
 //! uncracked λ on the same packing (Laguerre: λ exactly).
 //!
+//! Models: the Laguerre cells following the cracks (`Conforming`, the headline since issue 32:
+//! seed pairs across each disc, a model built with each crack set), the Laguerre cells cut by
+//! the covered part of each facet, Terreros α. Beside the dilute estimate, two schemes that
+//! account for the cracks' interaction: Mori–Tanaka, λ/λ₀ = 1/(1 + kρ), and the differential
+//! scheme, λ/λ₀ = exp(−kρ) (k = 8/3 aligned, 8/9 random).
+//!
 //! Reported, not gated: `crack-penny` measured the network's crack (whole facets cut, the rule
 //! when this case was written) as acting with an effective radius a + (1.9–2.9) R̄ at these
 //! resolutions (now a + (1.5–2.1) R̄ with the covered part of each facet cut, the Laguerre
@@ -119,9 +125,43 @@ fn tensor(cfg: &SceneConfig, model: &Model) -> anyhow::Result<[[f64; 3]; 3]> {
         .tensor)
 }
 
+/// The models: the Laguerre cells following the cracks (the headline since issue 32), the
+/// Laguerre cells cut by the covered part of each facet, Terreros α (segment rule).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum CrackModel {
+    Conforming,
+    Laguerre,
+    Terreros,
+}
+
+impl CrackModel {
+    const ALL: [CrackModel; 3] = [CrackModel::Conforming, CrackModel::Laguerre, CrackModel::Terreros];
+
+    fn surface(self) -> Surface {
+        match self {
+            CrackModel::Terreros => Surface::Terreros,
+            _ => Surface::Laguerre,
+        }
+    }
+
+    fn id(self) -> &'static str {
+        match self {
+            CrackModel::Conforming => "laguerre_conforming",
+            m => m.surface().id(),
+        }
+    }
+
+    fn label(self) -> &'static str {
+        match self {
+            CrackModel::Conforming => "Laguerre, conforming cells",
+            m => m.surface().label(),
+        }
+    }
+}
+
 /// One model, one packing, one crack set.
 struct Measure {
-    surface: Surface,
+    model: CrackModel,
     m: usize,
     /// Measured Δλ/λ: aligned (zz), random (mean diagonal).
     aligned: f64,
@@ -133,6 +173,15 @@ struct Measure {
     cut_random: usize,
 }
 
+/// The reduction −Δλ/λ of insulating penny cracks of density ρ with factor k (8/3 aligned,
+/// 8/9 random) under three schemes: the dilute (non-interaction) estimate k ρ, Mori–Tanaka
+/// 1 − 1/(1 + k ρ) (the dilute estimate written for the resistivity), the differential scheme
+/// 1 − exp(−k ρ) (Sevostianov & Kachanov's conductivity counterparts of the elastic schemes).
+fn reductions(k: f64, rho: f64) -> [f64; 3] {
+    let x = k * rho;
+    [x, 1.0 - 1.0 / (1.0 + x), 1.0 - (-x).exp()]
+}
+
 impl Measure {
     fn efficiency_aligned(&self) -> f64 {
         -self.aligned / (8.0 / 3.0 * density(self.m))
@@ -140,6 +189,15 @@ impl Measure {
 
     fn efficiency_random(&self) -> f64 {
         -self.random / (8.0 / 9.0 * density(self.m))
+    }
+
+    /// Measured reduction over each scheme's ([`reductions`]): aligned, then random.
+    fn efficiencies(&self) -> [[f64; 3]; 2] {
+        let rho = density(self.m);
+        [
+            reductions(8.0 / 3.0, rho).map(|r| -self.aligned / r),
+            reductions(8.0 / 9.0, rho).map(|r| -self.random / r),
+        ]
     }
 }
 
@@ -170,7 +228,8 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     let contacts = model_of(&with_surface_model(&cfg, Surface::Terreros, None))?;
     let cells = laguerre_model(&cfg, &contacts)?;
     let mut runs = Vec::new();
-    for s in [Surface::Laguerre, Surface::Terreros] {
+    for model in CrackModel::ALL {
+        let s = model.surface();
         let base = if s.needs_cells() { &cells } else { &contacts };
         let cfg_s = with_surface_model(&cfg, s, None);
         let t0 = tensor(&cfg_s, base)?;
@@ -179,13 +238,19 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
             let with = |aligned: bool| -> anyhow::Result<([[f64; 3]; 3], usize)> {
                 let mut c = cfg_s.clone();
                 c.cracks = cracks(m, aligned, seed);
-                let cracked = with_scene_defects(base, &c)?;
+                let cracked = if model == CrackModel::Conforming {
+                    // Its own cells, built with the cracks (seed pairs across each disc).
+                    c.phase_rule = Some(PhaseRuleConfig::Conforming);
+                    model_of(&c)?
+                } else {
+                    with_scene_defects(base, &c)?
+                };
                 Ok((tensor(&cfg_s, &cracked)?, cracked.cut_contacts().len()))
             };
             let (ta, cut_aligned) = with(true)?;
             let (tr, cut_random) = with(false)?;
             runs.push(Measure {
-                surface: s,
+                model,
                 m,
                 aligned: ta[2][2] / t0[2][2] - 1.0,
                 parallel: (ta[0][0] + ta[1][1]) / (t0[0][0] + t0[1][1]) - 1.0,
@@ -206,7 +271,7 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
 
 fn compare(packings: &[PackingRun], out: &mut CaseOutcome) {
     let mut by = Map::new();
-    for s in [Surface::Laguerre, Surface::Terreros] {
+    for model in CrackModel::ALL {
         let mut grids = Map::new();
         for m in GRIDS {
             let pick = |f: fn(&Measure) -> f64| {
@@ -214,7 +279,7 @@ fn compare(packings: &[PackingRun], out: &mut CaseOutcome) {
                     packings
                         .iter()
                         .flat_map(|p| p.runs.iter())
-                        .filter(|r| r.surface == s && r.m == m)
+                        .filter(|r| r.model == model && r.m == m)
                         .map(f),
                 )
                 .json()
@@ -224,15 +289,23 @@ fn compare(packings: &[PackingRun], out: &mut CaseOutcome) {
                 serde_json::json!({
                     "aligned_efficiency": pick(Measure::efficiency_aligned),
                     "random_efficiency": pick(Measure::efficiency_random),
+                    "aligned_efficiency_mori_tanaka": pick(|r| r.efficiencies()[0][1]),
+                    "random_efficiency_mori_tanaka": pick(|r| r.efficiencies()[1][1]),
+                    "aligned_efficiency_differential": pick(|r| r.efficiencies()[0][2]),
+                    "random_efficiency_differential": pick(|r| r.efficiencies()[1][2]),
                     "aligned_parallel_change": pick(|r| r.parallel),
                 }),
             );
         }
-        by.insert(s.id().to_string(), Value::Object(grids));
+        by.insert(model.id().to_string(), Value::Object(grids));
     }
     out.metric("crack_efficiency_by_model", Value::Object(by));
     out.reference("aligned", "λ_zz/λ = 1 − (8/3)ρ");
     out.reference("random", "λ_e/λ = 1 − (8/9)ρ");
+    out.reference(
+        "second schemes",
+        "Mori–Tanaka λ/λ₀ = 1/(1 + kρ), differential λ/λ₀ = exp(−kρ), k = 8/3 aligned, 8/9 random",
+    );
     out.reference(
         "source",
         "dilute insulated penny cracks, non-interacting (refs/analytic.md §8); efficiency = measured reduction / \
@@ -255,7 +328,7 @@ fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
         Columns::new()
             .column("packing", |l: &Line| (l.p.k + 1).to_string())
             .column("N", |l| l.p.n.to_string())
-            .column("model", |l| l.r.surface.label().to_string())
+            .column("model", |l| l.r.model.label().to_string())
             .column("cracks", |l| (l.r.m * l.r.m * l.r.m).to_string())
             .column("ρ", |l| format!("{:.4}", density(l.r.m)))
             .column("aligned Δλ_zz/λ (est.)", |l| {
@@ -267,6 +340,10 @@ fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
             })
             .column("efficiency aligned / random", |l| {
                 format!("{:.2} / {:.2}", l.r.efficiency_aligned(), l.r.efficiency_random())
+            })
+            .column("vs Mori–Tanaka, differential (aligned / random)", |l| {
+                let e = l.r.efficiencies();
+                format!("{:.2}, {:.2} / {:.2}, {:.2}", e[0][1], e[0][2], e[1][1], e[1][2])
             })
             .column("a_eff/a (aligned); (a_eff − a)/R̄", |l| {
                 let x = l.r.efficiency_aligned().max(0.0).cbrt();
