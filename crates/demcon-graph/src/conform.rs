@@ -399,12 +399,25 @@ pub fn conforming_sites(
             seed_radii.push(d * (1.0 - excess(sample)));
         }
     };
-    // The unsigned distance from `at` to the plane patches other than `skip`.
+    // The unsigned distance from `at` to the plane patches other than `skip` and those in the
+    // same plane as `skip` (the pieces of one crack, two boxes sharing a face: one surface,
+    // whose samples meet only through the seed-overlap check).
+    let frames: Vec<(Vec3, Vec3)> = planes
+        .iter()
+        .map(|pl| {
+            let (origin, n, _, _) = pl.frame();
+            (origin, n)
+        })
+        .collect();
+    let coplanar = |a: usize, b: usize| {
+        let ((oa, na), (ob, nb)) = (frames[a], frames[b]);
+        na.dot(&nb).abs() > 1.0 - 1e-9 && na.dot(&offset(&oa, &ob)).abs() <= 1e-9 * h
+    };
     let plane_gap = |at: &Vec3, skip: Option<usize>| {
         planes
             .iter()
             .enumerate()
-            .filter(|&(k, _)| Some(k) != skip)
+            .filter(|&(k, _)| skip.is_none_or(|s| s != k && !coplanar(s, k)))
             .map(|(_, pl)| pl.distance(at, &offset))
             .fold(f64::INFINITY, f64::min)
     };
@@ -846,5 +859,45 @@ mod tests {
             .filter(|x| in_gap(x) && x.x > 0.5 && radial(x) < 0.05)
             .count();
         assert!(left > 0 && right > 0, "{left} {right}");
+    }
+
+    #[test]
+    fn the_pieces_of_one_plane_do_not_squeeze_each_other() {
+        // A crack made of two squares sharing an edge, in a walled box: one surface, so no pair
+        // is narrowed along the shared edge, and the seeds cover both pieces.
+        let n = 20;
+        let centres = lattice(n, |i, j, k| {
+            Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * (1.0 / n as f64)
+        });
+        let p = ParticleSet::new(centres, vec![0.01; n * n * n]).unwrap();
+        let cell = Container::Box { size: [1.0; 3] };
+        let square = |x0: f64| {
+            PlanePatch::Crack(CrackShape::Polygon {
+                points: vec![
+                    Vec3::new(x0, 0.52, 0.2),
+                    Vec3::new(x0 + 0.3, 0.52, 0.2),
+                    Vec3::new(x0 + 0.3, 0.52, 0.8),
+                    Vec3::new(x0, 0.52, 0.8),
+                ],
+            })
+        };
+        let h = 1.0 / n as f64;
+        let c = conforming_sites(
+            &p,
+            &cell,
+            &[],
+            &[square(0.2), square(0.5)],
+            h,
+            &ConformParams::default(),
+        )
+        .unwrap();
+        assert_eq!(c.report.narrowed_pairs, 0, "{:?}", c.report);
+        let seeds = &c.particles.centres[c.kept.len()..];
+        assert!(seeds.iter().any(|x| x.x < 0.5) && seeds.iter().any(|x| x.x > 0.5));
+        assert!(
+            seeds
+                .iter()
+                .all(|x| ((x.y - 0.52).abs() - 0.25 * h).abs() < 1e-12)
+        );
     }
 }
