@@ -20,8 +20,9 @@
 //! touching spheres keeps cells of its own. A pair squeezed
 //! below 0.05 δ, a sample inside another sphere, and a pair that would overlap a seed already
 //! placed are dropped (counted). In a periodic box the seeds are wrapped into the cell and the
-//! distances to the surfaces are minimum-image; in a walled box, seeds outside the container
-//! are dropped. Every drop is counted in the report.
+//! distances to the surfaces are minimum-image; in a walled container (box, cylinder, sphere), a
+//! pair with a seed whose ball leaves it is dropped, and the samples of a plane outside it are
+//! not surface of the body (skipped, not counted). Every drop is counted in the report.
 
 use demcon_core::{Container, CoreError, ParticleSet, Vec3};
 use rstar::primitives::{GeomWithData, Rectangle};
@@ -207,7 +208,7 @@ pub struct ConformReport {
     /// Seeds placed.
     pub seeds: usize,
     /// Seeds dropped: within δ of another sphere's surface, overlapping a seed already
-    /// placed, or outside a walled container.
+    /// placed, or leaving a walled container.
     pub dropped_seeds: usize,
     /// Packing sites removed because their sphere came within 2δ of a surface.
     pub removed_sites: usize,
@@ -365,7 +366,6 @@ pub fn conforming_sites(
         }
     }
     // The seeds.
-    let bounds = container.bounds();
     let mut seeds: Vec<Vec3> = Vec::new();
     let mut grid = SeedGrid::new(2.0 * delta, period);
     let mut seed_radii: Vec<f64> = Vec::new();
@@ -378,10 +378,9 @@ pub fn conforming_sites(
         }
         let d = delta.min(NARROW * gap);
         let pair = [-1.0, 1.0].map(|side| wrap(at + n * (side * d)));
-        let inside_box = pair
-            .iter()
-            .all(|x| (0..3).all(|k| x[k] >= bounds.min[k] && x[k] <= bounds.max[k]));
-        if !inside_box
+        // Each seed's ball inside the container (a curved wall included; +∞ when periodic).
+        let inside = pair.iter().all(|x| container.wall_distance(x) >= d);
+        if !inside
             || d < MIN_OFFSET * delta
             || pair
                 .iter()
@@ -455,7 +454,7 @@ pub fn conforming_sites(
         let (n, points) = pl.samples(sample);
         for (k, at) in points.into_iter().enumerate() {
             // A crack reaching past a wall: its part outside the body is no surface.
-            if period.is_none() && !(0..3).all(|a| at[a] >= bounds.min[a] && at[a] <= bounds.max[a]) {
+            if container.wall_distance(&at) < 0.0 {
                 continue;
             }
             let spheres_gap = index
