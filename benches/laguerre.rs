@@ -20,7 +20,7 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use demcon_benches::jittered_fcc;
 use demcon_core::Container;
 use demcon_core::Vec3;
-use demcon_graph::{ConformParams, LaguerreParams, SphereSurface, conforming_sites, tessellate};
+use demcon_graph::{Body, ConformParams, LaguerreParams, SphereSurface, conforming_sites, tessellate};
 use demcon_network::{Method, Network, SolveParams, homogenize};
 
 fn laguerre(c: &mut Criterion) {
@@ -96,12 +96,16 @@ fn conforming(c: &mut Criterion) {
         .collect();
     let h = (size[0] * size[1] * size[2] / p.len() as f64).cbrt();
     let params = ConformParams::default();
+    let body = Body {
+        container: &periodic,
+        carve: None,
+    };
     group.bench_function(BenchmarkId::new("sites", p.len()), |b| {
-        b.iter(|| black_box(conforming_sites(&p, &periodic, &spheres, &[], h, &params).unwrap()))
+        b.iter(|| black_box(conforming_sites(&p, body, &spheres, &[], h, &params).unwrap()))
     });
     group.bench_function(BenchmarkId::new("sites+tessellation", p.len()), |b| {
         b.iter(|| {
-            let c = conforming_sites(&p, &periodic, &spheres, &[], h, &params).unwrap();
+            let c = conforming_sites(&p, body, &spheres, &[], h, &params).unwrap();
             black_box(tessellate(&c.particles, &periodic, None, &LaguerreParams::default()).unwrap())
         })
     });

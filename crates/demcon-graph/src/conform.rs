@@ -24,7 +24,7 @@
 //! pair with a seed whose ball leaves it is dropped, and the samples of a plane outside it are
 //! not surface of the body (skipped, not counted). Every drop is counted in the report.
 
-use demcon_core::{Container, CoreError, ParticleSet, Vec3};
+use demcon_core::{Container, CoreError, ParticleSet, Region, Vec3};
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{AABB, RTree};
 
@@ -232,14 +232,33 @@ pub struct Conformed {
     pub report: ConformReport,
 }
 
-/// Places conforming seeds across every sphere of `spheres` and removes the packing sites that
-/// would overlap them (see the module doc). `h` is the mean site spacing (m): (V/N)^{1/3}.
+/// Where the seeds may go: the container and, for a carved body, the carving region.
+#[derive(Debug, Clone, Copy)]
+pub struct Body<'a> {
+    /// The container (periodic or walled).
+    pub container: &'a Container,
+    /// The carving region, when the body is carved out of the container.
+    pub carve: Option<&'a Region>,
+}
+
+impl Body<'_> {
+    /// How deep `x` lies inside the body (m): the distance to its nearest wall or to the
+    /// carving region's boundary, negative outside; +∞ in a periodic box without carving.
+    fn depth(&self, x: &Vec3) -> f64 {
+        let carved = self.carve.map_or(f64::INFINITY, |r| -r.signed_distance(x));
+        self.container.wall_distance(x).min(carved)
+    }
+}
+
+/// Places conforming seeds across every sphere of `spheres` and plane of `planes` and removes
+/// the packing sites that would overlap them (see the module doc), the seeds inside `body`.
+/// `h` is the mean site spacing (m): (V/N)^{1/3}.
 ///
 /// # Errors
 /// A non-finite or non-positive radius or spacing; parameters out of (0, 1).
 pub fn conforming_sites(
     particles: &ParticleSet,
-    container: &Container,
+    body: Body,
     spheres: &[SphereSurface],
     planes: &[PlanePatch],
     h: f64,
@@ -278,6 +297,7 @@ pub fn conforming_sites(
         )
         .into());
     }
+    let container = body.container;
     if spheres.is_empty() && planes.is_empty() {
         // Nothing to follow: every site stays.
         return Ok(Conformed {
@@ -378,8 +398,8 @@ pub fn conforming_sites(
         }
         let d = delta.min(NARROW * gap);
         let pair = [-1.0, 1.0].map(|side| wrap(at + n * (side * d)));
-        // Each seed's ball inside the container (a curved wall included; +∞ when periodic).
-        let inside = pair.iter().all(|x| container.wall_distance(x) >= d);
+        // Each seed's ball inside the body (curved walls and carving included).
+        let inside = pair.iter().all(|x| body.depth(x) >= d);
         if !inside
             || d < MIN_OFFSET * delta
             || pair
@@ -454,7 +474,7 @@ pub fn conforming_sites(
         let (n, points) = pl.samples(sample);
         for (k, at) in points.into_iter().enumerate() {
             // A crack reaching past a wall: its part outside the body is no surface.
-            if container.wall_distance(&at) < 0.0 {
+            if body.depth(&at) < 0.0 {
                 continue;
             }
             let spheres_gap = index
@@ -762,6 +782,14 @@ mod tests {
         assert!((last / ball - 1.0) < 5e-3, "{last}");
     }
 
+    /// The whole container as the body.
+    fn walled(container: &Container) -> Body<'_> {
+        Body {
+            container,
+            carve: None,
+        }
+    }
+
     /// The points `at(i, j, k)` of an n³ lattice.
     fn lattice(n: usize, at: impl Fn(usize, usize, usize) -> Vec3) -> Vec<Vec3> {
         (0..n * n * n)
@@ -785,7 +813,7 @@ mod tests {
             radius: 0.3,
         };
         let h = 1.0 / n as f64;
-        let c = conforming_sites(&p, &cell, &[sphere], &[], h, &ConformParams::default()).unwrap();
+        let c = conforming_sites(&p, walled(&cell), &[sphere], &[], h, &ConformParams::default()).unwrap();
         let delta = 0.25 * h;
         let image = |x: &Vec3| {
             let mut d = x - sphere.centre;
@@ -832,7 +860,7 @@ mod tests {
             },
         ];
         let h = 1.0 / n as f64;
-        let c = conforming_sites(&p, &cell, &spheres, &[], h, &ConformParams::default()).unwrap();
+        let c = conforming_sites(&p, walled(&cell), &spheres, &[], h, &ConformParams::default()).unwrap();
         assert_eq!(c.report.dropped_seeds, 0, "{:?}", c.report);
         assert!(c.report.narrowed_pairs > 0, "{:?}", c.report);
         let seeds = &c.particles.centres[c.kept.len()..];
@@ -883,7 +911,7 @@ mod tests {
         let h = 1.0 / n as f64;
         let c = conforming_sites(
             &p,
-            &cell,
+            walled(&cell),
             &[],
             &[square(0.2), square(0.5)],
             h,

@@ -75,7 +75,8 @@ mod wall;
 
 pub use calibrated::surface_calibrated;
 pub use conform::{
-    ConformParams, ConformReport, Conformed, PlanePatch, SphereSurface, conforming_sites, fibonacci_sphere,
+    Body, ConformParams, ConformReport, Conformed, PlanePatch, SphereSurface, conforming_sites,
+    fibonacci_sphere,
 };
 pub use contact::{
     ContactGeometry, ContactGraph, ContactParams, ContactReport, ContactTolerance, CoordinationPoint,

@@ -472,9 +472,13 @@ fn conform(
             .map(|c| PlanePatch::Crack(c.shape.clone())),
     );
     let h = (domain_volume / particles.len().max(1) as f64).cbrt();
+    let body = demcon_graph::Body {
+        container,
+        carve: params.carve.as_ref().map(|(r, _)| r),
+    };
     Ok(conforming_sites(
         particles,
-        container,
+        body,
         &spheres,
         &planes,
         h,

@@ -221,3 +221,30 @@ fn seeds_stay_inside_a_curved_container() {
     }
     assert!(r.etc.as_ref().unwrap().lambda_e.is_finite());
 }
+
+#[test]
+fn seeds_stay_inside_a_carved_body() {
+    // A sphere and a crack crossing the carving region's boundary: no seed outside the body.
+    let text = r#"(
+    seed: 3,
+    packing: Generate(container: Box(size: (1.0, 1.0, 1.0)), count: 4000, phi: 0.55, radius_cov: 0.3),
+    carve: Some(Box(min: (0.0, 0.0, 0.0), max: (0.6, 1.0, 1.0))),
+    materials: [
+        (name: "a", conductivity: 2.0, density: 1000.0, specific_heat: 500.0),
+        (name: "b", conductivity: 20.0, density: 1000.0, specific_heat: 500.0),
+    ],
+    phases: [Spheres(material: "b", radius: 0.2, centres: [(0.5, 0.5, 0.5)])],
+    cracks: [Disc(centre: (0.3, 0.2, 0.5), normal: (0.0, 1.0, 0.0), radius: 0.4)],
+    thermal: (bcs: [WallTemperature(face: YMin, value: 0.0), WallTemperature(face: YMax, value: 1.0)], solver: Steady),
+    outputs: (etc_axis: Some(Y), vtk: false),
+)"#;
+    let r = run(&parse(text), &RunOptions::default()).unwrap();
+    let n = r.model.particles.len();
+    assert!(r.model.seeds > 0);
+    assert!(
+        r.model.particles.centres[n - r.model.seeds..]
+            .iter()
+            .all(|x| x.x < 0.6)
+    );
+    assert!(r.etc.as_ref().unwrap().lambda_e.is_finite());
+}
