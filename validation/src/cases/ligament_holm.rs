@@ -11,7 +11,9 @@
 //! `Polygon` sectors (their inner edges a 64-gon of vertex radius a: 0.16 % less ligament
 //! area than the circle). Measured: the constriction ΔR = R − R₀ (R₀ the same model's
 //! uncracked resistance, so the model's bulk bias does not enter) against the references'
-//! constriction part. Models: Laguerre cells (the headline) and Terreros α, face electrodes;
+//! constriction part. Models: Laguerre cells following the crack's sectors (`Conforming`, the
+//! headline since issue 32; a model built with each crack), Laguerre cells cut by the covered
+//! part of each facet, and Terreros α, face electrodes;
 //! N = 5·10³ (one packing) and 2·10⁴ (3 packings).
 //!
 //! Reported, not gated: `crack-penny` and `crack-density` (written before this case) measured
@@ -76,9 +78,41 @@ fn scene(n: usize, seed: u64) -> SceneConfig {
     s
 }
 
+/// The models: the Laguerre cells following the crack (the headline since issue 32), the
+/// Laguerre cells cut by the covered part of each facet, Terreros α (segment rule).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum LigamentModel {
+    Conforming,
+    Laguerre,
+    Terreros,
+}
+
+impl LigamentModel {
+    fn surface(self) -> Surface {
+        match self {
+            LigamentModel::Terreros => Surface::Terreros,
+            _ => Surface::Laguerre,
+        }
+    }
+
+    fn id(self) -> &'static str {
+        match self {
+            LigamentModel::Conforming => "laguerre_conforming",
+            m => m.surface().id(),
+        }
+    }
+
+    fn label(self) -> &'static str {
+        match self {
+            LigamentModel::Conforming => "Laguerre, conforming cells",
+            m => m.surface().label(),
+        }
+    }
+}
+
 /// One model, one packing.
 struct Run {
-    surface: Surface,
+    model: LigamentModel,
     /// Uncracked resistance (Ω).
     r0: f64,
     /// Constriction ΔR per ligament (Ω).
@@ -96,15 +130,19 @@ struct PackingRun {
 }
 
 impl PackingRun {
-    fn run(&self, s: Surface) -> &Run {
+    fn run(&self, m: LigamentModel) -> &Run {
         self.runs
             .iter()
-            .find(|r| r.surface == s)
+            .find(|r| r.model == m)
             .expect("every model runs on every packing")
     }
 }
 
-const MODELS: [Surface; 2] = [Surface::Laguerre, Surface::Terreros];
+const MODELS: [LigamentModel; 3] = [
+    LigamentModel::Conforming,
+    LigamentModel::Laguerre,
+    LigamentModel::Terreros,
+];
 
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
@@ -134,7 +172,8 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     let contacts = model_of(&cfg)?;
     let cells = laguerre_model(&cfg, &contacts)?;
     let mut runs = Vec::new();
-    for s in MODELS {
+    for model in MODELS {
+        let s = model.surface();
         let base = if s.needs_cells() { &cells } else { &contacts };
         let cfg_s = with_surface_model(&cfg, s, None);
         let resistance = |model: &Model| -> anyhow::Result<f64> {
@@ -149,12 +188,18 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
         for ratio in RATIOS {
             let mut c = cfg_s.clone();
             c.cracks = annulus(ratio * RADIUS);
-            let cracked = with_scene_defects(base, &c)?;
+            let cracked = if model == LigamentModel::Conforming {
+                // Its own cells, built with the crack's 64 sectors (seed pairs across them).
+                c.phase_rule = Some(PhaseRuleConfig::Conforming);
+                model_of(&c)?
+            } else {
+                with_scene_defects(base, &c)?
+            };
             delta.push(resistance(&cracked)? - r0);
             cut.push(cracked.cut_contacts().len());
         }
         runs.push(Run {
-            surface: s,
+            model,
             r0,
             delta,
             cut,
@@ -209,7 +254,7 @@ fn compare(ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
 /// A line of the table.
 struct Line<'a> {
     p: &'a PackingRun,
-    s: Surface,
+    s: LigamentModel,
     i: usize,
 }
 
