@@ -790,6 +790,16 @@ mod tests {
         }
     }
 
+    /// 20³ sites of radius 0.01 at the cell centres of a unit walled box.
+    fn walled_lattice() -> (usize, ParticleSet, Container) {
+        let n = 20;
+        let centres = lattice(n, |i, j, k| {
+            Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * (1.0 / n as f64)
+        });
+        let p = ParticleSet::new(centres, vec![0.01; n * n * n]).unwrap();
+        (n, p, Container::Box { size: [1.0; 3] })
+    }
+
     /// The points `at(i, j, k)` of an n³ lattice.
     fn lattice(n: usize, at: impl Fn(usize, usize, usize) -> Vec3) -> Vec<Vec3> {
         (0..n * n * n)
@@ -843,12 +853,7 @@ mod tests {
         // Two spheres of radius 0.2 with a gap of 0.02 (0.4 h, h = 0.05) in a
         // walled box, sites on a coarse lattice: both surfaces are sampled up to the gap and
         // no pair is dropped; the pairs facing each other do not overlap.
-        let n = 20;
-        let centres = lattice(n, |i, j, k| {
-            Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * (1.0 / n as f64)
-        });
-        let p = ParticleSet::new(centres, vec![0.01; n * n * n]).unwrap();
-        let cell = Container::Box { size: [1.0; 3] };
+        let (n, p, cell) = walled_lattice();
         let spheres = [
             SphereSurface {
                 centre: Vec3::new(0.29, 0.5, 0.5),
@@ -892,12 +897,7 @@ mod tests {
     fn the_pieces_of_one_plane_do_not_squeeze_each_other() {
         // A crack made of two squares sharing an edge, in a walled box: one surface, so no pair
         // is narrowed along the shared edge, and the seeds cover both pieces.
-        let n = 20;
-        let centres = lattice(n, |i, j, k| {
-            Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * (1.0 / n as f64)
-        });
-        let p = ParticleSet::new(centres, vec![0.01; n * n * n]).unwrap();
-        let cell = Container::Box { size: [1.0; 3] };
+        let (n, p, cell) = walled_lattice();
         let square = |x0: f64| {
             PlanePatch::Crack(CrackShape::Polygon {
                 points: vec![

@@ -694,3 +694,50 @@ mod tests {
         assert!(err.contains("phi") && err.contains("1.5"), "{err}");
     }
 }
+
+/// The models of the crack cases that cut a built network or follow the cracks: the Laguerre
+/// cells following the cracks (`Conforming`, the headline since issue 32: a model built with
+/// each crack set), the Laguerre cells cut by the covered part of each facet, Terreros α
+/// (segment rule).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CrackVariant {
+    /// The Laguerre cells following the cracks.
+    Conforming,
+    /// The Laguerre cells, the covered part of each facet cut.
+    Laguerre,
+    /// Terreros α, the contacts whose segment crosses a crack cut.
+    Terreros,
+}
+
+impl CrackVariant {
+    /// The three, the headline first.
+    pub const ALL: [CrackVariant; 3] = [
+        CrackVariant::Conforming,
+        CrackVariant::Laguerre,
+        CrackVariant::Terreros,
+    ];
+
+    /// Its transmission-surface model.
+    pub fn surface(self) -> Surface {
+        match self {
+            CrackVariant::Terreros => Surface::Terreros,
+            _ => Surface::Laguerre,
+        }
+    }
+
+    /// Id in metric names.
+    pub fn id(self) -> &'static str {
+        match self {
+            CrackVariant::Conforming => "laguerre_conforming",
+            m => m.surface().id(),
+        }
+    }
+
+    /// Label in tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            CrackVariant::Conforming => "Laguerre, conforming cells",
+            m => m.surface().label(),
+        }
+    }
+}

@@ -125,43 +125,9 @@ fn tensor(cfg: &SceneConfig, model: &Model) -> anyhow::Result<[[f64; 3]; 3]> {
         .tensor)
 }
 
-/// The models: the Laguerre cells following the cracks (the headline since issue 32), the
-/// Laguerre cells cut by the covered part of each facet, Terreros α (segment rule).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum CrackModel {
-    Conforming,
-    Laguerre,
-    Terreros,
-}
-
-impl CrackModel {
-    const ALL: [CrackModel; 3] = [CrackModel::Conforming, CrackModel::Laguerre, CrackModel::Terreros];
-
-    fn surface(self) -> Surface {
-        match self {
-            CrackModel::Terreros => Surface::Terreros,
-            _ => Surface::Laguerre,
-        }
-    }
-
-    fn id(self) -> &'static str {
-        match self {
-            CrackModel::Conforming => "laguerre_conforming",
-            m => m.surface().id(),
-        }
-    }
-
-    fn label(self) -> &'static str {
-        match self {
-            CrackModel::Conforming => "Laguerre, conforming cells",
-            m => m.surface().label(),
-        }
-    }
-}
-
 /// One model, one packing, one crack set.
 struct Measure {
-    model: CrackModel,
+    model: CrackVariant,
     m: usize,
     /// Measured Δλ/λ: aligned (zz), random (mean diagonal).
     aligned: f64,
@@ -228,7 +194,7 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     let contacts = model_of(&with_surface_model(&cfg, Surface::Terreros, None))?;
     let cells = laguerre_model(&cfg, &contacts)?;
     let mut runs = Vec::new();
-    for model in CrackModel::ALL {
+    for model in CrackVariant::ALL {
         let s = model.surface();
         let base = if s.needs_cells() { &cells } else { &contacts };
         let cfg_s = with_surface_model(&cfg, s, None);
@@ -238,7 +204,7 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
             let with = |aligned: bool| -> anyhow::Result<([[f64; 3]; 3], usize)> {
                 let mut c = cfg_s.clone();
                 c.cracks = cracks(m, aligned, seed);
-                let cracked = if model == CrackModel::Conforming {
+                let cracked = if model == CrackVariant::Conforming {
                     // Its own cells, built with the cracks (seed pairs across each disc).
                     c.phase_rule = Some(PhaseRuleConfig::Conforming);
                     model_of(&c)?
@@ -271,7 +237,7 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
 
 fn compare(packings: &[PackingRun], out: &mut CaseOutcome) {
     let mut by = Map::new();
-    for model in CrackModel::ALL {
+    for model in CrackVariant::ALL {
         let mut grids = Map::new();
         for m in GRIDS {
             let pick = |f: fn(&Measure) -> f64| {

@@ -78,41 +78,9 @@ fn scene(n: usize, seed: u64) -> SceneConfig {
     s
 }
 
-/// The models: the Laguerre cells following the crack (the headline since issue 32), the
-/// Laguerre cells cut by the covered part of each facet, Terreros α (segment rule).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum LigamentModel {
-    Conforming,
-    Laguerre,
-    Terreros,
-}
-
-impl LigamentModel {
-    fn surface(self) -> Surface {
-        match self {
-            LigamentModel::Terreros => Surface::Terreros,
-            _ => Surface::Laguerre,
-        }
-    }
-
-    fn id(self) -> &'static str {
-        match self {
-            LigamentModel::Conforming => "laguerre_conforming",
-            m => m.surface().id(),
-        }
-    }
-
-    fn label(self) -> &'static str {
-        match self {
-            LigamentModel::Conforming => "Laguerre, conforming cells",
-            m => m.surface().label(),
-        }
-    }
-}
-
 /// One model, one packing.
 struct Run {
-    model: LigamentModel,
+    model: CrackVariant,
     /// Uncracked resistance (Ω).
     r0: f64,
     /// Constriction ΔR per ligament (Ω).
@@ -130,7 +98,7 @@ struct PackingRun {
 }
 
 impl PackingRun {
-    fn run(&self, m: LigamentModel) -> &Run {
+    fn run(&self, m: CrackVariant) -> &Run {
         self.runs
             .iter()
             .find(|r| r.model == m)
@@ -138,11 +106,7 @@ impl PackingRun {
     }
 }
 
-const MODELS: [LigamentModel; 3] = [
-    LigamentModel::Conforming,
-    LigamentModel::Laguerre,
-    LigamentModel::Terreros,
-];
+const MODELS: [CrackVariant; 3] = CrackVariant::ALL;
 
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
@@ -188,7 +152,7 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
         for ratio in RATIOS {
             let mut c = cfg_s.clone();
             c.cracks = annulus(ratio * RADIUS);
-            let cracked = if model == LigamentModel::Conforming {
+            let cracked = if model == CrackVariant::Conforming {
                 // Its own cells, built with the crack's 64 sectors (seed pairs across them).
                 c.phase_rule = Some(PhaseRuleConfig::Conforming);
                 model_of(&c)?
@@ -254,7 +218,7 @@ fn compare(ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
 /// A line of the table.
 struct Line<'a> {
     p: &'a PackingRun,
-    s: LigamentModel,
+    s: CrackVariant,
     i: usize,
 }
 
