@@ -294,7 +294,8 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
         }
         let (r, rd, rep_all) = headline.expect("at least the headline model");
         by_size.push(SizeReadings {
-            n: r.model.particles.len(),
+            // The packing's particles (the conforming seeds are sites, not particles).
+            n: r.model.particles.len() - r.model.seeds,
             readings: rd,
         });
         if i == 0 {
