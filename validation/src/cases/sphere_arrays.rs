@@ -238,7 +238,8 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             for (m, (_, rule)) in RULES.iter().enumerate() {
                 let cfg = scene(a, side, n, ctx.seed + k, *rule);
                 let model = model_of(&cfg)?;
-                out.n_particles = out.n_particles.max(model.particles.len());
+                // The packing's particles (the conforming seeds are sites, not particles).
+                out.n_particles = out.n_particles.max(model.particles.len() - model.seeds);
                 let r = run_with(&cfg, &model)?;
                 let h = r
                     .homogenization
