@@ -122,7 +122,7 @@ pub fn build_model_staged(
     let t0 = Instant::now();
     let (particles, container, report, imported_from) =
         stages.time("packing", || make_particles(cfg, base_dir, progress))?;
-    crate::validate::check_run_memory(particles.len(), cfg, "packing")?;
+    crate::validate::check_run_memory(particles.len(), cfg, Some(&container), "packing")?;
     let packed = Packed {
         particles,
         container,

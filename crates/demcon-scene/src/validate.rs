@@ -50,7 +50,7 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
             PackingConfig::Tile { .. } => "packing.repeat",
             _ => "packing.count",
         };
-        r.check(check_run_memory(n, c, field));
+        r.check(check_run_memory(n, c, container.as_ref(), field));
     }
     r.check(check_contacts(&c.contacts));
     r.check(check_defects(c, base_dir));
@@ -322,22 +322,86 @@ pub const RUN_BYTES_PER_PARTICLE_LAGUERRE: u64 = 1450;
 /// See [`run_bytes_per_particle`].
 pub const RUN_BYTES_PER_PARTICLE_CONTACTS: u64 = 1300;
 
-/// Refuses a run of `n` particles whose memory estimate ([`run_bytes_per_particle`]) exceeds
-/// the memory available now (`MemAvailable`; no check where it is unknown). `field` names
-/// what set the count.
-pub fn check_run_memory(n: usize, c: &SceneConfig, field: &str) -> Result<(), SceneError> {
+/// The sites the conforming cells add to a packing of `n` particles in `container` (0 under
+/// another phase rule): ≈ 1.6 A / h² for followed surfaces of area A (m²) and the mean site
+/// spacing h = (V/n)^{1/3} — 2 seeds per sample of area 0.55 h², less the particles they
+/// replace within ~1 h of the surface (measured 1.12·10⁵ for 1.10·10⁵ estimated on the f = 0.5
+/// composite at 2·10⁵, docs/performance.md §6). Surfaces: listed and placed spheres, sphere
+/// regions, box regions' faces, cracks.
+pub fn conforming_extra_sites(n: usize, c: &SceneConfig, container: &Container) -> usize {
+    if convert::phase_rule_of(c) != PhaseRuleConfig::Conforming || n == 0 {
+        return 0;
+    }
+    let b = container.bounds();
+    let e = b.max - b.min;
+    let volume = container.volume();
+    let sphere = |r: f64| 4.0 * std::f64::consts::PI * r * r;
+    let region_area = |r: &RegionConfig| match r {
+        RegionConfig::Sphere { radius, .. } => sphere(*radius),
+        RegionConfig::Box { min, max } => {
+            let d = [0, 1, 2].map(|k| {
+                let (lo, hi) = ([min.0, min.1, min.2][k], [max.0, max.1, max.2][k]);
+                (hi.min(b.max[k]) - lo.max(b.min[k])).max(0.0)
+            });
+            2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0])
+        }
+        _ => 0.0,
+    };
+    let mut area: f64 = c
+        .phases
+        .iter()
+        .map(|ph| match ph {
+            PhaseConfig::Spheres { radius, centres, .. } => centres.len() as f64 * sphere(*radius),
+            // f V of spheres of radius r: area 3 f V / r.
+            PhaseConfig::Inclusions {
+                fraction, size_ratio, ..
+            } => 3.0 * fraction * volume / (0.5 * e.x.min(e.y).min(e.z) / size_ratio),
+            PhaseConfig::Region { region, .. } => region_area(region),
+        })
+        .sum();
+    area += c
+        .cracks
+        .iter()
+        .map(|k| match k {
+            CrackConfig::Disc { radius, .. } => std::f64::consts::PI * radius * radius,
+            CrackConfig::Polygon { points, .. } => {
+                let p: Vec<Vec3> = points.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
+                let twice: Vec3 = (0..p.len()).map(|i| p[i].cross(&p[(i + 1) % p.len()])).sum();
+                0.5 * twice.norm()
+            }
+        })
+        .sum::<f64>();
+    let per_area = (n as f64 / volume).powf(2.0 / 3.0);
+    (1.6 * area * per_area).min(4.0 * n as f64) as usize
+}
+
+/// Refuses a run of `n` particles (and the conforming seeds they get, [`conforming_extra_sites`])
+/// whose memory estimate ([`run_bytes_per_particle`]) exceeds the memory available now
+/// (`MemAvailable`; no check where it is unknown). `field` names what set the count.
+pub fn check_run_memory(
+    n: usize,
+    c: &SceneConfig,
+    container: Option<&Container>,
+    field: &str,
+) -> Result<(), SceneError> {
     let Some(available) = demcon_core::available_memory_bound() else {
         return Ok(());
     };
     let per = run_bytes_per_particle(c);
-    let need = (n as u64).saturating_mul(per);
+    let seeds = container.map_or(0, |k| conforming_extra_sites(n, c, k));
+    let need = ((n + seeds) as u64).saturating_mul(per);
     if need > available.bytes {
+        let with_seeds = if seeds > 0 {
+            format!(" and ~{seeds} conforming seeds")
+        } else {
+            String::new()
+        };
         return Err(SceneError::invalid(
             field,
             format!("{n} particles"),
             format!(
-                "a run needs about {per} bytes per particle ({:.1} GB for {n} particles), but only {:.1} GB \
-                 is left: the {}: at most ~{} particles",
+                "a run needs about {per} bytes per particle ({:.1} GB for {n} particles{with_seeds}), but only \
+                 {:.1} GB is left: the {}: at most ~{} particles",
                 need as f64 / 1e9,
                 available.bytes as f64 / 1e9,
                 available.bound,

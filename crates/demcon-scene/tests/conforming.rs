@@ -248,3 +248,35 @@ fn seeds_stay_inside_a_carved_body() {
     );
     assert!(r.etc.as_ref().unwrap().lambda_e.is_finite());
 }
+
+#[test]
+fn the_memory_estimate_counts_the_conforming_seeds() {
+    // The f = 0.5 random composite of the validation (206 spheres of radius 0.834 mm in a
+    // 1 cm periodic cell) at 2·10⁵ particles: 1.12·10⁵ sites added, measured.
+    let centres: Vec<String> = (0..206)
+        .map(|k| format!("({:e}, 0.005, 0.005)", 1e-3 + 4e-5 * k as f64))
+        .collect();
+    let text = format!(
+        r#"(
+    packing: Generate(container: Periodic(size: (0.01, 0.01, 0.01)), count: 200000, phi: 0.6, radius_cov: 0.3),
+    materials: [
+        (name: "a", conductivity: 2.0, density: 1000.0, specific_heat: 500.0),
+        (name: "b", conductivity: 20.0, density: 1000.0, specific_heat: 500.0),
+    ],
+    phases: [Spheres(material: "b", radius: 8.3369e-4, centres: [{}])],
+    thermal: (bcs: [], solver: Homogenize),
+    outputs: (vtk: false),
+)"#,
+        centres.join(", ")
+    );
+    let cfg = parse(&text).config;
+    let cell = demcon_core::Container::Periodic { size: [0.01; 3] };
+    let extra = demcon_scene::validate::conforming_extra_sites(200_000, &cfg, &cell);
+    assert!((0.9e5..1.4e5).contains(&(extra as f64)), "{extra}");
+    let mut centre = cfg.clone();
+    centre.phase_rule = Some(demcon_scene::config::PhaseRuleConfig::Centre);
+    assert_eq!(
+        demcon_scene::validate::conforming_extra_sites(200_000, &centre, &cell),
+        0
+    );
+}
