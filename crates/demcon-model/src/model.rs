@@ -34,7 +34,8 @@ pub struct Model {
     /// The carving region the body was cut from, if any.
     pub carve: Option<Region>,
     /// Conforming seeds at the end of `particles` (`PhaseRule::Conforming`; 0 otherwise): the
-    /// sites that put the spheres' surfaces on facets, not particles of the packing.
+    /// sites that put the followed surfaces (spheres, box faces, cracks) on facets, not
+    /// particles of the packing.
     pub seeds: usize,
     /// Solid fraction Σ V_p / domain volume of the packing's particles (the conforming seeds
     /// are sites, not grains), used for the representative volume V_p/φ.
@@ -309,10 +310,10 @@ pub enum PhaseRule {
     Laminate,
     /// Each half-bond mixes what lies along its own segment, in series.
     Segment,
-    /// The Laguerre cells follow the spheres' surfaces: seeds mirrored across each sphere
-    /// phase's surface put facets on it, the packing's sites next to it are removed
-    /// ([`demcon_graph::conforming_sites`]), and every cell is of one phase (its centre's).
-    /// Needs the Laguerre cells; phases that are not spheres are assigned by centre.
+    /// The Laguerre cells follow the surfaces: seeds mirrored across each sphere phase's
+    /// surface, each box region's faces and each crack put facets on them, the packing's sites
+    /// next to them are removed ([`demcon_graph::conforming_sites`]), and every cell is of one
+    /// phase (its centre's). Needs the Laguerre cells; other regions are assigned by centre.
     Conforming,
 }
 
