@@ -741,3 +741,15 @@ impl CrackVariant {
         }
     }
 }
+
+/// The thermal physics of a periodic homogenisation: no boundary condition, no source,
+/// `Homogenize` (the three load cases of the effective tensor).
+pub fn homogenize_thermal() -> ThermalConfig {
+    ThermalConfig {
+        initial_temperature: 0.0,
+        bcs: Vec::new(),
+        sources: Vec::new(),
+        solver: ThermalSolverConfig::Homogenize,
+        checkpoint: None,
+    }
+}

@@ -104,13 +104,7 @@ fn scene(n: usize, seed: u64) -> SceneConfig {
         seed,
         packing(ContainerConfig::Periodic { size: (L, L, L) }, n),
         vec![material("solid", LAMBDA, 1000.0, 1000.0)],
-        ThermalConfig {
-            initial_temperature: 0.0,
-            bcs: Vec::new(),
-            sources: Vec::new(),
-            solver: ThermalSolverConfig::Homogenize,
-            checkpoint: None,
-        },
+        homogenize_thermal(),
     )
 }
 

@@ -194,13 +194,7 @@ fn scene(r: &Realisation, n: usize, seed: u64, m: &PeriodicModel) -> SceneConfig
         cut_contacts: None,
         floating: FloatingConfig::default(),
         linear_solver: LinearSolverConfig::default(),
-        thermal: Some(ThermalConfig {
-            initial_temperature: 0.0,
-            bcs: Vec::new(),
-            sources: Vec::new(),
-            solver: ThermalSolverConfig::Homogenize,
-            checkpoint: None,
-        }),
+        thermal: Some(homogenize_thermal()),
         electric: None,
         outputs: OutputsConfig {
             vtk: false,

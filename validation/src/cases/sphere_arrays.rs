@@ -193,13 +193,7 @@ fn scene(a: &Array, side_over_radius: f64, n: usize, seed: u64, rule: PhaseRuleC
             material("matrix", LAMBDA_M, 1000.0, 1000.0),
             material("spheres", LAMBDA_M * a.contrast, 1000.0, 1000.0),
         ],
-        ThermalConfig {
-            initial_temperature: 0.0,
-            bcs: Vec::new(),
-            sources: Vec::new(),
-            solver: ThermalSolverConfig::Homogenize,
-            checkpoint: None,
-        },
+        homogenize_thermal(),
     );
     s.surface = SurfaceConfig::Laguerre;
     s.phases = vec![PhaseConfig::Spheres {
