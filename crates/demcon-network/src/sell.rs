@@ -34,7 +34,7 @@ const _: () = assert!(CHUNK.is_multiple_of(WINDOW) && WINDOW.is_multiple_of(LANE
 /// How far ahead (stored entries, about 30 rows) a sliced sweep over a large vector
 /// prefetches the x_j it will gather: at 10⁶ unknowns x (8 MB) is out of cache, and the
 /// gathers of the columns far away in the index space wait on memory. The 10⁶ electric
-/// solve, 36 solves each (`docs/performance.md`, seventeenth session): solve median 0.75 s
+/// solve, 36 solves each (`docs/performance.md` §8, "Levers tried"): solve median 0.75 s
 /// at 64 or 128 entries ahead, 0.68–0.70 s at 256 or 512, 0.82 s without. The explicit heat
 /// step does the same (`demcon-thermal`).
 pub(crate) const PREFETCH_AHEAD: usize = 256;

@@ -443,12 +443,12 @@ impl<'a> ExplicitStepper<'a> {
 /// kernel (10⁶ rows, 7.9·10⁶ entries, medians of 7 rounds, two threads) huge pages took the
 /// step from 7.8 to 9.4·10⁸ contacts/s and this prefetch, 128 entries ahead, to
 /// 10.5–11.1·10⁸; 32, 64 or 256 ahead gained less or the same. In the solver benchmark at
-/// 10⁶: 5.5–5.7 → 8.1–8.3·10⁸ contacts/s (`docs/performance.md`, seventeenth session).
+/// 10⁶: 5.5–5.7 → 8.1–8.3·10⁸ contacts/s (`docs/performance.md` §8, "Levers tried").
 const PREFETCH_AHEAD: usize = 128;
 
 /// Fewest rows from which the sweep prefetches (1 MB of temperatures). Below, the
 /// temperatures stay in cache and the hints only cost instructions: at 10⁵ particles the
-/// step was 13–17 % slower with them (`docs/performance.md`, seventeenth session).
+/// step was 13–17 % slower with them (`docs/performance.md` §8, "Levers tried").
 const PREFETCH_MIN_ROWS: usize = 1 << 17;
 
 /// Full steps of `dt` in a segment of length `span` (s), and whether a shortened last step

@@ -78,7 +78,7 @@ const TOL_THROUGH: f64 = 1e-12;
 /// part's residual entries over Q₀, so a check at [`TOL_THROUGH`] needs a solve that tight:
 /// at the scenes' default 10⁻¹⁰, smoothed-aggregation multigrid happened to leave residuals
 /// whose sums over each part cancelled (|Q|/Q₀ ≤ 10⁻¹²), the K-cycle multigrid leaves
-/// 3·10⁻¹¹–4·10⁻¹⁰ (twelfth session). Solving to 10⁻¹³ (or to the round-off floor, which
+/// 3·10⁻¹¹–4·10⁻¹⁰. Solving to 10⁻¹³ (or to the round-off floor, which
 /// the solver accepts and reports) tests the topology, not the solver's luck.
 const THROUGH_REL_TOL: f64 = 1e-13;
 
