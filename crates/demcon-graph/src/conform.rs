@@ -580,12 +580,12 @@ fn image_shifts(container: &Container) -> Vec<Vec3> {
 /// The seeded spheres (radius r') and their periodic images, indexed by their boxes inflated
 /// by a reach (rstar): [`SphereIndex::near`] yields every sphere whose surface may come
 /// within the reach of a point of the box.
-struct SphereIndex {
+pub(crate) struct SphereIndex {
     tree: RTree<GeomWithData<Rectangle<[f64; 3]>, usize>>,
 }
 
 impl SphereIndex {
-    fn new(spheres: impl Iterator<Item = (Vec3, f64)>, container: &Container, reach: f64) -> Self {
+    pub(crate) fn new(spheres: impl Iterator<Item = (Vec3, f64)>, container: &Container, reach: f64) -> Self {
         let b = container.bounds();
         let shifts = image_shifts(container);
         let mut boxes = Vec::new();
@@ -608,7 +608,7 @@ impl SphereIndex {
 
     /// The spheres near `x` (a point of the box), in no particular order, a sphere once per
     /// image near `x` (the callers take a minimum or an `any`, which neither changes).
-    fn near(&self, x: &Vec3) -> impl Iterator<Item = usize> + '_ {
+    pub(crate) fn near(&self, x: &Vec3) -> impl Iterator<Item = usize> + '_ {
         self.tree
             .locate_in_envelope_intersecting(AABB::from_point([x.x, x.y, x.z]))
             .map(|g| g.data)

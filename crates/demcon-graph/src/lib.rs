@@ -59,6 +59,7 @@
 //! ```
 #![warn(missing_docs)]
 
+mod bridge;
 mod calibrated;
 mod conform;
 mod contact;
@@ -73,6 +74,7 @@ mod surface;
 mod terreros;
 mod wall;
 
+pub use bridge::{Bridge, NO_SPHERE, bridges, sphere_membership};
 pub use calibrated::surface_calibrated;
 pub use conform::{
     Body, ConformParams, ConformReport, Conformed, PlanePatch, SphereSurface, conforming_sites,

@@ -543,7 +543,7 @@ pub(crate) fn apply_defects(
         crack_face,
         report,
     };
-    update_interface_marks(&mut defects, &graph, &particles.phases, mixes, n_phases);
+    update_interface_marks(&mut defects, &graph, &particles.phases, mixes, &[], n_phases);
     Ok((graph, defects))
 }
 
@@ -744,6 +744,7 @@ pub(crate) fn update_interface_marks(
     graph: &ContactGraph,
     phases: &[u16],
     mixes: &[Mix],
+    bridges: &[PhaseBridge],
     n_phases: usize,
 ) {
     if defects.marks.len() != graph.len() {
@@ -752,9 +753,9 @@ pub(crate) fn update_interface_marks(
     let table = defects.spec.table(n_phases);
     let lam = Laminates::new(phases.len(), mixes);
     let mut count = 0;
-    for k in 0..graph.len() {
+    for (k, bridge) in bridge_of(graph, bridges).enumerate() {
         let crossed = !defects.spec.interfaces.is_empty()
-            && contact_interface(graph, phases, &lam, &table, n_phases, k, None).2 > 0;
+            && contact_or_bridge_interface(graph, phases, &lam, &table, n_phases, k, None, bridge).2 > 0;
         if crossed {
             defects.marks[k] |= MARK_INTERFACE;
             count += 1;
@@ -763,6 +764,66 @@ pub(crate) fn update_interface_marks(
         }
     }
     defects.report.interface_contacts = count;
+}
+
+/// A branch that leaves one followed sphere and enters another across a gap (conforming
+/// cells where two spheres nearly touch, closer than the seed pairs can follow: both cells are
+/// of one phase, the surfaces between them are not facets). Its path reads two crossings —
+/// out of p's sphere into the gap's phase, out of the gap into q's sphere — each with its own
+/// |e·n| ([`crossing_resistance`]), instead of the phases at its ends (none). The bulk
+/// conductance keeps p's and q's phases along the whole branch (the gap, under ~0.2 × the
+/// seed offset, is not in it).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PhaseBridge {
+    /// The contact's particles `[p, q]`, p < q (as in the graph).
+    pub pair: [u32; 2],
+    /// The phase of the gap between the spheres.
+    pub gap_phase: u16,
+    /// |e·n| where the branch leaves p's sphere (e from p to q, n the sphere's normal).
+    pub cos_exit: f64,
+    /// |e·n| where it enters q's sphere.
+    pub cos_entry: f64,
+}
+
+/// For each contact of `graph` in order, its bridge among `bridges` (sorted by pair, as the
+/// graph's pairs are), or `None`.
+fn bridge_of<'b>(
+    graph: &'b ContactGraph,
+    bridges: &'b [PhaseBridge],
+) -> impl Iterator<Item = Option<&'b PhaseBridge>> + 'b {
+    let mut j = 0;
+    graph.pairs.iter().map(move |pq| {
+        while j < bridges.len() && bridges[j].pair < *pq {
+            j += 1;
+        }
+        bridges.get(j).filter(|b| b.pair == *pq)
+    })
+}
+
+/// The interface resistances of contact `k` ([`contact_interface`]), read at the two
+/// crossings of its bridge when it has one.
+#[allow(clippy::too_many_arguments)]
+fn contact_or_bridge_interface(
+    graph: &ContactGraph,
+    phases: &[u16],
+    lam: &Laminates<'_>,
+    table: &[Option<(f64, f64)>],
+    n: usize,
+    k: usize,
+    normals: Option<&[Vec3]>,
+    bridge: Option<&PhaseBridge>,
+) -> (f64, f64, u32) {
+    match bridge {
+        Some(b) => {
+            let [p, q] = b.pair.map(|x| phases[x as usize]);
+            path_resistance(
+                table,
+                n,
+                &[(p, b.gap_phase, b.cos_exit), (b.gap_phase, q, b.cos_entry)],
+            )
+        }
+        None => contact_interface(graph, phases, lam, table, n, k, normals),
+    }
 }
 
 /// Which network a conductance belongs to.
@@ -798,10 +859,19 @@ pub(crate) fn apply_to_contacts(model: &Model, areas: &[f64], g: &mut [f64], phy
     };
     let interfaces = !defects.spec.interfaces.is_empty();
     let normals = interfaces.then(|| phase_normals(graph, phases, areas));
-    for k in 0..g.len() {
+    for (k, bridge) in bridge_of(graph, &model.bridges).enumerate().take(g.len()) {
         let mut r = 0.0;
         if interfaces {
-            let (t, e, _) = contact_interface(graph, phases, &lam, &table, n_phases, k, normals.as_deref());
+            let (t, e, _) = contact_or_bridge_interface(
+                graph,
+                phases,
+                &lam,
+                &table,
+                n_phases,
+                k,
+                normals.as_deref(),
+                bridge,
+            );
             r = match physics {
                 Physics::Thermal => t,
                 Physics::Electric => e,

@@ -16,7 +16,7 @@ use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReaso
 use serde::Serialize;
 
 use crate::defects::{
-    CutContact, DefectReport, DefectSpec, Defects, Numbering, apply_defects, cut_wall_links,
+    CutContact, DefectReport, DefectSpec, Defects, Numbering, PhaseBridge, apply_defects, cut_wall_links,
     update_interface_marks,
 };
 use crate::error::ModelError;
@@ -54,6 +54,10 @@ pub struct Model {
     /// Interfaces, cracks, damage and broken bonds applied to the graph (cut contacts are
     /// not in `graph`; see [`crate::defects`]).
     pub defects: Defects,
+    /// The branches between the cells of two followed spheres that nearly touch, by particle
+    /// pair, ascending (conforming cells; empty otherwise): an interface law is read at both
+    /// crossings ([`PhaseBridge`]). Pairs, not contact indices: they survive cut contacts.
+    pub bridges: Vec<PhaseBridge>,
     /// What the build did.
     pub report: ModelReport,
 }
@@ -192,6 +196,10 @@ pub struct ConformSummary {
     pub narrowed_pairs: usize,
     /// Largest 1 − r'/r of the tangent-plane radius correction.
     pub max_radius_correction: f64,
+    /// Facets between the cells of two spheres that nearly touch (their branch leaves one
+    /// sphere and enters the other across a gap the seed pairs could not follow): a surface
+    /// law is read twice on them ([`crate::PhaseBridge`]).
+    pub bridged_facets: usize,
 }
 
 impl From<&ConformReport> for ConformSummary {
@@ -205,6 +213,7 @@ impl From<&ConformReport> for ConformSummary {
             removed_particles: r.removed_sites,
             narrowed_pairs: r.narrowed_pairs,
             max_radius_correction: r.max_radius_correction,
+            bridged_facets: 0, // set once the cells are built
         }
     }
 }
@@ -426,7 +435,7 @@ fn conform(
     particles: &ParticleSet,
     container: &Container,
     domain_volume: f64,
-) -> Result<demcon_graph::Conformed, ModelError> {
+) -> Result<(demcon_graph::Conformed, Vec<SphereSurface>), ModelError> {
     if params.laguerre.is_none() {
         return Err(ModelError::invalid(
             "phase_rule",
@@ -477,14 +486,46 @@ fn conform(
         container,
         carve: params.carve.as_ref().map(|(r, _)| r),
     };
-    Ok(conforming_sites(
-        particles,
-        body,
-        &spheres,
-        &planes,
-        h,
-        &ConformParams::default(),
-    )?)
+    let conformed = conforming_sites(particles, body, &spheres, &planes, h, &ConformParams::default())?;
+    Ok((conformed, spheres))
+}
+
+/// The phase of the gap between two followed spheres at `x`: the last phase entry that is not
+/// a followed sphere set whose region holds `x`, else phase 0 (the gap lies outside every
+/// followed sphere: between two that nearly touch).
+fn gap_phase(params: &ModelParams, x: &Vec3) -> u16 {
+    params
+        .phases
+        .iter()
+        .filter_map(|ph| match ph {
+            PhaseSpec::Region { phase, region } if !matches!(region, Region::Sphere { .. }) => {
+                region.contains_point(x).then_some(*phase)
+            }
+            _ => None,
+        })
+        .next_back()
+        .unwrap_or(0)
+}
+
+/// The bridges of a conforming model ([`PhaseBridge`]): the branches between the cells of
+/// two different followed spheres, with the phase of the gap at their middle.
+fn phase_bridges(
+    params: &ModelParams,
+    graph: &ContactGraph,
+    particles: &ParticleSet,
+    container: &Container,
+    spheres: &[SphereSurface],
+) -> Vec<PhaseBridge> {
+    let membership = demcon_graph::sphere_membership(&particles.centres, spheres, container);
+    demcon_graph::bridges(graph, &particles.centres, spheres, &membership, container)
+        .into_iter()
+        .map(|b| PhaseBridge {
+            pair: graph.pairs[b.contact as usize],
+            gap_phase: gap_phase(params, &b.gap_middle),
+            cos_exit: b.cos_exit,
+            cos_entry: b.cos_entry,
+        })
+        .collect()
 }
 
 /// The faces of the box `[min, max]` (m) that separate it from the rest of the body, clipped
@@ -570,13 +611,13 @@ pub fn build_model_staged(
             let mut conformed = None;
             packing_solid = particles.solid_volume();
             if params.phase_rule == PhaseRule::Conforming {
-                let c = conform(params, &particles, &container, domain_volume)?;
+                let (c, spheres) = conform(params, &particles, &container, domain_volume)?;
                 kept_ids = Some(match kept_ids.take() {
                     Some(ids) => c.kept.iter().map(|&k| ids[k as usize]).collect(),
                     None => c.kept.clone(),
                 });
                 particles = c.particles;
-                conformed = Some((c.n_seeds, c.report));
+                conformed = Some((c.n_seeds, c.report, spheres));
             }
             let mut mixes = Vec::new();
             let inclusions = apply_phases(params, &mut particles, &container, &materials, &mut mixes)?;
@@ -627,6 +668,24 @@ pub fn build_model_staged(
             )
         })?
     };
+    // Where two followed spheres nearly touch, the cells inside them meet across the gap.
+    let bridges = match &conformed {
+        Some((_, _, spheres)) if graph.cells.is_some() => {
+            phase_bridges(params, &graph, &particles, &container, spheres)
+        }
+        _ => Vec::new(),
+    };
+    let mut defects = defects;
+    if !bridges.is_empty() {
+        update_interface_marks(
+            &mut defects,
+            &graph,
+            &particles.phases,
+            &mixes,
+            &bridges,
+            n_phases,
+        );
+    }
     let t2 = Instant::now();
     let network = stages.time("network", || Network::new(particles.len(), &graph.pairs))?;
     let network_s = t2.elapsed().as_secs_f64();
@@ -651,7 +710,10 @@ pub fn build_model_staged(
             phase_fractions: body_fractions.unwrap_or_else(|| phase_fractions.clone()),
             sphere_phase_fractions: phase_fractions,
             mixed_particles: mixes.len(),
-            conform: conformed.as_ref().map(|c| ConformSummary::from(&c.1)),
+            conform: conformed.as_ref().map(|c| ConformSummary {
+                bridged_facets: bridges.len(),
+                ..ConformSummary::from(&c.1)
+            }),
             inclusions,
             contacts: ContactSummary::from(&graph.report),
             tessellation: graph
@@ -674,6 +736,7 @@ pub fn build_model_staged(
         graph,
         network: OnceLock::from(network),
         defects,
+        bridges,
     })
 }
 
@@ -971,6 +1034,7 @@ pub fn set_region_phases(
         &model.graph,
         &model.particles.phases,
         &model.mixes,
+        &model.bridges,
         n_phases,
     );
     if let Some(r) = model.report.defects.as_mut() {
@@ -1009,6 +1073,17 @@ pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelErro
         },
         n_phases,
     )?;
+    let mut defects = defects;
+    if !model.bridges.is_empty() {
+        update_interface_marks(
+            &mut defects,
+            &graph,
+            &model.particles.phases,
+            &model.mixes,
+            &model.bridges,
+            n_phases,
+        );
+    }
     let network = Network::new(n, &graph.pairs)?;
     let mut report = model.report.clone();
     report.contacts = ContactSummary::from(&graph.report);
@@ -1025,6 +1100,7 @@ pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelErro
         graph,
         network: OnceLock::from(network),
         defects,
+        bridges: model.bridges.clone(),
         report,
     })
 }

@@ -785,3 +785,73 @@ fn a_filled_crack_covers_laguerre_facets_in_part() {
     assert_eq!(whole.defects.report.filled_crack_contacts, 8);
     assert!(q_whole > q_half, "{q_whole} {q_half}");
 }
+
+/// Two spheres of phase 1 whose gap (5·10⁻⁴ of the cube) is far below what the conforming
+/// seed pairs can follow: the cells inside them meet across the gap ("bridges"), and an
+/// interface conductance h is read at both crossings, each with its own |e·n|:
+/// 1/G = 1/G₀ + (1/h)(1/|e·n|_exit + 1/|e·n|_entry)/S, G₀ the same facet without the interface.
+#[test]
+fn nearly_touching_spheres_read_their_interface_at_both_crossings() {
+    use demcon_packing::{PackingParams, RadiusDistribution, pack};
+    let container = Container::Box { size: [1.0; 3] };
+    let params = PackingParams::new(container, 3000, 0.55, RadiusDistribution::gaussian(0.2));
+    let particles = pack(&params, 3, None).unwrap().0;
+    let (radius, gap) = (0.2, 5e-4);
+    let centres = vec![
+        Vec3::new(0.5 - radius - 0.5 * gap, 0.5, 0.5),
+        Vec3::new(0.5 + radius + 0.5 * gap, 0.5, 0.5),
+    ];
+    let h = 50.0;
+    let build = |defects: DefectSpec| {
+        let packed = Packed {
+            particles: particles.clone(),
+            container,
+            report: None,
+            imported_from: None,
+            pack_s: 0.0,
+        };
+        let params = ModelParams {
+            materials: materials(),
+            carve: None,
+            phases: vec![PhaseSpec::Spheres {
+                phase: 1,
+                radius,
+                centres: centres.clone(),
+            }],
+            phase_rule: PhaseRule::Conforming,
+            contacts: ContactParams::default(),
+            laguerre: Some(LaguerreParams::default()),
+            defects,
+            seed: 1,
+        };
+        build_model(packed, &params).unwrap()
+    };
+    let perfect = build(DefectSpec::default());
+    let barrier = build(interface(h, None));
+    assert_eq!(perfect.graph.pairs, barrier.graph.pairs);
+    assert!(!barrier.bridges.is_empty(), "no bridge across a gap of {gap} m");
+    assert_eq!(
+        barrier.report.conform.as_ref().unwrap().bridged_facets,
+        barrier.bridges.len()
+    );
+    let problem = steady(true, FloatingPolicy::Fail);
+    let g0 = thermal_setup(&perfect, &problem).unwrap().conductances;
+    let g = thermal_setup(&barrier, &problem).unwrap().conductances;
+    let area = &barrier.graph.cells.as_ref().unwrap().facet_area;
+    for b in &barrier.bridges {
+        let k = barrier.graph.pairs.binary_search(&b.pair).unwrap();
+        let [p, q] = b.pair.map(|i| barrier.particles.phases[i as usize]);
+        assert_eq!((p, q, b.gap_phase), (1, 1, 0));
+        assert!(b.cos_exit > 0.0 && b.cos_exit <= 1.0 && b.cos_entry > 0.0 && b.cos_entry <= 1.0);
+        assert_ne!(barrier.defects.marks[k] & MARK_INTERFACE, 0);
+        let expected = 1.0 / (1.0 / g0[k] + (1.0 / h) * (1.0 / b.cos_exit + 1.0 / b.cos_entry) / area[k]);
+        assert_relative_eq!(g[k], expected, max_relative = 1e-12);
+    }
+    // Every other facet between two phase-1 cells keeps its conductance.
+    for (k, &[p, q]) in barrier.graph.pairs.iter().enumerate() {
+        let bridged = barrier.bridges.iter().any(|b| b.pair == [p, q]);
+        if !bridged && barrier.particles.phases[p as usize] == barrier.particles.phases[q as usize] {
+            assert_eq!(g[k], g0[k]);
+        }
+    }
+}
