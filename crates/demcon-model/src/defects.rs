@@ -696,7 +696,8 @@ fn phase_normals(graph: &ContactGraph, phases: &[u16], areas: &[f64]) -> Vec<Vec
 
 /// The interface resistances of contact `k` (thermal m²·K/W, electric Ω·m², count).
 /// `normals` ([`phase_normals`]) give the |e·n| of a crossing at the facet (the centre
-/// reading); without them it is 1.
+/// reading); without them it is 1. A contact with a `bridge` reads its two crossings instead.
+#[allow(clippy::too_many_arguments)]
 fn contact_interface(
     graph: &ContactGraph,
     phases: &[u16],
@@ -705,7 +706,16 @@ fn contact_interface(
     n: usize,
     k: usize,
     normals: Option<&[Vec3]>,
+    bridge: Option<&PhaseBridge>,
 ) -> (f64, f64, u32) {
+    if let Some(b) = bridge {
+        let [p, q] = b.pair.map(|x| phases[x as usize]);
+        return path_resistance(
+            table,
+            n,
+            &[(p, b.gap_phase, b.cos_exit), (b.gap_phase, q, b.cos_entry)],
+        );
+    }
     let [p, q] = graph.pairs[k].map(|x| x as usize);
     let g = &graph.geometry[k];
     let w = graph.split(k);
@@ -755,7 +765,7 @@ pub(crate) fn update_interface_marks(
     let mut count = 0;
     for (k, bridge) in bridge_of(graph, bridges).enumerate() {
         let crossed = !defects.spec.interfaces.is_empty()
-            && contact_or_bridge_interface(graph, phases, &lam, &table, n_phases, k, None, bridge).2 > 0;
+            && contact_interface(graph, phases, &lam, &table, n_phases, k, None, bridge).2 > 0;
         if crossed {
             defects.marks[k] |= MARK_INTERFACE;
             count += 1;
@@ -800,32 +810,6 @@ fn bridge_of<'b>(
     })
 }
 
-/// The interface resistances of contact `k` ([`contact_interface`]), read at the two
-/// crossings of its bridge when it has one.
-#[allow(clippy::too_many_arguments)]
-fn contact_or_bridge_interface(
-    graph: &ContactGraph,
-    phases: &[u16],
-    lam: &Laminates<'_>,
-    table: &[Option<(f64, f64)>],
-    n: usize,
-    k: usize,
-    normals: Option<&[Vec3]>,
-    bridge: Option<&PhaseBridge>,
-) -> (f64, f64, u32) {
-    match bridge {
-        Some(b) => {
-            let [p, q] = b.pair.map(|x| phases[x as usize]);
-            path_resistance(
-                table,
-                n,
-                &[(p, b.gap_phase, b.cos_exit), (b.gap_phase, q, b.cos_entry)],
-            )
-        }
-        None => contact_interface(graph, phases, lam, table, n, k, normals),
-    }
-}
-
 /// Which network a conductance belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Physics {
@@ -862,7 +846,7 @@ pub(crate) fn apply_to_contacts(model: &Model, areas: &[f64], g: &mut [f64], phy
     for (k, bridge) in bridge_of(graph, &model.bridges).enumerate().take(g.len()) {
         let mut r = 0.0;
         if interfaces {
-            let (t, e, _) = contact_or_bridge_interface(
+            let (t, e, _) = contact_interface(
                 graph,
                 phases,
                 &lam,

@@ -467,24 +467,13 @@ fn periodic_cracks_and_determinism_on_a_random_packing() {
         ..DefectSpec::default()
     };
     let build = || {
-        let packed = Packed {
-            particles: particles.clone(),
+        laguerre_model(
+            &particles,
             container,
-            report: None,
-            imported_from: None,
-            pack_s: 0.0,
-        };
-        let params = ModelParams {
-            materials: materials(),
-            carve: None,
-            phases: Vec::new(),
-            phase_rule: PhaseRule::Centre,
-            contacts: ContactParams::default(),
-            laguerre: Some(LaguerreParams::default()),
-            defects: defects.clone(),
-            seed: 1,
-        };
-        build_model(packed, &params).unwrap()
+            Vec::new(),
+            PhaseRule::Centre,
+            defects.clone(),
+        )
     };
     let (a, b) = (build(), build());
     let cut = a.cut_contacts();
@@ -620,14 +609,14 @@ const BAR: [f64; 3] = [0.04, 0.1, 0.04];
 
 /// A Gaussian-0.3 LS packing of 2000 spheres in [`BAR`] (made once), tessellated, material a,
 /// with `defects`.
-fn laguerre_bar(defects: DefectSpec) -> Model {
-    use demcon_packing::{PackingParams, RadiusDistribution, pack};
-    static PACKING: OnceLock<ParticleSet> = OnceLock::new();
-    let container = Container::Box { size: BAR };
-    let particles = PACKING.get_or_init(|| {
-        let params = PackingParams::new(container, 2000, 0.55, RadiusDistribution::gaussian(0.3));
-        pack(&params, 1, None).unwrap().0
-    });
+/// The Laguerre model of `particles` in `container` with `phases` under `rule` and `defects`.
+fn laguerre_model(
+    particles: &ParticleSet,
+    container: Container,
+    phases: Vec<PhaseSpec>,
+    rule: PhaseRule,
+    defects: DefectSpec,
+) -> Model {
     let packed = Packed {
         particles: particles.clone(),
         container,
@@ -638,14 +627,25 @@ fn laguerre_bar(defects: DefectSpec) -> Model {
     let params = ModelParams {
         materials: materials(),
         carve: None,
-        phases: Vec::new(),
-        phase_rule: PhaseRule::Centre,
+        phases,
+        phase_rule: rule,
         contacts: ContactParams::default(),
         laguerre: Some(LaguerreParams::default()),
         defects,
         seed: 1,
     };
     build_model(packed, &params).unwrap()
+}
+
+fn laguerre_bar(defects: DefectSpec) -> Model {
+    use demcon_packing::{PackingParams, RadiusDistribution, pack};
+    static PACKING: OnceLock<ParticleSet> = OnceLock::new();
+    let container = Container::Box { size: BAR };
+    let particles = PACKING.get_or_init(|| {
+        let params = PackingParams::new(container, 2000, 0.55, RadiusDistribution::gaussian(0.3));
+        pack(&params, 1, None).unwrap().0
+    });
+    laguerre_model(particles, container, Vec::new(), PhaseRule::Centre, defects)
 }
 
 /// The plane y = `y` over the bar's section, reaching `margin` (m) past its side walls (0:
@@ -803,28 +803,12 @@ fn nearly_touching_spheres_read_their_interface_at_both_crossings() {
     ];
     let h = 50.0;
     let build = |defects: DefectSpec| {
-        let packed = Packed {
-            particles: particles.clone(),
-            container,
-            report: None,
-            imported_from: None,
-            pack_s: 0.0,
-        };
-        let params = ModelParams {
-            materials: materials(),
-            carve: None,
-            phases: vec![PhaseSpec::Spheres {
-                phase: 1,
-                radius,
-                centres: centres.clone(),
-            }],
-            phase_rule: PhaseRule::Conforming,
-            contacts: ContactParams::default(),
-            laguerre: Some(LaguerreParams::default()),
-            defects,
-            seed: 1,
-        };
-        build_model(packed, &params).unwrap()
+        let phases = vec![PhaseSpec::Spheres {
+            phase: 1,
+            radius,
+            centres: centres.clone(),
+        }];
+        laguerre_model(&particles, container, phases, PhaseRule::Conforming, defects)
     };
     let perfect = build(DefectSpec::default());
     let barrier = build(interface(h, None));
