@@ -28,9 +28,11 @@
 //!
 //! Models on the same packings: the Laguerre cells with the segment rule (the gated model), the
 //! Laguerre cells following the inclusions (`Conforming`, issue 32's headline; reported, not
-//! gated: against this reference, an approximation at high f, no gate says which is right —
-//! the reference as good as the perfect interface's is still to be built) and, in `--full`,
-//! Terreros α with the segment rule; temperatures held through the wall links.
+//! gated here: against this reference, an approximation at high f, no gate says which is
+//! right) and, in `--full`, Terreros α with the segment rule; temperatures held through the
+//! wall links. The conforming cells are gated in the periodic mode
+//! ([`super::multi_inclusion_interface_periodic`]): the FFT realisations against their own
+//! multipole solutions with the interface, a reference as good as the perfect interface's.
 //! ETC = λ_m · λ_e/λ_hom, λ_hom measured on the same model with one phase.
 //!
 //! Tolerance, fixed before any number was seen: the DEM's ratio ETC(α)/ETC(0) within 3 % of
@@ -169,10 +171,18 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         }
     }
     let m = Measured { ladder, packings };
+    let periodic = super::multi_inclusion_interface_periodic::measure(ctx)?;
     let mut out = CaseOutcome::new("multi-inclusion-interface", ctx.mode);
-    out.n_particles = m.packings.iter().map(|p| p.n).max().unwrap_or(0);
+    out.n_particles = m
+        .packings
+        .iter()
+        .map(|p| p.n)
+        .max()
+        .unwrap_or(0)
+        .max(periodic.n_max());
     compare(ctx, &m, &variants, tol, &mut out);
     report(ctx, &m, &variants, &mut out)?;
+    super::multi_inclusion_interface_periodic::compare_and_report(ctx, &periodic, &mut out);
     Ok(out)
 }
 

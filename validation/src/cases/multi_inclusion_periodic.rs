@@ -39,7 +39,7 @@ use crate::{CaseOutcome, Comparison, Ctx};
 use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Edge of the periodic cell (m); the reference's unit-cell coordinates are scaled by it.
-const CELL: f64 = 0.01;
+pub(super) const CELL: f64 = 0.01;
 
 /// Solid fraction of the packings: dense enough for the contact models' coordination, far
 /// enough from jamming to pack fast (the Laguerre network needs no particular density).
@@ -57,24 +57,24 @@ const FULL_TARGETS: [f64; 2] = [0.003, 0.005];
 const QUICK_BOUND: f64 = 0.02;
 
 /// The headline model (index into [`MODELS`]): the conforming cells.
-const HEADLINE: usize = 4;
+pub(super) const HEADLINE: usize = 4;
 
 /// One realisation of the reference.
-struct Realisation {
+pub(super) struct Realisation {
     /// Silica volume fraction.
-    f: f64,
+    pub(super) f: f64,
     /// Realisation index in the reference.
-    index: usize,
+    pub(super) index: usize,
     /// Sphere diameter (unit cell).
-    d: f64,
+    pub(super) d: f64,
     /// Centres (unit cell).
-    centres: Vec<[f64; 3]>,
+    pub(super) centres: Vec<[f64; 3]>,
     /// FFT λ_yy extrapolated to zero voxel size (W/(m·K)).
-    fft_y: f64,
+    pub(super) fft_y: f64,
 }
 
 /// The realisations 0 and 1 of every fraction, by fraction.
-fn realisations() -> anyhow::Result<Vec<Realisation>> {
+pub(super) fn realisations() -> anyhow::Result<Vec<Realisation>> {
     let refs = crate::refs::multi_inclusion_fft_realisations();
     let table = refs["by_volume_fraction"]
         .as_object()
@@ -117,14 +117,14 @@ fn realisations() -> anyhow::Result<Vec<Realisation>> {
 
 /// A model of the comparison: surface × phase rule.
 #[derive(Debug, Clone, Copy)]
-struct PeriodicModel {
-    id: &'static str,
+pub(super) struct PeriodicModel {
+    pub(super) id: &'static str,
     laguerre: bool,
     surface: fn() -> SurfaceConfig,
     rule: PhaseRuleConfig,
 }
 
-const MODELS: [PeriodicModel; 5] = [
+pub(super) const MODELS: [PeriodicModel; 5] = [
     PeriodicModel {
         id: "laguerre-centre",
         laguerre: true,
@@ -158,7 +158,7 @@ const MODELS: [PeriodicModel; 5] = [
 ];
 
 /// The homogenisation scene of one realisation under one model.
-fn scene(r: &Realisation, n: usize, seed: u64, m: &PeriodicModel) -> SceneConfig {
+pub(super) fn scene(r: &Realisation, n: usize, seed: u64, m: &PeriodicModel) -> SceneConfig {
     SceneConfig {
         name: format!("multi-inclusion-periodic-{}-{}", r.f, r.index),
         seed,

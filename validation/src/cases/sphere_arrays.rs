@@ -10,7 +10,9 @@
 //! lattice at f = 0.3 and nearly touching (SC 0.5, BCC 0.65, FCC 0.7; gaps 3–4 % of the
 //! radius), contrast 10, SC f = 0.3 at contrast 0.1, and SC f = 0.3, contrast 10 with an interface
 //! conductance h (h a/λ_m = 1 and 0.1; their tolerance, f = 0.3's, after seeing h a/λ_m = 1 on one
-//! packing at 10⁴: −0.016 %). Models: the Laguerre cells with the
+//! packing at 10⁴: −0.016 %), and the three nearly touching arrays with an interface (SC 0.5 and
+//! BCC 0.65 at h a/λ_m = 1, FCC 0.7 at 10: the interface where the flux crowds between the
+//! spheres; the nearly touching tolerance, added with it). Models: the Laguerre cells with the
 //! phase by centre, the segment rule and the conforming seeds (issue 32's rule).
 //!
 //! Tolerance of the conforming rule, on the largest error over the three packings and three
@@ -51,7 +53,7 @@ struct Array {
     interface: Option<f64>,
 }
 
-const ARRAYS: [Array; 9] = [
+const ARRAYS: [Array; 12] = [
     Array {
         lattice: "sc",
         f: 0.3,
@@ -114,6 +116,27 @@ const ARRAYS: [Array; 9] = [
         contrast: 10.0,
         touching: false,
         interface: Some(0.1),
+    },
+    Array {
+        lattice: "sc",
+        f: 0.5,
+        contrast: 10.0,
+        touching: true,
+        interface: Some(1.0),
+    },
+    Array {
+        lattice: "bcc",
+        f: 0.65,
+        contrast: 10.0,
+        touching: true,
+        interface: Some(1.0),
+    },
+    Array {
+        lattice: "fcc",
+        f: 0.7,
+        contrast: 10.0,
+        touching: true,
+        interface: Some(10.0),
     },
 ];
 
