@@ -8,6 +8,9 @@
 //!   `demcon-scene` depends on `ron`.
 //! - **File headers**: every `.rs` file under `crates/`, `xtask/` and `benches/` opens with a
 //!   `//!` line saying what it is for.
+//! - **Cases import no case**: a module of `validation/src/cases/` that the registry runs as a
+//!   case (`run: <module>::run` in `cases/mod.rs`) is named through `super::` by no other
+//!   module there; what two cases share lives in a shared module.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -268,6 +271,70 @@ fn files_without_header(dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
     Ok(())
 }
 
+/// The modules the registry of `cases/mod.rs` (its text) runs as cases: `run: <module>::run`.
+pub fn case_modules(registry: &str) -> Vec<String> {
+    let mut out: Vec<String> = registry
+        .split("run:")
+        .skip(1)
+        .filter_map(|rest| rest.trim_start().split("::run").next())
+        .map(|m| m.trim().to_string())
+        .filter(|m| !m.is_empty() && m.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
+        .collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// The case modules (of `cases`) that the module `own`'s source `text` names through
+/// `super::` (other than itself).
+pub fn imported_cases<'c>(own: &str, text: &str, cases: &'c [String]) -> Vec<&'c str> {
+    cases
+        .iter()
+        .filter(|c| c.as_str() != own)
+        .filter(|c| {
+            text.match_indices(&format!("super::{c}")).any(|(i, m)| {
+                !text[i + m.len()..]
+                    .chars()
+                    .next()
+                    .is_some_and(|ch| ch.is_ascii_alphanumeric() || ch == '_')
+            })
+        })
+        .map(String::as_str)
+        .collect()
+}
+
+/// "cases import no case": every `validation/src/cases/*.rs` against the registry's cases.
+fn case_imports(root: &Path) -> Result<Vec<String>> {
+    let dir = root.join("validation/src/cases");
+    if !dir.is_dir() {
+        return Ok(Vec::new());
+    }
+    let registry =
+        std::fs::read_to_string(dir.join("mod.rs")).context("reading validation/src/cases/mod.rs")?;
+    let cases = case_modules(&registry);
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "rs"))
+        .collect();
+    files.sort();
+    let mut out = Vec::new();
+    for p in files {
+        let own = p
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or_default()
+            .to_string();
+        let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+        for c in imported_cases(&own, &text, &cases) {
+            out.push(format!(
+                "validation/src/cases/{own}.rs names the case `{c}`: cases import no case (move what they share \
+                 into a shared module)"
+            ));
+        }
+    }
+    Ok(out)
+}
+
 /// Runs every check on the workspace at `root`; the error lists every violation.
 pub fn check(root: &Path) -> Result<()> {
     let mut problems: Vec<String> = layer_violations(root)?.iter().map(|v| v.to_string()).collect();
@@ -284,6 +351,7 @@ pub fn check(root: &Path) -> Result<()> {
             p.strip_prefix(root).unwrap_or(p).display()
         )
     }));
+    problems.extend(case_imports(root)?);
     if problems.is_empty() {
         Ok(())
     } else {
@@ -325,6 +393,30 @@ mod tests {
     }
 
     /// The workspace as it is obeys the layer picture and the header rule.
+    #[test]
+    fn a_case_named_by_another_module_is_found() {
+        let registry = "Case { id: \"a\", run: alpha::run },\n Case { id: \"b\", run: beta_2::run }";
+        let cases = case_modules(registry);
+        assert_eq!(cases, vec!["alpha".to_string(), "beta_2".to_string()]);
+        assert_eq!(
+            imported_cases("gamma", "let x = super::alpha::scene();", &cases),
+            vec!["alpha"]
+        );
+        assert_eq!(
+            imported_cases("gamma", "super::super::beta_2::run(ctx)", &cases),
+            vec!["beta_2"]
+        );
+        // Itself, a longer name and a shared module are not imports of a case.
+        assert!(
+            imported_cases(
+                "alpha",
+                "super::alpha::x; super::alphabet::y; super::common::z",
+                &cases
+            )
+            .is_empty()
+        );
+    }
+
     #[test]
     fn workspace_is_tidy() {
         check(&workspace_root()).unwrap();

@@ -659,9 +659,15 @@ pub fn key(n: usize) -> String {
 mod tests {
     use super::*;
 
-    /// A small scene (any case's builder will do: only its packing section and seed count).
+    /// A small scene (only its packing section and seed count matter here).
     fn small(seed: u64, count: usize) -> SceneConfig {
-        super::super::haddad2021_halo_cov::scene(count, seed)
+        super::super::composite::slab_scene(
+            "prepack",
+            seed,
+            count,
+            super::super::composite::epoxy_silica(),
+            Vec::new(),
+        )
     }
 
     /// Packings made ahead, several at a time, are the ones a case would make one by one.

@@ -5,6 +5,8 @@
 pub mod common;
 pub mod composite;
 pub mod cylinder;
+pub mod multi_inclusion_interface_periodic;
+pub mod multi_inclusion_periodic;
 pub mod transient;
 
 // The cases.
@@ -29,8 +31,6 @@ pub mod joule_transient;
 pub mod layered_interface;
 pub mod ligament_holm;
 pub mod multi_inclusion_interface;
-pub mod multi_inclusion_interface_periodic;
-pub mod multi_inclusion_periodic;
 pub mod packing_stress;
 pub mod sphere_arrays;
 
