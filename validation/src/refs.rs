@@ -1,5 +1,5 @@
-//! Reference data files (FEM, FFT) from `shared/refs/`, loaded at run time and compiled in as a
-//! fallback copy in `validation/data/` so a clean clone validates without `shared/`.
+//! Reference data files (FEM, FFT): copies of `shared/refs/` kept in `validation/data/` and
+//! compiled in (`include_str!`), so a clean clone validates without `shared/`.
 
 use serde_json::Value;
 

@@ -6,7 +6,7 @@
 //!   crate must point down the layer picture; siblings on a layer never know each other;
 //!   `demcon-post` uses no physics crate; only `demcon-network` depends on `faer`; only
 //!   `demcon-scene` depends on `ron`.
-//! - **File headers**: every `.rs` file under `crates/`, `xtask/` and `benches/` opens with a
+//! - **File headers**: every `.rs` file under `crates/`, `xtask/`, `benches/` and `validation/` opens with a
 //!   `//!` line saying what it is for.
 //! - **Cases import no case**: a module of `validation/src/cases/` that the registry runs as a
 //!   case (`run: <module>::run` in `cases/mod.rs`) is named through `super::` by no other
@@ -339,7 +339,7 @@ fn case_imports(root: &Path) -> Result<Vec<String>> {
 pub fn check(root: &Path) -> Result<()> {
     let mut problems: Vec<String> = layer_violations(root)?.iter().map(|v| v.to_string()).collect();
     let mut bare = Vec::new();
-    for d in ["crates", "xtask", "benches"] {
+    for d in ["crates", "xtask", "benches", "validation"] {
         let dir = root.join(d);
         if dir.is_dir() {
             files_without_header(&dir, &mut bare)?;

@@ -12,9 +12,10 @@
 //! ([`WallContacts::for_graph`]): h_p is the distance from the centre to the facet, n_p its
 //! normal and S_p its area.
 //!
-//! Wall nodes come after the particles: wall w is node `n_particles + w`. Only this module
-//! knows that numbering; everyone else asks [`WallContacts::node`], [`WallContacts::edges`]
-//! or [`WallContacts::split`].
+//! Wall nodes come after the particles: wall w is node `n_particles + w`. Ask
+//! [`WallContacts::node`], [`WallContacts::edges`] or [`WallContacts::split`] for it; some
+//! callers in demcon-model and demcon-scene still strip the wall nodes by slicing to the
+//! particle count (docs/ARCHITECTURE.md, Invariants).
 
 use std::ops::Range;
 
