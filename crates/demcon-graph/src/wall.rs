@@ -12,10 +12,11 @@
 //! ([`WallContacts::for_graph`]): h_p is the distance from the centre to the facet, n_p its
 //! normal and S_p its area.
 //!
-//! Wall nodes come after the particles: wall w is node `n_particles + w`. Ask
-//! [`WallContacts::node`], [`WallContacts::edges`] or [`WallContacts::split`] for it; some
-//! callers in demcon-model and demcon-scene still strip the wall nodes by slicing to the
-//! particle count (docs/ARCHITECTURE.md, Invariants).
+//! Wall nodes come after the particles: wall w is node `n_particles + w`. Only this module
+//! knows that numbering; everyone else asks [`WallContacts::node`], [`WallContacts::edges`],
+//! [`WallContacts::split`], or splits and joins node values with
+//! [`WallContacts::particle_part`], [`WallContacts::split_nodes`] and
+//! [`WallContacts::join_nodes`].
 
 use std::ops::Range;
 
@@ -192,6 +193,23 @@ impl WallContacts {
     /// The network node of wall `w`.
     pub fn node(&self, w: usize) -> u32 {
         (self.n_particles + w) as u32
+    }
+
+    /// The particles' part of values over the extended network's nodes (`n_particles` of
+    /// them first, then the walls).
+    pub fn particle_part(nodes: &[f64], n_particles: usize) -> &[f64] {
+        &nodes[..n_particles]
+    }
+
+    /// Values over the extended network's nodes split into the particles' and the walls'.
+    pub fn split_nodes(mut nodes: Vec<f64>, n_particles: usize) -> (Vec<f64>, Vec<f64>) {
+        let walls = nodes.split_off(n_particles);
+        (nodes, walls)
+    }
+
+    /// Values over the extended network's nodes from the particles' and the walls'.
+    pub fn join_nodes(particles: &[f64], walls: &[f64]) -> Vec<f64> {
+        [particles, walls].concat()
     }
 
     /// The links of wall `w` (indices into the per-link arrays).

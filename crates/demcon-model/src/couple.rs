@@ -16,6 +16,8 @@
 
 use std::cell::RefCell;
 
+use demcon_graph::WallContacts;
+
 use crate::checkpoint::{Checkpointing, CouplingState, RunCheckpoint, check_coupling, not_resumable};
 use crate::electric::{ElectricProblem, ElectricRun, solve_electric};
 use crate::error::ModelError;
@@ -219,7 +221,10 @@ fn coupled_transient(
                 .map(|c| c.last_temperatures.clone())
                 .unwrap_or_default()
         }
-        None => initial_node_temperatures(model, setup, bcs, thermal.initial_temperature)[..n].to_vec(),
+        None => {
+            let nodes = initial_node_temperatures(model, setup, bcs, thermal.initial_temperature);
+            WallContacts::particle_part(&nodes, n).to_vec()
+        }
     };
     let el = solve_electric(model, e, Some(&last_t))?;
     let first_joule = el.joule.clone();
@@ -236,14 +241,15 @@ fn coupled_transient(
     });
     let mut update = |_time: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, ModelError> {
         let mut c = state.borrow_mut();
-        let moved = temps[..n]
+        let temps = WallContacts::particle_part(temps, n);
+        let moved = temps
             .iter()
             .zip(&c.last_t)
             .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
         if moved <= tol {
             return Ok(None);
         }
-        c.last_t.copy_from_slice(&temps[..n]);
+        c.last_t.copy_from_slice(temps);
         c.el = solve_electric(model, e, Some(&c.last_t))?;
         c.solves += 1;
         c.solves_s += c.el.report.solves_wall_s;

@@ -112,7 +112,7 @@ impl ElectricRun {
     /// Potentials of every node of the electric network (V): the particles, then the face
     /// electrodes.
     pub fn node_potentials(&self) -> Vec<f64> {
-        [&self.potentials[..], &self.wall_potentials[..]].concat()
+        WallContacts::join_nodes(&self.potentials, &self.wall_potentials)
     }
 
     /// The current density j_p of every particle (A/m², the direction the current flows: from
@@ -333,9 +333,9 @@ pub fn solve_electric(
         let du = sol.potentials[p] - sol.potentials[walls.node(w) as usize];
         joule[p] += 0.5 * problem.eta * g[m + k] * du * du;
     }
-    joule.truncate(n);
-    let mut potentials = sol.potentials;
-    let wall_potentials = potentials.split_off(n);
+    // The wall nodes keep no Joule heat (their half went to the particle above).
+    let joule = WallContacts::split_nodes(joule, n).0;
+    let (potentials, wall_potentials) = WallContacts::split_nodes(sol.potentials, n);
     let rep_volumes = representative_volumes(&model.graph, &model.particles, &sm, model.phi)?;
     let r = &sol.report;
     Ok(ElectricRun {

@@ -659,7 +659,7 @@ impl ThermalRun {
 
     /// Temperatures of every node of the thermal network: the particles, then the walls (°C).
     pub fn node_temperatures(&self) -> Vec<f64> {
-        [&self.temperatures[..], &self.wall_temperatures[..]].concat()
+        WallContacts::join_nodes(&self.temperatures, &self.wall_temperatures)
     }
 }
 
@@ -778,7 +778,11 @@ pub fn solve_thermal_checkpointed(
         Some(c) => TransientStart::Resume(&c.transient),
         None => TransientStart::Initial(input),
     };
-    let observer = |t, v: &[f64]| snapshots.borrow_mut().push((t, v[..n].to_vec()));
+    let observer = |t, v: &[f64]| {
+        snapshots
+            .borrow_mut()
+            .push((t, WallContacts::particle_part(v, n).to_vec()))
+    };
     let mut save = |state: TransientState| {
         let Some(sink) = sink.as_mut() else {
             return Ok(());

@@ -10,6 +10,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use demcon_core::{StageObserver, Stages, Vec3};
+use demcon_graph::WallContacts;
 use demcon_model::{
     Checkpointing, ElectricRun, EtcValue, ExtraSources, HomogenizeRun, Model, ModelError, RunCheckpoint,
     ThermalBcs, ThermalProblem, ThermalRun, ThermalSetup, couple_checkpointed, homogenize_electric,
@@ -740,7 +741,7 @@ fn post_process(stages: &mut Stages, inp: &PostInputs<'_>) -> Result<Post, Scene
                 .map(|(k, (t, temps))| {
                     let (flux, halo) = match plan.flux {
                         true => {
-                            let nodes = [&temps[..], &th.wall_temperatures[..]].concat();
+                            let nodes = WallContacts::join_nodes(temps, &th.wall_temperatures);
                             let (f, h) = flux_and_halo(model, s, &nodes, plan.halo.as_ref(), &domain)?;
                             (Some(f), h.map(|(h, cut, _)| (h, cut)))
                         }
