@@ -66,9 +66,10 @@ pub fn sphere_membership(points: &[Vec3], spheres: &[SphereSurface], container: 
         .collect()
 }
 
-/// The contacts of `graph` between particles held by two different spheres (`membership`
-/// from [`sphere_membership`]) whose branch leaves the first sphere before it enters the
-/// second (a gap between them along the branch), with the two crossings.
+/// The contacts of `graph` between particles held by two spheres (`membership` from
+/// [`sphere_membership`]; in a periodic box two images of one sphere count as two) whose
+/// branch leaves the first before it enters the second (a gap between them along the branch),
+/// with the two crossings. A branch between two points of one sphere (image) never leaves it.
 pub fn bridges(
     graph: &ContactGraph,
     centres: &[Vec3],
@@ -87,7 +88,7 @@ pub fn bridges(
         .with_min_len(4096)
         .filter_map(|(k, &[p, q])| {
             let (a, b) = (membership[p as usize], membership[q as usize]);
-            if a == NO_SPHERE || b == NO_SPHERE || a == b {
+            if a == NO_SPHERE || b == NO_SPHERE {
                 return None;
             }
             let (sa, sb) = (&spheres[a as usize], &spheres[b as usize]);
@@ -106,7 +107,8 @@ pub fn bridges(
             let t_exit = root(&wa, sa.radius, 1.0)?;
             let t_entry = root(&wb, sb.radius, -1.0)?;
             if t_entry <= t_exit {
-                return None; // the spheres overlap along the branch: no gap to cross
+                // One sphere (image) holds the whole branch, or two overlap along it: no gap.
+                return None;
             }
             let cos = |w: &Vec3, t: f64, r: f64| (e.dot(&(w + t * e)) / r).abs();
             Some(Bridge {

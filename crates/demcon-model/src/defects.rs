@@ -274,6 +274,9 @@ pub struct DefectReport {
     pub damaged_contacts: usize,
     /// Contacts crossing a listed interface (at build time; re-phasing updates it).
     pub interface_contacts: usize,
+    /// Of those, contacts between two spheres that nearly touch, whose branch reads the
+    /// interface twice ([`PhaseBridge`]).
+    pub bridged_contacts: usize,
     /// Particles on a crack face (an end of a contact crossed by a crack).
     pub crack_face_particles: usize,
     /// Connected components of the graph once the contacts are cut.
@@ -776,9 +779,10 @@ pub(crate) fn update_interface_marks(
     defects.report.interface_contacts = count;
 }
 
-/// A branch that leaves one followed sphere and enters another across a gap (conforming
-/// cells where two spheres nearly touch, closer than the seed pairs can follow: both cells are
-/// of one phase, the surfaces between them are not facets). Its path reads two crossings —
+/// A branch that leaves one sphere and enters another across a gap: conforming cells where two
+/// spheres nearly touch, closer than the seed pairs can follow, or, by centre, two particles of
+/// two spheres in contact (both ends of one phase, the surfaces between them on no facet). Its
+/// path reads two crossings —
 /// out of p's sphere into the gap's phase, out of the gap into q's sphere — each with its own
 /// |e·n| ([`crossing_resistance`]), instead of the phases at its ends (none). The bulk
 /// conductance keeps p's and q's phases along the whole branch (the gap, under ~0.2 × the

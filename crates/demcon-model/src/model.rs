@@ -54,9 +54,10 @@ pub struct Model {
     /// Interfaces, cracks, damage and broken bonds applied to the graph (cut contacts are
     /// not in `graph`; see [`crate::defects`]).
     pub defects: Defects,
-    /// The branches between the cells of two followed spheres that nearly touch, by particle
-    /// pair, ascending (conforming cells; empty otherwise): an interface law is read at both
-    /// crossings ([`PhaseBridge`]). Pairs, not contact indices: they survive cut contacts.
+    /// The branches between the cells (or particles) of two spheres that nearly touch, by
+    /// particle pair, ascending (conforming cells; by centre when the scene lists an interface;
+    /// empty otherwise): an interface law is read at both crossings ([`PhaseBridge`]). Pairs,
+    /// not contact indices: they survive cut contacts.
     pub bridges: Vec<PhaseBridge>,
     /// What the build did.
     pub report: ModelReport,
@@ -443,8 +444,38 @@ fn conform(
             "conforming seeds shape the Laguerre cells: set `surface: Laguerre`",
         ));
     }
-    let mut spheres = Vec::new();
+    let spheres = sphere_surfaces(params, container)?;
     let mut planes = Vec::new();
+    for ph in &params.phases {
+        if let PhaseSpec::Region {
+            region: Region::Box { min, max },
+            ..
+        } = ph
+        {
+            planes.extend(box_faces(min, max, container));
+        }
+    }
+    // The cracks' surfaces: their law (open, filled) sits on the facets that lie on them.
+    planes.extend(
+        params
+            .defects
+            .cracks
+            .iter()
+            .map(|c| PlanePatch::Crack(c.shape.clone())),
+    );
+    let h = (domain_volume / particles.len().max(1) as f64).cbrt();
+    let body = demcon_graph::Body {
+        container,
+        carve: params.carve.as_ref().map(|(r, _)| r),
+    };
+    let conformed = conforming_sites(particles, body, &spheres, &planes, h, &ConformParams::default())?;
+    Ok((conformed, spheres))
+}
+
+/// The sphere surfaces of the phases: every `Spheres` and `Inclusions` phase and every
+/// `Region(Sphere)`, in the order of the phase entries.
+fn sphere_surfaces(params: &ModelParams, container: &Container) -> Result<Vec<SphereSurface>, ModelError> {
+    let mut spheres = Vec::new();
     for ph in &params.phases {
         match ph {
             PhaseSpec::Spheres { radius, centres, .. } => {
@@ -466,28 +497,10 @@ fn conform(
                 centre: *centre,
                 radius: *radius,
             }),
-            PhaseSpec::Region {
-                region: Region::Box { min, max },
-                ..
-            } => planes.extend(box_faces(min, max, container)),
             PhaseSpec::Region { .. } => {}
         }
     }
-    // The cracks' surfaces: their law (open, filled) sits on the facets that lie on them.
-    planes.extend(
-        params
-            .defects
-            .cracks
-            .iter()
-            .map(|c| PlanePatch::Crack(c.shape.clone())),
-    );
-    let h = (domain_volume / particles.len().max(1) as f64).cbrt();
-    let body = demcon_graph::Body {
-        container,
-        carve: params.carve.as_ref().map(|(r, _)| r),
-    };
-    let conformed = conforming_sites(particles, body, &spheres, &planes, h, &ConformParams::default())?;
-    Ok((conformed, spheres))
+    Ok(spheres)
 }
 
 /// The phase of the gap between two followed spheres at `x`: the last phase entry that is not
@@ -668,10 +681,14 @@ pub fn build_model_staged(
             )
         })?
     };
-    // Where two followed spheres nearly touch, the cells inside them meet across the gap.
-    let bridges = match &conformed {
-        Some((_, _, spheres)) if graph.cells.is_some() => {
-            phase_bridges(params, &graph, &particles, &container, spheres)
+    // Where two spheres nearly touch, cells (or particles) inside them meet across the gap:
+    // under the conforming cells always (the seeds cannot follow such a gap), by centre
+    // whenever two spheres' particles touch (read when the scene lists an interface).
+    let bridges = match (&conformed, params.phase_rule) {
+        (Some((_, _, spheres)), _) => phase_bridges(params, &graph, &particles, &container, spheres),
+        (None, PhaseRule::Centre) if !params.defects.interfaces.is_empty() => {
+            let spheres = sphere_surfaces(params, &container)?;
+            phase_bridges(params, &graph, &particles, &container, &spheres)
         }
         _ => Vec::new(),
     };
@@ -685,6 +702,7 @@ pub fn build_model_staged(
             &bridges,
             n_phases,
         );
+        defects.report.bridged_contacts = bridges.len();
     }
     let t2 = Instant::now();
     let network = stages.time("network", || Network::new(particles.len(), &graph.pairs))?;

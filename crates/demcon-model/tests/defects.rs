@@ -787,7 +787,8 @@ fn a_filled_crack_covers_laguerre_facets_in_part() {
 }
 
 /// Two spheres of phase 1 whose gap (5·10⁻⁴ of the cube) is far below what the conforming
-/// seed pairs can follow: the cells inside them meet across the gap ("bridges"), and an
+/// seed pairs can follow (and below the cells, by centre): the cells inside them meet across
+/// the gap ("bridges"), and an
 /// interface conductance h is read at both crossings, each with its own |e·n|:
 /// 1/G = 1/G₀ + (1/h)(1/|e·n|_exit + 1/|e·n|_entry)/S, G₀ the same facet without the interface.
 #[test]
@@ -802,40 +803,81 @@ fn nearly_touching_spheres_read_their_interface_at_both_crossings() {
         Vec3::new(0.5 + radius + 0.5 * gap, 0.5, 0.5),
     ];
     let h = 50.0;
-    let build = |defects: DefectSpec| {
-        let phases = vec![PhaseSpec::Spheres {
-            phase: 1,
-            radius,
-            centres: centres.clone(),
-        }];
-        laguerre_model(&particles, container, phases, PhaseRule::Conforming, defects)
-    };
-    let perfect = build(DefectSpec::default());
-    let barrier = build(interface(h, None));
-    assert_eq!(perfect.graph.pairs, barrier.graph.pairs);
-    assert!(!barrier.bridges.is_empty(), "no bridge across a gap of {gap} m");
-    assert_eq!(
-        barrier.report.conform.as_ref().unwrap().bridged_facets,
-        barrier.bridges.len()
-    );
-    let problem = steady(true, FloatingPolicy::Fail);
-    let g0 = thermal_setup(&perfect, &problem).unwrap().conductances;
-    let g = thermal_setup(&barrier, &problem).unwrap().conductances;
-    let area = &barrier.graph.cells.as_ref().unwrap().facet_area;
-    for b in &barrier.bridges {
-        let k = barrier.graph.pairs.binary_search(&b.pair).unwrap();
-        let [p, q] = b.pair.map(|i| barrier.particles.phases[i as usize]);
-        assert_eq!((p, q, b.gap_phase), (1, 1, 0));
-        assert!(b.cos_exit > 0.0 && b.cos_exit <= 1.0 && b.cos_entry > 0.0 && b.cos_entry <= 1.0);
-        assert_ne!(barrier.defects.marks[k] & MARK_INTERFACE, 0);
-        let expected = 1.0 / (1.0 / g0[k] + (1.0 / h) * (1.0 / b.cos_exit + 1.0 / b.cos_entry) / area[k]);
-        assert_relative_eq!(g[k], expected, max_relative = 1e-12);
+    for rule in [PhaseRule::Conforming, PhaseRule::Centre] {
+        let build = |defects: DefectSpec| {
+            let phases = vec![PhaseSpec::Spheres {
+                phase: 1,
+                radius,
+                centres: centres.clone(),
+            }];
+            laguerre_model(&particles, container, phases, rule, defects)
+        };
+        let perfect = build(DefectSpec::default());
+        let barrier = build(interface(h, None));
+        assert_eq!(perfect.graph.pairs, barrier.graph.pairs);
+        assert!(!barrier.bridges.is_empty(), "no bridge across a gap of {gap} m");
+        let report = barrier.report.defects.as_ref().unwrap();
+        assert_eq!(report.bridged_contacts, barrier.bridges.len());
+        if rule == PhaseRule::Conforming {
+            let conform = barrier.report.conform.as_ref().unwrap();
+            assert_eq!(conform.bridged_facets, barrier.bridges.len());
+        }
+        let problem = steady(true, FloatingPolicy::Fail);
+        let g0 = thermal_setup(&perfect, &problem).unwrap().conductances;
+        let g = thermal_setup(&barrier, &problem).unwrap().conductances;
+        let area = &barrier.graph.cells.as_ref().unwrap().facet_area;
+        for b in &barrier.bridges {
+            let k = barrier.graph.pairs.binary_search(&b.pair).unwrap();
+            let [p, q] = b.pair.map(|i| barrier.particles.phases[i as usize]);
+            assert_eq!((p, q, b.gap_phase), (1, 1, 0));
+            assert!(b.cos_exit > 0.0 && b.cos_exit <= 1.0 && b.cos_entry > 0.0 && b.cos_entry <= 1.0);
+            assert_ne!(barrier.defects.marks[k] & MARK_INTERFACE, 0);
+            let expected = 1.0 / (1.0 / g0[k] + (1.0 / h) * (1.0 / b.cos_exit + 1.0 / b.cos_entry) / area[k]);
+            assert_relative_eq!(g[k], expected, max_relative = 1e-12);
+        }
+        // Every other facet between two phase-1 cells keeps its conductance.
+        for (k, &[p, q]) in barrier.graph.pairs.iter().enumerate() {
+            let bridged = barrier.bridges.iter().any(|b| b.pair == [p, q]);
+            if !bridged && barrier.particles.phases[p as usize] == barrier.particles.phases[q as usize] {
+                assert_eq!(g[k], g0[k]);
+            }
+        }
     }
-    // Every other facet between two phase-1 cells keeps its conductance.
-    for (k, &[p, q]) in barrier.graph.pairs.iter().enumerate() {
-        let bridged = barrier.bridges.iter().any(|b| b.pair == [p, q]);
-        if !bridged && barrier.particles.phases[p as usize] == barrier.particles.phases[q as usize] {
-            assert_eq!(g[k], g0[k]);
+}
+
+/// A sphere nearly touching its own periodic image (the simple-cubic array at f → π/6): the
+/// branches across the gap join two images of one sphere and are bridges too, under the
+/// conforming cells and by centre.
+#[test]
+fn a_sphere_nearly_touching_its_periodic_image_is_bridged() {
+    use demcon_packing::{PackingParams, RadiusDistribution, pack};
+    let container = Container::Periodic { size: [1.0; 3] };
+    let params = PackingParams::new(container, 3000, 0.55, RadiusDistribution::gaussian(0.2));
+    let particles = pack(&params, 4, None).unwrap().0;
+    let phases = vec![PhaseSpec::Spheres {
+        phase: 1,
+        radius: 0.5 - 2.5e-4,
+        centres: vec![Vec3::new(0.5, 0.5, 0.5)],
+    }];
+    let problem = ThermalProblem {
+        bcs: Vec::new(),
+        ..steady(true, FloatingPolicy::Fail)
+    };
+    for rule in [PhaseRule::Conforming, PhaseRule::Centre] {
+        let h = 20.0;
+        let perfect = laguerre_model(&particles, container, phases.clone(), rule, DefectSpec::default());
+        let barrier = laguerre_model(&particles, container, phases.clone(), rule, interface(h, None));
+        assert!(
+            !barrier.bridges.is_empty(),
+            "{rule:?}: no bridge across the periodic gap"
+        );
+        let g0 = thermal_setup(&perfect, &problem).unwrap().conductances;
+        let g = thermal_setup(&barrier, &problem).unwrap().conductances;
+        let area = &barrier.graph.cells.as_ref().unwrap().facet_area;
+        for b in &barrier.bridges {
+            let k = barrier.graph.pairs.binary_search(&b.pair).unwrap();
+            let expected = 1.0 / (1.0 / g0[k] + (1.0 / h) * (1.0 / b.cos_exit + 1.0 / b.cos_entry) / area[k]);
+            assert_relative_eq!(g[k], expected, max_relative = 1e-12);
         }
     }
 }
