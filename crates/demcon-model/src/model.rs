@@ -685,10 +685,14 @@ pub fn build_model_staged(
     // under the conforming cells always (the seeds cannot follow such a gap), by centre
     // whenever two spheres' particles touch (read when the scene lists an interface).
     let bridges = match (&conformed, params.phase_rule) {
-        (Some((_, _, spheres)), _) => phase_bridges(params, &graph, &particles, &container, spheres),
+        (Some((_, _, spheres)), _) => stages.time("bridges", || {
+            phase_bridges(params, &graph, &particles, &container, spheres)
+        }),
         (None, PhaseRule::Centre) if !params.defects.interfaces.is_empty() => {
             let spheres = sphere_surfaces(params, &container)?;
-            phase_bridges(params, &graph, &particles, &container, &spheres)
+            stages.time("bridges", || {
+                phase_bridges(params, &graph, &particles, &container, &spheres)
+            })
         }
         _ => Vec::new(),
     };
