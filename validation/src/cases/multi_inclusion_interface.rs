@@ -53,6 +53,7 @@ use super::common::*;
 use super::composite::{
     LAMBDA_EPOXY, LAMBDA_SILICA, SIZE_RATIO, Variant, epoxy_silica, etc_of, slab_scene, with_inclusions,
 };
+use super::multi_inclusion_interface_periodic::ALPHAS;
 use crate::analytic::{hasselman_johnson, third_order};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
@@ -60,8 +61,6 @@ use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Silica volume fractions.
 const FS: [f64; 5] = [0.1, 0.2, 0.3, 0.4, 0.5];
-/// Kapitza radius over the sphere radius (0: the perfect interface).
-const ALPHAS: [f64; 6] = [0.0, 0.01, 0.03, 0.1, 0.3, 1.0];
 /// Independent packings (each with its own inclusion layout).
 const PACKINGS: u64 = 3;
 /// The paper's DEM–experiment gap the question is about (fraction).
