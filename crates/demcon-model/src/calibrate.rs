@@ -17,9 +17,9 @@ use demcon_network::{FloatingPolicy, SolveReport, homogenize, resolve_fixed};
 use demcon_thermal::{face_flux_sources, solve_steady_temperature};
 use serde::Serialize;
 
+use crate::assembly::{default_solve_params, network_with_walls};
 use crate::error::ModelError;
 use crate::model::Model;
-use crate::thermal::{default_solve_params, network_with_walls};
 
 /// Result of a C_t calibration.
 #[derive(Debug, Clone, Serialize)]

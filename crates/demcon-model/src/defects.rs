@@ -60,7 +60,6 @@ use demcon_graph::{
 use serde::Serialize;
 
 use crate::error::ModelError;
-use crate::model::Model;
 
 /// A contact crossing the interface between the two phases.
 pub const MARK_INTERFACE: u8 = 1;
@@ -823,19 +822,32 @@ pub(crate) enum Physics {
     Electric,
 }
 
+/// What the conductances of a built model read of its defects (a model's
+/// [`crate::Model::defect_view`]): the defects, the graph, the particles and their cut parts,
+/// the container, the number of phases and the bridges.
+pub(crate) struct DefectView<'a> {
+    pub(crate) defects: &'a Defects,
+    pub(crate) graph: &'a ContactGraph,
+    pub(crate) particles: &'a ParticleSet,
+    pub(crate) container: &'a Container,
+    pub(crate) mixes: &'a [Mix],
+    pub(crate) n_phases: usize,
+    pub(crate) bridges: &'a [PhaseBridge],
+}
+
 /// Adds the interface and filled-crack series resistances per area to contact conductances
 /// `g` (W/K or S) of surfaces `areas` (m²) and applies the damage factors:
 /// G = f / (1/G₀ + (Σ r_interface + r_gap)/S) on a facet a filled crack covers wholly (each
 /// r already divided by its |e·n|), G = f ((1 − c) G₁ + c / (1/G₁ + r_gap/S)) with
 /// G₁ = 1/(1/G₀ + Σ r_interface/S) on one it covers in the part c ([`with_gap`]).
-pub(crate) fn apply_to_contacts(model: &Model, areas: &[f64], g: &mut [f64], physics: Physics) {
-    let (defects, graph, phases, mixes) = (
-        &model.defects,
-        &model.graph,
-        &model.particles.phases,
-        &model.mixes,
+pub(crate) fn apply_to_contacts(view: &DefectView<'_>, areas: &[f64], g: &mut [f64], physics: Physics) {
+    let (defects, graph, phases, mixes, n_phases) = (
+        view.defects,
+        view.graph,
+        &view.particles.phases,
+        view.mixes,
+        view.n_phases,
     );
-    let n_phases = model.materials.materials.len();
     if defects.spec.interfaces.is_empty() && defects.gap_thermal.is_empty() && defects.damage.is_empty() {
         return;
     }
@@ -847,7 +859,7 @@ pub(crate) fn apply_to_contacts(model: &Model, areas: &[f64], g: &mut [f64], phy
     };
     let interfaces = !defects.spec.interfaces.is_empty();
     let normals = interfaces.then(|| phase_normals(graph, phases, areas));
-    for (k, bridge) in bridge_of(graph, &model.bridges).enumerate().take(g.len()) {
+    for (k, bridge) in bridge_of(graph, view.bridges).enumerate().take(g.len()) {
         let mut r = 0.0;
         if interfaces {
             let (t, e, _) = contact_interface(
@@ -910,15 +922,19 @@ pub(crate) fn cut_wall_links(
 /// inside its particle (segment rule), filled cracks on the link's segment (each gap divided
 /// by |e·n|, e the face's normal), damage by the half-bond's midpoint.
 pub(crate) fn apply_to_walls(
-    model: &Model,
+    view: &DefectView<'_>,
     walls: &WallContacts,
     surfaces: &[f64],
     g: &mut [f64],
     physics: Physics,
 ) {
-    let (defects, particles, container, mixes) =
-        (&model.defects, &model.particles, &model.container, &model.mixes);
-    let n_phases = model.materials.materials.len();
+    let (defects, particles, container, mixes, n_phases) = (
+        view.defects,
+        view.particles,
+        view.container,
+        view.mixes,
+        view.n_phases,
+    );
     let spec = &defects.spec;
     if spec.interfaces.is_empty() && spec.cracks.is_empty() && spec.damage.is_empty() {
         return;

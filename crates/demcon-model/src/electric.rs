@@ -11,11 +11,11 @@ use demcon_graph::{
 use demcon_network::FloatingPolicy;
 use serde::Serialize;
 
+use crate::assembly::{CtSpec, SurfaceSpec, network_with_walls};
 use crate::calibrate::calibrate_ct;
 use crate::defects::{Physics, apply_to_contacts, apply_to_walls};
 use crate::error::ModelError;
 use crate::model::Model;
-use crate::thermal::{CtSpec, SurfaceSpec, network_with_walls};
 
 /// Where an electrode holds its potential.
 #[derive(Debug, Clone, PartialEq)]
@@ -266,7 +266,7 @@ fn contact_conductances(
             interface_value_split(sp, sq, w, rule) * a / geo.distance
         })
         .collect();
-    apply_to_contacts(model, &s.area, &mut g, Physics::Electric);
+    apply_to_contacts(&model.defect_view(), &s.area, &mut g, Physics::Electric);
     Ok(g)
 }
 
@@ -290,7 +290,13 @@ pub fn solve_electric(
     let walls = model.wall_contacts(&faces, "electric.electrodes")?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), &sm);
     let mut wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
-    apply_to_walls(model, &walls, &wall_s, &mut wall_g, Physics::Electric);
+    apply_to_walls(
+        &model.defect_view(),
+        &walls,
+        &wall_s,
+        &mut wall_g,
+        Physics::Electric,
+    );
     let m = g.len();
     let (ext, g) = network_with_walls(model, &walls, g, wall_g)?;
     let net = ext.as_ref().unwrap_or_else(|| model.network());

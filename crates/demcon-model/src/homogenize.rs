@@ -8,11 +8,12 @@ use demcon_graph::InterfaceRule;
 use demcon_network::{Homogenized, SolveParams, homogenize};
 use serde::Serialize;
 
+use crate::assembly::SurfaceSpec;
 use crate::calibrate::CtCalibration;
 use crate::electric::electric_conductances;
 use crate::error::ModelError;
 use crate::model::Model;
-use crate::thermal::{SurfaceSpec, thermal_conductances};
+use crate::thermal::thermal_conductances;
 
 /// An effective tensor and what it cost.
 #[derive(Debug, Clone, Serialize)]

@@ -12,6 +12,8 @@
 //!   carry series resistances and factors that both physics' conductances apply).
 //! - [`etc`]: the effective conductivity of a steady run from its two held sets
 //!   ([`effective_conductivity`]), refused where it is not defined.
+//! - `assembly`: what both physics share — the surface choice ([`SurfaceSpec`]), the default
+//!   solver ([`default_solve_params`]), the network extended by the wall nodes.
 //! - [`calibrate`]: C_t on the model's own packing ([`calibrate_ct_with`]).
 //! - [`electric`]: an [`ElectricProblem`] → [`solve_electric`] (conductances with ρ_e(T),
 //!   electrodes on particles or faces, Joule power).
@@ -30,6 +32,7 @@
 //! flux dipoles all read.
 #![warn(missing_docs)]
 
+mod assembly;
 pub mod calibrate;
 pub mod checkpoint;
 pub mod couple;

@@ -16,8 +16,8 @@ use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReaso
 use serde::Serialize;
 
 use crate::defects::{
-    CutContact, DefectReport, DefectSpec, Defects, Numbering, PhaseBridge, apply_defects, cut_wall_links,
-    update_interface_marks,
+    CutContact, DefectReport, DefectSpec, DefectView, Defects, Numbering, PhaseBridge, apply_defects,
+    cut_wall_links, update_interface_marks,
 };
 use crate::error::ModelError;
 
@@ -64,6 +64,19 @@ pub struct Model {
 }
 
 impl Model {
+    /// What the conductances read of the model's defects ([`crate::defects`]).
+    pub(crate) fn defect_view(&self) -> DefectView<'_> {
+        DefectView {
+            defects: &self.defects,
+            graph: &self.graph,
+            particles: &self.particles,
+            container: &self.container,
+            mixes: &self.mixes,
+            n_phases: self.materials.materials.len(),
+            bridges: &self.bridges,
+        }
+    }
+
     /// Laplacian structure over the contacts (rebuilt here, identical, after
     /// [`Self::release_network`]).
     pub fn network(&self) -> &Network {

@@ -9,7 +9,7 @@ use demcon_graph::{
     CellWall, InterfaceRule, SurfaceModel, Surfaces, WallContacts, conductances, contact_property_laminate,
     contact_surfaces, representative_volumes,
 };
-use demcon_network::{Constraints, FloatingPolicy, Method, Network, SolveParams, resolve_fixed};
+use demcon_network::{Constraints, FloatingPolicy, Network, SolveParams, resolve_fixed};
 use demcon_thermal::{
     CheckpointEvery, Checkpoints, ExplicitParams, ImplicitParams, ProgressFn, RepresentativeVolume, Scheme,
     ThermalSystem, TimeStep, TransientInput, TransientStart, TransientState, capacities, face_flux_sources,
@@ -17,56 +17,13 @@ use demcon_thermal::{
 };
 use serde::Serialize;
 
+use crate::assembly::network_with_walls;
+pub use crate::assembly::{CtSpec, SurfaceSpec, default_solve_params};
 use crate::calibrate::{CalibrationBc, CtCalibration, calibrate_ct_with};
 use crate::checkpoint::{Checkpointing, RunCheckpoint, not_resumable};
 use crate::defects::{Physics, apply_to_contacts, apply_to_walls};
 use crate::error::ModelError;
 use crate::model::Model;
-
-/// Default steady/implicit solver: MIC-preconditioned CG below 10⁴ unknowns,
-/// smoothed-aggregation AMG-PCG above (`Method::Auto`), to a relative residual of 1e-10.
-pub fn default_solve_params() -> SolveParams {
-    SolveParams {
-        method: Method::Auto {
-            rel_tol: 1e-10,
-            max_iter: 200_000,
-        },
-    }
-}
-
-/// The C_t of the calibrated surface model.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum CtSpec {
-    /// Calibrated on the model's own packing before the run.
-    Auto,
-    /// A given value (dimensionless, > 0).
-    Value(f64),
-}
-
-/// Which transmission-surface model a network uses.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum SurfaceSpec {
-    /// S = C_t π R_m² (Haddad 2021).
-    Calibrated(CtSpec),
-    /// Terreros α (Hubert 2017).
-    TerrerosAlpha,
-    /// Facets of the Laguerre cells (the model's graph must be a tessellation).
-    Laguerre,
-}
-
-impl SurfaceSpec {
-    /// The surface model with C_t resolved (`c_t` from a calibration when `Auto`; 1 if none).
-    pub fn model(&self, c_t: Option<f64>) -> SurfaceModel {
-        match *self {
-            SurfaceSpec::TerrerosAlpha => SurfaceModel::TerrerosAlpha,
-            SurfaceSpec::Laguerre => SurfaceModel::Laguerre,
-            SurfaceSpec::Calibrated(CtSpec::Value(v)) => SurfaceModel::Calibrated { c_t: v },
-            SurfaceSpec::Calibrated(CtSpec::Auto) => SurfaceModel::Calibrated {
-                c_t: c_t.unwrap_or(1.0),
-            },
-        }
-    }
-}
 
 /// A thermal boundary condition, resolved on the model by [`thermal_bcs`].
 #[derive(Debug, Clone, PartialEq)]
@@ -256,24 +213,6 @@ impl ThermalSetup {
     }
 }
 
-/// The model's network extended by one node per wall (`None` without walls), and the
-/// conductances of the contacts followed by those of the wall links.
-pub(crate) fn network_with_walls(
-    model: &Model,
-    walls: &WallContacts,
-    contact_g: Vec<f64>,
-    wall_g: Vec<f64>,
-) -> Result<(Option<Network>, Vec<f64>), ModelError> {
-    if walls.is_empty() {
-        return Ok((None, contact_g));
-    }
-    let mut edges = model.graph.pairs.clone();
-    edges.extend(walls.edges());
-    let mut g = contact_g;
-    g.extend(wall_g);
-    Ok((Some(Network::new(walls.n_nodes(), &edges)?), g))
-}
-
 /// Builds the thermal network values (calibrating C_t when asked): surfaces, conductances
 /// with the interface rule, wall links of the `WallTemperature` faces, heat capacities
 /// (laminate particles mix ρ and ρc arithmetically) and the paper's step estimate.
@@ -322,7 +261,13 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
     let walls = model.wall_contacts(&faces, "thermal.bcs")?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), &sm);
     let mut wall_g = walls.conductances(&wall_s, |p, e, h| lam.half_bond(p, phases, &lam_phase, e, h));
-    apply_to_walls(model, &walls, &wall_s, &mut wall_g, Physics::Thermal);
+    apply_to_walls(
+        &model.defect_view(),
+        &walls,
+        &wall_s,
+        &mut wall_g,
+        Physics::Thermal,
+    );
     let (network, g) = network_with_walls(model, &walls, g, wall_g)?;
     caps.resize(caps.len() + walls.n_walls(), 1.0);
     let paper_dt = match sm {
@@ -369,7 +314,7 @@ fn contact_values(
         interface,
     )?;
     let mut g = conductances(&model.graph, &s.area, &lambda)?;
-    apply_to_contacts(model, &s.area, &mut g, Physics::Thermal);
+    apply_to_contacts(&model.defect_view(), &s.area, &mut g, Physics::Thermal);
     Ok((s, lambda, g))
 }
 
