@@ -357,6 +357,7 @@ fn paper_scale_scene_runs_shrunk() {
             "packing",
             "phases",
             "tessellation",
+            "bridges",
             "network",
             "thermal setup",
             "solve",
