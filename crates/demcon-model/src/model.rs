@@ -516,38 +516,45 @@ fn sphere_surfaces(params: &ModelParams, container: &Container) -> Result<Vec<Sp
     Ok(spheres)
 }
 
-/// The phase of the gap between two followed spheres at `x`: the last phase entry that is not
-/// a followed sphere set whose region holds `x`, else phase 0 (the gap lies outside every
-/// followed sphere: between two that nearly touch).
-fn gap_phase(params: &ModelParams, x: &Vec3) -> u16 {
+/// The phase entries of `params` that are not spheres (the regions a gap between two spheres
+/// may lie in), in order.
+fn other_regions(params: &ModelParams) -> Vec<(&Region, u16)> {
     params
         .phases
         .iter()
         .filter_map(|ph| match ph {
             PhaseSpec::Region { phase, region } if !matches!(region, Region::Sphere { .. }) => {
-                region.contains_point(x).then_some(*phase)
+                Some((region, *phase))
             }
             _ => None,
         })
-        .next_back()
-        .unwrap_or(0)
+        .collect()
 }
 
-/// The bridges of a conforming model ([`PhaseBridge`]): the branches between the cells of
-/// two different followed spheres, with the phase of the gap at their middle.
+/// The bridges of a model ([`PhaseBridge`]): the branches between the cells or particles of
+/// two spheres (`spheres`) that leave the first before entering the second. The phase of the
+/// gap at their middle is that of the last of `regions` (the non-sphere phase entries, in
+/// order) holding it, else phase 0.
 fn phase_bridges(
-    params: &ModelParams,
+    regions: &[(&Region, u16)],
     graph: &ContactGraph,
     particles: &ParticleSet,
     container: &Container,
     spheres: &[SphereSurface],
 ) -> Vec<PhaseBridge> {
     let membership = demcon_graph::sphere_membership(&particles.centres, spheres, container);
+    let gap_phase = |x: &Vec3| {
+        regions
+            .iter()
+            .rev()
+            .find(|(r, _)| r.contains_point(x))
+            .map_or(0, |&(_, p)| p)
+    };
     demcon_graph::bridges(graph, &particles.centres, spheres, &membership, container)
         .into_iter()
         .map(|b| PhaseBridge {
             pair: graph.pairs[b.contact as usize],
-            gap_phase: gap_phase(params, &b.gap_middle),
+            gap_phase: gap_phase(&b.gap_middle),
             cos_exit: b.cos_exit,
             cos_entry: b.cos_entry,
         })
@@ -695,16 +702,16 @@ pub fn build_model_staged(
         })?
     };
     // Where two spheres nearly touch, cells (or particles) inside them meet across the gap:
-    // under the conforming cells always (the seeds cannot follow such a gap), by centre
-    // whenever two spheres' particles touch (read when the scene lists an interface).
+    // under the conforming cells (the seeds cannot follow such a gap) and by centre.
+    let regions = other_regions(params);
     let bridges = match (&conformed, params.phase_rule) {
         (Some((_, _, spheres)), _) => stages.time("bridges", || {
-            phase_bridges(params, &graph, &particles, &container, spheres)
+            phase_bridges(&regions, &graph, &particles, &container, spheres)
         }),
-        (None, PhaseRule::Centre) if !params.defects.interfaces.is_empty() => {
+        (None, PhaseRule::Centre) => {
             let spheres = sphere_surfaces(params, &container)?;
             stages.time("bridges", || {
-                phase_bridges(params, &graph, &particles, &container, &spheres)
+                phase_bridges(&regions, &graph, &particles, &container, &spheres)
             })
         }
         _ => Vec::new(),
@@ -1047,6 +1054,40 @@ pub fn set_region_phases(
     }
     model.particles.phases.iter_mut().for_each(|p| *p = 0);
     model.mixes.clear();
+    // The bridges follow the new layout's spheres (by centre; the cut rules read the
+    // crossings on the half-bonds).
+    model.bridges = match rule {
+        PhaseRule::Centre => {
+            let mut spheres = Vec::new();
+            let mut others = Vec::new();
+            for (region, phase) in regions {
+                match region {
+                    Region::Sphere { centre, radius } => spheres.push(SphereSurface {
+                        centre: *centre,
+                        radius: *radius,
+                    }),
+                    Region::Union(parts) if parts.iter().all(|r| matches!(r, Region::Sphere { .. })) => {
+                        spheres.extend(parts.iter().filter_map(|r| match r {
+                            Region::Sphere { centre, radius } => Some(SphereSurface {
+                                centre: *centre,
+                                radius: *radius,
+                            }),
+                            _ => None,
+                        }))
+                    }
+                    _ => others.push((region, *phase)),
+                }
+            }
+            phase_bridges(
+                &others,
+                &model.graph,
+                &model.particles,
+                &model.container,
+                &spheres,
+            )
+        }
+        _ => Vec::new(),
+    };
     for (region, phase) in regions {
         assign(&mut model.particles, region, *phase, rule, &mut model.mixes);
     }

@@ -821,6 +821,19 @@ fn nearly_touching_spheres_read_their_interface_at_both_crossings() {
         if rule == PhaseRule::Conforming {
             let conform = barrier.report.conform.as_ref().unwrap();
             assert_eq!(conform.bridged_facets, barrier.bridges.len());
+        } else {
+            // Re-phasing by centre with the same spheres finds the same bridges; a cut rule none.
+            let spheres = Region::Union(
+                centres
+                    .iter()
+                    .map(|&centre| Region::Sphere { centre, radius })
+                    .collect(),
+            );
+            let mut again = barrier.clone();
+            set_region_phases(&mut again, &[(spheres.clone(), 1)], PhaseRule::Centre).unwrap();
+            assert_eq!(again.bridges, barrier.bridges);
+            set_region_phases(&mut again, &[(spheres, 1)], PhaseRule::Segment).unwrap();
+            assert!(again.bridges.is_empty());
         }
         let problem = steady(true, FloatingPolicy::Fail);
         let g0 = thermal_setup(&perfect, &problem).unwrap().conductances;
