@@ -64,12 +64,7 @@ fn homogenisation(c: &mut Criterion) {
         .collect();
     let branches: Vec<_> = (0..g.len()).map(|k| g.branch(k)).collect();
     let net = Network::new(p.len(), &g.pairs).unwrap();
-    let params = SolveParams {
-        method: Method::Auto {
-            rel_tol: 1e-10,
-            max_iter: 10_000,
-        },
-    };
+    let params = SolveParams::new(Method::Auto, 1e-10, 10_000);
     let volume = size[0] * size[1] * size[2];
     group.bench_function(BenchmarkId::new("laguerre-periodic", p.len()), |b| {
         b.iter(|| black_box(homogenize(&net, &cond, &branches, volume, &params).unwrap()))

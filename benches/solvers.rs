@@ -1,6 +1,6 @@
 //! Criterion benchmarks of the network solvers: the explicit heat step (contacts/s, Morton
 //! vs random particle order) against a STREAM-like triad, the steady heat solve, and the
-//! electric solve with CG, faer's CG and sparse Cholesky, over a size ladder.
+//! electric solve with Jacobi-, MIC- and multigrid-preconditioned CG and sparse Cholesky, over a size ladder.
 //!
 //! Networks are packing-like random geometric graphs built here (Poisson points of unit
 //! density, links within r = 1.214, mean coordination ≈ 7.5), so the benchmark does not
@@ -290,28 +290,16 @@ fn bench_explicit(c: &mut Criterion) {
     group.finish();
 }
 
-const JACOBI: Method = Method::Cg {
-    rel_tol: 1e-8,
-    max_iter: 100_000,
-};
-const MIC: Method = Method::IcCg {
-    rel_tol: 1e-8,
-    max_iter: 20_000,
-};
-const AMG: Method = Method::AmgCg {
-    rel_tol: 1e-8,
-    max_iter: 10_000,
-};
-const FAER: Method = Method::FaerCg {
-    rel_tol: 1e-8,
-    max_iter: 100_000,
-};
+const JACOBI: SolveParams = SolveParams::new(Method::Cg, 1e-8, 100_000);
+const MIC: SolveParams = SolveParams::new(Method::IcCg, 1e-8, 20_000);
+const AMG: SolveParams = SolveParams::new(Method::AmgCg, 1e-8, 10_000);
+const CHOLESKY: SolveParams = SolveParams::new(Method::Cholesky, 1e-8, 1);
 
 fn bench_steady(c: &mut Criterion) {
     let mut group = c.benchmark_group("steady_solve");
     group.sample_size(10);
     for n in [10_000usize, 100_000] {
-        if !["jacobi-pcg", "amg-pcg", "faer-cg"]
+        if !["jacobi-pcg", "amg-pcg"]
             .iter()
             .any(|m| wanted(&format!("steady_solve/{m}/{n}")))
         {
@@ -320,17 +308,17 @@ fn bench_steady(c: &mut Criterion) {
         let case = build(n, false, 2);
         let bcs = constraints(&case);
         let q = vec![0.0; n];
-        for method in [JACOBI, AMG, FAER] {
-            if !wanted(&format!("steady_solve/{}/{n}", method.name())) {
+        for method in [JACOBI, AMG] {
+            if !wanted(&format!("steady_solve/{}/{n}", method.method.name())) {
                 continue;
             }
-            let p = SolveParams { method };
+            let p = method;
             for _ in 0..summary_repeats() {
                 let r = solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges");
                 println!(
                     "steady n = {n}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s",
                     case.net.n_edges(),
-                    method.name(),
+                    method.method.name(),
                     r.report.iterations,
                     r.report.relative_residual,
                     r.report.setup_s,
@@ -352,7 +340,7 @@ fn bench_steady(c: &mut Criterion) {
             if summary_only() {
                 continue;
             }
-            group.bench_with_input(BenchmarkId::new(method.name(), n), &n, |bch, _| {
+            group.bench_with_input(BenchmarkId::new(method.method.name(), n), &n, |bch, _| {
                 bch.iter(|| solve_steady(&case.net, &case.g, &bcs, &q, &p).expect("converges"))
             });
         }
@@ -362,11 +350,11 @@ fn bench_steady(c: &mut Criterion) {
 
 /// The one-off line of an electric solve: contacts, method, iterations, residual, setup and
 /// solve times (s), resistance (Ω).
-fn electric_line(label: &str, net: &Network, method: Method, r: &ElectricSolution) -> String {
+fn electric_line(label: &str, net: &Network, method: SolveParams, r: &ElectricSolution) -> String {
     format!(
         "{label}, {} contacts, {}: {} iterations, residual {:.1e}, setup {:.4} s, solve {:.4} s, R = {:.6e} ohm",
         net.n_edges(),
-        method.name(),
+        method.method.name(),
         r.report.iterations,
         r.report.relative_residual,
         r.report.setup_s,
@@ -378,27 +366,27 @@ fn electric_line(label: &str, net: &Network, method: Method, r: &ElectricSolutio
 fn bench_electric(c: &mut Criterion) {
     let mut group = c.benchmark_group("electric_solve");
     group.sample_size(10);
-    let ladder: [(usize, &[Method]); 3] = [
-        (5_000, &[JACOBI, MIC, AMG, FAER, Method::Cholesky]),
-        (100_000, &[JACOBI, MIC, AMG, Method::Cholesky]),
+    let ladder: [(usize, &[SolveParams]); 3] = [
+        (5_000, &[JACOBI, MIC, AMG, CHOLESKY]),
+        (100_000, &[JACOBI, MIC, AMG, CHOLESKY]),
         (1_000_000, &[JACOBI, AMG]),
     ];
     for (n, methods) in ladder {
         if !methods
             .iter()
-            .any(|m| wanted(&format!("electric_solve/{}/{n}", m.name())))
+            .any(|m| wanted(&format!("electric_solve/{}/{n}", m.method.name())))
         {
             continue;
         }
         let case = build(n, false, 3);
         let electrodes = [(case.faces[0].clone(), 1.0), (case.faces[1].clone(), 0.0)];
         for &method in methods {
-            if !wanted(&format!("electric_solve/{}/{n}", method.name())) {
+            if !wanted(&format!("electric_solve/{}/{n}", method.method.name())) {
                 continue;
             }
             let p = ElectricParams {
                 floating: FloatingPolicy::Exclude,
-                solve: SolveParams { method },
+                solve: method,
             };
             for _ in 0..summary_repeats() {
                 let r = solve_potential(&case.net, &case.g, &electrodes, &p).expect("solves");
@@ -408,7 +396,7 @@ fn bench_electric(c: &mut Criterion) {
             if summary_only() {
                 continue;
             }
-            group.bench_with_input(BenchmarkId::new(method.name(), n), &n, |bch, _| {
+            group.bench_with_input(BenchmarkId::new(method.method.name(), n), &n, |bch, _| {
                 bch.iter(|| solve_potential(&case.net, &case.g, &electrodes, &p).expect("solves"))
             });
         }
@@ -446,10 +434,10 @@ fn cylinder_case() -> (Network, Vec<f64>, [Vec<u32>; 2]) {
 }
 
 fn bench_electric_cylinder(c: &mut Criterion) {
-    let methods = [JACOBI, MIC, Method::Cholesky];
+    let methods = [JACOBI, MIC, CHOLESKY];
     if !methods
         .iter()
-        .any(|m| wanted(&format!("electric_cylinder/{}/5000", m.name())))
+        .any(|m| wanted(&format!("electric_cylinder/{}/5000", m.method.name())))
     {
         return;
     }
@@ -458,12 +446,12 @@ fn bench_electric_cylinder(c: &mut Criterion) {
     let mut group = c.benchmark_group("electric_cylinder");
     group.sample_size(20);
     for method in methods {
-        if !wanted(&format!("electric_cylinder/{}/5000", method.name())) {
+        if !wanted(&format!("electric_cylinder/{}/5000", method.method.name())) {
             continue;
         }
         let p = ElectricParams {
             floating: FloatingPolicy::Exclude,
-            solve: SolveParams { method },
+            solve: method,
         };
         let r = solve_potential(&net, &g, &electrodes, &p).expect("solves");
         let label = format!("electric cylinder n = {}", net.n_nodes());
@@ -471,7 +459,7 @@ fn bench_electric_cylinder(c: &mut Criterion) {
         if summary_only() {
             continue;
         }
-        group.bench_with_input(BenchmarkId::new(method.name(), 5000), &5000, |bch, _| {
+        group.bench_with_input(BenchmarkId::new(method.method.name(), 5000), &5000, |bch, _| {
             bch.iter(|| solve_potential(&net, &g, &electrodes, &p).expect("solves"))
         });
     }

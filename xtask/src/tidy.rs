@@ -335,6 +335,77 @@ fn case_imports(root: &Path) -> Result<Vec<String>> {
     Ok(out)
 }
 
+/// A rule on the library sources: `pattern` may appear (outside `#[cfg(test)]` code) only in the
+/// files of `allowed` (paths from the workspace root); `why` says what the rule keeps.
+pub struct TextRule {
+    /// The text that marks the thing the rule confines.
+    pub pattern: &'static str,
+    /// The files where it may appear.
+    pub allowed: &'static [&'static str],
+    /// What the rule keeps, for the message.
+    pub why: &'static str,
+}
+
+/// The text rules `cargo xtask tidy` checks on `crates/*/src`.
+pub const TEXT_RULES: &[TextRule] = &[TextRule {
+    pattern: "let beta",
+    allowed: &["crates/demcon-network/src/pcg.rs"],
+    why: "one conjugate-gradient recurrence: implement `pcg::Krylov` and call `pcg::cg`",
+}];
+
+/// The part of a source file before its `#[cfg(test)]` module.
+fn library_part(text: &str) -> &str {
+    text.find("\n#[cfg(test)]").map_or(text, |i| &text[..i])
+}
+
+/// `.rs` files under `dir`, recursively, sorted.
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("reading {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            rust_files(&p, out)?;
+        } else if p.extension().is_some_and(|e| e == "rs") {
+            out.push(p);
+        }
+    }
+    Ok(())
+}
+
+/// Violations of [`TEXT_RULES`] in the library sources (`crates/*/src`) of `root`.
+fn text_rule_violations(root: &Path) -> Result<Vec<String>> {
+    let mut files = Vec::new();
+    let crates = root.join("crates");
+    if crates.is_dir() {
+        for krate in std::fs::read_dir(&crates)?.filter_map(|e| e.ok().map(|e| e.path())) {
+            let src = krate.join("src");
+            if src.is_dir() {
+                rust_files(&src, &mut files)?;
+            }
+        }
+    }
+    files.sort();
+    let mut out = Vec::new();
+    for p in files {
+        let rel = p
+            .strip_prefix(root)
+            .unwrap_or(&p)
+            .to_string_lossy()
+            .replace('\\', "/");
+        let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+        let lib = library_part(&text);
+        for rule in TEXT_RULES {
+            if lib.contains(rule.pattern) && !rule.allowed.contains(&rel.as_str()) {
+                out.push(format!("{rel} contains `{}`: {}", rule.pattern, rule.why));
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// Runs every check on the workspace at `root`; the error lists every violation.
 pub fn check(root: &Path) -> Result<()> {
     let mut problems: Vec<String> = layer_violations(root)?.iter().map(|v| v.to_string()).collect();
@@ -352,6 +423,7 @@ pub fn check(root: &Path) -> Result<()> {
         )
     }));
     problems.extend(case_imports(root)?);
+    problems.extend(text_rule_violations(root)?);
     if problems.is_empty() {
         Ok(())
     } else {
@@ -374,7 +446,7 @@ pub fn workspace_root() -> PathBuf {
 /// `cargo xtask tidy`.
 pub fn run() -> Result<()> {
     check(&workspace_root())?;
-    eprintln!("tidy: layers, exclusive dependencies and file headers are in order");
+    eprintln!("tidy: layers, exclusive dependencies, file headers, case imports and text rules are in order");
     Ok(())
 }
 
@@ -415,6 +487,13 @@ mod tests {
             )
             .is_empty()
         );
+    }
+
+    #[test]
+    fn text_rules_read_library_code_only() {
+        let text = "//! x\nfn f() {}\n#[cfg(test)]\nmod tests {\n    fn g() { let beta = 1.0; }\n}\n";
+        assert!(!library_part(text).contains(TEXT_RULES[0].pattern));
+        assert!(library_part("let beta = 0.5;").contains(TEXT_RULES[0].pattern));
     }
 
     #[test]

@@ -68,9 +68,7 @@ fn random_network_balances_currents_and_methods_agree() {
         &g,
         &electrodes,
         &ElectricParams {
-            solve: SolveParams {
-                method: Method::Cholesky,
-            },
+            solve: SolveParams::new(Method::Cholesky, 1e-8, 1),
             ..Default::default()
         },
     )
@@ -188,29 +186,18 @@ fn contrast_cliff_electric_solves_converge_at_contrast_1e6_and_1e_minus_6() {
             &g,
             &sets,
             &ElectricParams {
-                solve: SolveParams {
-                    method: Method::Cholesky,
-                },
+                solve: SolveParams::new(Method::Cholesky, 1e-8, 1),
                 ..Default::default()
             },
         )
         .unwrap();
         for method in [
-            Method::Auto {
-                rel_tol: 1e-10,
-                max_iter: 200_000,
-            },
-            Method::Cg {
-                rel_tol: 1e-10,
-                max_iter: 200_000,
-            },
-            Method::AmgCg {
-                rel_tol: 1e-10,
-                max_iter: 200_000,
-            },
+            SolveParams::new(Method::Auto, 1e-10, 200_000),
+            SolveParams::new(Method::Cg, 1e-10, 200_000),
+            SolveParams::new(Method::AmgCg, 1e-10, 200_000),
         ] {
             let params = ElectricParams {
-                solve: SolveParams { method },
+                solve: method,
                 ..Default::default()
             };
             let sol = solve_potential(&net, &g, &sets, &params)

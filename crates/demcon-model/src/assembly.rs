@@ -11,12 +11,7 @@ use crate::model::Model;
 /// Default steady/implicit solver: MIC-preconditioned CG below 10⁴ unknowns,
 /// smoothed-aggregation AMG-PCG above (`Method::Auto`), to a relative residual of 1e-10.
 pub fn default_solve_params() -> SolveParams {
-    SolveParams {
-        method: Method::Auto {
-            rel_tol: 1e-10,
-            max_iter: 200_000,
-        },
-    }
+    SolveParams::new(Method::Auto, 1e-10, 200_000)
 }
 
 /// The C_t of the calibrated surface model.

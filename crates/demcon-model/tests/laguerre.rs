@@ -264,12 +264,7 @@ fn the_heat_flux_and_the_current_density_are_exact_in_every_particle() {
         1500,
         7,
     );
-    let tight = demcon_network::SolveParams {
-        method: demcon_network::Method::Auto {
-            rel_tol: 1e-13,
-            max_iter: 200_000,
-        },
-    };
+    let tight = demcon_network::SolveParams::new(demcon_network::Method::Auto, 1e-13, 200_000);
     let check = |what: &str, field: &[demcon_core::Vec3], exact: f64| {
         for (p, f) in field.iter().enumerate() {
             assert!(

@@ -52,6 +52,7 @@ use rayon::prelude::*;
 use crate::csr::{Accumulator, Csr, Value};
 use crate::error::SolveError;
 use crate::par::{CHUNK, chunks_map, chunks_map2, dot, ordered_sum, ordered_sums};
+use crate::pcg::{self, Krylov};
 use crate::sell::{NO_GROUP, PREFETCH_AHEAD, PREFETCH_MIN_COLS, RowSell, SELL_LANES, Sell, prefetch_gathers};
 
 /// Largest level solved directly by dense Cholesky (unknowns).
@@ -1102,67 +1103,28 @@ impl DenseCholesky {
     }
 }
 
-/// Preconditioned CG on `a` δ = `rhs` from δ = 0 with the multigrid cycle, until
-/// ‖rhs − a δ‖ ≤ `abs_tol` (recursive residual) or `max_iter` iterations.
-/// Returns (δ, iterations).
-pub(crate) fn pcg(
-    amg: &Amg,
-    rhs: &[f64],
-    abs_tol: f64,
-    max_iter: usize,
-) -> Result<(Vec<f64>, usize), SolveError> {
-    const NAME: &str = "amg-pcg";
-    let n = rhs.len();
-    let mut work = amg.work();
-    if let (true, Coarse::Dense(f)) = (amg.levels.is_empty(), &amg.coarse) {
-        // The hierarchy is one exact factor: solve directly.
-        let mut x = vec![0.0; n];
-        f.solve(rhs, &mut x);
-        return Ok((x, 1));
+/// CG on the free block preconditioned by one multigrid cycle ([`pcg::cg`]): the fine
+/// operator's product, the cycle, and the residual update that makes the fine smoother's
+/// first sweep z = ω D⁻¹ r in the same pass.
+struct Cycled<'h> {
+    amg: &'h Amg,
+    work: Vec<Work>,
+    /// ω D⁻¹ of the finest level (none when the hierarchy is its coarse solve alone).
+    smoother: Option<&'h [f64]>,
+}
+
+impl Krylov for Cycled<'_> {
+    fn name(&self) -> &'static str {
+        "amg-pcg"
     }
-    let mut x = vec![0.0; n];
-    // Copies in parallel chunks (fresh pages first touched by both threads).
-    let mut r: Vec<f64> = rhs.par_iter().with_min_len(CHUNK).copied().collect();
-    let mut z = vec![0.0; n];
-    let mut q = vec![0.0; n];
-    let [mut rz, _] = amg.cycle_with(0, &r, &mut z, &mut work, None, false);
-    let mut p: Vec<f64> = z.par_iter().with_min_len(CHUNK).copied().collect();
-    let flexible = amg.flexible();
-    // The fine smoother's first sweep, z = ω D⁻¹ r, is made in the pass that updates r.
-    let smoother = amg.fine_smoother();
-    let mut iterations = 0;
-    while iterations < max_iter {
-        if !rz.is_finite() {
-            return Err(SolveError::NonFinite {
-                method: NAME,
-                iteration: iterations,
-                what: "r·M⁻¹r",
-                value: rz,
-            });
-        }
-        if rz <= 0.0 {
-            // The cycle is positive definite (the K-cycle's steps are CG steps); r·M⁻¹r ≤ 0
-            // is round-off (r at the floor). Return the correction so far; the caller judges the true residual.
-            break;
-        }
-        let pq = amg.fine_spmv_dot(&p, &mut q);
-        iterations += 1;
-        if !pq.is_finite() {
-            return Err(SolveError::NonFinite {
-                method: NAME,
-                iteration: iterations,
-                what: "p·Ap",
-                value: pq,
-            });
-        }
-        if pq <= 0.0 {
-            // A is positive definite by construction: p·Ap ≤ 0 is round-off at the floor.
-            break;
-        }
-        let alpha = rz / pq;
-        // r −= α q, and the next cycle's first sweep z = ω D⁻¹ r; x is updated with the
-        // direction below (one pass fewer over p).
-        let partials = chunks_map2(&mut r, &mut z, |c, rc, zc| {
+
+    fn apply_dot(&mut self, p: &[f64], q: &mut [f64]) -> f64 {
+        self.amg.fine_spmv_dot(p, q)
+    }
+
+    fn descend(&mut self, alpha: f64, q: &[f64], r: &mut [f64], z: &mut Vec<f64>) -> f64 {
+        let smoother = self.smoother;
+        let partials = chunks_map2(r, z, |c, rc, zc| {
             let range = c * CHUNK..c * CHUNK + rc.len();
             let mut rr = 0.0;
             match smoother {
@@ -1184,52 +1146,44 @@ pub(crate) fn pcg(
             }
             rr
         });
-        let rr = ordered_sum(&partials);
-        if !rr.is_finite() {
-            return Err(SolveError::NonFinite {
-                method: NAME,
-                iteration: iterations,
-                what: "recursive residual ‖r‖²",
-                value: rr,
-            });
-        }
-        if rr.sqrt() <= abs_tol || iterations >= max_iter {
-            axpy(alpha, &p, &mut x);
-            break;
-        }
-        // Flexible CG (the K-cycle is nonlinear): β = −(z·q)/(p·q) makes the new direction
-        // A-conjugate to the last (z·q summed in the cycle's last sweep); with a linear,
-        // symmetric cycle the usual r·z ratio.
-        let [rz_new, zq] = amg.cycle_with(
-            0,
-            &r,
-            &mut z,
-            &mut work,
-            flexible.then_some(&q[..]),
-            smoother.is_some(),
-        );
-        let beta = if flexible { -zq / pq } else { rz_new / rz };
-        rz = rz_new;
-        // x += α p with the old direction, then p = z + β p.
-        chunks_map2(&mut x, &mut p, |c, xc, pc| {
-            let range = c * CHUNK..c * CHUNK + pc.len();
-            for ((xi, pi), zi) in xc.iter_mut().zip(pc.iter_mut()).zip(&z[range]) {
-                *xi += alpha * *pi;
-                *pi = zi + beta * *pi;
-            }
-        });
+        ordered_sum(&partials)
     }
-    Ok((x, iterations))
+
+    fn precondition(&mut self, r: &[f64], z: &mut Vec<f64>, q: Option<&[f64]>, descended: bool) -> [f64; 2] {
+        let presmoothed = descended && self.smoother.is_some();
+        self.amg.cycle_with(0, r, z, &mut self.work, q, presmoothed)
+    }
+
+    /// The K-cycle is nonlinear: β = −(z·q)/(p·q) keeps the new direction A-conjugate to the
+    /// last (z·q summed in the cycle's last sweep).
+    fn flexible(&self) -> bool {
+        self.amg.flexible()
+    }
 }
 
-/// y += α x, in parallel chunks.
-fn axpy(alpha: f64, x: &[f64], y: &mut [f64]) {
-    chunks_map(y, |c, yc| {
-        let range = c * CHUNK..c * CHUNK + yc.len();
-        for (yi, xi) in yc.iter_mut().zip(&x[range]) {
-            *yi += alpha * xi;
-        }
-    });
+/// Solves `a` δ = `rhs` from δ = 0 by multigrid-preconditioned CG, until ‖rhs − a δ‖ ≤
+/// `abs_tol` (recursive residual) or `max_iter` iterations. Returns (δ, iterations).
+pub(crate) fn solve(
+    amg: &Amg,
+    rhs: &[f64],
+    abs_tol: f64,
+    max_iter: usize,
+) -> Result<(Vec<f64>, usize), SolveError> {
+    let mut x = vec![0.0; rhs.len()];
+    if let (true, Coarse::Dense(f)) = (amg.levels.is_empty(), &amg.coarse) {
+        // The hierarchy is one exact factor: solve directly.
+        f.solve(rhs, &mut x);
+        return Ok((x, 1));
+    }
+    // Copies in parallel chunks (fresh pages first touched by both threads).
+    let mut r: Vec<f64> = rhs.par_iter().with_min_len(CHUNK).copied().collect();
+    let mut cycled = Cycled {
+        amg,
+        work: amg.work(),
+        smoother: amg.fine_smoother(),
+    };
+    let iterations = pcg::cg(&mut cycled, &mut x, &mut r, abs_tol, max_iter)?;
+    Ok((x, iterations))
 }
 
 #[cfg(test)]
@@ -1285,7 +1239,7 @@ mod tests {
             // One level: the preconditioner is linear, CG is not flexible.
             assert!(!amg.flexible());
             let rhs: Vec<f64> = (0..n).map(|i| (i % 7) as f64).collect();
-            let (x, its) = pcg(&amg, &rhs, 1e-12, 50).unwrap();
+            let (x, its) = solve(&amg, &rhs, 1e-12, 50).unwrap();
             let mut r = vec![0.0; n];
             a.residual(&rhs, &x, &mut r);
             assert!(dot(&r, &r).sqrt() <= 1e-10, "{coarsening:?}: {its} iterations");
@@ -1429,8 +1383,8 @@ mod tests {
                 .collect::<Vec<_>>()
         );
         let b: Vec<f64> = (0..a.nrows).map(|i| ((i * 7) % 13) as f64 - 6.0).collect();
-        let (x1, it1) = pcg(&from_sell, &b, 1e-10 * dot(&b, &b).sqrt(), 200).unwrap();
-        let (x2, it2) = pcg(&from_csr, &b, 1e-10 * dot(&b, &b).sqrt(), 200).unwrap();
+        let (x1, it1) = solve(&from_sell, &b, 1e-10 * dot(&b, &b).sqrt(), 200).unwrap();
+        let (x2, it2) = solve(&from_csr, &b, 1e-10 * dot(&b, &b).sqrt(), 200).unwrap();
         assert_eq!((it1, &x1), (it2, &x2));
     }
 
@@ -1459,7 +1413,7 @@ mod tests {
             assert_eq!(amg.flexible(), coarsening == Coarsening::Plain);
             let rhs: Vec<f64> = (0..n).map(|i| ((i * 7919) % 13) as f64 - 6.0).collect();
             let norm = dot(&rhs, &rhs).sqrt();
-            let (x, its) = pcg(&amg, &rhs, 1e-10 * norm, 200).unwrap();
+            let (x, its) = solve(&amg, &rhs, 1e-10 * norm, 200).unwrap();
             let mut r = vec![0.0; n];
             a.residual(&rhs, &x, &mut r);
             assert!(dot(&r, &r).sqrt() <= 2e-10 * norm, "{coarsening:?}");

@@ -166,12 +166,7 @@ mod tests {
     }
 
     fn params() -> SolveParams {
-        SolveParams {
-            method: Method::Auto {
-                rel_tol: 1e-12,
-                max_iter: 10_000,
-            },
-        }
+        SolveParams::new(Method::Auto, 1e-12, 10_000)
     }
 
     #[test]

@@ -20,6 +20,7 @@
 
 use crate::csr::Csr;
 use crate::error::SolveError;
+use crate::pcg::{self, Krylov};
 
 /// Smallest accepted pivot, relative to the row's diagonal; smaller ones are reset to A_ii.
 const PIVOT_FLOOR: f64 = 1e-3;
@@ -224,68 +225,82 @@ fn sum4(cols: &[u32], vals: &[f64], x: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
-/// CG on Â for A δ = rhs (compact free-block numbering) until the transformed residual
+/// CG on Â = S P⁻¹ A P⁻ᵀ S ([`pcg::cg`] with M = I): two triangular sweeps per product,
+/// sequential like the updates of r (small systems).
+struct Eisenstat<'m> {
+    m: &'m Mic,
+    /// Work vectors of [`Mic::apply`].
+    y: Vec<f64>,
+    t: Vec<f64>,
+    w: Vec<f64>,
+    /// r̂·r̂ of the last [`Krylov::descend`].
+    rr: f64,
+}
+
+impl Krylov for Eisenstat<'_> {
+    fn name(&self) -> &'static str {
+        "mic-pcg"
+    }
+
+    fn apply_dot(&mut self, p: &[f64], q: &mut [f64]) -> f64 {
+        self.m.apply(p, q, &mut self.y, &mut self.t, &mut self.w)
+    }
+
+    fn descend(&mut self, alpha: f64, q: &[f64], r: &mut [f64], _z: &mut Vec<f64>) -> f64 {
+        let mut rr = 0.0;
+        for (ri, qi) in r.iter_mut().zip(q) {
+            *ri -= alpha * qi;
+            rr += *ri * *ri;
+        }
+        self.rr = rr;
+        rr
+    }
+
+    fn precondition(
+        &mut self,
+        r: &[f64],
+        _z: &mut Vec<f64>,
+        _q: Option<&[f64]>,
+        descended: bool,
+    ) -> [f64; 2] {
+        if !descended {
+            self.rr = r.iter().map(|v| v * v).sum();
+        }
+        [self.rr, 0.0]
+    }
+
+    fn identity(&self) -> bool {
+        true
+    }
+}
+
+/// Solves A δ = rhs (compact free-block numbering) by CG on Â until the transformed residual
 /// has fallen by `reduction`; returns δ and the iterations. The caller checks the true
 /// residual and calls again on the correction if needed.
-pub(crate) fn pcg(
+pub(crate) fn solve(
     m: &Mic,
     rhs: &[f64],
     reduction: f64,
     max_iter: usize,
 ) -> Result<(Vec<f64>, usize), SolveError> {
-    const NAME: &str = "mic-pcg";
     let n = rhs.len();
-    let (mut y, mut t, mut w) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     // r̂ = S P⁻¹ b.
     let mut r = vec![0.0; n];
     m.forward(rhs, &mut r);
     r.iter_mut().zip(&m.s).for_each(|(ri, si)| *ri *= si);
+    let abs_tol = reduction * r.iter().map(|v| v * v).sum::<f64>().sqrt();
     let mut x = vec![0.0; n];
-    let mut rr: f64 = r.iter().map(|v| v * v).sum();
-    let stop = reduction * reduction * rr;
-    let mut p = r.clone();
-    let mut q = vec![0.0; n];
-    let mut iterations = 0;
-    // NaN-safe: a NaN ‖r̂‖² does not count as converged (it is reported below).
-    while iterations < max_iter && (rr.is_nan() || rr > stop) {
-        if !rr.is_finite() {
-            return Err(SolveError::NonFinite {
-                method: NAME,
-                iteration: iterations,
-                what: "preconditioned residual ‖r̂‖²",
-                value: rr,
-            });
-        }
-        let pq = m.apply(&p, &mut q, &mut y, &mut t, &mut w);
-        iterations += 1;
-        if !pq.is_finite() {
-            return Err(SolveError::NonFinite {
-                method: NAME,
-                iteration: iterations,
-                what: "p·Âp",
-                value: pq,
-            });
-        }
-        if pq <= 0.0 {
-            // Â is positive definite by construction: p·Âp ≤ 0 is round-off at the floor.
-            // Return the correction so far; the caller judges the true residual.
-            break;
-        }
-        let alpha = rr / pq;
-        let mut rr_new = 0.0;
-        for i in 0..n {
-            x[i] += alpha * p[i];
-            r[i] -= alpha * q[i];
-            rr_new += r[i] * r[i];
-        }
-        let beta = rr_new / rr;
-        rr = rr_new;
-        for (pi, ri) in p.iter_mut().zip(&r) {
-            *pi = ri + beta * *pi;
-        }
-    }
+    let mut k = Eisenstat {
+        m,
+        y: vec![0.0; n],
+        t: vec![0.0; n],
+        w: vec![0.0; n],
+        rr: 0.0,
+    };
+    let iterations = pcg::cg(&mut k, &mut x, &mut r, abs_tol, max_iter)?;
     // δ = P⁻ᵀ S x̂.
     x.iter_mut().zip(&m.s).for_each(|(xi, si)| *xi *= si);
+    let mut t = std::mem::take(&mut k.t);
     m.backward(&x, &mut t);
     Ok((t, iterations))
 }
@@ -322,7 +337,7 @@ mod tests {
         let m = Mic::new(&a, 0.0).unwrap();
         assert_eq!(m.floored, 0);
         let b: Vec<f64> = (0..50).map(|i| (i as f64 * 0.3).sin()).collect();
-        let (x, its) = pcg(&m, &b, 1e-12, 100).unwrap();
+        let (x, its) = solve(&m, &b, 1e-12, 100).unwrap();
         assert!(its <= 2, "{its} iterations");
         let mut r = vec![0.0; 50];
         a.residual(&b, &x, &mut r);
@@ -380,7 +395,7 @@ mod tests {
         for omega in [0.0, 0.97] {
             let m = Mic::new(&a, omega).unwrap();
             assert_eq!(m.floored, 0);
-            let (x, its) = pcg(&m, &b, 1e-10, 1000).unwrap();
+            let (x, its) = solve(&m, &b, 1e-10, 1000).unwrap();
             let mut r = vec![0.0; n];
             a.residual(&b, &x, &mut r);
             let rn = r.iter().map(|v| v * v).sum::<f64>().sqrt();

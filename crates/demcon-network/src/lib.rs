@@ -39,13 +39,13 @@ mod constraints;
 mod csr;
 pub mod distributed;
 mod error;
-mod faer_cg;
 pub mod fixtures;
 mod flows;
 mod homogenize;
 mod ic;
 mod network;
 mod par;
+mod pcg;
 mod sell;
 mod solve;
 

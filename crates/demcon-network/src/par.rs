@@ -70,31 +70,6 @@ where
     }
 }
 
-/// As [`chunks_map`] over the matching chunks of three vectors of equal length.
-pub(crate) fn chunks_map3<T, F>(x: &mut [f64], y: &mut [f64], z: &mut [f64], f: F) -> Vec<T>
-where
-    T: Send,
-    F: Fn(usize, &mut [f64], &mut [f64], &mut [f64]) -> T + Sync + Send,
-{
-    debug_assert!(x.len() == y.len() && y.len() == z.len());
-    if sequential(y.len()) {
-        x.chunks_mut(CHUNK)
-            .zip(y.chunks_mut(CHUNK))
-            .zip(z.chunks_mut(CHUNK))
-            .enumerate()
-            .map(|(c, ((xc, yc), zc))| f(c, xc, yc, zc))
-            .collect()
-    } else {
-        x.par_chunks_mut(CHUNK)
-            .zip(y.par_chunks_mut(CHUNK))
-            .zip(z.par_chunks_mut(CHUNK))
-            .enumerate()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .map(|(c, ((xc, yc), zc))| f(c, xc, yc, zc))
-            .collect()
-    }
-}
-
 /// Dot product a·b with a thread-count-independent summation order.
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     debug_assert_eq!(a.len(), b.len());

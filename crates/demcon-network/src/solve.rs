@@ -12,82 +12,53 @@ use crate::csr::Csr;
 use crate::error::SolveError;
 use crate::ic::{self, Mic};
 use crate::network::Network;
-use crate::par::{CHUNK, chunks_map, chunks_map3, dot, ordered_sum};
+use crate::par::{CHUNK, chunks_map, chunks_map2, dot, ordered_sum};
+use crate::pcg::{self, Krylov, Stop};
 use crate::sell::RowSell;
-use crate::{cholesky, distributed, faer_cg};
+use crate::{cholesky, distributed};
 
-/// How the linear system is solved.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// How the linear system is solved; the tolerance and the iteration limit of the iterative
+/// methods are [`SolveParams::rel_tol`] and [`SolveParams::max_iter`]. Every iterative method
+/// runs the crate's one conjugate gradient (or PETSc's) and stops when ‖b − Ax‖/‖b‖ ≤
+/// `rel_tol` on the true residual, not only the recursive one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Method {
-    /// Jacobi-preconditioned conjugate gradient, hand-written with fused parallel sweeps
-    /// (deterministic for any thread count). Stops when ‖b − Ax‖/‖b‖ ≤ `rel_tol` (checked
-    /// on the true residual, not only the recursive one).
-    Cg {
-        /// Relative residual tolerance, in (0, 1).
-        rel_tol: f64,
-        /// Maximum number of iterations, ≥ 1.
-        max_iter: usize,
-    },
-    /// The same Jacobi-preconditioned CG run by `faer::matrix_free::conjugate_gradient`
-    /// around this crate's parallel operator (kept for comparison; slower per iteration).
-    FaerCg {
-        /// Relative residual tolerance, in (0, 1).
-        rel_tol: f64,
-        /// Maximum number of iterations, ≥ 1.
-        max_iter: usize,
-    },
+    /// Jacobi-preconditioned conjugate gradient on the whole network, with fused parallel
+    /// sweeps (deterministic for any thread count).
+    Cg,
     /// Conjugate gradient preconditioned by aggregation algebraic multigrid on the free-node
     /// block, deterministic for any thread count: plain aggregation with a K-cycle and
     /// flexible CG for unshifted systems (steady, electric, homogenisation: a cheap setup),
     /// smoothed aggregation with a V-cycle for shifted ones (implicit steps: a cheap cycle).
     /// The hierarchy is built once per [`LinearSystem`] (cost in [`SolveReport::setup_s`],
     /// kind in [`LinearSystem::amg_info`]) and reused by every solve; a few tens of
-    /// iterations at any size where Jacobi-PCG needs hundreds. Stops on the true residual
-    /// like [`Method::Cg`].
-    AmgCg {
-        /// Relative residual tolerance, in (0, 1).
-        rel_tol: f64,
-        /// Maximum number of iterations, ≥ 1.
-        max_iter: usize,
-    },
+    /// iterations at any size where Jacobi-PCG needs hundreds.
+    AmgCg,
     /// Conjugate gradient preconditioned by the modified diagonal incomplete Cholesky
     /// factorisation (MIC, relaxation ω = 0.8): M = (D + L) D⁻¹ (D + L)ᵀ with only D computed,
     /// so M's row sums follow A's. Its two triangular sweeps are sequential, but it needs
     /// several times fewer iterations than Jacobi-PCG: the method for small systems
-    /// (10³–10⁴ unknowns). Stops on the true residual like [`Method::Cg`].
-    IcCg {
-        /// Relative residual tolerance, in (0, 1).
-        rel_tol: f64,
-        /// Maximum number of iterations, ≥ 1.
-        max_iter: usize,
-    },
+    /// (10³–10⁴ unknowns).
+    IcCg,
     /// Chooses by the number of unknowns: MIC-PCG ([`Method::IcCg`]) below
     /// [`AUTO_AMG_MIN_UNKNOWNS`], where its sequential sweeps are cheap and its setup is
     /// negligible (5·10³ nodes: ~3 ms against ~6 ms for Jacobi-PCG and ~7 ms for multigrid),
     /// multigrid ([`Method::AmgCg`]) from there on (10⁵ nodes: 2–3× faster than MIC-PCG;
     /// 10⁶: ~10× faster than Jacobi-PCG). [`SolveReport::method`] names the method that ran.
-    Auto {
-        /// Relative residual tolerance, in (0, 1).
-        rel_tol: f64,
-        /// Maximum number of iterations, ≥ 1.
-        max_iter: usize,
-    },
+    #[default]
+    Auto,
     /// Direct sparse Cholesky (faer, AMD ordering). The factorisation is reused by every
-    /// solve of one [`LinearSystem`]; practical to ~10⁵ unknowns.
+    /// solve of one [`LinearSystem`]; practical to ~10⁵ unknowns. Ignores `rel_tol` and
+    /// `max_iter`.
     Cholesky,
     /// PETSc's conjugate gradient preconditioned by its smoothed-aggregation multigrid
     /// (KSPCG + PCGAMG) on the free block distributed over the MPI ranks by contiguous row
     /// ranges ([`crate::distributed`]); needs the `petsc` feature and a running
     /// [`crate::distributed::Session`] on every rank, and every rank must set up and solve
     /// the same systems in the same order. The matrix and the hierarchy are built once per
-    /// [`LinearSystem`]. Stops on the true residual like [`Method::AmgCg`], with the same
-    /// restart loop: every rank ends with the whole solution.
-    Distributed {
-        /// Relative residual tolerance, in (0, 1).
-        rel_tol: f64,
-        /// Maximum number of iterations, ≥ 1.
-        max_iter: usize,
-    },
+    /// [`LinearSystem`]. Restarted from the true residual like the others: every rank ends
+    /// with the whole solution.
+    Distributed,
 }
 
 /// Relaxation ω of [`Method::IcCg`]'s modified incomplete Cholesky (0 = DIC, 1 = row sums
@@ -121,27 +92,16 @@ pub const STAGNATION_DECREASE: f64 = 0.9;
 /// √k·ε· that on average; packings have k ≈ 7–14.
 const ATTAINABLE_FACTOR: f64 = 8.0;
 
-/// [`Method::Auto`] to a relative residual of 1e-8 (at most 20 000 iterations).
-impl Default for Method {
-    fn default() -> Self {
-        Self::Auto {
-            rel_tol: 1e-8,
-            max_iter: 20_000,
-        }
-    }
-}
-
 impl Method {
     /// Short name, for reports.
     pub fn name(&self) -> &'static str {
         match self {
-            Self::Cg { .. } => "jacobi-pcg",
-            Self::IcCg { .. } => "mic-pcg",
-            Self::FaerCg { .. } => "faer-cg",
-            Self::AmgCg { .. } => "amg-pcg",
-            Self::Auto { .. } => "auto",
+            Self::Cg => "jacobi-pcg",
+            Self::IcCg => "mic-pcg",
+            Self::AmgCg => "amg-pcg",
+            Self::Auto => "auto",
             Self::Cholesky => "cholesky",
-            Self::Distributed { .. } => distributed::METHOD,
+            Self::Distributed => distributed::METHOD,
         }
     }
 
@@ -149,44 +109,68 @@ impl Method {
     /// returned unchanged).
     pub fn resolve(&self, n_unknowns: usize) -> Method {
         match *self {
-            Self::Auto { rel_tol, max_iter } if n_unknowns >= AUTO_AMG_MIN_UNKNOWNS => {
-                Self::AmgCg { rel_tol, max_iter }
-            }
-            Self::Auto { rel_tol, max_iter } => Self::IcCg { rel_tol, max_iter },
+            Self::Auto if n_unknowns >= AUTO_AMG_MIN_UNKNOWNS => Self::AmgCg,
+            Self::Auto => Self::IcCg,
             m => m,
-        }
-    }
-
-    fn validate(&self) -> Result<(), SolveError> {
-        match *self {
-            Self::Cg { rel_tol, max_iter }
-            | Self::IcCg { rel_tol, max_iter }
-            | Self::FaerCg { rel_tol, max_iter }
-            | Self::AmgCg { rel_tol, max_iter }
-            | Self::Distributed { rel_tol, max_iter }
-            | Self::Auto { rel_tol, max_iter } => {
-                if !(rel_tol.is_finite() && rel_tol > 0.0 && rel_tol < 1.0) {
-                    return Err(SolveError::invalid(
-                        "method.rel_tol",
-                        rel_tol,
-                        "must be in (0, 1), e.g. 1e-8",
-                    ));
-                }
-                if max_iter == 0 {
-                    return Err(SolveError::invalid("method.max_iter", 0, "must be ≥ 1"));
-                }
-                Ok(())
-            }
-            Self::Cholesky => Ok(()),
         }
     }
 }
 
 /// Inputs of a solve besides the system itself.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolveParams {
     /// Solution method.
     pub method: Method,
+    /// Relative residual tolerance ‖b − Ax‖/‖b‖ of the iterative methods, in (0, 1).
+    pub rel_tol: f64,
+    /// Iteration limit of the iterative methods, ≥ 1.
+    pub max_iter: usize,
+}
+
+/// [`Method::Auto`] to a relative residual of 1e-8 (at most 20 000 iterations).
+impl Default for SolveParams {
+    fn default() -> Self {
+        Self::new(Method::Auto, 1e-8, 20_000)
+    }
+}
+
+impl SolveParams {
+    /// `method` to a relative residual of `rel_tol` in at most `max_iter` iterations.
+    pub const fn new(method: Method, rel_tol: f64, max_iter: usize) -> Self {
+        Self {
+            method,
+            rel_tol,
+            max_iter,
+        }
+    }
+
+    /// Refuses a tolerance outside (0, 1) or no iterations (iterative methods only).
+    fn validate(&self) -> Result<(), SolveError> {
+        if self.method == Method::Cholesky {
+            return Ok(());
+        }
+        let rel_tol = self.rel_tol;
+        if !(rel_tol.is_finite() && rel_tol > 0.0 && rel_tol < 1.0) {
+            return Err(SolveError::invalid(
+                "method.rel_tol",
+                rel_tol,
+                "must be in (0, 1), e.g. 1e-8",
+            ));
+        }
+        if self.max_iter == 0 {
+            return Err(SolveError::invalid("method.max_iter", 0, "must be ≥ 1"));
+        }
+        Ok(())
+    }
+
+    /// When an iterative solve of right-hand-side norm `b_norm` stops.
+    fn stop(&self, b_norm: f64) -> Stop {
+        Stop {
+            b_norm,
+            rel_tol: self.rel_tol,
+            max_iter: self.max_iter,
+        }
+    }
 }
 
 /// What a solve did and what it cost.
@@ -260,18 +244,27 @@ pub struct LinearSystem<'a> {
     /// The free nodes next to a fixed node, sorted: the only rows of b_eff that differ
     /// from b ([`Self::lifted_rhs`]).
     lift_rows: Vec<u32>,
-    method: Method,
-    factor: Option<cholesky::Factor>,
-    /// Multigrid hierarchy of the free block and the free nodes in unknown order
-    /// ([`Method::AmgCg`]).
-    amg: Option<(Amg, Vec<u32>)>,
-    /// Modified incomplete Cholesky of the free block and the free nodes in unknown order
-    /// ([`Method::IcCg`]).
-    mic: Option<(Mic, Vec<u32>)>,
-    /// The PETSc solver of the free block and the free nodes in unknown order
-    /// ([`Method::Distributed`]).
-    petsc: Option<(distributed::Solver, Vec<u32>)>,
+    /// The parameters, [`Method::Auto`] resolved.
+    params: SolveParams,
+    /// What the method prepared once for every solve.
+    prepared: Prepared,
     setup_s: f64,
+}
+
+/// What a method prepares once per [`LinearSystem`]; the compact methods keep the free nodes
+/// in unknown order beside it.
+#[derive(Debug)]
+enum Prepared {
+    /// Jacobi-PCG: the inverse diagonal, kept by the system itself.
+    Jacobi,
+    /// The multigrid hierarchy of the free block ([`Method::AmgCg`]).
+    Amg(Amg, Vec<u32>),
+    /// The modified incomplete Cholesky factor of the free block ([`Method::IcCg`]).
+    Mic(Mic, Vec<u32>),
+    /// The PETSc solver of the free block ([`Method::Distributed`]).
+    Petsc(distributed::Solver, Vec<u32>),
+    /// The sparse Cholesky factor ([`Method::Cholesky`]).
+    Cholesky(cholesky::Factor),
 }
 
 impl<'a> LinearSystem<'a> {
@@ -293,7 +286,7 @@ impl<'a> LinearSystem<'a> {
         params: &SolveParams,
     ) -> Result<Self, SolveError> {
         let start = Instant::now();
-        params.method.validate()?;
+        params.validate()?;
         net.check_conductances(conductances)?;
         check_len("constraints (nodes)", constraints.kinds().len(), net.n_nodes())?;
         if let Some(d) = shift {
@@ -331,10 +324,8 @@ impl<'a> LinearSystem<'a> {
         }
         let method = params.method.resolve(constraints.n_free());
         let values = match method {
-            Method::Cg { .. } | Method::FaerCg { .. } | Method::Auto { .. } => {
-                EntryValues::Entries(net.entry_values(conductances))
-            }
-            Method::AmgCg { .. } | Method::IcCg { .. } | Method::Cholesky | Method::Distributed { .. } => {
+            Method::Cg | Method::Auto => EntryValues::Entries(net.entry_values(conductances)),
+            Method::AmgCg | Method::IcCg | Method::Cholesky | Method::Distributed => {
                 EntryValues::Edges(conductances)
             }
         };
@@ -372,21 +363,18 @@ impl<'a> LinearSystem<'a> {
             inv_diag,
             free,
             lift_rows,
-            method,
-            factor: None,
-            amg: None,
-            mic: None,
-            petsc: None,
+            params: SolveParams { method, ..*params },
+            prepared: Prepared::Jacobi,
             setup_s: 0.0,
         };
-        match method {
-            Method::Cholesky => sys.factor = Some(cholesky::Factor::new(&sys)?),
-            Method::AmgCg { .. } => {
+        sys.prepared = match method {
+            Method::Cholesky => Prepared::Cholesky(cholesky::Factor::new(&sys)?),
+            Method::AmgCg => {
                 // One solve, or a few (steady, electric, homogenisation): plain aggregation and a
                 // K-cycle, under a third of the setup, its finest level assembled straight into
                 // the sliced layout. Shifted systems are implicit time steps, solved hundreds of
                 // times: smoothed aggregation, the faster cycle.
-                sys.amg = Some(if shift.is_some() {
+                let (amg, nodes) = if shift.is_some() {
                     let (a0, nodes) = sys.free_block();
                     (Amg::new(a0, Coarsening::Smoothed)?, nodes)
                 } else {
@@ -397,20 +385,24 @@ impl<'a> LinearSystem<'a> {
                         .map(|&p| sys.diag[p as usize])
                         .collect();
                     (Amg::plain_from_sell(a0, diag)?, nodes)
-                });
+                };
                 // The setup's temporaries were freed in many sizes: hand what the allocator
                 // keeps resident back to the system before the solve allocates its vectors.
                 demcon_core::release_free_memory();
+                Prepared::Amg(amg, nodes)
             }
-            Method::IcCg { .. } => sys.mic = Some(sys.incomplete_factor()?),
-            Method::Distributed { .. } => {
+            Method::IcCg => {
+                let (mic, nodes) = sys.incomplete_factor()?;
+                Prepared::Mic(mic, nodes)
+            }
+            Method::Distributed => {
                 let nodes: Vec<u32> = (0..sys.free.len() as u32)
                     .filter(|&p| sys.free[p as usize])
                     .collect();
-                sys.petsc = Some((distributed::Solver::new(&sys, &nodes)?, nodes));
+                Prepared::Petsc(distributed::Solver::new(&sys, &nodes)?, nodes)
             }
-            Method::Cg { .. } | Method::FaerCg { .. } | Method::Auto { .. } => {}
-        }
+            Method::Cg | Method::Auto => Prepared::Jacobi,
+        };
         sys.setup_s = start.elapsed().as_secs_f64();
         Ok(sys)
     }
@@ -422,13 +414,16 @@ impl<'a> LinearSystem<'a> {
 
     /// The method this system runs ([`Method::Auto`] resolved).
     pub fn method(&self) -> Method {
-        self.method
+        self.params.method
     }
 
     /// Shape of the multigrid hierarchy ([`Method::AmgCg`] only): levels, operator and grid
     /// complexity.
     pub fn amg_info(&self) -> Option<AmgInfo> {
-        self.amg.as_ref().map(|(a, _)| a.info())
+        match &self.prepared {
+            Prepared::Amg(a, _) => Some(a.info()),
+            _ => None,
+        }
     }
 
     /// [`Method::IcCg`]'s factor of the free block and the free nodes in unknown order
@@ -527,36 +522,11 @@ impl<'a> LinearSystem<'a> {
                 .for_each(|(v, _)| *v = 0.0);
             (0, 0.0, None)
         } else {
-            match self.method {
-                // `Auto` was resolved in `new`; were it not, Jacobi-PCG is always valid.
-                Method::IcCg { rel_tol, max_iter } => {
-                    self.mic_pcg(rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
-                }
-                Method::Cg { rel_tol, max_iter } | Method::Auto { rel_tol, max_iter } => {
-                    self.pcg(rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
-                }
-                Method::FaerCg { rel_tol, max_iter } => {
-                    faer_cg::solve(self, rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
-                }
-                Method::AmgCg { rel_tol, max_iter } => {
-                    self.amg_pcg(rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
-                }
-                Method::Distributed { rel_tol, max_iter } => {
-                    self.petsc_pcg(rhs, &mut x, &mut r, b_norm, rel_tol, max_iter)?
-                }
-                Method::Cholesky => {
-                    let factor = self.factor.as_ref().ok_or_else(|| {
-                        SolveError::Factorization("system prepared without a factor".into())
-                    })?;
-                    factor.solve(self, &r, &mut x);
-                    self.residual(rhs, &x, &mut r);
-                    (0, dot(&r, &r).sqrt() / b_norm, None)
-                }
-            }
+            self.iterate(rhs, &mut x, &mut r, b_norm)?
         };
         if let Some(p) = x.iter().position(|v| !v.is_finite()) {
             return Err(SolveError::NonFinite {
-                method: self.method.name(),
+                method: self.method().name(),
                 iteration: iterations,
                 what: if self.free[p] {
                     "solution value"
@@ -570,7 +540,7 @@ impl<'a> LinearSystem<'a> {
             values: x,
             excluded: self.constraints.excluded().to_vec(),
             report: SolveReport {
-                method: self.method.name(),
+                method: self.method().name(),
                 iterations,
                 relative_residual: rel,
                 wall_s: start.elapsed().as_secs_f64(),
@@ -718,225 +688,102 @@ impl<'a> LinearSystem<'a> {
         ordered_sum(&partials)
     }
 
-    /// Fused Jacobi-PCG on the correction; `r` holds b − A x on entry.
-    fn pcg(
+    /// Runs the prepared method from x, `r` = b − A x (norm of b: `b_norm`); returns the
+    /// iterations, the true relative residual and the round-off floor when only that was met.
+    fn iterate(
         &self,
         b: &[f64],
         x: &mut [f64],
         r: &mut [f64],
         b_norm: f64,
-        rel_tol: f64,
-        max_iter: usize,
     ) -> Result<(usize, f64, Option<f64>), SolveError> {
-        let n = x.len();
-        let name = self.method.name();
-        let mut z = vec![0.0; n];
-        let mut p = vec![0.0; n];
-        let mut q = vec![0.0; n];
-        let mut iterations = 0usize;
-        let mut progress = Progress::new(name, dot(r, r).sqrt() / b_norm)?;
-        // Outer loop: restart from the true residual if the recursive one drifted.
-        while progress.go_on(rel_tol, iterations, max_iter) {
-            let mut rz = self.precondition(r, &mut z).0;
-            p.copy_from_slice(&z);
-            loop {
-                let pq = self.apply_dot(&p, &mut q);
-                iterations += 1;
-                if !pq.is_finite() {
-                    return Err(SolveError::NonFinite {
-                        method: name,
-                        iteration: iterations,
-                        what: "p·Ap",
-                        value: pq,
-                    });
-                }
-                if pq <= 0.0 {
-                    // The system is positive definite by construction (conductances > 0,
-                    // every free cluster anchored): p·Ap ≤ 0 is round-off at the floor.
-                    break;
-                }
-                let alpha = rz / pq;
-                let (rz_new, rr) = self.update(alpha, &p, &q, x, r, &mut z);
-                if !rr.is_finite() {
-                    return Err(SolveError::NonFinite {
-                        method: name,
-                        iteration: iterations,
-                        what: "recursive residual ‖r‖²",
-                        value: rr,
-                    });
-                }
-                if rr.sqrt() <= rel_tol * b_norm || iterations >= max_iter {
-                    break;
-                }
-                let beta = rz_new / rz;
-                rz = rz_new;
-                chunks_map(&mut p, |c, pc| {
-                    let range = c * CHUNK..c * CHUNK + pc.len();
-                    for (pi, zi) in pc.iter_mut().zip(&z[range]) {
-                        *pi = zi + beta * *pi;
-                    }
+        let stop = self.params.stop(b_norm);
+        let abs_tol = stop.rel_tol * b_norm;
+        match &self.prepared {
+            Prepared::Cholesky(factor) => {
+                factor.solve(self, r, x);
+                self.residual(b, x, r);
+                Ok((0, dot(r, r).sqrt() / b_norm, None))
+            }
+            Prepared::Jacobi => pcg::restart(self, b, x, r, stop, |x: &mut [f64], r: &mut [f64], _, left| {
+                pcg::cg(&mut Jacobi::new(self), x, r, abs_tol, left)
+            }),
+            Prepared::Amg(amg, nodes) => {
+                let inner = pcg::compact(nodes, |rc, _, left| amg::solve(amg, rc, abs_tol, left));
+                pcg::restart(self, b, x, r, stop, inner)
+            }
+            Prepared::Mic(mic, nodes) => {
+                // The inner solve measures its residual after the preconditioner, so it aims at
+                // the true residual's required reduction and is restarted on the correction
+                // (ten times deeper each time) until the true residual meets the tolerance.
+                let mut depth = 1.0;
+                let inner = pcg::compact(nodes, |rc, r_norm, left| {
+                    let reduction = (depth * abs_tol / r_norm).min(0.5);
+                    depth *= 0.1;
+                    ic::solve(mic, rc, reduction, left)
                 });
+                pcg::restart(self, b, x, r, stop, inner)
             }
-            self.residual(b, x, r);
-            progress.restarted(dot(r, r).sqrt() / b_norm, x, iterations)?;
-        }
-        progress.finish(self, b, x, r, b_norm, rel_tol, iterations)
-    }
-
-    /// Multigrid-preconditioned CG on the compact free block for the correction, restarted
-    /// from the true residual until it meets the tolerance; `r` holds b − A x on entry.
-    fn amg_pcg(
-        &self,
-        b: &[f64],
-        x: &mut [f64],
-        r: &mut [f64],
-        b_norm: f64,
-        rel_tol: f64,
-        max_iter: usize,
-    ) -> Result<(usize, f64, Option<f64>), SolveError> {
-        let Some((hierarchy, nodes)) = &self.amg else {
-            return Err(SolveError::Factorization(
-                "system prepared without a multigrid hierarchy".into(),
-            ));
-        };
-        let stop = Stop {
-            b_norm,
-            rel_tol,
-            max_iter,
-        };
-        self.compact_pcg(b, x, r, stop, nodes, |rc, _, left| {
-            amg::pcg(hierarchy, rc, rel_tol * b_norm, left)
-        })
-    }
-
-    /// [`Method::Distributed`]: PETSc's KSPCG + PCGAMG for the correction, asked for the
-    /// reduction that meets the tolerance on the true residual, restarted from the true
-    /// residual like [`Self::amg_pcg`]. Every rank runs the same loop on the same gathered
-    /// vectors, so every rank takes the same decisions.
-    fn petsc_pcg(
-        &self,
-        b: &[f64],
-        x: &mut [f64],
-        r: &mut [f64],
-        b_norm: f64,
-        rel_tol: f64,
-        max_iter: usize,
-    ) -> Result<(usize, f64, Option<f64>), SolveError> {
-        let Some((solver, nodes)) = &self.petsc else {
-            return Err(SolveError::Factorization(
-                "system prepared without a distributed solver".into(),
-            ));
-        };
-        let stop = Stop {
-            b_norm,
-            rel_tol,
-            max_iter,
-        };
-        self.compact_pcg(b, x, r, stop, nodes, |rc, r_norm, left| {
-            solver.solve(rc, rel_tol * b_norm / r_norm, left)
-        })
-    }
-
-    /// [`Method::IcCg`] on the compact free block, as [`Self::amg_pcg`]. The inner solve
-    /// measures its residual after the preconditioner, so it aims at the true residual's
-    /// required reduction and is restarted on the correction (ten times deeper each
-    /// time) until the true residual meets the tolerance.
-    fn mic_pcg(
-        &self,
-        b: &[f64],
-        x: &mut [f64],
-        r: &mut [f64],
-        b_norm: f64,
-        rel_tol: f64,
-        max_iter: usize,
-    ) -> Result<(usize, f64, Option<f64>), SolveError> {
-        let Some((mic, nodes)) = &self.mic else {
-            return Err(SolveError::Factorization(
-                "system prepared without an incomplete factor".into(),
-            ));
-        };
-        let depth = std::cell::Cell::new(1.0);
-        let stop = Stop {
-            b_norm,
-            rel_tol,
-            max_iter,
-        };
-        self.compact_pcg(b, x, r, stop, nodes, |rc, r_norm, left| {
-            let reduction = (depth.get() * rel_tol * b_norm / r_norm).min(0.5);
-            depth.set(depth.get() * 0.1);
-            ic::pcg(mic, rc, reduction, left)
-        })
-    }
-
-    /// Restart loop of the compact-block solvers: `inner(r_compact, ‖r‖, iterations left)`
-    /// returns a correction δ and its iterations; x += δ until ‖b − Ax‖ ≤ rel_tol ‖b‖
-    /// (`stop`).
-    fn compact_pcg(
-        &self,
-        b: &[f64],
-        x: &mut [f64],
-        r: &mut [f64],
-        stop: Stop,
-        nodes: &[u32],
-        inner: impl Fn(&[f64], f64, usize) -> Result<(Vec<f64>, usize), SolveError>,
-    ) -> Result<(usize, f64, Option<f64>), SolveError> {
-        let Stop {
-            b_norm,
-            rel_tol,
-            max_iter,
-        } = stop;
-        let mut iterations = 0usize;
-        let mut progress = Progress::new(self.method.name(), dot(r, r).sqrt() / b_norm)?;
-        while progress.go_on(rel_tol, iterations, max_iter) {
-            // Gathers in parallel: fresh pages are first touched by both threads (in this VM a
-            // 4 KB page costs ~1.7 µs on first touch; docs/performance.md § 4).
-            let rc: Vec<f64> = nodes
-                .par_iter()
-                .with_min_len(CHUNK)
-                .map(|&p| r[p as usize])
-                .collect();
-            let (delta, its) = inner(&rc, progress.current() * b_norm, max_iter - iterations)?;
-            iterations += its.max(1);
-            for (&p, d) in nodes.iter().zip(&delta) {
-                x[p as usize] += d;
+            Prepared::Petsc(solver, nodes) => {
+                // PETSc's KSPCG + PCGAMG, asked for the reduction that meets the tolerance.
+                // Every rank runs the same loop on the same gathered vectors, so every rank
+                // takes the same decisions.
+                let inner = pcg::compact(nodes, |rc, r_norm, left| solver.solve(rc, abs_tol / r_norm, left));
+                pcg::restart(self, b, x, r, stop, inner)
             }
-            self.residual(b, x, r);
-            progress.restarted(dot(r, r).sqrt() / b_norm, x, iterations)?;
         }
-        progress.finish(self, b, x, r, b_norm, rel_tol, iterations)
+    }
+}
+
+/// Jacobi-PCG on the whole network: q = A p over the free rows, z = D⁻¹ r made in the pass
+/// that updates r.
+struct Jacobi<'s, 'a> {
+    sys: &'s LinearSystem<'a>,
+    /// r·z of the last [`Krylov::descend`].
+    rz: f64,
+}
+
+impl<'s, 'a> Jacobi<'s, 'a> {
+    fn new(sys: &'s LinearSystem<'a>) -> Self {
+        Self { sys, rz: 0.0 }
     }
 
-    /// z = D⁻¹ r on free nodes; returns (r·z, r·r).
-    fn precondition(&self, r: &[f64], z: &mut [f64]) -> (f64, f64) {
+    /// z = D⁻¹ r on free nodes; returns r·z.
+    fn precondition_all(&self, r: &[f64], z: &mut [f64]) -> f64 {
         let partials = chunks_map(z, |c, zc| {
             let range = c * CHUNK..c * CHUNK + zc.len();
-            let (mut rz, mut rr) = (0.0, 0.0);
-            for ((zi, ri), di) in zc.iter_mut().zip(&r[range.clone()]).zip(&self.inv_diag[range]) {
+            let mut rz = 0.0;
+            for ((zi, ri), di) in zc
+                .iter_mut()
+                .zip(&r[range.clone()])
+                .zip(&self.sys.inv_diag[range])
+            {
                 *zi = ri * di;
                 rz += ri * *zi;
-                rr += ri * ri;
             }
-            (rz, rr)
+            rz
         });
-        partials.iter().fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d))
+        partials.iter().sum()
+    }
+}
+
+impl Krylov for Jacobi<'_, '_> {
+    fn name(&self) -> &'static str {
+        Method::Cg.name()
     }
 
-    /// x += αp, r −= αq, z = D⁻¹ r; returns (r·z, r·r).
-    fn update(
-        &self,
-        alpha: f64,
-        p: &[f64],
-        q: &[f64],
-        x: &mut [f64],
-        r: &mut [f64],
-        z: &mut [f64],
-    ) -> (f64, f64) {
-        let partials = chunks_map3(x, r, z, |c, xc, rc, zc| {
-            let range = c * CHUNK..c * CHUNK + xc.len();
-            let (pc, qc, dc) = (&p[range.clone()], &q[range.clone()], &self.inv_diag[range]);
+    fn apply_dot(&mut self, p: &[f64], q: &mut [f64]) -> f64 {
+        self.sys.apply_dot(p, q)
+    }
+
+    /// r −= α q and z = D⁻¹ r in one pass.
+    fn descend(&mut self, alpha: f64, q: &[f64], r: &mut [f64], z: &mut Vec<f64>) -> f64 {
+        let inv_diag = &self.sys.inv_diag;
+        let partials = chunks_map2(r, z, |c, rc, zc| {
+            let range = c * CHUNK..c * CHUNK + rc.len();
+            let (qc, dc) = (&q[range.clone()], &inv_diag[range]);
             let (mut rz, mut rr) = (0.0, 0.0);
-            for k in 0..xc.len() {
-                xc[k] += alpha * pc[k];
+            for k in 0..rc.len() {
                 rc[k] -= alpha * qc[k];
                 zc[k] = rc[k] * dc[k];
                 rz += rc[k] * zc[k];
@@ -944,130 +791,17 @@ impl<'a> LinearSystem<'a> {
             }
             (rz, rr)
         });
-        partials.iter().fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d))
-    }
-}
-
-/// The restart loop's bookkeeping, shared by every iterative method: the best true
-/// relative residual and its iterate, restarts without progress, non-finite checks.
-#[derive(Debug)]
-pub(crate) struct Progress {
-    method: &'static str,
-    /// Current true relative residual.
-    current: f64,
-    /// Best true relative residual so far.
-    best: f64,
-    /// Copy of the iterate with `best` (taken when a restart improves on it).
-    best_x: Option<Vec<f64>>,
-    /// Level `best` must go below for a restart to count as progress.
-    target: f64,
-    /// Consecutive restarts without progress.
-    stalled: usize,
-}
-
-impl Progress {
-    /// Starts from the true relative residual at the initial guess.
-    pub(crate) fn new(method: &'static str, rel: f64) -> Result<Self, SolveError> {
-        if !rel.is_finite() {
-            return Err(SolveError::NonFinite {
-                method,
-                iteration: 0,
-                what: "initial relative residual",
-                value: rel,
-            });
-        }
-        Ok(Self {
-            method,
-            current: rel,
-            best: rel,
-            best_x: None,
-            target: STAGNATION_DECREASE * rel,
-            stalled: 0,
-        })
+        let (rz, rr) = partials.iter().fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d));
+        self.rz = rz;
+        rr
     }
 
-    /// The current true relative residual.
-    pub(crate) fn current(&self) -> f64 {
-        self.current
-    }
-
-    /// Whether to run another restart: tolerance not met (NaN-safe), iterations left, not
-    /// stagnated.
-    pub(crate) fn go_on(&self, rel_tol: f64, iterations: usize, max_iter: usize) -> bool {
-        (self.current.is_nan() || self.current > rel_tol)
-            && iterations < max_iter
-            && self.stalled < STAGNATION_WINDOW
-    }
-
-    /// Records the true relative residual `rel` at iterate `x` after a restart.
-    pub(crate) fn restarted(&mut self, rel: f64, x: &[f64], iterations: usize) -> Result<(), SolveError> {
-        if !rel.is_finite() {
-            return Err(SolveError::NonFinite {
-                method: self.method,
-                iteration: iterations,
-                what: "true relative residual",
-                value: rel,
-            });
-        }
-        self.current = rel;
-        if rel < self.best {
-            // One copy per improving restart (one or two in a normal solve).
-            self.best = rel;
-            match &mut self.best_x {
-                Some(v) => v.copy_from_slice(x),
-                None => self.best_x = Some(x.to_vec()),
-            }
-        }
-        if rel < self.target {
-            self.target = STAGNATION_DECREASE * rel;
-            self.stalled = 0;
+    fn precondition(&mut self, r: &[f64], z: &mut Vec<f64>, _q: Option<&[f64]>, descended: bool) -> [f64; 2] {
+        if descended {
+            [self.rz, 0.0]
         } else {
-            self.stalled += 1;
+            [self.precondition_all(r, z), 0.0]
         }
-        Ok(())
-    }
-
-    /// Ends the loop: Ok when the tolerance is met, or when the best residual is within the
-    /// round-off floor (then the floor is returned); else the error that says why.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn finish(
-        self,
-        sys: &LinearSystem<'_>,
-        b: &[f64],
-        x: &mut [f64],
-        r: &mut [f64],
-        b_norm: f64,
-        rel_tol: f64,
-        iterations: usize,
-    ) -> Result<(usize, f64, Option<f64>), SolveError> {
-        if self.current <= rel_tol {
-            return Ok((iterations, self.current, None));
-        }
-        if let (Some(best), true) = (&self.best_x, self.current > self.best) {
-            x.copy_from_slice(best);
-            sys.residual(b, x, r);
-        }
-        let rel = dot(r, r).sqrt() / b_norm;
-        let floor = sys.attainable(b, x, b_norm);
-        if rel <= floor {
-            return Ok((iterations, rel, Some(floor)));
-        }
-        if self.stalled >= STAGNATION_WINDOW {
-            return Err(SolveError::Stagnated {
-                method: self.method,
-                iterations,
-                residual: rel,
-                tolerance: rel_tol,
-                attainable: floor,
-                window: STAGNATION_WINDOW,
-            });
-        }
-        Err(SolveError::NotConverged {
-            method: self.method,
-            iterations,
-            relative_residual: rel,
-            tolerance: rel_tol,
-        })
     }
 }
 
@@ -1140,18 +874,6 @@ impl<'s, 'a> FreeRows<'s, 'a> {
         }
         debug_assert_eq!(at, c.len());
     }
-}
-
-/// When an iterative solve stops: ‖b − Ax‖ ≤ `rel_tol` · `b_norm`, within `max_iter`
-/// iterations.
-#[derive(Debug, Clone, Copy)]
-struct Stop {
-    /// ‖b_eff‖, the residual norm with the free unknowns at zero (W or A).
-    b_norm: f64,
-    /// Relative tolerance (dimensionless).
-    rel_tol: f64,
-    /// Iteration limit.
-    max_iter: usize,
 }
 
 /// Steady solve of K x = s on the free nodes with the fixed values of `constraints`.

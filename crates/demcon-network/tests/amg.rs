@@ -20,17 +20,10 @@ fn geometric(n: usize, seed: u64) -> (Network, Vec<f64>, Vec<f64>) {
 }
 
 fn amg(rel_tol: f64) -> SolveParams {
-    SolveParams {
-        method: Method::AmgCg {
-            rel_tol,
-            max_iter: 500,
-        },
-    }
+    SolveParams::new(Method::AmgCg, rel_tol, 500)
 }
 
-const CHOLESKY: SolveParams = SolveParams {
-    method: Method::Cholesky,
-};
+const CHOLESKY: SolveParams = SolveParams::new(Method::Cholesky, 1e-8, 1);
 
 fn max_diff(u: &[f64], v: &[f64]) -> f64 {
     u.iter().zip(v).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
@@ -189,19 +182,7 @@ fn results_do_not_depend_on_thread_count() {
     assert_eq!(one.values, three.values);
     assert_eq!(one.report.iterations, three.report.iterations);
     // Far fewer iterations than Jacobi-PCG on the same system.
-    let jacobi = solve_steady(
-        &net,
-        &g,
-        &bcs,
-        &s,
-        &SolveParams {
-            method: Method::Cg {
-                rel_tol: 1e-9,
-                max_iter: 10_000,
-            },
-        },
-    )
-    .unwrap();
+    let jacobi = solve_steady(&net, &g, &bcs, &s, &SolveParams::new(Method::Cg, 1e-9, 10_000)).unwrap();
     assert!(
         one.report.iterations * 4 < jacobi.report.iterations,
         "amg {} jacobi {}",
@@ -216,32 +197,17 @@ fn parameters_and_non_convergence_are_reported() {
     let (net, g, x) = geometric(1500, 6);
     let bcs = resolve_fixed(&net, &faces(&x, 0.0, 1.0), FloatingPolicy::Exclude).unwrap();
     let s = vec![0.0; net.n_nodes()];
-    let bad = SolveParams {
-        method: Method::AmgCg {
-            rel_tol: 1.5,
-            max_iter: 10,
-        },
-    };
+    let bad = SolveParams::new(Method::AmgCg, 1.5, 10);
     assert!(matches!(
         solve_steady(&net, &g, &bcs, &s, &bad),
         Err(SolveError::InvalidParameter { ref field, .. }) if field == "method.rel_tol"
     ));
-    let zero = SolveParams {
-        method: Method::AmgCg {
-            rel_tol: 1e-8,
-            max_iter: 0,
-        },
-    };
+    let zero = SolveParams::new(Method::AmgCg, 1e-8, 0);
     assert!(matches!(
         solve_steady(&net, &g, &bcs, &s, &zero),
         Err(SolveError::InvalidParameter { ref field, .. }) if field == "method.max_iter"
     ));
-    let short = SolveParams {
-        method: Method::AmgCg {
-            rel_tol: 1e-14,
-            max_iter: 2,
-        },
-    };
+    let short = SolveParams::new(Method::AmgCg, 1e-14, 2);
     match solve_steady(&net, &g, &bcs, &s, &short) {
         Err(SolveError::NotConverged {
             method,
@@ -259,7 +225,7 @@ fn parameters_and_non_convergence_are_reported() {
 #[test]
 fn auto_picks_mic_for_small_and_multigrid_for_large_systems() {
     let auto = SolveParams::default();
-    assert!(matches!(auto.method, Method::Auto { .. }));
+    assert!(auto.method == Method::Auto);
     let (net, g, x) = geometric(2000, 8);
     let bcs = resolve_fixed(&net, &faces(&x, 0.0, 1.0), FloatingPolicy::Exclude).unwrap();
     let small = solve_steady(&net, &g, &bcs, &vec![0.0; net.n_nodes()], &auto).unwrap();
@@ -267,10 +233,7 @@ fn auto_picks_mic_for_small_and_multigrid_for_large_systems() {
     assert!(small.report.relative_residual <= 1e-8);
     assert_eq!(
         auto.method.resolve(demcon_network::AUTO_AMG_MIN_UNKNOWNS),
-        Method::AmgCg {
-            rel_tol: 1e-8,
-            max_iter: 20_000
-        }
+        Method::AmgCg
     );
     // A chain of 12 000 free nodes between two fixed ends: multigrid, and the linear profile.
     let n = 12_002;
@@ -284,7 +247,7 @@ fn auto_picks_mic_for_small_and_multigrid_for_large_systems() {
     .unwrap();
     let g = vec![1.0; n - 1];
     let sys = LinearSystem::new(&chain, &g, None, &ends, &auto).unwrap();
-    assert!(matches!(sys.method(), Method::AmgCg { .. }));
+    assert!(sys.method() == Method::AmgCg);
     let sol = sys.solve(&vec![0.0; n], None).unwrap();
     assert_eq!(sol.report.method, "amg-pcg");
     let worst = sol

@@ -8,10 +8,6 @@ use demcon_network::distributed::{Session, stats};
 use demcon_network::fixtures::inclusion_lattice;
 use demcon_network::{FloatingPolicy, LinearSystem, Method, SolveError, SolveParams, resolve_fixed};
 
-fn params(method: Method) -> SolveParams {
-    SolveParams { method }
-}
-
 /// One test function: PETSc starts once per process, and libtest runs tests in threads.
 #[test]
 fn distributed_solve_matches_the_serial_one_on_one_rank() {
@@ -31,10 +27,7 @@ fn distributed_solve_matches_the_serial_one_on_one_rank() {
         &g,
         None,
         &bcs,
-        &params(Method::AmgCg {
-            rel_tol,
-            max_iter: 1000,
-        }),
+        &SolveParams::new(Method::AmgCg, rel_tol, 1000),
     )
     .unwrap();
     let dist = LinearSystem::new(
@@ -42,10 +35,7 @@ fn distributed_solve_matches_the_serial_one_on_one_rank() {
         &g,
         None,
         &bcs,
-        &params(Method::Distributed {
-            rel_tol,
-            max_iter: 1000,
-        }),
+        &SolveParams::new(Method::Distributed, rel_tol, 1000),
     )
     .unwrap();
     // Two right-hand sides on one prepared system: the set-up is reused.
@@ -74,10 +64,7 @@ fn distributed_solve_matches_the_serial_one_on_one_rank() {
         &g,
         None,
         &bcs,
-        &params(Method::Distributed {
-            rel_tol: 1e-12,
-            max_iter: 2,
-        }),
+        &SolveParams::new(Method::Distributed, 1e-12, 2),
     )
     .unwrap();
     let err = starved.solve(&vec![0.0; net.n_nodes()], None).unwrap_err();

@@ -16,14 +16,7 @@ fn geometric(n: usize, seed: u64) -> (Network, Vec<f64>, Vec<f64>) {
     geometric_with(n, seed, |rng, _| 10f64.powf(rng.random::<f64>()))
 }
 
-fn params(method: Method) -> SolveParams {
-    SolveParams { method }
-}
-
-const MIC: Method = Method::IcCg {
-    rel_tol: 1e-10,
-    max_iter: 2000,
-};
+const MIC: SolveParams = SolveParams::new(Method::IcCg, 1e-10, 2000);
 
 fn max_diff(u: &[f64], v: &[f64]) -> f64 {
     u.iter().zip(v).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
@@ -36,19 +29,9 @@ fn agrees_with_cholesky_and_beats_jacobi_on_iterations() {
         let bcs = resolve_fixed(&net, &faces(&x, 0.0, 1.0), FloatingPolicy::Exclude).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(seed + 10);
         let s: Vec<f64> = (0..net.n_nodes()).map(|_| rng.random_range(-0.2..0.2)).collect();
-        let a = solve_steady(&net, &g, &bcs, &s, &params(MIC)).unwrap();
-        let b = solve_steady(&net, &g, &bcs, &s, &params(Method::Cholesky)).unwrap();
-        let j = solve_steady(
-            &net,
-            &g,
-            &bcs,
-            &s,
-            &params(Method::Cg {
-                rel_tol: 1e-10,
-                max_iter: 5000,
-            }),
-        )
-        .unwrap();
+        let a = solve_steady(&net, &g, &bcs, &s, &MIC).unwrap();
+        let b = solve_steady(&net, &g, &bcs, &s, &SolveParams::new(Method::Cholesky, 1e-8, 1)).unwrap();
+        let j = solve_steady(&net, &g, &bcs, &s, &SolveParams::new(Method::Cg, 1e-10, 5000)).unwrap();
         assert_eq!(a.report.method, "mic-pcg");
         assert!(a.report.relative_residual <= 1e-10, "{:?}", a.report);
         assert!(
@@ -82,8 +65,15 @@ fn high_contrast_shifted_and_warm_started_systems_match_cholesky() {
     // Floating clusters kept: the shift anchors them (an implicit step).
     let bcs = resolve_fixed(&net, &faces(&x, 1.0, 0.0), FloatingPolicy::Keep).unwrap();
     let d: Vec<f64> = (0..net.n_nodes()).map(|p| 0.05 + 0.1 * (p % 5) as f64).collect();
-    let sys = LinearSystem::new(&net, &g, Some(&d), &bcs, &params(MIC)).unwrap();
-    let direct = LinearSystem::new(&net, &g, Some(&d), &bcs, &params(Method::Cholesky)).unwrap();
+    let sys = LinearSystem::new(&net, &g, Some(&d), &bcs, &MIC).unwrap();
+    let direct = LinearSystem::new(
+        &net,
+        &g,
+        Some(&d),
+        &bcs,
+        &SolveParams::new(Method::Cholesky, 1e-8, 1),
+    )
+    .unwrap();
     let mut prev: Option<Vec<f64>> = None;
     for k in 0..3 {
         let rhs: Vec<f64> = (0..net.n_nodes()).map(|p| ((p + k) % 7) as f64 * 0.1).collect();
@@ -105,10 +95,7 @@ fn high_contrast_shifted_and_warm_started_systems_match_cholesky() {
 fn too_few_iterations_is_reported() {
     let (net, g, x) = geometric(1500, 6);
     let bcs = resolve_fixed(&net, &faces(&x, 0.0, 1.0), FloatingPolicy::Exclude).unwrap();
-    let p = params(Method::IcCg {
-        rel_tol: 1e-12,
-        max_iter: 3,
-    });
+    let p = SolveParams::new(Method::IcCg, 1e-12, 3);
     match solve_steady(&net, &g, &bcs, &vec![0.0; net.n_nodes()], &p) {
         Err(SolveError::NotConverged {
             method, iterations, ..

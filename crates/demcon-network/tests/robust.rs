@@ -9,18 +9,17 @@ use demcon_network::{
 };
 
 /// Every iterative method (and Auto) with a given tolerance.
-fn iterative(rel_tol: f64) -> Vec<Method> {
+fn iterative(rel_tol: f64) -> Vec<SolveParams> {
     let max_iter = 20_000;
     vec![
-        Method::Cg { rel_tol, max_iter },
-        Method::FaerCg { rel_tol, max_iter },
-        Method::AmgCg { rel_tol, max_iter },
-        Method::IcCg { rel_tol, max_iter },
-        Method::Auto { rel_tol, max_iter },
+        SolveParams::new(Method::Cg, rel_tol, max_iter),
+        SolveParams::new(Method::AmgCg, rel_tol, max_iter),
+        SolveParams::new(Method::IcCg, rel_tol, max_iter),
+        SolveParams::new(Method::Auto, rel_tol, max_iter),
     ]
 }
 
-fn expect_rhs_refused(r: Result<demcon_network::Solution, SolveError>, value: &str, method: Method) {
+fn expect_rhs_refused(r: Result<demcon_network::Solution, SolveError>, value: &str, method: SolveParams) {
     match r {
         Err(SolveError::InvalidParameter {
             field,
@@ -40,8 +39,11 @@ fn cg_treats_nan_residual_as_converged_fixed_value_1e300_is_refused() {
     let (net, g, x) = common::geometric_with(500, 1, |_, _| 1.0);
     let c = resolve_fixed(&net, &common::faces(&x, 0.0, 1e300), FloatingPolicy::Exclude).unwrap();
     let s = vec![0.0; net.n_nodes()];
-    for method in iterative(1e-8).into_iter().chain([Method::Cholesky]) {
-        let r = solve_steady(&net, &g, &c, &s, &SolveParams { method });
+    for method in iterative(1e-8)
+        .into_iter()
+        .chain([SolveParams::new(Method::Cholesky, 1e-8, 1)])
+    {
+        let r = solve_steady(&net, &g, &c, &s, &method);
         // The right-hand side of a node next to the hot face: a sum of conductance × 1e300.
         match &r {
             Err(SolveError::InvalidParameter { value, .. }) => {
@@ -62,11 +64,7 @@ fn cg_treats_nan_residual_as_converged_heat_flux_1e160_is_refused() {
     let mut s = vec![0.0; net.n_nodes()];
     s[free] = 1e160;
     for method in iterative(1e-8) {
-        expect_rhs_refused(
-            solve_steady(&net, &g, &c, &s, &SolveParams { method }),
-            "1e160",
-            method,
-        );
+        expect_rhs_refused(solve_steady(&net, &g, &c, &s, &method), "1e160", method);
     }
 }
 
@@ -78,7 +76,7 @@ fn cg_treats_nan_residual_as_converged_resistivity_7e_minus_307_is_refused() {
     let c = resolve_fixed(&net, &common::faces(&x, 0.0, 1.0), FloatingPolicy::Exclude).unwrap();
     let s = vec![0.0; net.n_nodes()];
     for method in iterative(1e-8) {
-        match solve_steady(&net, &g, &c, &s, &SolveParams { method }) {
+        match solve_steady(&net, &g, &c, &s, &method) {
             Err(SolveError::InvalidParameter { field, allowed, .. }) => {
                 assert!(field.contains("right-hand side"), "{field}");
                 assert!(allowed.contains("1e150"), "{allowed}");
@@ -97,7 +95,7 @@ fn cg_treats_nan_residual_as_converged_non_finite_residual_is_an_error() {
     let s = vec![0.0; net.n_nodes()];
     let x0 = vec![1e200; net.n_nodes()];
     for method in iterative(1e-8) {
-        let sys = LinearSystem::new(&net, &g, None, &c, &SolveParams { method }).unwrap();
+        let sys = LinearSystem::new(&net, &g, None, &c, &method).unwrap();
         match sys.solve(&s, Some(&x0)) {
             Err(SolveError::NonFinite { value, .. }) => assert!(!value.is_finite()),
             other => panic!("{method:?}: expected NonFinite, got {other:?}"),
@@ -122,18 +120,9 @@ fn contrast_cliff_steady_solves_converge_at_contrast_1e6_and_1e_minus_6() {
         let (net, g, sets) = demcon_network::fixtures::inclusion_lattice(n, ratio);
         let c = resolve_fixed(&net, &sets, FloatingPolicy::Fail).unwrap();
         let s = vec![0.0; net.n_nodes()];
-        let exact = solve_steady(
-            &net,
-            &g,
-            &c,
-            &s,
-            &SolveParams {
-                method: Method::Cholesky,
-            },
-        )
-        .unwrap();
+        let exact = solve_steady(&net, &g, &c, &s, &SolveParams::new(Method::Cholesky, 1e-8, 1)).unwrap();
         for method in iterative(1e-10) {
-            let sol = solve_steady(&net, &g, &c, &s, &SolveParams { method })
+            let sol = solve_steady(&net, &g, &c, &s, &method)
                 .unwrap_or_else(|e| panic!("contrast {ratio:e}, {method:?}: {e}"));
             let r = &sol.report;
             eprintln!(

@@ -43,12 +43,7 @@ fn faces(n: usize) -> Vec<(Vec<u32>, f64)> {
 }
 
 fn cg(rel_tol: f64) -> SolveParams {
-    SolveParams {
-        method: Method::Cg {
-            rel_tol,
-            max_iter: 10_000,
-        },
-    }
+    SolveParams::new(Method::Cg, rel_tol, 10_000)
 }
 
 /// ‖K x − s‖ over free rows, relative to ‖s + lift‖, recomputed from scratch.
@@ -72,14 +67,13 @@ fn three_node_chain_is_exact_for_every_method() {
     let bcs = resolve_fixed(&net, &[(vec![0], 1.0), (vec![2], 9.0)], FloatingPolicy::Fail).unwrap();
     // Node 1: (2·1 + 6·9)/(2 + 6) = 7; with 4 W injected: (2 + 54 + 4)/8 = 7.5.
     for method in [
-        Method::default(),
-        Method::FaerCg {
-            rel_tol: 1e-12,
-            max_iter: 10,
-        },
-        Method::Cholesky,
+        SolveParams::default(),
+        SolveParams::new(Method::Cg, 1e-12, 10),
+        SolveParams::new(Method::IcCg, 1e-12, 10),
+        SolveParams::new(Method::AmgCg, 1e-12, 10),
+        SolveParams::new(Method::Cholesky, 1e-12, 1),
     ] {
-        let p = SolveParams { method };
+        let p = method;
         let sol = solve_steady(&net, &g, &bcs, &[0.0; 3], &p).unwrap();
         assert!((sol.values[1] - 7.0).abs() < 1e-12, "{method:?}");
         assert_eq!((sol.values[0], sol.values[2]), (1.0, 9.0));
@@ -93,34 +87,20 @@ fn three_node_chain_is_exact_for_every_method() {
 }
 
 #[test]
-fn cg_residual_and_agreement_with_cholesky_and_faer() {
+fn cg_residual_and_agreement_with_cholesky_and_multigrid() {
     let n = 12;
     let (net, g) = lattice(n, 7);
     let bcs = resolve_fixed(&net, &faces(n), FloatingPolicy::Fail).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let s: Vec<f64> = (0..net.n_nodes()).map(|_| rng.random_range(-0.1..0.1)).collect();
     let a = solve_steady(&net, &g, &bcs, &s, &cg(1e-10)).unwrap();
-    let b = solve_steady(
-        &net,
-        &g,
-        &bcs,
-        &s,
-        &SolveParams {
-            method: Method::Cholesky,
-        },
-    )
-    .unwrap();
+    let b = solve_steady(&net, &g, &bcs, &s, &SolveParams::new(Method::Cholesky, 1e-8, 1)).unwrap();
     let c = solve_steady(
         &net,
         &g,
         &bcs,
         &s,
-        &SolveParams {
-            method: Method::FaerCg {
-                rel_tol: 1e-10,
-                max_iter: 10_000,
-            },
-        },
+        &SolveParams::new(Method::AmgCg, 1e-10, 10_000),
     )
     .unwrap();
     assert!(a.report.relative_residual <= 1e-10 && a.report.iterations > 5);
@@ -173,9 +153,7 @@ fn shifted_solve_matches_cholesky_and_warm_start_saves_iterations() {
         &g,
         Some(&d),
         &bcs,
-        &SolveParams {
-            method: Method::Cholesky,
-        },
+        &SolveParams::new(Method::Cholesky, 1e-8, 1),
     )
     .unwrap();
     let b = sys.solve(&rhs, None).unwrap();
@@ -236,16 +214,10 @@ fn non_convergence_and_bad_input_are_clear_errors() {
     let bcs = resolve_fixed(&net, &faces(n), FloatingPolicy::Fail).unwrap();
     let s = vec![0.0; net.n_nodes()];
     for method in [
-        Method::Cg {
-            rel_tol: 1e-12,
-            max_iter: 3,
-        },
-        Method::FaerCg {
-            rel_tol: 1e-12,
-            max_iter: 3,
-        },
+        SolveParams::new(Method::Cg, 1e-12, 3),
+        SolveParams::new(Method::IcCg, 1e-12, 3),
     ] {
-        match solve_steady(&net, &g, &bcs, &s, &SolveParams { method }) {
+        match solve_steady(&net, &g, &bcs, &s, &method) {
             Err(SolveError::NotConverged {
                 iterations,
                 relative_residual,
@@ -256,12 +228,7 @@ fn non_convergence_and_bad_input_are_clear_errors() {
             other => panic!("expected NotConverged, got {other:?}"),
         }
     }
-    let bad = SolveParams {
-        method: Method::Cg {
-            rel_tol: 0.0,
-            max_iter: 5,
-        },
-    };
+    let bad = SolveParams::new(Method::Cg, 0.0, 5);
     assert!(matches!(
         solve_steady(&net, &g, &bcs, &s, &bad),
         Err(SolveError::InvalidParameter { ref field, .. }) if field == "method.rel_tol"

@@ -550,17 +550,15 @@ pub fn electric_problem(
 
 /// The linear solver's parameters.
 pub fn solve_params(l: &LinearSolverConfig) -> SolveParams {
-    let (rel_tol, max_iter) = (l.rel_tol, l.max_iter);
-    SolveParams {
-        method: match l.method {
-            LinearMethodConfig::Auto => Method::Auto { rel_tol, max_iter },
-            LinearMethodConfig::Multigrid => Method::AmgCg { rel_tol, max_iter },
-            LinearMethodConfig::Mic => Method::IcCg { rel_tol, max_iter },
-            LinearMethodConfig::Jacobi => Method::Cg { rel_tol, max_iter },
-            LinearMethodConfig::Cholesky => Method::Cholesky,
-            LinearMethodConfig::Distributed => Method::Distributed { rel_tol, max_iter },
-        },
-    }
+    let method = match l.method {
+        LinearMethodConfig::Auto => Method::Auto,
+        LinearMethodConfig::Multigrid => Method::AmgCg,
+        LinearMethodConfig::Mic => Method::IcCg,
+        LinearMethodConfig::Jacobi => Method::Cg,
+        LinearMethodConfig::Cholesky => Method::Cholesky,
+        LinearMethodConfig::Distributed => Method::Distributed,
+    };
+    SolveParams::new(method, l.rel_tol, l.max_iter)
 }
 
 /// How a probe reads a field.

@@ -72,7 +72,7 @@ fn go(
     let observer = |t: f64, v: &[f64]| snaps.push((t, v.to_vec()));
     let q = case.q.clone();
     let update = source_update_fn(move |_t, temps: &[f64]| {
-        Ok(Some(
+        Ok::<_, demcon_thermal::ThermalError>(Some(
             q.iter()
                 .zip(temps)
                 .map(|(&q, &t)| q * (1.0 + 0.01 * (t - 300.0)))

@@ -27,12 +27,7 @@ fn energy_balance_is_not_one_on_a_steady_run_between_two_fixed_sets() {
     let c = resolve_fixed(&net, &faces(n, 300.0, 400.0), FloatingPolicy::Fail).unwrap();
     // The balance error is Σ of the free rows' residuals over the gross flow: it follows the
     // solver's tolerance (3e-9 at the default 1e-8), so solve tightly here.
-    let params = SolveParams {
-        method: Method::Auto {
-            rel_tol: 1e-12,
-            max_iter: 20_000,
-        },
-    };
+    let params = SolveParams::new(Method::Auto, 1e-12, 20_000);
     let st = solve_steady_temperature(&net, &g, &c, &vec![0.0; net.n_nodes()], &params).unwrap();
     // The net flow is ~0 (what flows in at the hot face leaves at the cold one): it was the
     // scale, which made the error ~1.
@@ -235,22 +230,9 @@ fn contrast_cliff_implicit_steps_converge_at_contrast_1e6_and_1e_minus_6() {
         let t0 = vec![0.5; net.n_nodes()];
         let q = vec![0.0; net.n_nodes()];
         for method in [
-            Method::Auto {
-                rel_tol: 1e-10,
-                max_iter: 200_000,
-            },
-            Method::Cg {
-                rel_tol: 1e-10,
-                max_iter: 200_000,
-            },
-            Method::FaerCg {
-                rel_tol: 1e-10,
-                max_iter: 200_000,
-            },
-            Method::AmgCg {
-                rel_tol: 1e-10,
-                max_iter: 200_000,
-            },
+            SolveParams::new(Method::Auto, 1e-10, 200_000),
+            SolveParams::new(Method::Cg, 1e-10, 200_000),
+            SolveParams::new(Method::AmgCg, 1e-10, 200_000),
         ] {
             let run = run_implicit(
                 &system,
@@ -261,7 +243,7 @@ fn contrast_cliff_implicit_steps_converge_at_contrast_1e6_and_1e_minus_6() {
                 &ImplicitParams {
                     t_end: 10.0,
                     dt: 1.0,
-                    solve: SolveParams { method },
+                    solve: method,
                     ..Default::default()
                 },
                 |_, _| {},

@@ -142,7 +142,7 @@ fn explicit_implicit_and_steady_agree() {
                 dt,
                 scheme,
                 output_times: vec![],
-                solve: SolveParams { method },
+                solve: method,
                 ..Default::default()
             },
             |_, _| {},
@@ -150,15 +150,12 @@ fn explicit_implicit_and_steady_agree() {
         )
         .unwrap()
     };
-    let cg = Method::Cg {
-        rel_tol: 1e-12,
-        max_iter: 1000,
-    };
+    let cg = SolveParams::new(Method::Cg, 1e-12, 1000);
     let cn = implicit(Scheme::CrankNicolson, ex.report.dt_bound, cg, t_mid);
     let be = implicit(
         Scheme::BackwardEuler,
         ex.report.dt_bound * 0.1,
-        Method::Cholesky,
+        SolveParams::new(Method::Cholesky, 1e-12, 1),
         t_mid,
     );
     let max_diff = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
@@ -401,7 +398,7 @@ fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
         |_, _| {},
         source_update_fn(|_, t| {
             calls += 1;
-            Ok(Some(src(t)))
+            Ok::<_, ThermalError>(Some(src(t)))
         }),
     )
     .unwrap();
@@ -432,12 +429,7 @@ fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
             t_end: 40.0 * dt,
             dt: 4.0 * dt,
             scheme,
-            solve: SolveParams {
-                method: Method::Cg {
-                    rel_tol: 1e-13,
-                    max_iter: 10_000,
-                },
-            },
+            solve: SolveParams::new(Method::Cg, 1e-13, 10_000),
             ..Default::default()
         };
         let mut calls = 0;
@@ -451,7 +443,7 @@ fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
             |_, _| {},
             source_update_fn(|_, t| {
                 calls += 1;
-                Ok(Some(src(t)))
+                Ok::<_, ThermalError>(Some(src(t)))
             }),
         )
         .unwrap();
@@ -471,7 +463,7 @@ fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
         },
         &params,
         |_, _| {},
-        source_update_fn(|_, _| Ok(Some(vec![f64::NAN; m]))),
+        source_update_fn(|_, _| Ok::<_, ThermalError>(Some(vec![f64::NAN; m]))),
     );
     assert!(
         matches!(bad, Err(ThermalError::InvalidParameter { .. })),
@@ -485,7 +477,7 @@ fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
         },
         &params,
         |_, _| {},
-        source_update_fn(|_, _| Ok(Some(vec![0.0; 3]))),
+        source_update_fn(|_, _| Ok::<_, ThermalError>(Some(vec![0.0; 3]))),
     );
     assert!(
         matches!(short, Err(ThermalError::InvalidParameter { .. })),

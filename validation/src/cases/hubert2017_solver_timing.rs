@@ -43,12 +43,12 @@ fn time_method(
     model: &Model,
     g: &[f64],
     electrodes: &[(Vec<u32>, f64)],
-    method: Method,
+    method: SolveParams,
     reps: usize,
 ) -> anyhow::Result<Timing> {
     let params = ElectricParams {
         floating: FloatingPolicy::Exclude,
-        solve: SolveParams { method },
+        solve: method,
     };
     let (mut solve, mut total) = (Vec::with_capacity(reps), Vec::with_capacity(reps));
     let mut last = None;
@@ -123,24 +123,19 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     )?;
     let sel = |f: Face| Selector::Face(f).select_nonempty(&model.particles, &model.container, f.name());
     let electrodes = vec![(sel(Face::ZMin)?, 0.0), (sel(Face::ZMax)?, 1.0)];
-    let cg = Method::IcCg {
-        rel_tol: 1e-8,
-        max_iter: 20_000,
-    };
-    let jacobi = Method::Cg {
-        rel_tol: 1e-8,
-        max_iter: 20_000,
-    };
+    let cg = SolveParams::new(Method::IcCg, 1e-8, 20_000);
+    let jacobi = SolveParams::new(Method::Cg, 1e-8, 20_000);
+    let cholesky = SolveParams::new(Method::Cholesky, 1e-8, 20_000);
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let (cg1, jac1, ch1) = one.install(|| -> anyhow::Result<_> {
         Ok((
             time_method(&model, &g, &electrodes, cg, reps)?,
             time_method(&model, &g, &electrodes, jacobi, reps)?,
-            time_method(&model, &g, &electrodes, Method::Cholesky, reps)?,
+            time_method(&model, &g, &electrodes, cholesky, reps)?,
         ))
     })?;
     let cgp = time_method(&model, &g, &electrodes, jacobi, reps)?;
-    let chp = time_method(&model, &g, &electrodes, Method::Cholesky, reps)?;
+    let chp = time_method(&model, &g, &electrodes, cholesky, reps)?;
     Ok(Measured {
         reps,
         n: model.particles.len(),

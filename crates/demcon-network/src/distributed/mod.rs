@@ -286,12 +286,7 @@ mod tests {
         use crate::{FloatingPolicy, LinearSystem, Method, Network, SolveError, SolveParams, resolve_fixed};
         let net = Network::new(3, &[[0, 1], [1, 2]]).unwrap();
         let bcs = resolve_fixed(&net, &[(vec![0], 0.0), (vec![2], 1.0)], FloatingPolicy::Fail).unwrap();
-        let params = SolveParams {
-            method: Method::Distributed {
-                rel_tol: 1e-8,
-                max_iter: 10,
-            },
-        };
+        let params = SolveParams::new(Method::Distributed, 1e-8, 10);
         let err = LinearSystem::new(&net, &[1.0, 1.0], None, &bcs, &params).unwrap_err();
         assert!(
             matches!(&err, SolveError::DistributedUnavailable { why } if why.contains("--features petsc")),
