@@ -685,25 +685,12 @@ pub fn solve_thermal_checkpointed(
         sources.iter_mut().zip(x).for_each(|(a, b)| *a += b);
     }
     let update = extra.update;
-    // The model's error that stopped a run, returned instead of the solver's.
-    let stopped: RefCell<Option<ModelError>> = RefCell::new(None);
-    let mut hook = |t: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, demcon_thermal::ThermalError> {
-        match update(t, temps) {
-            Ok(None) => Ok(None),
-            Ok(Some(extra)) => {
-                let mut s = bcs.sources.clone();
-                s.iter_mut().zip(&extra).for_each(|(a, b)| *a += b);
-                Ok(Some(s))
-            }
-            Err(e) => {
-                *stopped.borrow_mut() = Some(e);
-                Err(demcon_thermal::ThermalError::invalid(
-                    "source update",
-                    t,
-                    "the run was stopped by the coupled solve",
-                ))
-            }
-        }
+    let mut hook = |t: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, ModelError> {
+        Ok(update(t, temps)?.map(|extra| {
+            let mut s = bcs.sources.clone();
+            s.iter_mut().zip(&extra).for_each(|(a, b)| *a += b);
+            s
+        }))
     };
     let net = setup.network(model);
     let t_init = initial_node_temperatures(model, setup, bcs, initial);
@@ -732,16 +719,11 @@ pub fn solve_thermal_checkpointed(
         let Some(sink) = sink.as_mut() else {
             return Ok(());
         };
-        let t = state.t;
         let snapshots = snapshots.borrow().clone();
         sink(RunCheckpoint {
             transient: state,
             snapshots,
             coupling: None,
-        })
-        .map_err(|e| {
-            *stopped.borrow_mut() = Some(e);
-            demcon_thermal::ThermalError::invalid("checkpoint", t, "the run was stopped by its checkpoint")
         })
     };
     let checkpoints = Some(Checkpoints {
@@ -845,11 +827,7 @@ pub fn solve_thermal_checkpointed(
             ));
         }
     };
-    // A model error raised in the hook is returned in place of the solver's "stopped".
-    let tr = match (tr, stopped.into_inner()) {
-        (_, Some(e)) => return Err(e),
-        (r, None) => r?,
-    };
+    let tr = tr?;
     Ok(ThermalRun::from_nodes(
         &setup.walls,
         tr.temperatures,

@@ -105,16 +105,17 @@ impl CheckpointEvery {
 }
 
 /// The checkpoints of a run: when, and what receives each state. An error returned by
-/// `save` stops the run and is passed on (the state it was given is complete: a caller may
-/// keep it and stop on purpose).
-pub struct Checkpoints<'a> {
+/// `save` stops the run and is returned by it as it is (the state it was given is complete: a
+/// caller may keep it and stop on purpose). `E` is the caller's error type, the one its
+/// [`crate::SourceUpdate`] returns; the solver's own errors convert into it.
+pub struct Checkpoints<'a, E = ThermalError> {
     /// When.
     pub every: CheckpointEvery,
     /// Receives each state.
-    pub save: &'a mut dyn FnMut(TransientState) -> Result<(), ThermalError>,
+    pub save: &'a mut dyn FnMut(TransientState) -> Result<(), E>,
 }
 
-impl std::fmt::Debug for Checkpoints<'_> {
+impl<E> std::fmt::Debug for Checkpoints<'_, E> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Checkpoints")
             .field("every", &self.every)
@@ -123,15 +124,15 @@ impl std::fmt::Debug for Checkpoints<'_> {
 }
 
 /// Decides when a checkpoint is due; kept apart from the arithmetic.
-pub(crate) struct Schedule<'a> {
-    checkpoints: Option<Checkpoints<'a>>,
+pub(crate) struct Schedule<'a, E> {
+    checkpoints: Option<Checkpoints<'a, E>>,
     last_steps: u64,
     last_time: Instant,
 }
 
-impl<'a> Schedule<'a> {
+impl<'a, E> Schedule<'a, E> {
     /// A schedule starting at `steps` steps done.
-    pub(crate) fn new(checkpoints: Option<Checkpoints<'a>>, steps: u64) -> Result<Self, ThermalError> {
+    pub(crate) fn new(checkpoints: Option<Checkpoints<'a, E>>, steps: u64) -> Result<Self, ThermalError> {
         if let Some(c) = &checkpoints {
             c.every.check()?;
         }
@@ -144,11 +145,7 @@ impl<'a> Schedule<'a> {
 
     /// After `steps` steps: hands out the state `make` builds when a checkpoint is due.
     #[inline]
-    pub(crate) fn after_step(
-        &mut self,
-        steps: u64,
-        make: impl FnOnce() -> TransientState,
-    ) -> Result<(), ThermalError> {
+    pub(crate) fn after_step(&mut self, steps: u64, make: impl FnOnce() -> TransientState) -> Result<(), E> {
         let Some(c) = self.checkpoints.as_mut() else {
             return Ok(());
         };

@@ -2,17 +2,16 @@
 //! linear solve per step through the network (CG warm-started, or a reused Cholesky
 //! factor), and the steady state solved directly.
 
-use std::time::Instant;
-
 use demcon_core::check::{check_finite, check_len};
 use demcon_network::{Constraints, LinearSystem, Network, NodeKind, Solution, SolveParams, solve_steady};
 
-use crate::checkpoint::{Checkpoints, Schedule, TransientStart, TransientState, check_state};
+use crate::checkpoint::{Checkpoints, TransientStart};
 use crate::error::ThermalError;
+use crate::march::{Ledger, MarchParams, Segment, Stepper, march};
 use crate::system::{SourceUpdate, ThermalSystem, TransientInput};
 use crate::transient::{
-    DEFAULT_MAX_STEPS, ProgressFn, Ticker, Transient, TransientReport, Turnover, boundary_edges,
-    boundary_gross, boundary_power, check_max_steps, close_ledger, source_gross, source_power, stops,
+    DEFAULT_MAX_STEPS, ProgressFn, Transient, TransientReport, boundary_edges, boundary_gross,
+    boundary_power, check_max_steps, source_gross, stops,
 };
 
 /// Implicit time discretisation.
@@ -81,13 +80,13 @@ impl Default for ImplicitParams {
 /// # Errors
 /// Bad input; linear-solver failures ([`ThermalError::Network`]); an invalid source vector
 /// from `update`; an error returned by `update` stops the run and is passed on.
-pub fn run_implicit(
+pub fn run_implicit<U: SourceUpdate>(
     system: &ThermalSystem<'_>,
     input: TransientInput<'_>,
     params: &ImplicitParams,
     observer: impl FnMut(f64, &[f64]),
-    update: impl SourceUpdate,
-) -> Result<Transient, ThermalError> {
+    update: U,
+) -> Result<Transient, U::Error> {
     run_implicit_from(
         system,
         TransientStart::Initial(input),
@@ -107,31 +106,20 @@ pub fn run_implicit(
 /// # Errors
 /// Those of [`run_implicit`]; a state that does not belong to this run; a bad schedule; an
 /// error returned by `checkpoints.save` stops the run and is passed on.
-pub fn run_implicit_from(
+pub fn run_implicit_from<U: SourceUpdate>(
     system: &ThermalSystem<'_>,
     start: TransientStart<'_>,
     params: &ImplicitParams,
-    mut observer: impl FnMut(f64, &[f64]),
-    mut update: impl SourceUpdate,
-    checkpoints: Option<Checkpoints<'_>>,
-) -> Result<Transient, ThermalError> {
-    let clock = Instant::now();
+    observer: impl FnMut(f64, &[f64]),
+    update: U,
+    checkpoints: Option<Checkpoints<'_, U::Error>>,
+) -> Result<Transient, U::Error> {
     if let TransientStart::Initial(input) = &start {
         system.check_input(input)?;
     }
-    let (net, conductances, capacities, constraints) = (
-        system.network(),
-        system.conductances(),
-        system.capacities(),
-        system.constraints(),
-    );
     let stops = stops(params.t_end, &params.output_times)?;
     if !(params.dt.is_finite() && params.dt > 0.0) {
-        return Err(ThermalError::invalid(
-            "dt",
-            params.dt,
-            "must be a finite time > 0 (s)",
-        ));
+        return Err(ThermalError::invalid("dt", params.dt, "must be a finite time > 0 (s)").into());
     }
     // Steps of each segment between stops (output times), counted before the first step.
     let mut seg_steps = Vec::with_capacity(stops.len());
@@ -149,192 +137,147 @@ pub fn run_implicit_from(
         params.max_steps,
         "use a larger dt or the steady solver",
     )?;
-    // The step each segment's linear system is built for: a segment whose step is within
-    // 1e-12 of the system in force reuses it.
-    let mut sys_h: Vec<f64> = Vec::with_capacity(stops.len());
+    // Each segment's uniform step, and the step its linear system is built for: a segment
+    // whose step is within 1e-12 of the system in force reuses it.
+    let (mut segments, mut sys_h) = (
+        Vec::with_capacity(stops.len()),
+        Vec::<f64>::with_capacity(stops.len()),
+    );
     let mut t_prev = 0.0;
     for (&stop, &n_steps) in stops.iter().zip(&seg_steps) {
         let h = (stop - t_prev) / n_steps as f64;
+        segments.push(Segment {
+            n_steps,
+            n_full: n_steps - 1,
+            h,
+            last: h,
+        });
         let reuse = matches!(sys_h.last(), Some(&d) if (d - h).abs() <= 1e-12 * h);
         sys_h.push(if reuse { sys_h[sys_h.len() - 1] } else { h });
         t_prev = stop;
     }
-    let bound = system.stable_dt_bound();
-    let n = net.n_nodes();
-    let cn = params.scheme == Scheme::CrankNicolson;
-    let factor = if cn { 2.0 } else { 1.0 };
-    let scheme = params.scheme.name();
-    let mut report = TransientReport::new(scheme, params.dt, bound, None);
-    let mut turnover = Turnover::default();
-    // The state to start from: t = 0, or a checkpoint.
-    let (mut cur, t0, mut sources, first_segment, first_step, prior_wall_s);
-    match start {
-        TransientStart::Initial(input) => {
-            cur = input.temperatures.to_vec();
-            constraints.impose(&mut cur);
-            t0 = cur.clone();
-            sources = input.sources.to_vec();
-            (first_segment, first_step, prior_wall_s) = (0, 0, 0.0);
-        }
-        TransientStart::Resume(s) => {
-            check_state(s, system, scheme, params.dt, params.t_end, &seg_steps)?;
-            cur = s.temperatures.clone();
-            t0 = s.initial_temperatures.clone();
-            sources = s.sources.clone();
-            (first_segment, first_step, prior_wall_s) = (s.segment as usize, s.segment_steps, s.wall_s);
-            report.steps = s.steps;
-            report.energy_sources_j = s.energy_sources_j;
-            report.energy_boundary_j = s.energy_boundary_j;
-            report.solver_iterations = s.solver_iterations;
-            report.max_relative_residual = s.max_relative_residual;
-            turnover = Turnover {
-                boundary_j: s.turnover_boundary_j,
-                sources_j: s.turnover_sources_j,
-            };
-        }
-    }
-    let mut ticker = Ticker::new(params.progress.as_ref(), total);
-    ticker.skip_to(report.steps);
-    let mut schedule = Schedule::new(checkpoints, report.steps)?;
-    let edges_b = boundary_edges(net, conductances, constraints);
-    let mut p_src = source_power(constraints, &sources);
-    let mut p_src_gross = source_gross(constraints, &sources);
-    let kinds = constraints.kinds();
-
-    if first_segment == 0 && first_step == 0 && params.output_times.first() == Some(&0.0) {
-        observer(0.0, &cur);
-    }
-    // The state between two steps, as a checkpoint hands it out.
-    let state = |segment: usize,
-                 segment_steps: u64,
-                 t: f64,
-                 cur: &[f64],
-                 sources: &[f64],
-                 report: &TransientReport,
-                 turnover: &Turnover| TransientState {
-        scheme: scheme.into(),
+    let m = MarchParams {
+        scheme: params.scheme.name(),
         dt: params.dt,
         t_end: params.t_end,
-        segment: segment as u64,
-        segment_steps,
-        steps: report.steps,
-        t,
-        temperatures: cur.to_vec(),
-        initial_temperatures: t0.clone(),
-        sources: sources.to_vec(),
-        energy_sources_j: report.energy_sources_j,
-        energy_boundary_j: report.energy_boundary_j,
-        turnover_boundary_j: turnover.boundary_j,
-        turnover_sources_j: turnover.sources_j,
-        solver_iterations: report.solver_iterations,
-        max_relative_residual: report.max_relative_residual,
-        envelope: [0.0; 3],
-        wall_s: prior_wall_s + clock.elapsed().as_secs_f64(),
+        stops,
+        segments,
+        output_times: &params.output_times,
+        bound: system.stable_dt_bound(),
+        paper_dt: None,
+        envelope: None,
+        progress: params.progress.as_ref(),
     };
-    let mut shift = vec![0.0; n];
-    let mut rhs = vec![0.0; n];
-    let mut system: Option<(f64, LinearSystem<'_>)> = None;
-    for (seg, (&stop, &n_steps)) in stops.iter().zip(&seg_steps).enumerate().skip(first_segment) {
-        let t_start = if seg == 0 { 0.0 } else { stops[seg - 1] };
-        let span = stop - t_start;
-        let h = span / n_steps as f64;
-        let h_sys = sys_h[seg];
-        if !matches!(&system, Some((d, _)) if d.to_bits() == h_sys.to_bits()) {
-            for p in 0..n {
-                shift[p] = factor * capacities[p] / h_sys;
-            }
-            system = Some((
-                h_sys,
-                LinearSystem::new(net, conductances, Some(&shift), constraints, &params.solve)?,
-            ));
-        }
-        let sys = match &system {
-            Some((_, s)) => s,
-            None => unreachable!("system built above"),
-        };
-        let k0 = if seg == first_segment { first_step } else { 0 };
-        for k in k0..n_steps {
-            let p_b_old = boundary_power(&edges_b, &cur);
-            if cn {
-                let k_t = net.apply_laplacian(conductances, &cur)?;
-                for p in 0..n {
-                    rhs[p] = shift[p] * cur[p] - k_t[p] + 2.0 * sources[p];
-                }
-            } else {
-                for p in 0..n {
-                    rhs[p] = shift[p] * cur[p] + sources[p];
-                }
-            }
-            let Solution {
-                values, report: r, ..
-            } = sys.solve(&rhs, Some(&cur))?;
-            let mut next = values;
-            // Excluded nodes keep their value (they are not part of the solve).
-            for p in constraints.excluded() {
-                next[*p as usize] = cur[*p as usize];
-            }
-            let p_b_new = boundary_power(&edges_b, &next);
-            let prev = &cur;
-            report.energy_boundary_j += if cn {
-                0.5 * h * (p_b_old + p_b_new)
-            } else {
-                h * p_b_new
-            };
-            report.energy_sources_j += h * p_src;
-            turnover.boundary_j += if cn {
-                0.5 * h * (boundary_gross(&edges_b, prev) + boundary_gross(&edges_b, &next))
-            } else {
-                h * boundary_gross(&edges_b, &next)
-            };
-            turnover.sources_j += h * p_src_gross;
-            report.solver_iterations += r.iterations as u64;
-            report.max_relative_residual = report.max_relative_residual.max(r.relative_residual);
-            report.steps += 1;
-            ticker.tick(report.steps);
-            cur = next;
-            let t_now = t_start
-                + if k + 1 == n_steps {
-                    span
-                } else {
-                    (k + 1) as f64 * h
-                };
-            if let Some(new) = update.update(t_now, &cur)? {
-                check_len("sources", new.len(), n)?;
-                check_finite("sources", &new)?;
-                p_src = source_power(constraints, &new);
-                p_src_gross = source_gross(constraints, &new);
-                sources = new;
-            }
-            if k + 1 < n_steps {
-                schedule.after_step(report.steps, || {
-                    state(seg, k + 1, t_now, &cur, &sources, &report, &turnover)
-                })?;
-            }
-        }
-        if stop < params.t_end || params.output_times.last() == Some(&stop) {
-            observer(stop, &cur);
-        }
-        if seg + 1 < stops.len() {
-            schedule.after_step(report.steps, || {
-                state(seg + 1, 0, stop, &cur, &sources, &report, &turnover)
-            })?;
+    let make = |sources: &[f64]| {
+        let n = system.n_nodes();
+        Ok(Implicit {
+            system,
+            scheme: params.scheme,
+            solve: params.solve,
+            sys_h,
+            shift: vec![0.0; n],
+            rhs: vec![0.0; n],
+            sources: sources.to_vec(),
+            prepared: None,
+        })
+    };
+    march(system, start, m, make, observer, update, checkpoints)
+}
+
+/// Backward Euler or Crank–Nicolson: one solve of (f C/Δt + K) T' = b per step (f = 1 or 2),
+/// the system built once per step length.
+struct Implicit<'a> {
+    system: &'a ThermalSystem<'a>,
+    scheme: Scheme,
+    solve: SolveParams,
+    /// The step each segment's system is built for (s).
+    sys_h: Vec<f64>,
+    /// f C/Δt (W/K) and the right-hand side (W), per node.
+    shift: Vec<f64>,
+    rhs: Vec<f64>,
+    /// Sources in force (W).
+    sources: Vec<f64>,
+    /// The system in force and its step (s).
+    prepared: Option<(f64, LinearSystem<'a>)>,
+}
+
+impl Stepper for Implicit<'_> {
+    fn ledger(&self) -> Ledger {
+        match self.scheme {
+            Scheme::BackwardEuler => Ledger::End,
+            Scheme::CrankNicolson => Ledger::Trapezoid,
         }
     }
-    debug_assert!(kinds.len() == n);
-    report.t_end = params.t_end;
-    report.wall_s = prior_wall_s + clock.elapsed().as_secs_f64();
-    close_ledger(
-        &mut report,
-        constraints,
-        capacities,
-        (&t0, &cur),
-        turnover,
-        f64::EPSILON / 2.0,
-    );
-    Ok(Transient {
-        temperatures: cur,
-        report,
-    })
+
+    fn begin_segment(&mut self, seg: usize) -> Result<(), ThermalError> {
+        let h_sys = self.sys_h[seg];
+        if matches!(&self.prepared, Some((d, _)) if d.to_bits() == h_sys.to_bits()) {
+            return Ok(());
+        }
+        let factor = if self.scheme == Scheme::CrankNicolson {
+            2.0
+        } else {
+            1.0
+        };
+        let s = self.system;
+        for (d, c) in self.shift.iter_mut().zip(s.capacities()) {
+            *d = factor * c / h_sys;
+        }
+        let sys = LinearSystem::new(
+            s.network(),
+            s.conductances(),
+            Some(&self.shift),
+            s.constraints(),
+            &self.solve,
+        )?;
+        self.prepared = Some((h_sys, sys));
+        Ok(())
+    }
+
+    fn step(
+        &mut self,
+        cur: &[f64],
+        next: &mut Vec<f64>,
+        _h: f64,
+        _shortened: bool,
+        report: &mut TransientReport,
+    ) -> Result<Option<(f64, f64, bool)>, ThermalError> {
+        let Some((_, sys)) = &self.prepared else {
+            unreachable!("the march begins every segment")
+        };
+        let (shift, sources) = (&self.shift, &self.sources);
+        if self.scheme == Scheme::CrankNicolson {
+            let k_t = self
+                .system
+                .network()
+                .apply_laplacian(self.system.conductances(), cur)?;
+            for (p, b) in self.rhs.iter_mut().enumerate() {
+                *b = shift[p] * cur[p] - k_t[p] + 2.0 * sources[p];
+            }
+        } else {
+            for (p, b) in self.rhs.iter_mut().enumerate() {
+                *b = shift[p] * cur[p] + sources[p];
+            }
+        }
+        let Solution {
+            values, report: r, ..
+        } = sys.solve(&self.rhs, Some(cur))?;
+        *next = values;
+        // Excluded nodes keep their value (they are not part of the solve).
+        for &p in self.system.constraints().excluded() {
+            next[p as usize] = cur[p as usize];
+        }
+        report.solver_iterations += r.iterations as u64;
+        report.max_relative_residual = report.max_relative_residual.max(r.relative_residual);
+        Ok(None)
+    }
+
+    fn set_sources(&mut self, sources: &[f64]) -> Result<(), ThermalError> {
+        check_len("sources", sources.len(), self.sources.len())?;
+        check_finite("sources", sources)?;
+        self.sources.copy_from_slice(sources);
+        Ok(())
+    }
 }
 
 /// Steady temperatures and the heat balance that checks them.

@@ -41,6 +41,8 @@ mod checkpoint;
 mod error;
 mod explicit;
 mod implicit;
+mod kernel;
+mod march;
 mod sources;
 mod system;
 mod transient;

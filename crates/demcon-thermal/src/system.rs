@@ -108,54 +108,73 @@ pub struct TransientInput<'a> {
 }
 
 /// Sources that may change during a transient (e.g. Joule heat re-evaluated from the
-/// temperatures). The default method keeps the sources: `()` and [`NoUpdate`] use it;
-/// closures are wrapped by [`source_update_fn`].
+/// temperatures). `()` and [`NoUpdate`] keep the sources; closures are wrapped by
+/// [`source_update_fn`].
 pub trait SourceUpdate {
+    /// The error an update may stop the run with: the caller's own type, into which the
+    /// solver's errors convert (the run returns it as it is).
+    type Error: From<ThermalError>;
+
     /// Called once after every step with the time reached `t` (s) and the temperatures
     /// `temps` (K, one per node). Returns new sources (W per node) to use from the next step
     /// on, or `None` to keep the current ones.
     ///
     /// # Errors
     /// Any error stops the run and is returned by the solver.
-    fn update(&mut self, t: f64, temps: &[f64]) -> Result<Option<Vec<f64>>, ThermalError> {
-        let _ = (t, temps);
-        Ok(None)
-    }
+    fn update(&mut self, t: f64, temps: &[f64]) -> Result<Option<Vec<f64>>, Self::Error>;
 }
 
 /// Sources that never change.
-impl SourceUpdate for () {}
+impl SourceUpdate for () {
+    type Error = ThermalError;
+
+    fn update(&mut self, _t: f64, _temps: &[f64]) -> Result<Option<Vec<f64>>, ThermalError> {
+        Ok(None)
+    }
+}
 
 /// Sources that never change (a named form of `()`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct NoUpdate;
 
-impl SourceUpdate for NoUpdate {}
+impl SourceUpdate for NoUpdate {
+    type Error = ThermalError;
+
+    fn update(&mut self, _t: f64, _temps: &[f64]) -> Result<Option<Vec<f64>>, ThermalError> {
+        Ok(None)
+    }
+}
 
 /// A closure used as a [`SourceUpdate`]; made by [`source_update_fn`].
 #[derive(Debug, Clone, Copy)]
 pub struct SourceUpdateFn<F>(F);
 
 /// Wraps `f(t, T)` (t in s, T in K per node; returns new sources in W per node, or `None`)
-/// as a [`SourceUpdate`]. A `&mut` closure works too.
-pub fn source_update_fn<F>(f: F) -> SourceUpdateFn<F>
+/// as a [`SourceUpdate`] whose error is the closure's. A `&mut` closure works too.
+pub fn source_update_fn<F, E>(f: F) -> SourceUpdateFn<F>
 where
-    F: FnMut(f64, &[f64]) -> Result<Option<Vec<f64>>, ThermalError>,
+    F: FnMut(f64, &[f64]) -> Result<Option<Vec<f64>>, E>,
+    E: From<ThermalError>,
 {
     SourceUpdateFn(f)
 }
 
-impl<F> SourceUpdate for SourceUpdateFn<F>
+impl<F, E> SourceUpdate for SourceUpdateFn<F>
 where
-    F: FnMut(f64, &[f64]) -> Result<Option<Vec<f64>>, ThermalError>,
+    F: FnMut(f64, &[f64]) -> Result<Option<Vec<f64>>, E>,
+    E: From<ThermalError>,
 {
-    fn update(&mut self, t: f64, temps: &[f64]) -> Result<Option<Vec<f64>>, ThermalError> {
+    type Error = E;
+
+    fn update(&mut self, t: f64, temps: &[f64]) -> Result<Option<Vec<f64>>, E> {
         (self.0)(t, temps)
     }
 }
 
 impl<U: SourceUpdate + ?Sized> SourceUpdate for &mut U {
-    fn update(&mut self, t: f64, temps: &[f64]) -> Result<Option<Vec<f64>>, ThermalError> {
+    type Error = U::Error;
+
+    fn update(&mut self, t: f64, temps: &[f64]) -> Result<Option<Vec<f64>>, U::Error> {
         (**self).update(t, temps)
     }
 }
@@ -193,13 +212,16 @@ mod tests {
     fn the_default_update_keeps_the_sources() {
         assert_eq!(().update(1.0, &[0.0]), Ok(None));
         assert_eq!(NoUpdate.update(1.0, &[0.0]), Ok(None));
-        fn call(mut u: impl SourceUpdate, t: f64) -> Result<Option<Vec<f64>>, ThermalError> {
+        fn call(
+            mut u: impl SourceUpdate<Error = ThermalError>,
+            t: f64,
+        ) -> Result<Option<Vec<f64>>, ThermalError> {
             u.update(t, &[0.0])
         }
         let mut calls = 0;
         let mut hook = |t, _: &[f64]| {
             calls += 1;
-            Ok(Some(vec![t]))
+            Ok::<_, ThermalError>(Some(vec![t]))
         };
         assert_eq!(call(source_update_fn(&mut hook), 2.0), Ok(Some(vec![2.0])));
         let mut wrapped = source_update_fn(&mut hook);
