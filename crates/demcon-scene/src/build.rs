@@ -11,6 +11,7 @@ use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReaso
 use crate::config::*;
 use crate::convert;
 use crate::error::SceneError;
+use crate::scene::Scene;
 
 /// Particles and container from the scene's packing section (generated or read), with the
 /// packing report.
@@ -100,22 +101,21 @@ fn particles_of(
 /// Builds the model of a scene: particles (packed or read), carving, phases, contacts,
 /// network structure.
 pub fn build_model(
-    cfg: &SceneConfig,
-    base_dir: &Path,
+    scene: &Scene,
     progress: Option<&dyn Fn(&demcon_packing::PackProgress)>,
 ) -> Result<Model, SceneError> {
-    build_model_staged(cfg, base_dir, progress, &mut Stages::default())
+    build_model_staged(scene, progress, &mut Stages::default())
 }
 
 /// [`build_model`], timing the stages (`packing`, then those of
 /// [`demcon_model::build_model_staged`]) into `stages`.
 pub fn build_model_staged(
-    cfg: &SceneConfig,
-    base_dir: &Path,
+    scene: &Scene,
     progress: Option<&dyn Fn(&demcon_packing::PackProgress)>,
     stages: &mut Stages,
 ) -> Result<Model, SceneError> {
-    let mut params = convert::model_params(cfg)?;
+    let (cfg, base_dir) = (scene.config(), scene.base_dir.as_path());
+    let mut params = scene.problem().model.clone();
     if let Some(CutContactsConfig::File(path)) = &cfg.cut_contacts {
         params.defects.cut_pairs = read_cut_pairs(&base_dir.join(path))?;
     }

@@ -41,6 +41,7 @@ mod error;
 pub mod output;
 pub mod plots;
 pub mod run;
+mod scene;
 pub mod validate;
 
 pub use build::build_model;
@@ -52,4 +53,5 @@ pub use demcon_network::distributed;
 pub use demcon_thermal::ProgressFn;
 pub use error::SceneError;
 pub use output::{summary_json, write_outputs};
-pub use run::{CheckpointOptions, Homogenization, Resumed, RunOptions, RunResult, Scene, run, run_on_model};
+pub use run::{CheckpointOptions, Homogenization, Resumed, RunOptions, RunResult, run, run_on_model};
+pub use scene::Scene;

@@ -25,149 +25,7 @@ use crate::checkpoint::{Fingerprint, read_checkpoint, write_checkpoint};
 use crate::config::*;
 use crate::convert::{self, HomogenizePlan, PostPlan, Problem};
 use crate::error::SceneError;
-
-/// A loaded scene: its configuration and the folder relative paths are resolved against.
-#[derive(Debug, Clone)]
-pub struct Scene {
-    /// The parsed configuration.
-    pub config: SceneConfig,
-    /// Folder of the scene file.
-    pub base_dir: PathBuf,
-}
-
-impl Scene {
-    /// Reads and parses a RON scene file; errors carry the line and column.
-    /// The file must be UTF-8 (an error names the line and column of the first invalid byte).
-    pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
-            path: path.into(),
-            source,
-        })?;
-        let text = String::from_utf8(bytes).map_err(|e| {
-            let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-            let line = 1 + good.iter().filter(|&&b| b == b'\n').count();
-            let col = 1 + good.iter().rev().take_while(|&&b| b != b'\n').count();
-            SceneError::Parse {
-                path: path.into(),
-                line,
-                col,
-                message: "the file is not UTF-8 text (save the scene as UTF-8)".into(),
-            }
-        })?;
-        let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Scene::parse(&text, path, base_dir)
-    }
-
-    /// Parses RON text (`path` is only used in messages) and validates it. A UTF-8 byte-order
-    /// mark is skipped; CR-LF and CR-only line endings count as line breaks.
-    pub fn parse(text: &str, path: &Path, base_dir: PathBuf) -> Result<Scene, SceneError> {
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let text = if text.contains('\r') {
-            std::borrow::Cow::Owned(text.replace("\r\n", "\n").replace('\r', "\n"))
-        } else {
-            std::borrow::Cow::Borrowed(text)
-        };
-        let config: SceneConfig = ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-            .from_str(&text)
-            .map_err(|e| SceneError::Parse {
-                path: path.into(),
-                line: e.span.start.line,
-                col: e.span.start.col,
-                message: parse_message(&e.code),
-            })?;
-        Scene::from_config(config, base_dir)
-    }
-
-    /// A scene from a configuration built in code (paths relative to `base_dir`), validated.
-    pub fn from_config(config: SceneConfig, base_dir: PathBuf) -> Result<Scene, SceneError> {
-        let scene = Scene { config, base_dir };
-        scene.validate()?;
-        Ok(scene)
-    }
-
-    /// Checks every value before any heavy work (`validate.rs`).
-    pub fn validate(&self) -> Result<(), SceneError> {
-        crate::validate::validate(&self.config, &self.base_dir)
-    }
-}
-
-/// The RON parser's message in the user's terms (no internal option names).
-fn parse_message(code: &ron::error::Error) -> String {
-    match code {
-        ron::error::Error::ExceededRecursionLimit => {
-            "the scene is nested too deeply (regions within regions, more than the parser's limit)".into()
-        }
-        other => scene_words(&other.to_string()),
-    }
-}
-
-/// The scene's words for the parser's type names: what a user writes, not the Rust types
-/// that read it (`in \`MaterialConfig\`` → `in a material (materials[..])`,
-/// `\`RegionConfig::Difference\`` → `region \`Difference\``).
-fn scene_words(message: &str) -> String {
-    const NAMES: &[(&str, &str)] = &[
-        ("SceneConfig", "the scene"),
-        ("LinearSolverConfig", "`linear_solver`"),
-        ("LinearMethodConfig", "`linear_solver.method`"),
-        ("PackingConfig", "`packing`"),
-        ("CarveRuleConfig", "`carve_rule`"),
-        ("PhaseRuleConfig", "`phase_rule`"),
-        ("ContainerConfig", "a container"),
-        ("AxisConfig", "an axis"),
-        ("RegionConfig", "a region"),
-        ("ContactsConfig", "`contacts`"),
-        ("CtConfig", "`c_t`"),
-        ("SurfaceConfig", "a surface model"),
-        ("MaterialConfig", "a material (`materials`)"),
-        ("PhaseConfig", "a phase (`phases`)"),
-        ("InterfaceResistanceConfig", "an interface (`interfaces`)"),
-        ("CrackConfig", "a crack (`cracks`)"),
-        ("DamageConfig", "a damage region (`damage`)"),
-        ("CutContactsConfig", "`cut_contacts`"),
-        ("InterfaceConfig", "`interface`"),
-        ("FloatingConfig", "`floating`"),
-        ("FaceConfig", "a face"),
-        ("SelectorConfig", "a selector"),
-        ("ThermalConfig", "`thermal`"),
-        ("ThermalBcConfig", "a thermal boundary condition (`thermal.bcs`)"),
-        ("SourceConfig", "a source (`thermal.sources`)"),
-        ("TimeStepConfig", "a time step (`dt`)"),
-        ("ImplicitSchemeConfig", "an implicit scheme"),
-        ("ThermalSolverConfig", "a thermal solver (`thermal.solver`)"),
-        ("CheckpointConfig", "`thermal.checkpoint`"),
-        ("ElectricConfig", "`electric`"),
-        ("ElectrodeConfig", "an electrode (`electric.electrodes`)"),
-        ("ProbeMethodConfig", "a probe method"),
-        ("HaloPhasesConfig", "`halo_phases`"),
-        ("ProbeConfig", "a probe (`outputs.probes`)"),
-        ("ProfileConfig", "a profile (`outputs.profiles`)"),
-        ("OutputsConfig", "`outputs`"),
-    ];
-    let mut text = message.replace("in enum `", "in `");
-    for (rust, scene) in NAMES {
-        // A variant first (`RegionConfig::Difference`, quoted or not), then the bare type.
-        let variant = format!("{rust}::");
-        while let Some(k) = text.find(&variant) {
-            let quoted = k > 0 && text.as_bytes()[k - 1] == b'`';
-            let start = k + variant.len();
-            let end = text[start..]
-                .find(|c: char| !(c.is_alphanumeric() || c == '_'))
-                .map_or(text.len(), |e| start + e);
-            let name = text[start..end].to_string();
-            let what = scene.trim_start_matches("a ").trim_start_matches("an ");
-            let (from, to) = if quoted && text[end..].starts_with('`') {
-                (k - 1, end + 1)
-            } else {
-                (k, end)
-            };
-            text.replace_range(from..to, &format!("{what} `{name}`"));
-        }
-        text = text.replace(&format!("`{rust}`"), scene);
-        text = text.replace(rust, scene);
-    }
-    text
-}
+use crate::scene::Scene;
 
 /// A probe reading.
 #[derive(Debug, Clone, Serialize)]
@@ -318,14 +176,14 @@ pub struct CheckpointOptions<'a> {
 /// (wall times aside).
 pub fn run(scene: &Scene, opts: &RunOptions<'_>) -> Result<RunResult, SceneError> {
     let t0 = Instant::now();
-    let cfg = &scene.config;
+    let cfg = scene.config();
     // The checkpoint to continue from, checked against the scene before the build.
     let resume = match &opts.checkpoint {
         Some(ck) => checkpoint_to_resume(cfg, ck)?,
         None => None,
     };
     let mut stages = Stages::new(opts.stages.clone());
-    let model = build_model_staged(cfg, &scene.base_dir, opts.progress, &mut stages)?;
+    let model = build_model_staged(scene, opts.progress, &mut stages)?;
     let plan = match &opts.checkpoint {
         Some(ck) => {
             let fingerprint = Fingerprint::of_scene(cfg).with_packing(&model);
@@ -346,7 +204,7 @@ pub fn run(scene: &Scene, opts: &RunOptions<'_>) -> Result<RunResult, SceneError
         steps: c.transient.steps,
         t: c.transient.t,
     });
-    let mut result = run_stages(cfg, model, stages, opts.transient_progress.clone(), plan)?;
+    let mut result = run_stages(scene, model, stages, opts.transient_progress.clone(), plan)?;
     result.resumed = resumed;
     result.wall_s = t0.elapsed().as_secs_f64();
     Ok(result)
@@ -408,26 +266,26 @@ struct CheckpointPlan<'a> {
     after_write: Option<&'a dyn Fn(u64, f64) -> ControlFlow<()>>,
 }
 
-/// Runs the physics and post-processing of `cfg` on an already built model (so one packing
+/// Runs the physics and post-processing of `scene` on an already built model (so one packing
 /// can serve several solvers).
-pub fn run_on_model(cfg: &SceneConfig, model: Model) -> Result<RunResult, SceneError> {
-    run_stages(cfg, model, Stages::default(), None, None)
+pub fn run_on_model(scene: &Scene, model: Model) -> Result<RunResult, SceneError> {
+    run_stages(scene, model, Stages::default(), None, None)
 }
 
 /// The stages after the build.
 fn run_stages(
-    cfg: &SceneConfig,
+    scene: &Scene,
     mut model: Model,
     mut stages: Stages,
     progress: Option<demcon_thermal::ProgressFn>,
     checkpoints: Option<CheckpointPlan<'_>>,
 ) -> Result<RunResult, SceneError> {
     let t0 = Instant::now();
-    let mut problem = convert::problem(cfg)?;
+    let mut problem = scene.problem().clone();
     if let Some(t) = problem.thermal.as_mut() {
         t.progress = progress;
     }
-    let mut diagnostics = crate::validate::scene_warnings(cfg);
+    let mut diagnostics = scene.warnings().to_vec();
     diagnostics.extend(model_diagnostics(&model));
     if let Some(plan) = &problem.homogenize {
         let h = stages.time("homogenize", || homogenize(&model, plan))?;
@@ -477,7 +335,6 @@ fn run_stages(
         &mut stages,
         &PostInputs {
             model: &model,
-            cfg,
             problem: &problem,
             setup: thermal_setup.as_ref(),
             bcs: thermal_bcs.as_ref(),
@@ -695,7 +552,6 @@ struct SampledField {
 /// What the post-processing reads: the model, the scene and the solutions.
 struct PostInputs<'a> {
     model: &'a Model,
-    cfg: &'a SceneConfig,
     problem: &'a Problem,
     setup: Option<&'a ThermalSetup>,
     bcs: Option<&'a ThermalBcs>,
@@ -831,7 +687,6 @@ fn probes_and_fields(
 ) -> Result<Post, SceneError> {
     let PostInputs {
         model,
-        cfg,
         problem,
         setup,
         bcs,
@@ -910,7 +765,7 @@ fn probes_and_fields(
             .collect()
     });
     let index = ProbeIndex::new(&model.particles, &rep, &domain)?;
-    let (probes, profiles) = sample(&index, plan, cfg, &fields)?;
+    let (probes, profiles) = sample(&index, plan, &fields)?;
     Ok(Post {
         series: Vec::new(),
         cells: None,
@@ -927,7 +782,6 @@ fn probes_and_fields(
 fn sample(
     index: &ProbeIndex,
     plan: &PostPlan,
-    cfg: &SceneConfig,
     fields: &[SampledField],
 ) -> Result<(Vec<ProbeValue>, Vec<ProfileValues>), SceneError> {
     let mut probes = Vec::new();
@@ -938,7 +792,7 @@ fn sample(
         let err = |e: demcon_post::PostError| {
             SceneError::invalid(
                 &format!("outputs.probes[{i}] ({})", p.name),
-                format!("{:?}", cfg.outputs.probes[i].point),
+                format!("({:?}, {:?}, {:?})", p.point.x, p.point.y, p.point.z),
                 e.to_string(),
             )
         };

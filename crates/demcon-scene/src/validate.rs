@@ -37,13 +37,14 @@ impl Refusals {
     }
 }
 
-/// Checks the whole scene; relative paths resolve against `base_dir`. Every refusal is
-/// reported at once ([`SceneError::Several`] when there are more than one), each check group
-/// naming its first bad value.
-pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
+/// Checks the whole scene and returns its plain plan ([`convert::Problem`], the scene's one
+/// conversion); relative paths resolve against `base_dir`. Every refusal is reported at once
+/// ([`SceneError::Several`] when there are more than one), each check group naming its first
+/// bad value.
+pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<convert::Problem, SceneError> {
     let mut r = Refusals::default();
     // Materials, contacts, carving, phases, selectors, electrodes' select/face: by conversion.
-    r.check(convert::problem(c));
+    let problem = r.check(convert::problem(c));
     let container = r.check(known_container(c, base_dir)).flatten();
     if let Some(Some(n)) = r.check(known_count(&c.packing, "packing")) {
         let field = match c.packing {
@@ -101,7 +102,8 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
     }
     r.check(check_outputs(c, container.as_ref()));
     check_names(c, &mut r);
-    SceneError::all(r.0)
+    SceneError::all(r.0)?;
+    problem.ok_or_else(|| SceneError::invalid("scene", "", "could not be converted"))
 }
 
 /// What a scene asks for that is allowed but probably not meant: warnings for

@@ -95,7 +95,7 @@ fn go(scene: &Scene, out: &Path, resume: bool, stop: Option<u64>) -> Result<(), 
         ..Default::default()
     };
     let r = run(scene, &opts)?;
-    write_outputs(&scene.config.name, &scene.config.outputs, &r, out)?;
+    write_outputs(&scene.config().name, &scene.config().outputs, &r, out)?;
     demcon_scene::checkpoint::remove_checkpoint(&checkpoint_path(out).unwrap())?;
     Ok(())
 }
@@ -204,7 +204,7 @@ fn resuming_refuses_another_scene_or_packing_a_damaged_or_missing_checkpoint_and
     let d = scratch("refusals");
     // A packing file, so that it can change under the same scene.
     let generated = scene(&EXPLICIT.replace("PACKING", GENERATED), &d);
-    let model = demcon_scene::build_model(&generated.config, &d, None).unwrap();
+    let model = demcon_scene::build_model(&generated, None).unwrap();
     let file = d.join("p.xyzr");
     demcon_packing::write_xyzr(&file, &model.particles, &model.container).unwrap();
     let text = EXPLICIT.replace("PACKING", r#"File(path: "p.xyzr")"#);

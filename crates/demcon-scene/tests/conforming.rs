@@ -39,7 +39,7 @@ fn seeds_are_counted_flagged_and_a_same_material_sphere_changes_nothing() {
     assert!(seeds > 100 && seeds == r.model.seeds, "{}", j["build"]["conform"]);
     assert!(j["build"]["conform"]["removed_particles"].as_u64().unwrap() > 0);
     let dir = std::env::temp_dir().join(format!("demcon-conforming-{}", std::process::id()));
-    demcon_scene::write_outputs("c", &s.config.outputs, &r, &dir).unwrap();
+    demcon_scene::write_outputs("c", &s.config().outputs, &r, &dir).unwrap();
     let (header, cols) = demcon_post::read_csv(dir.join("particles.csv")).unwrap();
     let k = header
         .iter()
@@ -269,7 +269,7 @@ fn the_memory_estimate_counts_the_conforming_seeds() {
 )"#,
         centres.join(", ")
     );
-    let cfg = parse(&text).config;
+    let cfg = parse(&text).config().clone();
     let cell = demcon_core::Container::Periodic { size: [0.01; 3] };
     let extra = demcon_scene::validate::conforming_extra_sites(200_000, &cfg, &cell);
     assert!((0.9e5..1.4e5).contains(&(extra as f64)), "{extra}");

@@ -237,12 +237,16 @@ fn a_crack_outside_the_domain_is_reported_not_refused() {
 #[test]
 fn the_example_scene_runs_shrunk() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cracked-inclusion.ron");
-    let mut s = Scene::load(&path).unwrap();
-    if let demcon_scene::config::PackingConfig::Generate { count, phi, .. } = &mut s.config.packing {
-        *count = 3000;
-        *phi = 0.64 - 0.5 * 3000f64.powf(-1.0 / 3.0);
-    }
-    s.config.outputs.vtk = false;
+    let s = Scene::load(&path)
+        .unwrap()
+        .edit(|c| {
+            if let demcon_scene::config::PackingConfig::Generate { count, phi, .. } = &mut c.packing {
+                *count = 3000;
+                *phi = 0.64 - 0.5 * 3000f64.powf(-1.0 / 3.0);
+            }
+            c.outputs.vtk = false;
+        })
+        .unwrap();
     let r = run(&s, &RunOptions::default()).unwrap();
     let d = r.model.report.defects.as_ref().unwrap();
     assert!(

@@ -201,7 +201,7 @@ fn positive_beta_recouples_to_the_independent_fixed_point_and_raises_r() {
     // Self-consistency: the potential was solved with the final temperatures' ρ_e.
     let el = r.electric.as_ref().unwrap();
     let th = r.thermal.as_ref().unwrap();
-    let problem = demcon_scene::convert::problem(&s.config).unwrap();
+    let problem = s.problem().clone();
     let again = demcon_model::solve_electric(
         &r.model,
         problem.electric.as_ref().unwrap(),
@@ -234,7 +234,7 @@ fn negative_beta_lowers_r_and_a_runaway_is_reported() {
 fn the_coupled_run_is_deterministic() {
     let s = scene(4e-3, "recouple_tolerance: 1e-7,");
     let a = run(&s, &RunOptions::default()).unwrap();
-    let b = demcon_scene::run_on_model(&s.config, a.model.clone()).unwrap();
+    let b = demcon_scene::run_on_model(&s, a.model.clone()).unwrap();
     assert_eq!(
         a.thermal.as_ref().unwrap().temperatures,
         b.thermal.as_ref().unwrap().temperatures
@@ -245,14 +245,14 @@ fn the_coupled_run_is_deterministic() {
 #[test]
 fn bad_recouple_tolerances_are_refused_and_a_one_way_beta_is_reported() {
     for tol in ["0.0", "-1.0", "NaN", "inf"] {
-        let text = scene(0.0, "").config;
+        let text = scene(0.0, "").config().clone();
         let mut cfg = text.clone();
         cfg.electric.as_mut().unwrap().recouple_tolerance = Some(tol.parse().unwrap());
         let err = Scene::from_config(cfg, lattice_dir()).unwrap_err().to_string();
         assert!(err.contains("electric.recouple_tolerance"), "{err}");
     }
     // Without thermal physics there are no temperatures to recouple with.
-    let mut cfg = scene(0.0, "").config;
+    let mut cfg = scene(0.0, "").config().clone();
     cfg.thermal = None;
     cfg.electric.as_mut().unwrap().recouple_tolerance = Some(1e-3);
     let err = Scene::from_config(cfg, lattice_dir()).unwrap_err().to_string();

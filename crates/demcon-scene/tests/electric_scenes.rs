@@ -21,18 +21,18 @@ fn load(name: &str) -> Scene {
 
 /// The shipped scene shrunk to `n` packed particles.
 fn small(name: &str, n: usize) -> Scene {
-    let mut s = load(name);
-    match &mut s.config.packing {
-        PackingConfig::Generate { count, .. } => *count = n,
-        other => panic!("{name}: expected a generated packing, got {other:?}"),
-    }
-    s
+    load(name)
+        .edit(|c| match &mut c.packing {
+            PackingConfig::Generate { count, .. } => *count = n,
+            other => panic!("{name}: expected a generated packing, got {other:?}"),
+        })
+        .unwrap()
 }
 
 /// Checks the paper's parameters: AISI 304L, the r = 1 mm, l = 5 mm cylinder, electrodes on
 /// the end faces, ends at 20 °C, VTK on.
 fn check_parameters(s: &Scene) {
-    let c = &s.config;
+    let c = s.config();
     match &c.packing {
         PackingConfig::Generate {
             container: ContainerConfig::Cylinder { radius, length },
@@ -99,7 +99,7 @@ fn shipped_electric_scenes_have_the_papers_parameters() {
     for name in ["cylinder-resistance.ron", "notch-joule.ron"] {
         check_parameters(&load(name));
     }
-    assert!(load("notch-joule.ron").config.carve.is_some());
+    assert!(load("notch-joule.ron").config().carve.is_some());
 }
 
 #[test]
@@ -113,7 +113,7 @@ fn cylinder_and_notch_scenes_run_small_and_write_vtk() {
     let r_th = 0.73e-6 * 5e-3 / (std::f64::consts::PI * 1e-6);
     assert!((r_cyl / r_th - 1.0).abs() < 0.15, "R = {r_cyl}, ρl/A = {r_th}");
     let dir = out_dir("cylinder");
-    write_outputs("cylinder-resistance", &cyl.config.outputs, &rc, &dir).unwrap();
+    write_outputs("cylinder-resistance", &cyl.config().outputs, &rc, &dir).unwrap();
     vtu_has_fields(&dir);
 
     let notch = small("notch-joule.ron", n);
@@ -144,7 +144,7 @@ fn cylinder_and_notch_scenes_run_small_and_write_vtk() {
         el.excluded.len()
     );
     let dir = out_dir("notch");
-    write_outputs("notch-joule", &notch.config.outputs, &rn, &dir).unwrap();
+    write_outputs("notch-joule", &notch.config().outputs, &rn, &dir).unwrap();
     vtu_has_fields(&dir);
     let _ = std::fs::remove_dir_all(out_dir("cylinder"));
     let _ = std::fs::remove_dir_all(out_dir("notch"));
@@ -156,18 +156,21 @@ fn cylinder_and_notch_scenes_run_small_and_write_vtk() {
 /// heat stored is the Joule energy.
 #[test]
 fn joule_transient_scene_recouples_during_the_run() {
-    let mut s = small("joule-transient.ron", 500);
-    let Some(demcon_scene::config::ThermalConfig {
-        solver: demcon_scene::config::ThermalSolverConfig::Implicit { t_end, dt, .. },
-        ..
-    }) = s.config.thermal.as_mut()
-    else {
-        panic!("joule-transient.ron: expected an implicit thermal solver");
-    };
-    *t_end = 26.0;
-    *dt = 0.65;
-    s.config.outputs.times = vec![13.0, 26.0];
-    s.config.outputs.probes.clear();
+    let s = small("joule-transient.ron", 500)
+        .edit(|c| {
+            let Some(demcon_scene::config::ThermalConfig {
+                solver: demcon_scene::config::ThermalSolverConfig::Implicit { t_end, dt, .. },
+                ..
+            }) = c.thermal.as_mut()
+            else {
+                panic!("joule-transient.ron: expected an implicit thermal solver");
+            };
+            *t_end = 26.0;
+            *dt = 0.65;
+            c.outputs.times = vec![13.0, 26.0];
+            c.outputs.probes.clear();
+        })
+        .unwrap();
     let r = run(&s, &RunOptions::default()).unwrap();
     let el = r.electric.as_ref().unwrap();
     let th = r.thermal.as_ref().unwrap();
@@ -184,8 +187,10 @@ fn joule_transient_scene_recouples_during_the_run() {
         .collect();
     let theta = hot.iter().sum::<f64>() / hot.len() as f64;
     assert!(theta > 10.0, "θ̄ = {theta}");
-    let mut one_way = s.clone();
-    one_way.config.electric.as_mut().unwrap().recouple_tolerance = None;
+    let one_way = s
+        .clone()
+        .edit(|c| c.electric.as_mut().unwrap().recouple_tolerance = None)
+        .unwrap();
     let r0 = run(&one_way, &RunOptions::default()).unwrap();
     let (re, r00) = (
         el.report.resistance_ohm.unwrap(),

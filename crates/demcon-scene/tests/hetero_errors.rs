@@ -67,7 +67,7 @@ fn the_valid_two_phase_scene_runs() {
 fn halo_phases_is_read_and_needs_a_halo() {
     let s = parse(&text(TWO, SPHERE, "vtk: false, halo: 2.0, halo_phases: All")).unwrap();
     assert_eq!(
-        s.config.outputs.halo_phases,
+        s.config().outputs.halo_phases,
         Some(demcon_scene::config::HaloPhasesConfig::All)
     );
     let e = parse(&text(TWO, SPHERE, "vtk: false, halo_phases: Same"))

@@ -15,18 +15,20 @@ fn scene_path(name: &str) -> PathBuf {
 
 /// Loads a shipped scene and shrinks it to `n` particles, a Halo of `halo` radii and no files.
 fn small(name: &str, n: usize, halo: f64) -> Scene {
-    let mut s = Scene::load(&scene_path(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
-    match &mut s.config.packing {
-        PackingConfig::Generate { count, phi, .. } => {
-            *count = n;
-            // Looser wall layers weigh more in a small walled packing: keep the bulk at ≈ 0.64.
-            *phi = 0.64 - 0.5 * (n as f64).powf(-1.0 / 3.0);
+    let s = Scene::load(&scene_path(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+    s.edit(|c| {
+        match &mut c.packing {
+            PackingConfig::Generate { count, phi, .. } => {
+                *count = n;
+                // Looser wall layers weigh more in a small walled packing: keep the bulk at ≈ 0.64.
+                *phi = 0.64 - 0.5 * (n as f64).powf(-1.0 / 3.0);
+            }
+            other => panic!("{name}: expected a generated packing, got {other:?}"),
         }
-        other => panic!("{name}: expected a generated packing, got {other:?}"),
-    }
-    s.config.outputs.vtk = false;
-    s.config.outputs.halo = Some(halo);
-    s
+        c.outputs.vtk = false;
+        c.outputs.halo = Some(halo);
+    })
+    .unwrap()
 }
 
 fn probe(r: &demcon_scene::RunResult, name: &str, field: &str) -> f64 {
@@ -57,21 +59,27 @@ fn halo_slab_scene_gives_the_exact_flux_with_laguerre_cells() {
 fn halo_slab_scene_gives_the_uniform_flux() {
     // The paper's setup (calibrated C_t, particles held at the temperatures): the flux scatters
     // and the Halo reduces the scatter.
-    let mut s = small("halo-slab.ron", 3000, 3.0);
-    s.config.surface = demcon_scene::config::SurfaceConfig::Calibrated {
-        c_t: demcon_scene::config::CtConfig::Auto,
-    };
-    let t = s.config.thermal.as_mut().unwrap();
-    t.bcs = vec![
-        demcon_scene::config::ThermalBcConfig::FixedTemperature {
-            select: demcon_scene::config::SelectorConfig::Face(demcon_scene::config::FaceConfig::YMin),
-            value: 25.0,
-        },
-        demcon_scene::config::ThermalBcConfig::FixedTemperature {
-            select: demcon_scene::config::SelectorConfig::Face(demcon_scene::config::FaceConfig::YMax),
-            value: 35.0,
-        },
-    ];
+    let s = small("halo-slab.ron", 3000, 3.0)
+        .edit(|c| {
+            c.surface = demcon_scene::config::SurfaceConfig::Calibrated {
+                c_t: demcon_scene::config::CtConfig::Auto,
+            };
+            c.thermal.as_mut().unwrap().bcs = vec![
+                demcon_scene::config::ThermalBcConfig::FixedTemperature {
+                    select: demcon_scene::config::SelectorConfig::Face(
+                        demcon_scene::config::FaceConfig::YMin,
+                    ),
+                    value: 25.0,
+                },
+                demcon_scene::config::ThermalBcConfig::FixedTemperature {
+                    select: demcon_scene::config::SelectorConfig::Face(
+                        demcon_scene::config::FaceConfig::YMax,
+                    ),
+                    value: 35.0,
+                },
+            ];
+        })
+        .unwrap();
     let r = run(&s, &RunOptions::default()).unwrap();
     // λ_e from fixed temperatures with C_t calibrated under an imposed flux: a few % of λ.
     let etc = r.etc.as_ref().unwrap().lambda_e;
@@ -175,12 +183,11 @@ fn multi_inclusion_scene_places_the_silica() {
 fn laminate_rule_resolves_the_inclusion_below_a_particle() {
     use demcon_scene::build_model;
     use demcon_scene::config::PhaseRuleConfig;
-    let mut centre = small("single-inclusion.ron", 3000, 2.0);
-    centre.config.phase_rule = Some(PhaseRuleConfig::Centre);
-    let mut lam = centre.clone();
-    lam.config.phase_rule = Some(PhaseRuleConfig::Laminate);
-    let mc = build_model(&centre.config, &centre.base_dir, None).unwrap();
-    let ml = build_model(&lam.config, &lam.base_dir, None).unwrap();
+    let rule = |s: &Scene, r| s.clone().edit(|c| c.phase_rule = Some(r)).unwrap();
+    let centre = rule(&small("single-inclusion.ron", 3000, 2.0), PhaseRuleConfig::Centre);
+    let lam = rule(&centre, PhaseRuleConfig::Laminate);
+    let mc = build_model(&centre, None).unwrap();
+    let ml = build_model(&lam, None).unwrap();
     // Same packing, same phases by centre; only the laminate model carries mixes.
     assert_eq!(mc.particles.phases, ml.particles.phases);
     assert!(mc.mixes.is_empty());
@@ -235,9 +242,8 @@ fn laminate_rule_resolves_the_inclusion_below_a_particle() {
     assert!(etc > 0.9 * 33.0 && etc < 165.0, "λ_e = {etc}");
     // The segment rule cuts the same particles with the same fractions; its normals point
     // into the other phase and its offsets are the centres' distances to the sphere.
-    let mut seg = centre.clone();
-    seg.config.phase_rule = Some(PhaseRuleConfig::Segment);
-    let ms = build_model(&seg.config, &seg.base_dir, None).unwrap();
+    let seg = rule(&centre, PhaseRuleConfig::Segment);
+    let ms = build_model(&seg, None).unwrap();
     assert_eq!(ms.mixes.len(), ml.mixes.len());
     for (m, b) in ms.mixes.iter().zip(&ml.mixes) {
         assert_eq!((m.particle, m.other_fraction), (b.particle, b.other_fraction));
@@ -261,17 +267,20 @@ fn cut_particles_conduct_heat_and_current_alike_and_store_heat_by_volume() {
     use demcon_scene::build_model;
     use demcon_scene::config::{PhaseRuleConfig, SurfaceConfig};
     for rule in [PhaseRuleConfig::Laminate, PhaseRuleConfig::Segment] {
-        let mut s = small("single-inclusion.ron", 2000, 2.0);
-        s.config.phase_rule = Some(rule);
-        s.config.surface = SurfaceConfig::TerrerosAlpha;
-        // ρ_e = 1/λ in each phase: the electric network must be the thermal one.
-        for m in &mut s.config.materials {
-            m.resistivity = Some(1.0 / m.conductivity);
-        }
-        s.config.materials[1].density = 2.0 * s.config.materials[0].density;
-        let model = build_model(&s.config, &s.base_dir, None).unwrap();
+        let s = small("single-inclusion.ron", 2000, 2.0)
+            .edit(|c| {
+                c.phase_rule = Some(rule);
+                c.surface = SurfaceConfig::TerrerosAlpha;
+                // ρ_e = 1/λ in each phase: the electric network must be the thermal one.
+                for m in &mut c.materials {
+                    m.resistivity = Some(1.0 / m.conductivity);
+                }
+                c.materials[1].density = 2.0 * c.materials[0].density;
+            })
+            .unwrap();
+        let model = build_model(&s, None).unwrap();
         assert!(!model.mixes.is_empty());
-        let problem = demcon_scene::convert::problem(&s.config).unwrap();
+        let problem = s.problem();
         let tp = problem.thermal.as_ref().unwrap();
         let setup = thermal_setup(&model, tp).unwrap();
         let ge = electric_conductances(&model, &tp.surface, tp.interface, None).unwrap();
@@ -282,8 +291,8 @@ fn cut_particles_conduct_heat_and_current_alike_and_store_heat_by_volume() {
         // Capacities: ρc mixes by the volume fractions (c equal, ρ_inclusion = 2 ρ_matrix).
         let lam = model.laminates();
         let (c0, c1) = (
-            s.config.materials[0].density * s.config.materials[0].specific_heat,
-            s.config.materials[1].density * s.config.materials[1].specific_heat,
+            s.config().materials[0].density * s.config().materials[0].specific_heat,
+            s.config().materials[1].density * s.config().materials[1].specific_heat,
         );
         let frac: Vec<f64> = setup
             .rep_volumes
@@ -327,12 +336,12 @@ fn paper_scale_scene_runs_shrunk() {
         assert!(t.contains(from), "multi-inclusion-8m.ron no longer has `{from}`");
         t.replace(from, to)
     });
-    let mut s = Scene::parse(&small_text, &path, scene_path("")).unwrap();
-    let PackingConfig::Tile { walls, .. } = &s.config.packing else {
+    let s = Scene::parse(&small_text, &path, scene_path("")).unwrap();
+    let PackingConfig::Tile { walls, .. } = &s.config().packing else {
         panic!("multi-inclusion-8m.ron: expected a tiled packing");
     };
     assert!(*walls);
-    s.config.outputs.halo = Some(2.0);
+    let s = s.edit(|c| c.outputs.halo = Some(2.0)).unwrap();
     let r = run(&s, &RunOptions::default()).unwrap();
     // The 8000 particles, less those the conforming seeds replace, and the seeds.
     let c = r

@@ -74,7 +74,7 @@ fn face_electrodes_give_the_exact_current_density_in_every_particle_of_the_files
     let s = Scene::parse(&text, Path::new("l.ron"), PathBuf::new()).unwrap();
     let r = run(&s, &RunOptions::default()).unwrap();
     let dir = std::env::temp_dir().join(format!("demcon-laguerre-current-{}", std::process::id()));
-    demcon_scene::write_outputs("l", &s.config.outputs, &r, &dir).unwrap();
+    demcon_scene::write_outputs("l", &s.config().outputs, &r, &dir).unwrap();
     let (header, cols) = demcon_post::read_csv(dir.join("particles.csv")).unwrap();
     let col = |name: &str| {
         &cols[header

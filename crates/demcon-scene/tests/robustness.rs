@@ -144,11 +144,11 @@ fn outputs_never_mix_runs() {
     let with_csv = parse(&slab("outputs: (particles_csv: true, vtk: false),", "Steady", "")).unwrap();
     let r = run(&with_csv, &RunOptions::default()).unwrap();
     check_output_dir(&out).unwrap();
-    write_outputs("a", &with_csv.config.outputs, &r, &out).unwrap();
+    write_outputs("a", &with_csv.config().outputs, &r, &out).unwrap();
     assert!(out.join("particles.csv").exists() && out.join(RUN_MARKER).exists());
     let without = parse(&slab("outputs: (vtk: false),", "Steady", "")).unwrap();
     let r = run(&without, &RunOptions::default()).unwrap();
-    write_outputs("b", &without.config.outputs, &r, &out).unwrap();
+    write_outputs("b", &without.config().outputs, &r, &out).unwrap();
     assert!(
         !out.join("particles.csv").exists(),
         "a stale file of the first run is left"

@@ -57,7 +57,7 @@ fn first_scene_runs_end_to_end() {
             .all(|t| t.is_finite() && (25.0 - 1e-9..=35.0 + 1e-9).contains(t))
     );
     let dir = std::env::temp_dir().join(format!("demcon-scene-test-{}", std::process::id()));
-    let files = write_outputs("slab-steady", &scene.config.outputs, &r, &dir).unwrap();
+    let files = write_outputs("slab-steady", &scene.config().outputs, &r, &dir).unwrap();
     for f in [
         "particles.vtu",
         "particles.csv",

@@ -59,7 +59,7 @@ fn out_dir(test: &str) -> PathBuf {
 fn run_and_write(s: &Scene, test: &str) -> (RunResult, PathBuf) {
     let r = run(s, &RunOptions::default()).unwrap();
     let dir = out_dir(test);
-    write_outputs("vtk-outputs", &s.config.outputs, &r, &dir).unwrap();
+    write_outputs("vtk-outputs", &s.config().outputs, &r, &dir).unwrap();
     (r, dir)
 }
 
@@ -248,8 +248,9 @@ fn with_eta_one_half_the_lines_still_add_up_to_the_power_dissipated() {
     // `joule_power` of contacts.vtp is I²/G, before η; `electric.joule_w` is the power the
     // current dissipates, whatever η; the particles (and so the walls, in steady state) get
     // η of it (`joule_heat_w`).
-    let mut s = scene("Steady", "[]");
-    s.config.electric.as_mut().unwrap().eta = 0.5;
+    let s = scene("Steady", "[]")
+        .edit(|c| c.electric.as_mut().unwrap().eta = 0.5)
+        .unwrap();
     let (r, dir) = run_and_write(&s, "eta-half");
     let e = &r.electric.as_ref().unwrap().report;
     let heat: f64 = r.electric.as_ref().unwrap().joule.iter().sum();

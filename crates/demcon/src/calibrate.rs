@@ -39,7 +39,7 @@ pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
     let (mut scene, realisations) = match (&args.scene, &args.packing) {
         (Some(path), None) => {
             let s = Scene::load(path).with_context(|| format!("loading scene {}", path.display()))?;
-            let k = if matches!(s.config.packing, PackingConfig::File { .. }) {
+            let k = if matches!(s.config().packing, PackingConfig::File { .. }) {
                 1
             } else {
                 args.realisations
@@ -57,30 +57,27 @@ pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
         }
         _ => bail!("give a scene file or --packing FILE"),
     };
-    if let PackingConfig::File { .. } = scene.config.packing {
-        scene.config.contacts = if args.packing.is_some() {
-            ContactsConfig {
+    if let (PackingConfig::File { .. }, Some(_)) = (&scene.config().packing, &args.packing) {
+        scene = scene.edit(|c| {
+            c.contacts = ContactsConfig {
                 coordination: Some(args.coordination),
                 tolerance: None,
             }
-        } else {
-            scene.config.contacts
-        };
+        })?;
     }
-    let base_seed = scene.config.seed;
+    let base_seed = scene.config().seed;
     let mut values = Vec::new();
     println!(
         "{:>5} {:>9} {:>10} {:>9} {:>8} {:>8} {:>10}",
         "seed", "N", "C_t", "C_t(ctr)", "Z", "ε", "solve (s)"
     );
     for k in 0..realisations {
-        scene.config.seed = base_seed + k;
-        let model =
-            build_model(&scene.config, &scene.base_dir, None).context("building the packing and contacts")?;
+        scene = scene.edit(|c| c.seed = base_seed + k)?;
+        let model = build_model(&scene, None).context("building the packing and contacts")?;
         let cal = calibrate_ct(&model).context("calibrating C_t")?;
         println!(
             "{:>5} {:>9} {:>10.5} {:>9.5} {:>8.3} {:>8.4} {:>10.3}",
-            scene.config.seed,
+            scene.config().seed,
             model.particles.len(),
             cal.c_t,
             cal.c_t_centres,

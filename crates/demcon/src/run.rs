@@ -87,7 +87,8 @@ fn run_in(
     let mut scene =
         Scene::load(&args.scene).with_context(|| format!("loading scene {}", args.scene.display()))?;
     if session.is_some() {
-        scene.config.linear_solver.method = demcon_scene::config::LinearMethodConfig::Distributed;
+        scene =
+            scene.edit(|c| c.linear_solver.method = demcon_scene::config::LinearMethodConfig::Distributed)?;
     }
     let stem = args
         .scene
@@ -95,10 +96,10 @@ fn run_in(
         .and_then(|s| s.to_str())
         .unwrap_or("scene")
         .to_string();
-    let name = if scene.config.name.is_empty() {
+    let name = if scene.config().name.is_empty() {
         stem.clone()
     } else {
-        scene.config.name.clone()
+        scene.config().name.clone()
     };
     let out = args.out.unwrap_or_else(|| PathBuf::from("out").join(&stem));
     check_output_dir(&out).with_context(|| format!("output folder {}", out.display()))?;
@@ -113,7 +114,12 @@ fn run_in(
         !rank0,
     )
     .context("installing the SIGINT/SIGTERM handlers")?;
-    let wants_checkpoints = scene.config.thermal.as_ref().and_then(|t| t.checkpoint).is_some();
+    let wants_checkpoints = scene
+        .config()
+        .thermal
+        .as_ref()
+        .and_then(|t| t.checkpoint)
+        .is_some();
     if session.is_some() && wants_checkpoints && rank0 && !args.quiet {
         eprintln!(
             "note: a distributed run writes no checkpoints (the scene's thermal.checkpoint is ignored)"
@@ -121,7 +127,7 @@ fn run_in(
     }
     if !args.quiet
         && session.is_none()
-        && let Some(ck) = scene.config.thermal.as_ref().and_then(|t| t.checkpoint)
+        && let Some(ck) = scene.config().thermal.as_ref().and_then(|t| t.checkpoint)
     {
         let every = [
             ck.every_steps.map(|k| format!("{k} steps")),
@@ -178,7 +184,7 @@ fn run_in(
         return Ok(ExitCode::SUCCESS);
     }
     display.started("outputs");
-    let files = write_outputs(&name, &scene.config.outputs, &result, &out)
+    let files = write_outputs(&name, &scene.config().outputs, &result, &out)
         .with_context(|| format!("writing outputs to {}", out.display()));
     display.finish();
     let files = files?;

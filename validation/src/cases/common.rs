@@ -116,8 +116,10 @@ pub fn with_surface_model(cfg: &SceneConfig, s: Surface, c_t: Option<f64>) -> Sc
 /// particles, so the models compare on one microstructure). Particles already carved by the
 /// same region are all kept by carving them again.
 pub fn rebuild_on(cfg: &SceneConfig, model: &Model) -> anyhow::Result<Model> {
-    Scene::from_config(cfg.clone(), PathBuf::new())?;
-    let params = demcon_scene::convert::model_params(cfg)?;
+    let params = Scene::from_config(cfg.clone(), PathBuf::new())?
+        .problem()
+        .model
+        .clone();
     // The phases come from `cfg` alone: every particle starts from phase 0.
     let mut particles = model.particles.clone();
     particles.phases.iter_mut().for_each(|p| *p = 0);
@@ -433,8 +435,8 @@ pub fn prepack(cfgs: &[SceneConfig]) -> anyhow::Result<()> {
         }
         // The key `model_of` will look up: of the validated scene.
         let scene = Scene::from_config(cfg.clone(), PathBuf::new())?;
-        if keys.insert(packing_key(&scene.config)) && !is_cached(&scene.config) {
-            todo.push((count, scene.config));
+        if keys.insert(packing_key(scene.config())) && !is_cached(scene.config()) {
+            todo.push((count, scene.config().clone()));
         }
     }
     todo.sort_by_key(|(count, _)| std::cmp::Reverse(*count));
@@ -502,11 +504,11 @@ pub fn model_of_timed(cfg: &SceneConfig) -> anyhow::Result<(Model, f64)> {
     let t0 = std::time::Instant::now();
     let scene = Scene::from_config(cfg.clone(), PathBuf::new())?;
     if !matches!(cfg.packing, PackingConfig::Generate { .. }) || cfg.cut_contacts.is_some() {
-        let model = build_model(&scene.config, &scene.base_dir, None)?;
+        let model = build_model(&scene, None)?;
         return Ok((model, t0.elapsed().as_secs_f64()));
     }
-    let (packing, reused) = cached_packing(&scene.config)?;
-    let params = demcon_scene::convert::model_params(&scene.config)?;
+    let (packing, reused) = cached_packing(scene.config())?;
+    let params = scene.problem().model.clone();
     let packed = demcon_model::Packed {
         particles: packing.0.clone(),
         container: packing.1,
@@ -583,8 +585,8 @@ pub fn with_scene_defects_rule(
 
 /// Runs the physics of `cfg` on a clone of `model`.
 pub fn run_with(cfg: &SceneConfig, model: &Model) -> anyhow::Result<RunResult> {
-    Scene::from_config(cfg.clone(), PathBuf::new())?;
-    Ok(run_on_model(cfg, model.clone())?)
+    let scene = Scene::from_config(cfg.clone(), PathBuf::new())?;
+    Ok(run_on_model(&scene, model.clone())?)
 }
 
 /// Volume-weighted layer averages of `values` along axis `k` over `[lo, hi]` in `bins`
@@ -680,10 +682,10 @@ mod tests {
         prepack(&with_repeat).unwrap();
         for cfg in &scenes {
             let scene = Scene::from_config(cfg.clone(), PathBuf::new()).unwrap();
-            assert!(is_cached(&scene.config));
+            assert!(is_cached(scene.config()));
             let cached = model_of(cfg).unwrap();
             let (direct, ..) =
-                demcon_scene::build::make_particles(&scene.config, std::path::Path::new(""), None).unwrap();
+                demcon_scene::build::make_particles(scene.config(), std::path::Path::new(""), None).unwrap();
             assert_eq!(cached.particles.centres, direct.centres);
             assert_eq!(cached.particles.radii, direct.radii);
         }
