@@ -171,6 +171,259 @@ impl Envelope {
     }
 }
 
+/// Where a march starts: t = 0, or a checkpoint's state, checked against the run.
+struct Start {
+    cur: Vec<f64>,
+    t0: Vec<f64>,
+    sources: Vec<f64>,
+    segment: usize,
+    segment_steps: u64,
+    prior_wall_s: f64,
+    envelope_base: [f64; 3],
+    report: TransientReport,
+    turnover: Turnover,
+}
+
+impl Start {
+    fn read(
+        system: &ThermalSystem<'_>,
+        start: TransientStart<'_>,
+        m: &MarchParams<'_>,
+        seg_steps: &[u64],
+    ) -> Result<Self, ThermalError> {
+        let mut report = TransientReport::new(m.scheme, m.dt, m.bound, m.paper_dt);
+        Ok(match start {
+            TransientStart::Initial(input) => {
+                let mut t = input.temperatures.to_vec();
+                system.constraints().impose(&mut t);
+                Start {
+                    cur: t.clone(),
+                    t0: t,
+                    sources: input.sources.to_vec(),
+                    segment: 0,
+                    segment_steps: 0,
+                    prior_wall_s: 0.0,
+                    envelope_base: [0.0; 3],
+                    report,
+                    turnover: Turnover::default(),
+                }
+            }
+            TransientStart::Resume(s) => {
+                check_state(s, system, m.scheme, m.dt, m.t_end, seg_steps)?;
+                report.steps = s.steps;
+                report.energy_sources_j = s.energy_sources_j;
+                report.energy_boundary_j = s.energy_boundary_j;
+                report.solver_iterations = s.solver_iterations;
+                report.max_relative_residual = s.max_relative_residual;
+                Start {
+                    cur: s.temperatures.clone(),
+                    t0: s.initial_temperatures.clone(),
+                    sources: s.sources.clone(),
+                    segment: s.segment as usize,
+                    segment_steps: s.segment_steps,
+                    prior_wall_s: s.wall_s,
+                    envelope_base: s.envelope,
+                    report,
+                    turnover: Turnover {
+                        boundary_j: s.turnover_boundary_j,
+                        sources_j: s.turnover_sources_j,
+                    },
+                }
+            }
+        })
+    }
+}
+
+/// A march under way: the stepper, the temperatures, the sources in force, the ledger and the
+/// envelope.
+struct Marching<'a, 'p, S> {
+    system: &'a ThermalSystem<'a>,
+    m: &'a MarchParams<'p>,
+    stepper: S,
+    ledger: Ledger,
+    /// Free–fixed edges: the boundary of the ledger.
+    edges_b: Vec<(u32, u32, f64)>,
+    cur: Vec<f64>,
+    next: Vec<f64>,
+    t0: Vec<f64>,
+    sources: Vec<f64>,
+    /// Net and gross source power over the free nodes (W).
+    p_src: f64,
+    p_src_gross: f64,
+    report: TransientReport,
+    turnover: Turnover,
+    envelope: Option<Envelope>,
+    ticker: Ticker<'p>,
+    clock: Instant,
+    prior_wall_s: f64,
+}
+
+impl<'a, 'p, S: Stepper> Marching<'a, 'p, S> {
+    fn new(
+        system: &'a ThermalSystem<'a>,
+        m: &'a MarchParams<'p>,
+        from: Start,
+        stepper: S,
+        ticker: Ticker<'p>,
+        clock: Instant,
+    ) -> Self {
+        let (capacities, constraints) = (system.capacities(), system.constraints());
+        let envelope = m.envelope.map(|widen| {
+            let (lo0, hi0) = from.t0.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+            let [heat_base, cool_base, t_change] = from.envelope_base;
+            let (heat_rate, cool_rate) = Envelope::rates(constraints.kinds(), capacities, &from.sources);
+            Envelope {
+                lo0,
+                hi0,
+                heat_base,
+                cool_base,
+                t_change,
+                heat_rate,
+                cool_rate,
+                widen,
+            }
+        });
+        let cur = stepper.copy(&from.cur);
+        Self {
+            system,
+            m,
+            ledger: stepper.ledger(),
+            edges_b: boundary_edges(system.network(), system.conductances(), constraints),
+            next: stepper.copy(&cur),
+            cur,
+            t0: from.t0,
+            p_src: source_power(constraints, &from.sources),
+            p_src_gross: source_gross(constraints, &from.sources),
+            sources: from.sources,
+            report: from.report,
+            turnover: from.turnover,
+            envelope,
+            ticker,
+            clock,
+            prior_wall_s: from.prior_wall_s,
+            stepper,
+        }
+    }
+
+    /// Step `k` of `segment` (which starts at `t_start` and spans `span`, s): the ledger, the
+    /// step, the envelope. Returns the time reached (s).
+    fn step(&mut self, segment: &Segment, k: u64, t_start: f64, span: f64) -> Result<f64, ThermalError> {
+        let edges_b = &self.edges_b;
+        let shortened = k >= segment.n_full;
+        let h = if shortened { segment.last } else { segment.h };
+        let p_b_old = boundary_power(edges_b, &self.cur);
+        if self.ledger == Ledger::Start {
+            self.report.energy_boundary_j += h * p_b_old;
+            self.turnover.boundary_j += h * boundary_gross(edges_b, &self.cur);
+        }
+        self.report.energy_sources_j += h * self.p_src;
+        self.turnover.sources_j += h * self.p_src_gross;
+        let range = self
+            .stepper
+            .step(&self.cur, &mut self.next, h, shortened, &mut self.report)?;
+        match self.ledger {
+            Ledger::Start => {}
+            Ledger::End => {
+                self.report.energy_boundary_j += h * boundary_power(edges_b, &self.next);
+                self.turnover.boundary_j += h * boundary_gross(edges_b, &self.next);
+            }
+            Ledger::Trapezoid => {
+                self.report.energy_boundary_j += 0.5 * h * (p_b_old + boundary_power(edges_b, &self.next));
+                self.turnover.boundary_j +=
+                    0.5 * h * (boundary_gross(edges_b, &self.cur) + boundary_gross(edges_b, &self.next));
+            }
+        }
+        self.report.steps += 1;
+        self.ticker.tick(self.report.steps);
+        let t_now = t_start + if shortened { span } else { (k + 1) as f64 * segment.h };
+        if let (Some(env), Some((lo, hi, bad))) = (&self.envelope, range) {
+            let (env_lo, env_hi) = env.bounds(t_now);
+            if bad || lo < env_lo || hi > env_hi {
+                let node = self
+                    .next
+                    .iter()
+                    .position(|&v| !v.is_finite() || v < env_lo || v > env_hi)
+                    .unwrap_or(0);
+                return Err(ThermalError::Diverged {
+                    step: self.report.steps,
+                    t: t_now,
+                    node: node as u32,
+                    value: self.next[node],
+                    lo: env_lo,
+                    hi: env_hi,
+                    dt: self.m.dt,
+                    dt_max: self.m.bound.dt_max,
+                });
+            }
+        }
+        std::mem::swap(&mut self.cur, &mut self.next);
+        Ok(t_now)
+    }
+
+    /// New sources from the next step on, at time `t` (s).
+    fn set_sources(&mut self, t: f64, new: Vec<f64>) -> Result<(), ThermalError> {
+        let (capacities, constraints) = (self.system.capacities(), self.system.constraints());
+        self.stepper.set_sources(&new)?;
+        self.p_src = source_power(constraints, &new);
+        self.p_src_gross = source_gross(constraints, &new);
+        if let Some(env) = &mut self.envelope {
+            env.rebase(t, Envelope::rates(constraints.kinds(), capacities, &new));
+        }
+        self.sources = new;
+        Ok(())
+    }
+
+    /// The state between two steps, as a checkpoint hands it out: the next step is step
+    /// `segment_steps` of `segment`, at time `t` (s).
+    fn state(&self, segment: usize, segment_steps: u64, t: f64) -> TransientState {
+        let (report, turnover) = (&self.report, &self.turnover);
+        TransientState {
+            scheme: self.m.scheme.into(),
+            dt: self.m.dt,
+            t_end: self.m.t_end,
+            segment: segment as u64,
+            segment_steps,
+            steps: report.steps,
+            t,
+            temperatures: self.cur.to_vec(),
+            initial_temperatures: self.t0.clone(),
+            sources: self.sources.to_vec(),
+            energy_sources_j: report.energy_sources_j,
+            energy_boundary_j: report.energy_boundary_j,
+            turnover_boundary_j: turnover.boundary_j,
+            turnover_sources_j: turnover.sources_j,
+            solver_iterations: report.solver_iterations,
+            max_relative_residual: report.max_relative_residual,
+            envelope: self
+                .envelope
+                .as_ref()
+                .map_or([0.0; 3], |e| [e.heat_base, e.cool_base, e.t_change]),
+            wall_s: self.prior_wall_s + self.clock.elapsed().as_secs_f64(),
+        }
+    }
+
+    /// The result: the report completed and the ledger closed.
+    fn finish(mut self) -> Transient {
+        self.report.t_end = self.m.t_end;
+        self.report.wall_s = self.prior_wall_s + self.clock.elapsed().as_secs_f64();
+        self.stepper.finish(&mut self.report);
+        close_ledger(
+            &mut self.report,
+            self.system.constraints(),
+            self.system.capacities(),
+            (&self.t0, &self.cur),
+            self.turnover,
+            self.stepper.unit_roundoff(),
+        );
+        Transient {
+            temperatures: self.cur,
+            report: self.report,
+        }
+    }
+}
+
 /// Runs `make(sources)`'s stepper from `start` through the segments of `m`: the observer sees
 /// the temperatures at each stop, `update` may replace the sources after every step, and
 /// `checkpoints` receive the state on their schedule. A resumed run continues bit for bit as
@@ -190,211 +443,37 @@ pub(crate) fn march<S: Stepper, U: SourceUpdate>(
     checkpoints: Option<Checkpoints<'_, U::Error>>,
 ) -> Result<Transient, U::Error> {
     let clock = Instant::now();
-    let (net, capacities, constraints) = (system.network(), system.capacities(), system.constraints());
-    let kinds = constraints.kinds();
     let seg_steps: Vec<u64> = m.segments.iter().map(|s| s.n_steps).collect();
     let total = seg_steps.iter().fold(0u64, |a, &b| a.saturating_add(b));
-    let mut report = TransientReport::new(m.scheme, m.dt, m.bound, m.paper_dt);
-    let mut turnover = Turnover::default();
-    // The state to start from: t = 0, or a checkpoint.
-    let (cur, t0, mut sources, first_segment, first_step, prior_wall_s, envelope_base);
-    match start {
-        TransientStart::Initial(input) => {
-            let mut t = input.temperatures.to_vec();
-            constraints.impose(&mut t);
-            (cur, t0) = (t.clone(), t);
-            sources = input.sources.to_vec();
-            (first_segment, first_step, prior_wall_s) = (0, 0, 0.0);
-            envelope_base = [0.0; 3];
-        }
-        TransientStart::Resume(s) => {
-            check_state(s, system, m.scheme, m.dt, m.t_end, &seg_steps)?;
-            cur = s.temperatures.clone();
-            t0 = s.initial_temperatures.clone();
-            sources = s.sources.clone();
-            (first_segment, first_step, prior_wall_s) = (s.segment as usize, s.segment_steps, s.wall_s);
-            report.steps = s.steps;
-            report.energy_sources_j = s.energy_sources_j;
-            report.energy_boundary_j = s.energy_boundary_j;
-            report.solver_iterations = s.solver_iterations;
-            report.max_relative_residual = s.max_relative_residual;
-            turnover = Turnover {
-                boundary_j: s.turnover_boundary_j,
-                sources_j: s.turnover_sources_j,
-            };
-            envelope_base = s.envelope;
-        }
-    }
+    let from = Start::read(system, start, &m, &seg_steps)?;
+    let (first_segment, first_step) = (from.segment, from.segment_steps);
     let mut ticker = Ticker::new(m.progress, total);
-    ticker.skip_to(report.steps);
-    let mut schedule = Schedule::new(checkpoints, report.steps)?;
-    let mut stepper = make(&sources)?;
-    let ledger = stepper.ledger();
-    let mut cur = stepper.copy(&cur);
-    let mut next = stepper.copy(&cur);
-    let mut envelope = m.envelope.map(|widen| {
-        let (lo0, hi0) = t0.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
-        let [heat_base, cool_base, t_change] = envelope_base;
-        let (heat_rate, cool_rate) = Envelope::rates(kinds, capacities, &sources);
-        Envelope {
-            lo0,
-            hi0,
-            heat_base,
-            cool_base,
-            t_change,
-            heat_rate,
-            cool_rate,
-            widen,
-        }
-    });
-    let edges_b = boundary_edges(net, system.conductances(), constraints);
-    let mut p_src = source_power(constraints, &sources);
-    let mut p_src_gross = source_gross(constraints, &sources);
+    ticker.skip_to(from.report.steps);
+    let mut schedule = Schedule::new(checkpoints, from.report.steps)?;
+    let stepper = make(&from.sources)?;
+    let mut run = Marching::new(system, &m, from, stepper, ticker, clock);
     if first_segment == 0 && first_step == 0 && m.output_times.first() == Some(&0.0) {
-        observer(0.0, &cur);
+        observer(0.0, &run.cur);
     }
-    // The state between two steps, as a checkpoint hands it out.
-    let state = |segment: usize,
-                 segment_steps: u64,
-                 t: f64,
-                 cur: &[f64],
-                 sources: &[f64],
-                 report: &TransientReport,
-                 turnover: &Turnover,
-                 envelope: Option<&Envelope>| TransientState {
-        scheme: m.scheme.into(),
-        dt: m.dt,
-        t_end: m.t_end,
-        segment: segment as u64,
-        segment_steps,
-        steps: report.steps,
-        t,
-        temperatures: cur.to_vec(),
-        initial_temperatures: t0.clone(),
-        sources: sources.to_vec(),
-        energy_sources_j: report.energy_sources_j,
-        energy_boundary_j: report.energy_boundary_j,
-        turnover_boundary_j: turnover.boundary_j,
-        turnover_sources_j: turnover.sources_j,
-        solver_iterations: report.solver_iterations,
-        max_relative_residual: report.max_relative_residual,
-        envelope: envelope.map_or([0.0; 3], |e| [e.heat_base, e.cool_base, e.t_change]),
-        wall_s: prior_wall_s + clock.elapsed().as_secs_f64(),
-    };
     for (seg, (&stop, segment)) in m.stops.iter().zip(&m.segments).enumerate().skip(first_segment) {
         let t_start = if seg == 0 { 0.0 } else { m.stops[seg - 1] };
-        let span = stop - t_start;
-        stepper.begin_segment(seg)?;
+        run.stepper.begin_segment(seg)?;
         let k0 = if seg == first_segment { first_step } else { 0 };
         for k in k0..segment.n_steps {
-            let shortened = k >= segment.n_full;
-            let h = if shortened { segment.last } else { segment.h };
-            let p_b_old = boundary_power(&edges_b, &cur);
-            if ledger == Ledger::Start {
-                report.energy_boundary_j += h * p_b_old;
-                turnover.boundary_j += h * boundary_gross(&edges_b, &cur);
-            }
-            report.energy_sources_j += h * p_src;
-            turnover.sources_j += h * p_src_gross;
-            let range = stepper.step(&cur, &mut next, h, shortened, &mut report)?;
-            match ledger {
-                Ledger::Start => {}
-                Ledger::End => {
-                    report.energy_boundary_j += h * boundary_power(&edges_b, &next);
-                    turnover.boundary_j += h * boundary_gross(&edges_b, &next);
-                }
-                Ledger::Trapezoid => {
-                    report.energy_boundary_j += 0.5 * h * (p_b_old + boundary_power(&edges_b, &next));
-                    turnover.boundary_j +=
-                        0.5 * h * (boundary_gross(&edges_b, &cur) + boundary_gross(&edges_b, &next));
-                }
-            }
-            report.steps += 1;
-            ticker.tick(report.steps);
-            let t_now = t_start
-                + if shortened {
-                    span
-                } else {
-                    (k + 1) as f64 * segment.h
-                };
-            if let (Some(env), Some((lo, hi, bad))) = (&envelope, range) {
-                let (env_lo, env_hi) = env.bounds(t_now);
-                if bad || lo < env_lo || hi > env_hi {
-                    let node = next
-                        .iter()
-                        .position(|&v| !v.is_finite() || v < env_lo || v > env_hi)
-                        .unwrap_or(0);
-                    return Err(ThermalError::Diverged {
-                        step: report.steps,
-                        t: t_now,
-                        node: node as u32,
-                        value: next[node],
-                        lo: env_lo,
-                        hi: env_hi,
-                        dt: m.dt,
-                        dt_max: m.bound.dt_max,
-                    }
-                    .into());
-                }
-            }
-            std::mem::swap(&mut cur, &mut next);
-            if let Some(new) = update.update(t_now, &cur)? {
-                stepper.set_sources(&new)?;
-                p_src = source_power(constraints, &new);
-                p_src_gross = source_gross(constraints, &new);
-                if let Some(env) = &mut envelope {
-                    env.rebase(t_now, Envelope::rates(kinds, capacities, &new));
-                }
-                sources = new;
+            let t_now = run.step(segment, k, t_start, stop - t_start)?;
+            if let Some(new) = update.update(t_now, &run.cur)? {
+                run.set_sources(t_now, new)?;
             }
             if k + 1 < segment.n_steps {
-                schedule.after_step(report.steps, || {
-                    state(
-                        seg,
-                        k + 1,
-                        t_now,
-                        &cur,
-                        &sources,
-                        &report,
-                        &turnover,
-                        envelope.as_ref(),
-                    )
-                })?;
+                schedule.after_step(run.report.steps, || run.state(seg, k + 1, t_now))?;
             }
         }
         if stop < m.t_end || m.output_times.last() == Some(&stop) {
-            observer(stop, &cur);
+            observer(stop, &run.cur);
         }
         if seg + 1 < m.stops.len() {
-            schedule.after_step(report.steps, || {
-                state(
-                    seg + 1,
-                    0,
-                    stop,
-                    &cur,
-                    &sources,
-                    &report,
-                    &turnover,
-                    envelope.as_ref(),
-                )
-            })?;
+            schedule.after_step(run.report.steps, || run.state(seg + 1, 0, stop))?;
         }
     }
-    report.t_end = m.t_end;
-    report.wall_s = prior_wall_s + clock.elapsed().as_secs_f64();
-    stepper.finish(&mut report);
-    close_ledger(
-        &mut report,
-        constraints,
-        capacities,
-        (&t0, &cur),
-        turnover,
-        stepper.unit_roundoff(),
-    );
-    Ok(Transient {
-        temperatures: cur,
-        report,
-    })
+    Ok(run.finish())
 }
