@@ -5,7 +5,9 @@
 //! resistance ΔV/I, and the Joule power per particle that the thermal solvers accept as a
 //! source.
 //!
-//! Contact conductances 1/R_pq = S_pq/(ρ_e d_pq) (S) are computed by the caller.
+//! Contact conductances 1/R_pq = S_pq/(ρ_e d_pq) (S) come from the particles' conductivities
+//! σ = 1/ρ_e(T) ([`particle_conductivities`], [`contact_conductances`]); the surfaces S_pq
+//! from `demcon-graph`.
 //!
 //! ```
 //! use demcon_electric::{ElectricParams, joule_power, solve_potential};
@@ -25,8 +27,13 @@
 //! ```
 #![warn(missing_docs)]
 
+mod conductivity;
 mod error;
 mod solve;
 
+pub use conductivity::{
+    ParticleConductivities, conductivity_at, contact_conductances, give_link_joule_to_particles,
+    particle_conductivities,
+};
 pub use error::ElectricError;
 pub use solve::{ElectricParams, ElectricSolution, joule_power, solve_potential};

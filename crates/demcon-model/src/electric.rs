@@ -3,11 +3,11 @@
 //! potential solve and the Joule power per particle.
 
 use demcon_core::{Face, Selector, Vec3};
-use demcon_electric::{ElectricParams, joule_power, solve_potential};
-use demcon_graph::{
-    InterfaceRule, Mix, SurfaceModel, WallContacts, contact_surfaces, interface_value_split,
-    representative_volumes,
+use demcon_electric::{
+    ElectricError, ElectricParams, ParticleConductivities, contact_conductances, give_link_joule_to_particles,
+    joule_power, solve_potential,
 };
+use demcon_graph::{InterfaceRule, SurfaceModel, WallContacts, contact_surfaces, representative_volumes};
 use demcon_network::FloatingPolicy;
 use serde::Serialize;
 
@@ -167,65 +167,28 @@ pub fn electric_surface_model(model: &Model, surface: &SurfaceSpec) -> Result<Su
     })
 }
 
-/// Electric conductivities σ = 1/ρ_e(T_p) of every particle (S/m): its own phase's and, for a
-/// particle cut by a phase interface (`phase_rule` other than Centre), the other phase's with
-/// the mix that combines them along a half-bond.
-pub struct ParticleConductivities {
-    /// σ of the particle's own phase (S/m).
-    pub own: Vec<f64>,
-    /// The interface mix and σ of the other phase (S/m), for cut particles.
-    pub other: Vec<Option<(Mix, f64)>>,
-}
-
-impl ParticleConductivities {
-    /// Particle p's conductivity along the unit vector `e` over a half-bond of length `half`
-    /// (m) (S/m).
-    pub fn half_bond(&self, p: usize, e: &Vec3, half: f64) -> f64 {
-        match &self.other[p] {
-            Some((m, s)) => m.half_bond_value(self.own[p], *s, e, half),
-            None => self.own[p],
-        }
-    }
-}
-
-/// Electric conductivities of every particle; `temperatures` (°C), when given, evaluate
-/// ρ_e(T), else each material's ρ_e at its reference temperature.
+/// Electric conductivities of every particle ([`demcon_electric::particle_conductivities`]);
+/// `temperatures` (°C), when given, evaluate ρ_e(T), else each material's ρ_e at its reference
+/// temperature.
 pub fn particle_conductivities(
     model: &Model,
     temperatures: Option<&[f64]>,
 ) -> Result<ParticleConductivities, ModelError> {
-    let n = model.particles.len();
-    // σ = 1/ρ_e(T_p) of a phase at a particle's temperature.
-    let sigma_of = |phase: u16, p: usize| -> Result<f64, ModelError> {
-        let m = &model.materials.materials[phase as usize];
-        let t = temperatures.map(|t| t[p]).unwrap_or(m.resistivity_ref_temp);
-        let rho = m.resistivity_at(t).ok_or_else(|| {
-            ModelError::invalid(
-                &format!("materials[{}].resistivity", m.name),
-                "none",
-                "an electric scene needs it",
-            )
-        })?;
-        if !(rho.is_finite() && rho > 0.0) {
-            return Err(ModelError::invalid(
-                &format!("materials[{}].resistivity", m.name),
-                rho,
-                format!("ρ_e(T = {t:.3}) must stay > 0: check resistivity_temp_coeff"),
-            ));
-        }
-        Ok(1.0 / rho)
-    };
-    let lam = model.laminates();
-    let mut own = Vec::with_capacity(n);
-    let mut other = Vec::with_capacity(n);
-    for p in 0..n {
-        own.push(sigma_of(model.particles.phases[p], p)?);
-        other.push(match lam.get(p) {
-            Some(m) => Some((*m, sigma_of(m.other_phase, p)?)),
-            None => None,
-        });
+    demcon_electric::particle_conductivities(
+        &model.materials.materials,
+        &model.particles.phases,
+        &model.laminates(),
+        temperatures,
+    )
+    .map_err(scene_field)
+}
+
+/// A bad value of the electric physics as the scene field it names (the others unchanged).
+fn scene_field(e: ElectricError) -> ModelError {
+    match e {
+        ElectricError::InvalidParameter { field, value, allowed } => ModelError::invalid(&field, value, allowed),
+        e => e.into(),
     }
-    Ok(ParticleConductivities { own, other })
 }
 
 /// Contact conductances 1/R_pq = S_pq / (ρ_e,pq d_pq) (S). `temperatures` (°C), when given,
@@ -239,33 +202,18 @@ pub fn electric_conductances(
 ) -> Result<Vec<f64>, ModelError> {
     let sm = electric_surface_model(model, surface)?;
     let sigma = particle_conductivities(model, temperatures)?;
-    contact_conductances(model, &sm, interface, &sigma)
+    conductances_with_defects(model, &sm, interface, &sigma)
 }
 
-fn contact_conductances(
+/// [`contact_conductances`] on the model's contacts, its defects applied.
+fn conductances_with_defects(
     model: &Model,
     sm: &SurfaceModel,
     rule: InterfaceRule,
     sigma: &ParticleConductivities,
 ) -> Result<Vec<f64>, ModelError> {
     let s = contact_surfaces(&model.graph, &model.particles, sm)?;
-    let mut g: Vec<f64> = model
-        .graph
-        .pairs
-        .iter()
-        .zip(&model.graph.geometry)
-        .zip(&s.area)
-        .enumerate()
-        .map(|(k, ((&[p, q], geo), &a))| {
-            let (p, q) = (p as usize, q as usize);
-            let w = model.graph.split(k);
-            let (sp, sq) = (
-                sigma.half_bond(p, &geo.normal, w * geo.distance),
-                sigma.half_bond(q, &(-geo.normal), (1.0 - w) * geo.distance),
-            );
-            interface_value_split(sp, sq, w, rule) * a / geo.distance
-        })
-        .collect();
+    let mut g = contact_conductances(&model.graph, &s.area, sigma, rule);
     apply_to_contacts(&model.defect_view(), &s.area, &mut g, Physics::Electric);
     Ok(g)
 }
@@ -285,7 +233,7 @@ pub fn solve_electric(
     let n = model.particles.len();
     let sm = electric_surface_model(model, &problem.surface)?;
     let sigma = particle_conductivities(model, temperatures)?;
-    let g = contact_conductances(model, &sm, problem.interface, &sigma)?;
+    let g = conductances_with_defects(model, &sm, problem.interface, &sigma)?;
     let (faces, _) = problem.face_electrodes();
     let walls = model.wall_contacts(&faces, "electric.electrodes")?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), &sm);
@@ -334,11 +282,11 @@ pub fn solve_electric(
         })
         .sum();
     // A wall link's power: the half booked to the wall node goes to the particle too.
-    for (k, w) in walls.wall_of_links().enumerate() {
-        let p = walls.particle[k] as usize;
-        let du = sol.potentials[p] - sol.potentials[walls.node(w) as usize];
-        joule[p] += 0.5 * problem.eta * g[m + k] * du * du;
-    }
+    let links = walls
+        .wall_of_links()
+        .enumerate()
+        .map(|(k, w)| (walls.particle[k], walls.node(w), g[m + k]));
+    give_link_joule_to_particles(&mut joule, &sol.potentials, problem.eta, links);
     // The wall nodes keep no Joule heat (their half went to the particle above).
     let joule = WallContacts::split_nodes(joule, n).0;
     let (potentials, wall_potentials) = WallContacts::split_nodes(sol.potentials, n);
