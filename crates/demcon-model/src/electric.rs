@@ -4,8 +4,8 @@
 
 use demcon_core::{Face, Selector, Vec3};
 use demcon_electric::{
-    ElectricError, ElectricParams, ParticleConductivities, contact_conductances, give_link_joule_to_particles,
-    joule_power, solve_potential,
+    ElectricError, ElectricParams, ParticleConductivities, contact_conductances,
+    give_link_joule_to_particles, joule_power, solve_potential,
 };
 use demcon_graph::{InterfaceRule, SurfaceModel, WallContacts, contact_surfaces, representative_volumes};
 use demcon_network::FloatingPolicy;
@@ -186,7 +186,11 @@ pub fn particle_conductivities(
 /// A bad value of the electric physics as the scene field it names (the others unchanged).
 fn scene_field(e: ElectricError) -> ModelError {
     match e {
-        ElectricError::InvalidParameter { field, value, allowed } => ModelError::invalid(&field, value, allowed),
+        ElectricError::InvalidParameter {
+            field,
+            value,
+            allowed,
+        } => ModelError::invalid(&field, value, allowed),
         e => e.into(),
     }
 }

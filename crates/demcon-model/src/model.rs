@@ -608,7 +608,7 @@ pub fn build_model_staged(
     stages: &mut Stages,
 ) -> Result<Model, ModelError> {
     let Packed {
-        mut particles,
+        particles,
         container,
         report: packing,
         imported_from,
@@ -618,53 +618,17 @@ pub fn build_model_staged(
     let n_phases = materials.materials.len();
     params.defects.validate(n_phases)?;
     let n_before = particles.len();
-    let mut kept_ids = None;
-    let mut packing_solid = 0.0;
-    let (domain_volume, carved_away, mixes, inclusions, phase_fractions, conformed) =
-        stages.time("phases", || {
-            let mut domain_volume = container.volume();
-            let mut carved_away = 0;
-            if let Some((region, rule)) = &params.carve {
-                let (kept, ids) = match rule {
-                    CarveRule::WholeSphere => carve(&particles, region),
-                    CarveRule::Centre => particles.retain(|i| region.contains_point(&particles.centres[i])),
-                };
-                carved_away = particles.len() - kept.len();
-                if kept.is_empty() {
-                    return Err(ModelError::invalid(
-                        "carve",
-                        "region",
-                        "no particle lies inside the carving region",
-                    ));
-                }
-                particles = kept;
-                kept_ids = Some(ids);
-                domain_volume = body_volume(&container, region);
-            }
-            let mut conformed = None;
-            packing_solid = particles.solid_volume();
-            if params.phase_rule == PhaseRule::Conforming {
-                let (c, spheres) = conform(params, &particles, &container, domain_volume)?;
-                kept_ids = Some(match kept_ids.take() {
-                    Some(ids) => c.kept.iter().map(|&k| ids[k as usize]).collect(),
-                    None => c.kept.clone(),
-                });
-                particles = c.particles;
-                conformed = Some((c.n_seeds, c.report, spheres));
-            }
-            let mut mixes = Vec::new();
-            let inclusions = apply_phases(params, &mut particles, &container, &materials, &mut mixes)?;
-            let phase_fractions = Laminates::new(particles.len(), &mixes)
-                .phase_fractions(&particles, materials.materials.len());
-            Ok((
-                domain_volume,
-                carved_away,
-                mixes,
-                inclusions,
-                phase_fractions,
-                conformed,
-            ))
-        })?;
+    let Phased {
+        particles,
+        kept_ids,
+        packing_solid,
+        domain_volume,
+        carved_away,
+        mixes,
+        inclusions,
+        phase_fractions,
+        conformed,
+    } = stages.time("phases", || phases(params, particles, &container, &materials))?;
     let t1 = Instant::now();
     let graph = match &params.laguerre {
         Some(lp) => stages.time("tessellation", || {
@@ -701,21 +665,14 @@ pub fn build_model_staged(
             )
         })?
     };
-    // Where two spheres nearly touch, cells (or particles) inside them meet across the gap:
-    // under the conforming cells (the seeds cannot follow such a gap) and by centre.
-    let regions = other_regions(params);
-    let bridges = match (&conformed, params.phase_rule) {
-        (Some((_, _, spheres)), _) => stages.time("bridges", || {
-            phase_bridges(&regions, &graph, &particles, &container, spheres)
-        }),
-        (None, PhaseRule::Centre) => {
-            let spheres = sphere_surfaces(params, &container)?;
-            stages.time("bridges", || {
-                phase_bridges(&regions, &graph, &particles, &container, &spheres)
-            })
-        }
-        _ => Vec::new(),
-    };
+    let bridges = bridges(
+        params,
+        conformed.as_ref().map(|c| &c.2),
+        &graph,
+        &particles,
+        &container,
+        stages,
+    )?;
     let mut defects = defects;
     if !bridges.is_empty() {
         update_interface_marks(
@@ -779,6 +736,104 @@ pub fn build_model_staged(
         network: OnceLock::from(network),
         defects,
         bridges,
+    })
+}
+
+/// The particles after carving, conforming seeds and phase assignment, and what those steps
+/// measured.
+struct Phased {
+    particles: ParticleSet,
+    /// The packing's index of each kept particle (carving or conforming seeds removed some).
+    kept_ids: Option<Vec<u32>>,
+    /// Solid volume of the packing's own particles (m³).
+    packing_solid: f64,
+    domain_volume: f64,
+    carved_away: usize,
+    mixes: Vec<Mix>,
+    inclusions: Option<InclusionReport>,
+    phase_fractions: Vec<f64>,
+    /// Seeds, report and sphere surfaces of the conforming cells.
+    conformed: Option<(usize, ConformReport, Vec<SphereSurface>)>,
+}
+
+/// The "phases" stage: carving, conforming seeds, phase assignment.
+fn phases(
+    params: &ModelParams,
+    mut particles: ParticleSet,
+    container: &Container,
+    materials: &MaterialTable,
+) -> Result<Phased, ModelError> {
+    let mut kept_ids = None;
+    let mut domain_volume = container.volume();
+    let mut carved_away = 0;
+    if let Some((region, rule)) = &params.carve {
+        let (kept, ids) = match rule {
+            CarveRule::WholeSphere => carve(&particles, region),
+            CarveRule::Centre => particles.retain(|i| region.contains_point(&particles.centres[i])),
+        };
+        carved_away = particles.len() - kept.len();
+        if kept.is_empty() {
+            return Err(ModelError::invalid(
+                "carve",
+                "region",
+                "no particle lies inside the carving region",
+            ));
+        }
+        particles = kept;
+        kept_ids = Some(ids);
+        domain_volume = body_volume(container, region);
+    }
+    let mut conformed = None;
+    let packing_solid = particles.solid_volume();
+    if params.phase_rule == PhaseRule::Conforming {
+        let (c, spheres) = conform(params, &particles, container, domain_volume)?;
+        kept_ids = Some(match kept_ids.take() {
+            Some(ids) => c.kept.iter().map(|&k| ids[k as usize]).collect(),
+            None => c.kept.clone(),
+        });
+        particles = c.particles;
+        conformed = Some((c.n_seeds, c.report, spheres));
+    }
+    let mut mixes = Vec::new();
+    let inclusions = apply_phases(params, &mut particles, container, materials, &mut mixes)?;
+    let phase_fractions =
+        Laminates::new(particles.len(), &mixes).phase_fractions(&particles, materials.materials.len());
+    Ok(Phased {
+        particles,
+        kept_ids,
+        packing_solid,
+        domain_volume,
+        carved_away,
+        mixes,
+        inclusions,
+        phase_fractions,
+        conformed,
+    })
+}
+
+/// Where two spheres nearly touch, cells (or particles) inside them meet across the gap: under
+/// the conforming cells (the seeds cannot follow such a gap, `spheres` are theirs) and by
+/// centre (the "bridges" stage); none under the other rules.
+fn bridges(
+    params: &ModelParams,
+    spheres: Option<&Vec<SphereSurface>>,
+    graph: &ContactGraph,
+    particles: &ParticleSet,
+    container: &Container,
+    stages: &mut Stages,
+) -> Result<Vec<PhaseBridge>, ModelError> {
+    let regions = other_regions(params);
+    Ok(match (spheres, params.phase_rule) {
+        (Some(spheres), _) => stages.time("bridges", || {
+            phase_bridges(&regions, graph, particles, container, spheres)
+        }),
+        (None, PhaseRule::Centre) => {
+            let spheres = sphere_surfaces(params, container)?;
+            stages.time("bridges", || {
+                phase_bridges(&regions, graph, particles, container, &spheres)
+            })
+        }
+        _ => Vec::new(),
     })
 }
 

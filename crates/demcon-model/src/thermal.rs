@@ -414,76 +414,8 @@ pub fn thermal_bcs(
 ) -> Result<ThermalBcs, ModelError> {
     let net = setup.network(model);
     let mut sources = vec![0.0; net.n_nodes()];
-    let mut next_wall = 0..setup.walls.n_walls();
-    let mut fixed_sets = Vec::new();
-    for (i, bc) in problem.bcs.iter().enumerate() {
-        let field = format!("thermal.bcs[{i}]");
-        match bc {
-            ThermalBc::FixedTemperature { select, value } => {
-                let ids = select
-                    .select_nonempty(
-                        &model.particles,
-                        &model.container,
-                        &format!("{field} (FixedTemperature)"),
-                    )
-                    .map_err(|e| ModelError::at(&format!("{field}.select"), e))?;
-                fixed_sets.push(FixedSet {
-                    target: FixedTarget::Particles(ids),
-                    value: *value,
-                });
-            }
-            ThermalBc::HeatFlux { face, flux } if model.graph.cells.is_some() => {
-                // Laguerre cells: each facet on the face receives the flux through its area.
-                let cells = model.graph.cells.as_deref().expect("checked by the guard");
-                let mut any = false;
-                for f in cells.on_wall(CellWall::Face(*face)) {
-                    sources[f.particle as usize] += flux * f.area;
-                    any = true;
-                }
-                if !any {
-                    return Err(ModelError::invalid(
-                        &format!("{field}.face"),
-                        face.name(),
-                        "a face of the container some Laguerre cell reaches",
-                    ));
-                }
-            }
-            ThermalBc::HeatFlux { face, flux } => {
-                let ids = Selector::Face(*face)
-                    .select_nonempty(&model.particles, &model.container, &format!("{field} (HeatFlux)"))
-                    .map_err(|e| ModelError::at(&format!("{field}.face"), e))?;
-                let area = model.container.face_area(*face).ok_or_else(|| {
-                    ModelError::invalid(
-                        &format!("{field}.face"),
-                        face.name(),
-                        "this container has no such face",
-                    )
-                })?;
-                let s = face_flux_sources(&model.particles, &ids, flux * area)?;
-                sources.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
-            }
-            ThermalBc::WallTemperature { face, value } => {
-                let w = next_wall
-                    .next()
-                    .expect("one wall per WallTemperature, built by thermal_setup");
-                debug_assert_eq!(setup.walls.faces[w], *face);
-                fixed_sets.push(FixedSet {
-                    target: FixedTarget::Wall(w),
-                    value: *value,
-                });
-            }
-        }
-    }
-    for (i, src) in problem.sources.iter().enumerate() {
-        let field = format!("thermal.sources[{i}]");
-        let ids = src
-            .select
-            .select_nonempty(&model.particles, &model.container, &field)
-            .map_err(|e| ModelError::at(&format!("{field}.select"), e))?;
-        for &p in &ids {
-            sources[p as usize] += src.power_density * model.solid_volume_of(p as usize);
-        }
-    }
+    let fixed_sets = boundary_conditions(model, setup, problem, &mut sources)?;
+    add_volume_sources(model, problem, &mut sources)?;
     let mut warnings = Vec::new();
     let held_sourced = fixed_sets
         .iter()
@@ -544,6 +476,97 @@ pub fn thermal_bcs(
         fixed_sets,
         warnings,
     })
+}
+
+/// The fixed temperatures of `problem.bcs` (particle sets and walls), and the imposed fluxes
+/// added to `sources` (W per node).
+fn boundary_conditions(
+    model: &Model,
+    setup: &ThermalSetup,
+    problem: &ThermalProblem,
+    sources: &mut [f64],
+) -> Result<Vec<FixedSet>, ModelError> {
+    let mut next_wall = 0..setup.walls.n_walls();
+    let mut fixed_sets = Vec::new();
+    for (i, bc) in problem.bcs.iter().enumerate() {
+        let field = format!("thermal.bcs[{i}]");
+        match bc {
+            ThermalBc::FixedTemperature { select, value } => {
+                let ids = select
+                    .select_nonempty(
+                        &model.particles,
+                        &model.container,
+                        &format!("{field} (FixedTemperature)"),
+                    )
+                    .map_err(|e| ModelError::at(&format!("{field}.select"), e))?;
+                fixed_sets.push(FixedSet {
+                    target: FixedTarget::Particles(ids),
+                    value: *value,
+                });
+            }
+            ThermalBc::HeatFlux { face, flux } if model.graph.cells.is_some() => {
+                // Laguerre cells: each facet on the face receives the flux through its area.
+                let cells = model.graph.cells.as_deref().expect("checked by the guard");
+                let mut any = false;
+                for f in cells.on_wall(CellWall::Face(*face)) {
+                    sources[f.particle as usize] += flux * f.area;
+                    any = true;
+                }
+                if !any {
+                    return Err(ModelError::invalid(
+                        &format!("{field}.face"),
+                        face.name(),
+                        "a face of the container some Laguerre cell reaches",
+                    ));
+                }
+            }
+            ThermalBc::HeatFlux { face, flux } => {
+                let ids = Selector::Face(*face)
+                    .select_nonempty(&model.particles, &model.container, &format!("{field} (HeatFlux)"))
+                    .map_err(|e| ModelError::at(&format!("{field}.face"), e))?;
+                let area = model.container.face_area(*face).ok_or_else(|| {
+                    ModelError::invalid(
+                        &format!("{field}.face"),
+                        face.name(),
+                        "this container has no such face",
+                    )
+                })?;
+                let s = face_flux_sources(&model.particles, &ids, flux * area)?;
+                sources.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+            }
+            ThermalBc::WallTemperature { face, value } => {
+                let w = next_wall
+                    .next()
+                    .expect("one wall per WallTemperature, built by thermal_setup");
+                debug_assert_eq!(setup.walls.faces[w], *face);
+                fixed_sets.push(FixedSet {
+                    target: FixedTarget::Wall(w),
+                    value: *value,
+                });
+            }
+        }
+    }
+    Ok(fixed_sets)
+}
+
+/// Adds the volume sources of `problem.sources` (W/m³ × each particle's solid volume) to
+/// `sources` (W per node).
+fn add_volume_sources(
+    model: &Model,
+    problem: &ThermalProblem,
+    sources: &mut [f64],
+) -> Result<(), ModelError> {
+    for (i, src) in problem.sources.iter().enumerate() {
+        let field = format!("thermal.sources[{i}]");
+        let ids = src
+            .select
+            .select_nonempty(&model.particles, &model.container, &field)
+            .map_err(|e| ModelError::at(&format!("{field}.select"), e))?;
+        for &p in &ids {
+            sources[p as usize] += src.power_density * model.solid_volume_of(p as usize);
+        }
+    }
+    Ok(())
 }
 
 /// What a thermal solve did and cost.
@@ -699,9 +722,7 @@ pub fn solve_thermal_checkpointed(
         None => (CheckpointEvery::default(), None, None),
     };
     let snapshots = RefCell::new(resume.map(|c| c.snapshots.clone()).unwrap_or_default());
-    let excluded = bcs.constraints.excluded().len();
-    let g = &setup.conductances;
-    let system = ThermalSystem::new(net, g, &setup.capacities, &bcs.constraints)?;
+    let system = ThermalSystem::new(net, &setup.conductances, &setup.capacities, &bcs.constraints)?;
     let input = TransientInput {
         temperatures: &t_init,
         sources: &sources,
@@ -730,38 +751,11 @@ pub fn solve_thermal_checkpointed(
         every,
         save: &mut save,
     });
-    let report_of = |r: &demcon_thermal::TransientReport| ThermalSolveReport {
-        scheme: r.scheme.to_string(),
-        steps: r.steps,
-        dt: r.dt,
-        dt_bound: r.dt_bound,
-        dt_paper: setup.paper_dt,
-        iterations: r.solver_iterations,
-        residual: r.max_relative_residual,
-        wall_s: r.wall_s,
-        contacts_per_s: r.contacts_per_s,
-        energy_balance_error: r.energy_balance_error,
-        excluded,
-    };
     let tr = match problem.solver {
         ThermalSolver::Explicit { t_end, dt } => {
-            let step = match dt {
-                TimeStepSpec::Auto { safety } => TimeStep::Auto { safety },
-                TimeStepSpec::Fixed { dt, allow_unstable } => TimeStep::Fixed { dt, allow_unstable },
-                TimeStepSpec::Paper { allow_unstable } => {
-                    let dt = setup.paper_dt.ok_or_else(|| {
-                        ModelError::invalid(
-                            "thermal.solver.dt",
-                            "Paper",
-                            "the paper's estimate needs the Calibrated surface model",
-                        )
-                    })?;
-                    TimeStep::Fixed { dt, allow_unstable }
-                }
-            };
             let params = ExplicitParams {
                 t_end,
-                dt: step,
+                dt: explicit_step(dt, setup.paper_dt)?,
                 output_times: problem.output_times.clone(),
                 paper_dt: setup.paper_dt,
                 progress: problem.progress.clone(),
@@ -799,39 +793,79 @@ pub fn solve_thermal_checkpointed(
             if resume.is_some() {
                 return Err(not_resumable("Steady"));
             }
-            let st = solve_steady_temperature(net, g, &bcs.constraints, &sources, &problem.solve)?;
-            let mut temps = st.solution.values;
-            for &p in bcs.constraints.excluded() {
-                temps[p as usize] = initial;
-            }
-            let r = &st.solution.report;
-            let bound = system.stable_dt_bound();
-            let report = ThermalSolveReport {
-                scheme: "steady".into(),
-                steps: 0,
-                dt: 0.0,
-                dt_bound: bound.dt_max,
-                dt_paper: setup.paper_dt,
-                iterations: r.iterations as u64,
-                residual: r.relative_residual,
-                wall_s: r.wall_s + r.setup_s,
-                contacts_per_s: 0.0,
-                energy_balance_error: st.balance_error,
-                excluded,
-            };
-            return Ok(ThermalRun::from_nodes(
-                &setup.walls,
-                temps,
-                snapshots.into_inner(),
-                report,
-            ));
+            return steady_run(setup, bcs, problem, &system, &sources);
         }
     };
     let tr = tr?;
+    let r = &tr.report;
+    let report = ThermalSolveReport {
+        scheme: r.scheme.to_string(),
+        steps: r.steps,
+        dt: r.dt,
+        dt_bound: r.dt_bound,
+        dt_paper: setup.paper_dt,
+        iterations: r.solver_iterations,
+        residual: r.max_relative_residual,
+        wall_s: r.wall_s,
+        contacts_per_s: r.contacts_per_s,
+        energy_balance_error: r.energy_balance_error,
+        excluded: bcs.constraints.excluded().len(),
+    };
     Ok(ThermalRun::from_nodes(
         &setup.walls,
         tr.temperatures,
         snapshots.into_inner(),
-        report_of(&tr.report),
+        report,
     ))
+}
+
+/// The explicit step the scene asks for; `Paper` takes the paper's estimate (s), which only
+/// the calibrated surface model has.
+fn explicit_step(spec: TimeStepSpec, paper_dt: Option<f64>) -> Result<TimeStep, ModelError> {
+    Ok(match spec {
+        TimeStepSpec::Auto { safety } => TimeStep::Auto { safety },
+        TimeStepSpec::Fixed { dt, allow_unstable } => TimeStep::Fixed { dt, allow_unstable },
+        TimeStepSpec::Paper { allow_unstable } => {
+            let dt = paper_dt.ok_or_else(|| {
+                ModelError::invalid(
+                    "thermal.solver.dt",
+                    "Paper",
+                    "the paper's estimate needs the Calibrated surface model",
+                )
+            })?;
+            TimeStep::Fixed { dt, allow_unstable }
+        }
+    })
+}
+
+/// The steady temperatures under `sources` (W per node), excluded particles at the initial
+/// temperature, with the solve's report.
+fn steady_run(
+    setup: &ThermalSetup,
+    bcs: &ThermalBcs,
+    problem: &ThermalProblem,
+    system: &ThermalSystem<'_>,
+    sources: &[f64],
+) -> Result<ThermalRun, ModelError> {
+    let (net, g) = (system.network(), system.conductances());
+    let st = solve_steady_temperature(net, g, &bcs.constraints, sources, &problem.solve)?;
+    let mut temps = st.solution.values;
+    for &p in bcs.constraints.excluded() {
+        temps[p as usize] = problem.initial_temperature;
+    }
+    let r = &st.solution.report;
+    let report = ThermalSolveReport {
+        scheme: "steady".into(),
+        steps: 0,
+        dt: 0.0,
+        dt_bound: system.stable_dt_bound().dt_max,
+        dt_paper: setup.paper_dt,
+        iterations: r.iterations as u64,
+        residual: r.relative_residual,
+        wall_s: r.wall_s + r.setup_s,
+        contacts_per_s: 0.0,
+        energy_balance_error: st.balance_error,
+        excluded: bcs.constraints.excluded().len(),
+    };
+    Ok(ThermalRun::from_nodes(&setup.walls, temps, Vec::new(), report))
 }

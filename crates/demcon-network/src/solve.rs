@@ -286,42 +286,7 @@ impl<'a> LinearSystem<'a> {
         params: &SolveParams,
     ) -> Result<Self, SolveError> {
         let start = Instant::now();
-        params.validate()?;
-        net.check_conductances(conductances)?;
-        check_len("constraints (nodes)", constraints.kinds().len(), net.n_nodes())?;
-        if let Some(d) = shift {
-            check_len("shift", d.len(), net.n_nodes())?;
-            if let Some(p) = d.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
-                return Err(SolveError::invalid(
-                    format!("shift[{p}]"),
-                    d[p],
-                    "must be a finite number ≥ 0",
-                ));
-            }
-        }
-        let kept = constraints.floating_kept();
-        let unanchored = match shift {
-            None => kept.first().copied(),
-            Some(d) => kept.iter().copied().find(|&p| d[p as usize] <= 0.0),
-        };
-        if let Some(example) = unanchored {
-            let (clusters, largest) = constraints
-                .diagnostics()
-                .iter()
-                .find_map(|d| match d {
-                    crate::Diagnostic::FloatingKept {
-                        clusters, largest, ..
-                    } => Some((*clusters, *largest)),
-                    _ => None,
-                })
-                .unwrap_or((1, kept.len()));
-            return Err(SolveError::FloatingCluster {
-                clusters,
-                nodes: kept.len(),
-                largest,
-                example,
-            });
-        }
+        check_system(net, conductances, shift, constraints, params)?;
         let method = params.method.resolve(constraints.n_free());
         let values = match method {
             Method::Cg | Method::Auto => EntryValues::Entries(net.entry_values(conductances)),
@@ -367,22 +332,31 @@ impl<'a> LinearSystem<'a> {
             prepared: Prepared::Jacobi,
             setup_s: 0.0,
         };
-        sys.prepared = match method {
-            Method::Cholesky => Prepared::Cholesky(cholesky::Factor::new(&sys)?),
+        sys.prepared = sys.prepare(shift.is_some())?;
+        sys.setup_s = start.elapsed().as_secs_f64();
+        Ok(sys)
+    }
+
+    /// What the method prepares once for every solve: the multigrid hierarchy (plain for an
+    /// unshifted system, smoothed for a `shifted` one), the incomplete or the sparse Cholesky
+    /// factor, or PETSc's solver.
+    fn prepare(&self, shifted: bool) -> Result<Prepared, SolveError> {
+        Ok(match self.params.method {
+            Method::Cholesky => Prepared::Cholesky(cholesky::Factor::new(self)?),
             Method::AmgCg => {
                 // One solve, or a few (steady, electric, homogenisation): plain aggregation and a
                 // K-cycle, under a third of the setup, its finest level assembled straight into
                 // the sliced layout. Shifted systems are implicit time steps, solved hundreds of
                 // times: smoothed aggregation, the faster cycle.
-                let (amg, nodes) = if shift.is_some() {
-                    let (a0, nodes) = sys.free_block();
+                let (amg, nodes) = if shifted {
+                    let (a0, nodes) = self.free_block();
                     (Amg::new(a0, Coarsening::Smoothed)?, nodes)
                 } else {
-                    let (a0, nodes) = sys.free_block_sell();
+                    let (a0, nodes) = self.free_block_sell();
                     let diag = nodes
                         .par_iter()
                         .with_min_len(CHUNK)
-                        .map(|&p| sys.diag[p as usize])
+                        .map(|&p| self.diag[p as usize])
                         .collect();
                     (Amg::plain_from_sell(a0, diag)?, nodes)
                 };
@@ -392,19 +366,17 @@ impl<'a> LinearSystem<'a> {
                 Prepared::Amg(amg, nodes)
             }
             Method::IcCg => {
-                let (mic, nodes) = sys.incomplete_factor()?;
+                let (mic, nodes) = self.incomplete_factor()?;
                 Prepared::Mic(mic, nodes)
             }
             Method::Distributed => {
-                let nodes: Vec<u32> = (0..sys.free.len() as u32)
-                    .filter(|&p| sys.free[p as usize])
+                let nodes: Vec<u32> = (0..self.free.len() as u32)
+                    .filter(|&p| self.free[p as usize])
                     .collect();
-                Prepared::Petsc(distributed::Solver::new(&sys, &nodes)?, nodes)
+                Prepared::Petsc(distributed::Solver::new(self, &nodes)?, nodes)
             }
             Method::Cg | Method::Auto => Prepared::Jacobi,
-        };
-        sys.setup_s = start.elapsed().as_secs_f64();
-        Ok(sys)
+        })
     }
 
     /// Number of unknowns.
@@ -874,6 +846,54 @@ impl<'s, 'a> FreeRows<'s, 'a> {
         }
         debug_assert_eq!(at, c.len());
     }
+}
+
+/// Checks a system before it is prepared: the parameters, conductances, constraints and
+/// shift, and that no kept floating cluster lacks a positive shift (singular system).
+fn check_system(
+    net: &Network,
+    conductances: &[f64],
+    shift: Option<&[f64]>,
+    constraints: &Constraints,
+    params: &SolveParams,
+) -> Result<(), SolveError> {
+    params.validate()?;
+    net.check_conductances(conductances)?;
+    check_len("constraints (nodes)", constraints.kinds().len(), net.n_nodes())?;
+    if let Some(d) = shift {
+        check_len("shift", d.len(), net.n_nodes())?;
+        if let Some(p) = d.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+            return Err(SolveError::invalid(
+                format!("shift[{p}]"),
+                d[p],
+                "must be a finite number ≥ 0",
+            ));
+        }
+    }
+    let kept = constraints.floating_kept();
+    let unanchored = match shift {
+        None => kept.first().copied(),
+        Some(d) => kept.iter().copied().find(|&p| d[p as usize] <= 0.0),
+    };
+    if let Some(example) = unanchored {
+        let (clusters, largest) = constraints
+            .diagnostics()
+            .iter()
+            .find_map(|d| match d {
+                crate::Diagnostic::FloatingKept {
+                    clusters, largest, ..
+                } => Some((*clusters, *largest)),
+                _ => None,
+            })
+            .unwrap_or((1, kept.len()));
+        return Err(SolveError::FloatingCluster {
+            clusters,
+            nodes: kept.len(),
+            largest,
+            example,
+        });
+    }
+    Ok(())
 }
 
 /// Steady solve of K x = s on the free nodes with the fixed values of `constraints`.
