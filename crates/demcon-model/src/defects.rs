@@ -351,13 +351,74 @@ pub(crate) fn apply_defects(
     numbering: Numbering<'_>,
     n_phases: usize,
 ) -> Result<(ContactGraph, Defects), ModelError> {
-    let Numbering { kept_ids, n_before } = numbering;
     let m = graph.len();
-    let mut report = DefectReport::default();
-    // Broken bonds, mapped to current ids.
-    let mut remove = vec![false; m];
-    let mut cause: Vec<Option<CutCause>> = vec![None; m];
+    let mut c = Cutting {
+        remove: vec![false; m],
+        cause: vec![None; m],
+        marks: vec![0u8; m],
+        face: vec![false; particles.len()],
+        crack_hits: vec![0usize; spec.cracks.len()],
+        open_part: Vec::new(),
+        gap_thermal: Vec::new(),
+        gap_electric: Vec::new(),
+        gap_cover: Vec::new(),
+        report: DefectReport::default(),
+    };
     if !spec.cut_pairs.is_empty() {
+        c.break_bonds(&graph, spec, numbering)?;
+    }
+    c.open_cracks(&graph, particles, container, spec);
+    c.filled_cracks(&graph, particles, container, spec);
+    // Wall links (of every face the container has) count as hits too: a crack lying between
+    // a face and the centres next to it crosses no contact but cuts (or fills) those links.
+    for (i, n) in wall_links_crossed(&graph, particles, container, &spec.cracks)
+        .into_iter()
+        .enumerate()
+    {
+        c.crack_hits[i] += n;
+        c.report.crack_wall_links += n;
+    }
+    for (i, &hits) in c.crack_hits.iter().enumerate() {
+        if hits == 0 {
+            c.report.warnings.push(format!(
+                "cracks[{i}] crosses no contact or wall link (outside the domain, or smaller than a \
+                 particle)"
+            ));
+        }
+    }
+    let damage = c.damage(&graph, particles, container, spec);
+    c.finish(graph, particles, mixes, spec, damage, n_phases)
+}
+
+/// The contacts' defects as they are found, one per contact before any is removed.
+struct Cutting {
+    /// Contacts to remove (broken bonds, open cracks) and why.
+    remove: Vec<bool>,
+    cause: Vec<Option<CutCause>>,
+    marks: Vec<u8>,
+    /// Particles on a crack's face.
+    face: Vec<bool>,
+    /// Contacts and wall links each crack crosses.
+    crack_hits: Vec<usize>,
+    /// The open part of each facet an open crack covers in part (empty when none).
+    open_part: Vec<f64>,
+    /// Filled cracks' gap resistances per contact (thermal, electric) and covered fraction
+    /// (empty when none).
+    gap_thermal: Vec<f64>,
+    gap_electric: Vec<f64>,
+    gap_cover: Vec<f64>,
+    report: DefectReport,
+}
+
+impl Cutting {
+    /// Broken bonds, mapped to current ids.
+    fn break_bonds(
+        &mut self,
+        graph: &ContactGraph,
+        spec: &DefectSpec,
+        numbering: Numbering<'_>,
+    ) -> Result<(), ModelError> {
+        let Numbering { kept_ids, n_before } = numbering;
         let mut new_id = vec![u32::MAX; n_before];
         match kept_ids {
             Some(ids) => ids
@@ -382,171 +443,206 @@ pub(crate) fn apply_defects(
             let key = [p.min(q), p.max(q)];
             match index.get(&key) {
                 Some(&k) if p != u32::MAX && q != u32::MAX && p != q => {
-                    if !remove[k] {
-                        report.broken_bonds += 1;
+                    if !self.remove[k] {
+                        self.report.broken_bonds += 1;
                     }
-                    remove[k] = true;
-                    cause[k] = Some(CutCause::Broken);
+                    self.remove[k] = true;
+                    self.cause[k] = Some(CutCause::Broken);
                 }
-                _ => report.broken_not_contacts += 1,
+                _ => self.report.broken_not_contacts += 1,
             }
         }
+        Ok(())
     }
-    // Cracks: the open ones cut (the first that a segment crosses is named), then each filled
-    // one adds its gap on every segment it crosses (a segment crossing an open crack is cut
-    // whatever filled cracks it also crosses; two filled cracks add up).
-    let mut gap_thermal = Vec::new();
-    let mut gap_electric = Vec::new();
-    let mut gap_cover = Vec::new();
-    let mut marks = vec![0u8; m];
-    let mut face = vec![false; particles.len()];
-    let mut crack_hits = vec![0usize; spec.cracks.len()];
-    let open: Vec<usize> = (0..spec.cracks.len())
-        .filter(|&i| spec.cracks[i].gap_conductance.is_none())
-        .collect();
-    let shapes: Vec<CrackShape> = open.iter().map(|&i| spec.cracks[i].shape.clone()).collect();
-    let covers = blocked_contacts(&graph, particles, container, &shapes, spec.whole_facet_cuts);
-    // The open part of each facet an open crack covers in part (empty when none).
-    let mut open_part = Vec::new();
-    for (k, x) in covers.iter().enumerate() {
-        let Some(x) = x else { continue };
-        let crack = open[x.crack as usize];
-        crack_hits[crack] += 1;
-        let [p, q] = graph.pairs[k];
-        face[p as usize] = true;
-        face[q as usize] = true;
-        if x.fraction < 1.0 {
-            if open_part.is_empty() {
-                open_part = vec![1.0; m];
-            }
-            open_part[k] = 1.0 - x.fraction;
-            marks[k] |= MARK_PARTLY_CUT;
-            report.partly_cut_by_cracks += 1;
-            continue;
-        }
-        if !remove[k] {
-            report.cut_by_cracks += 1;
-        }
-        remove[k] = true;
-        cause[k].get_or_insert(CutCause::Crack {
-            crack: crack as u32,
-            point: [x.point.x, x.point.y, x.point.z],
-        });
-    }
-    // Filled cracks: an interface on a surface. On the part of a facet it covers (the whole
-    // contact without cells), each adds its gap's resistance per area divided by |e·n| (n the
-    // crack's normal, e the branch), the term an interface crossing gets (`crossing_resistance`).
-    for (i, crack) in spec.cracks.iter().enumerate() {
-        let Some(h) = crack.gap_conductance else { continue };
-        let (_, normal) = crack.shape.plane();
-        let covers = blocked_contacts(
-            &graph,
-            particles,
-            container,
-            std::slice::from_ref(&crack.shape),
-            spec.whole_facet_cuts,
-        );
+
+    /// Open cracks cut the contacts they cover (the first that a segment crosses is named);
+    /// a facet covered in part keeps its open part.
+    fn open_cracks(
+        &mut self,
+        graph: &ContactGraph,
+        particles: &ParticleSet,
+        container: &Container,
+        spec: &DefectSpec,
+    ) {
+        let m = graph.len();
+        let open: Vec<usize> = (0..spec.cracks.len())
+            .filter(|&i| spec.cracks[i].gap_conductance.is_none())
+            .collect();
+        let shapes: Vec<CrackShape> = open.iter().map(|&i| spec.cracks[i].shape.clone()).collect();
+        let covers = blocked_contacts(graph, particles, container, &shapes, spec.whole_facet_cuts);
         for (k, x) in covers.iter().enumerate() {
             let Some(x) = x else { continue };
-            crack_hits[i] += 1;
+            let crack = open[x.crack as usize];
+            self.crack_hits[crack] += 1;
             let [p, q] = graph.pairs[k];
-            face[p as usize] = true;
-            face[q as usize] = true;
-            if remove[k] {
+            self.face[p as usize] = true;
+            self.face[q as usize] = true;
+            if x.fraction < 1.0 {
+                if self.open_part.is_empty() {
+                    self.open_part = vec![1.0; m];
+                }
+                self.open_part[k] = 1.0 - x.fraction;
+                self.marks[k] |= MARK_PARTLY_CUT;
+                self.report.partly_cut_by_cracks += 1;
                 continue;
             }
-            if gap_thermal.is_empty() {
-                gap_thermal = vec![0.0; m];
-                gap_electric = vec![0.0; m];
-                gap_cover = vec![0.0; m];
+            if !self.remove[k] {
+                self.report.cut_by_cracks += 1;
             }
-            let cos = graph.geometry[k].normal.dot(&normal).abs();
-            gap_thermal[k] += crossing_resistance(1.0 / h, cos);
-            gap_electric[k] += crossing_resistance(crack.gap_electric_resistance.unwrap_or(0.0), cos);
-            gap_cover[k] = f64::max(gap_cover[k], x.fraction);
-            if marks[k] & MARK_FILLED_CRACK == 0 {
-                report.filled_crack_contacts += 1;
+            self.remove[k] = true;
+            self.cause[k].get_or_insert(CutCause::Crack {
+                crack: crack as u32,
+                point: [x.point.x, x.point.y, x.point.z],
+            });
+        }
+    }
+
+    /// Filled cracks: an interface on a surface. On the part of a facet it covers (the whole
+    /// contact without cells), each adds its gap's resistance per area divided by |e·n| (n the
+    /// crack's normal, e the branch), the term an interface crossing gets
+    /// (`crossing_resistance`). A segment crossing an open crack is cut whatever filled cracks
+    /// it also crosses; two filled cracks add up.
+    fn filled_cracks(
+        &mut self,
+        graph: &ContactGraph,
+        particles: &ParticleSet,
+        container: &Container,
+        spec: &DefectSpec,
+    ) {
+        let m = graph.len();
+        for (i, crack) in spec.cracks.iter().enumerate() {
+            let Some(h) = crack.gap_conductance else { continue };
+            let (_, normal) = crack.shape.plane();
+            let covers = blocked_contacts(
+                graph,
+                particles,
+                container,
+                std::slice::from_ref(&crack.shape),
+                spec.whole_facet_cuts,
+            );
+            for (k, x) in covers.iter().enumerate() {
+                let Some(x) = x else { continue };
+                self.crack_hits[i] += 1;
+                let [p, q] = graph.pairs[k];
+                self.face[p as usize] = true;
+                self.face[q as usize] = true;
+                if self.remove[k] {
+                    continue;
+                }
+                if self.gap_thermal.is_empty() {
+                    self.gap_thermal = vec![0.0; m];
+                    self.gap_electric = vec![0.0; m];
+                    self.gap_cover = vec![0.0; m];
+                }
+                let cos = graph.geometry[k].normal.dot(&normal).abs();
+                self.gap_thermal[k] += crossing_resistance(1.0 / h, cos);
+                self.gap_electric[k] +=
+                    crossing_resistance(crack.gap_electric_resistance.unwrap_or(0.0), cos);
+                self.gap_cover[k] = f64::max(self.gap_cover[k], x.fraction);
+                if self.marks[k] & MARK_FILLED_CRACK == 0 {
+                    self.report.filled_crack_contacts += 1;
+                }
+                self.marks[k] |= MARK_FILLED_CRACK;
             }
-            marks[k] |= MARK_FILLED_CRACK;
         }
     }
-    // Wall links (of every face the container has) count as hits too: a crack lying between
-    // a face and the centres next to it crosses no contact but cuts (or fills) those links.
-    for (i, n) in wall_links_crossed(&graph, particles, container, &spec.cracks)
-        .into_iter()
-        .enumerate()
-    {
-        crack_hits[i] += n;
-        report.crack_wall_links += n;
-    }
-    for (i, &hits) in crack_hits.iter().enumerate() {
-        if hits == 0 {
-            report.warnings.push(format!(
-                "cracks[{i}] crosses no contact or wall link (outside the domain, or smaller than a \
-                 particle)"
-            ));
-        }
-    }
-    // Damage, by the branch midpoint; the open part of partly cut facets scales the same way.
-    let mut damage = open_part;
-    if !spec.damage.is_empty() {
-        if damage.is_empty() {
-            damage = vec![1.0; m];
-        }
-        for k in 0..m {
-            let p = graph.pairs[k][0] as usize;
-            let mid = wrap(container, particles.centres[p] + 0.5 * graph.branch(k));
-            for d in &spec.damage {
-                if d.region.contains_point(&mid) {
-                    damage[k] *= d.factor;
-                    marks[k] |= MARK_DAMAGED;
+
+    /// Damage, by the branch midpoint; the open part of partly cut facets scales the same way
+    /// (empty when neither).
+    fn damage(
+        &mut self,
+        graph: &ContactGraph,
+        particles: &ParticleSet,
+        container: &Container,
+        spec: &DefectSpec,
+    ) -> Vec<f64> {
+        let m = graph.len();
+        let mut damage = std::mem::take(&mut self.open_part);
+        if !spec.damage.is_empty() {
+            if damage.is_empty() {
+                damage = vec![1.0; m];
+            }
+            for (k, dk) in damage.iter_mut().enumerate() {
+                let p = graph.pairs[k][0] as usize;
+                let mid = wrap(container, particles.centres[p] + 0.5 * graph.branch(k));
+                for d in &spec.damage {
+                    if d.region.contains_point(&mid) {
+                        *dk *= d.factor;
+                        self.marks[k] |= MARK_DAMAGED;
+                    }
                 }
             }
+            self.report.damaged_contacts = self.marks.iter().filter(|&&b| b & MARK_DAMAGED != 0).count();
         }
-        report.damaged_contacts = marks.iter().filter(|&&b| b & MARK_DAMAGED != 0).count();
+        damage
     }
-    let cut: Vec<CutContact> = (0..m)
-        .filter(|&k| remove[k])
-        .map(|k| CutContact {
-            pair: graph.pairs[k],
-            cause: cause[k].unwrap_or(CutCause::Broken),
-        })
-        .collect();
-    let keep = |v: Vec<f64>| -> Vec<f64> {
-        if v.is_empty() {
-            v
+
+    /// Removes the cut contacts from the graph and the per-contact vectors, and marks the
+    /// interfaces.
+    fn finish(
+        self,
+        graph: ContactGraph,
+        particles: &ParticleSet,
+        mixes: &[Mix],
+        spec: &DefectSpec,
+        damage: Vec<f64>,
+        n_phases: usize,
+    ) -> Result<(ContactGraph, Defects), ModelError> {
+        let Cutting {
+            remove,
+            cause,
+            marks,
+            face,
+            gap_thermal,
+            gap_electric,
+            gap_cover,
+            mut report,
+            ..
+        } = self;
+        let m = graph.len();
+        let cut: Vec<CutContact> = (0..m)
+            .filter(|&k| remove[k])
+            .map(|k| CutContact {
+                pair: graph.pairs[k],
+                cause: cause[k].unwrap_or(CutCause::Broken),
+            })
+            .collect();
+        let keep = |v: Vec<f64>| -> Vec<f64> {
+            if v.is_empty() {
+                v
+            } else {
+                (0..m).filter(|&k| !remove[k]).map(|k| v[k]).collect()
+            }
+        };
+        let (gap_thermal, gap_electric, gap_cover, damage) = (
+            keep(gap_thermal),
+            keep(gap_electric),
+            keep(gap_cover),
+            keep(damage),
+        );
+        let marks: Vec<u8> = (0..m).filter(|&k| !remove[k]).map(|k| marks[k]).collect();
+        let graph = if cut.is_empty() {
+            graph
         } else {
-            (0..m).filter(|&k| !remove[k]).map(|k| v[k]).collect()
-        }
-    };
-    let (gap_thermal, gap_electric, gap_cover, damage) = (
-        keep(gap_thermal),
-        keep(gap_electric),
-        keep(gap_cover),
-        keep(damage),
-    );
-    let marks: Vec<u8> = (0..m).filter(|&k| !remove[k]).map(|k| marks[k]).collect();
-    let graph = if cut.is_empty() {
-        graph
-    } else {
-        graph.without(&remove, &particles.radii)?
-    };
-    report.components_after_cuts = graph.report.n_components;
-    let crack_face: Vec<u32> = (0..face.len() as u32).filter(|&p| face[p as usize]).collect();
-    report.crack_face_particles = crack_face.len();
-    let mut defects = Defects {
-        spec: spec.clone(),
-        marks,
-        damage,
-        gap_thermal,
-        gap_electric,
-        gap_cover,
-        cut,
-        crack_face,
-        report,
-    };
-    update_interface_marks(&mut defects, &graph, &particles.phases, mixes, &[], n_phases);
-    Ok((graph, defects))
+            graph.without(&remove, &particles.radii)?
+        };
+        report.components_after_cuts = graph.report.n_components;
+        let crack_face: Vec<u32> = (0..face.len() as u32).filter(|&p| face[p as usize]).collect();
+        report.crack_face_particles = crack_face.len();
+        let mut defects = Defects {
+            spec: spec.clone(),
+            marks,
+            damage,
+            gap_thermal,
+            gap_electric,
+            gap_cover,
+            cut,
+            crack_face,
+            report,
+        };
+        update_interface_marks(&mut defects, &graph, &particles.phases, mixes, &[], n_phases);
+        Ok((graph, defects))
+    }
 }
 
 /// A point wrapped into a periodic container's cell (unchanged otherwise).
