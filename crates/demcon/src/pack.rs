@@ -78,15 +78,9 @@ pub struct PackArgs {
     quiet: bool,
 }
 
-/// Runs `demcon pack`.
-pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
-    let container = a
-        .container
-        .container()?
-        .context("--container is required: box, cylinder, sphere or periodic")?;
-    if a.count <= 0 {
-        bail!("invalid count = {}: must be ≥ 1", a.count);
-    }
+/// The packing parameters of the command line, budgets checked against the fewest events the
+/// target needs (before any work).
+fn packing_params(a: &PackArgs, container: demcon_core::Container) -> anyhow::Result<PackingParams> {
     let mut radii = RadiusDistribution::gaussian(a.radius_cov);
     if let RadiusDistribution::Gaussian {
         min_ratio, max_ratio, ..
@@ -144,6 +138,19 @@ pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
     if let Some(g) = a.compression_growth_rate {
         params.compression_growth_rate = g;
     }
+    Ok(params)
+}
+
+/// Runs `demcon pack`.
+pub fn run(a: PackArgs) -> anyhow::Result<ExitCode> {
+    let container = a
+        .container
+        .container()?
+        .context("--container is required: box, cylinder, sphere or periodic")?;
+    if a.count <= 0 {
+        bail!("invalid count = {}: must be ≥ 1", a.count);
+    }
+    let params = packing_params(&a, container)?;
     params.validate()?;
     params.check_memory(&MemoryLimit::current())?;
     // Every output can be written: checked before the packing, not after it.

@@ -114,30 +114,8 @@ fn run_in(
         !rank0,
     )
     .context("installing the SIGINT/SIGTERM handlers")?;
-    let wants_checkpoints = scene
-        .config()
-        .thermal
-        .as_ref()
-        .and_then(|t| t.checkpoint)
-        .is_some();
-    if session.is_some() && wants_checkpoints && rank0 && !args.quiet {
-        eprintln!(
-            "note: a distributed run writes no checkpoints (the scene's thermal.checkpoint is ignored)"
-        );
-    }
-    if !args.quiet
-        && session.is_none()
-        && let Some(ck) = scene.config().thermal.as_ref().and_then(|t| t.checkpoint)
-    {
-        let every = [
-            ck.every_steps.map(|k| format!("{k} steps")),
-            ck.every_seconds.map(|s| format!("{s} s")),
-        ]
-        .into_iter()
-        .flatten()
-        .collect::<Vec<_>>()
-        .join(" or ");
-        eprintln!("checkpoints every {every} in {}", checkpoint.display());
+    if !args.quiet && rank0 {
+        announce_checkpoints(&scene, session.is_some(), &checkpoint);
     }
     let written = Cell::new(0u64);
     let after_write = |_steps: u64, _t: f64| {
@@ -202,6 +180,28 @@ fn run_in(
     Ok(ExitCode::SUCCESS)
 }
 
+/// Says where the scene's checkpoints go, or that a distributed run writes none.
+fn announce_checkpoints(scene: &Scene, distributed: bool, checkpoint: &std::path::Path) {
+    let Some(ck) = scene.config().thermal.as_ref().and_then(|t| t.checkpoint) else {
+        return;
+    };
+    if distributed {
+        eprintln!(
+            "note: a distributed run writes no checkpoints (the scene's thermal.checkpoint is ignored)"
+        );
+        return;
+    }
+    let every = [
+        ck.every_steps.map(|k| format!("{k} steps")),
+        ck.every_seconds.map(|s| format!("{s} s")),
+    ]
+    .into_iter()
+    .flatten()
+    .collect::<Vec<_>>()
+    .join(" or ");
+    eprintln!("checkpoints every {every} in {}", checkpoint.display());
+}
+
 /// The PETSc session of `--distributed` after the launch checks (`crate::mpi`); `None` for
 /// a serial run.
 fn distributed_session(
@@ -241,6 +241,7 @@ fn distributed_session(
     Ok(Some(session))
 }
 
+/// The run's summary on the terminal: the model, what the physics gave, the cost.
 fn print_summary(name: &str, r: &demcon_scene::RunResult) {
     let m = &r.model;
     match &m.report.tessellation {
@@ -265,30 +266,7 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
         ),
     }
     if let Some(h) = &r.homogenization {
-        for (what, unit, t) in [
-            ("effective conductivity tensor", "W/(m·K)", h.thermal.as_ref()),
-            ("electric conductivity tensor", "S/m", h.electric.as_ref()),
-        ] {
-            let Some(t) = t else { continue };
-            let x = &t.report;
-            println!("  {what} ({unit}), periodic homogenisation, {:.2} s:", x.wall_s);
-            for row in &x.tensor {
-                println!("    [{:>12.6e} {:>12.6e} {:>12.6e}]", row[0], row[1], row[2]);
-            }
-            println!(
-                "    along x, y, z: {:.6e} {:.6e} {:.6e}; eigenvalues {:.6e} {:.6e} {:.6e}; symmetry error {:.1e}",
-                x.axes[0],
-                x.axes[1],
-                x.axes[2],
-                x.eigenvalues[0],
-                x.eigenvalues[1],
-                x.eigenvalues[2],
-                x.symmetry_error
-            );
-            if let Some(c) = &t.calibration {
-                println!("    C_t = {:.5} calibrated by homogenisation", c.c_t);
-            }
-        }
+        print_homogenization(h);
     }
     if let Some(p) = &m.report.packing {
         println!(
@@ -313,6 +291,42 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
             peak as f64 / m.particles.len().max(1) as f64
         );
     }
+    print_physics(r);
+    print_distributed();
+    println!("  total {:.2} s", r.wall_s);
+}
+
+/// The effective tensors of a periodic homogenisation.
+fn print_homogenization(h: &demcon_scene::Homogenization) {
+    for (what, unit, t) in [
+        ("effective conductivity tensor", "W/(m·K)", h.thermal.as_ref()),
+        ("electric conductivity tensor", "S/m", h.electric.as_ref()),
+    ] {
+        let Some(t) = t else { continue };
+        let x = &t.report;
+        println!("  {what} ({unit}), periodic homogenisation, {:.2} s:", x.wall_s);
+        for row in &x.tensor {
+            println!("    [{:>12.6e} {:>12.6e} {:>12.6e}]", row[0], row[1], row[2]);
+        }
+        println!(
+            "    along x, y, z: {:.6e} {:.6e} {:.6e}; eigenvalues {:.6e} {:.6e} {:.6e}; symmetry error {:.1e}",
+            x.axes[0],
+            x.axes[1],
+            x.axes[2],
+            x.eigenvalues[0],
+            x.eigenvalues[1],
+            x.eigenvalues[2],
+            x.symmetry_error
+        );
+        if let Some(c) = &t.calibration {
+            println!("    C_t = {:.5} calibrated by homogenisation", c.c_t);
+        }
+    }
+}
+
+/// The calibration, the thermal and electric solves, the ETC, the Halo, the probes and the
+/// notes.
+fn print_physics(r: &demcon_scene::RunResult) {
     if let Some(c) = r.thermal_setup.as_ref().and_then(|s| s.calibration.as_ref()) {
         println!(
             "  C_t = {:.4} (calibrated on this packing, {}, {} CG iterations)",
@@ -368,6 +382,10 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
     for d in &r.diagnostics {
         println!("  note: {d}");
     }
+}
+
+/// The distributed solve's totals, when there was one.
+fn print_distributed() {
     let d = demcon_scene::distributed::stats();
     if d.ranks > 0 {
         println!(
@@ -391,5 +409,4 @@ fn print_summary(name: &str, r: &demcon_scene::RunResult) {
             d.peak_rss_bytes.1 / 1e9
         );
     }
-    println!("  total {:.2} s", r.wall_s);
 }
