@@ -250,20 +250,14 @@ impl Body<'_> {
     }
 }
 
-/// Places conforming seeds across every sphere of `spheres` and plane of `planes` and removes
-/// the packing sites that would overlap them (see the module doc), the seeds inside `body`.
-/// `h` is the mean site spacing (m): (V/N)^{1/3}.
-///
-/// # Errors
-/// A non-finite or non-positive radius or spacing; parameters out of (0, 1).
-pub fn conforming_sites(
-    particles: &ParticleSet,
-    body: Body,
+/// Refuses spacing and offset outside (0, 1), a bad site spacing `h`, sphere radius or plane
+/// patch, naming the field.
+fn check_inputs(
     spheres: &[SphereSurface],
     planes: &[PlanePatch],
     h: f64,
     params: &ConformParams,
-) -> Result<Conformed, GraphError> {
+) -> Result<(), GraphError> {
     for (field, v) in [
         ("conform.spacing", params.spacing),
         ("conform.offset", params.offset),
@@ -297,6 +291,24 @@ pub fn conforming_sites(
         )
         .into());
     }
+    Ok(())
+}
+
+/// Places conforming seeds across every sphere of `spheres` and plane of `planes` and removes
+/// the packing sites that would overlap them (see the module doc), the seeds inside `body`.
+/// `h` is the mean site spacing (m): (V/N)^{1/3}.
+///
+/// # Errors
+/// A non-finite or non-positive radius or spacing; parameters out of (0, 1).
+pub fn conforming_sites(
+    particles: &ParticleSet,
+    body: Body,
+    spheres: &[SphereSurface],
+    planes: &[PlanePatch],
+    h: f64,
+    params: &ConformParams,
+) -> Result<Conformed, GraphError> {
+    check_inputs(spheres, planes, h, params)?;
     let container = body.container;
     if spheres.is_empty() && planes.is_empty() {
         // Nothing to follow: every site stays.
@@ -312,22 +324,8 @@ pub fn conforming_sites(
     }
     let delta = params.offset * h;
     let period = container.period();
-    // Minimum-image offset from a to b.
-    let offset = |a: &Vec3, b: &Vec3| -> Vec3 {
-        let mut d = b - a;
-        if let Some(l) = period {
-            for k in 0..3 {
-                d[k] -= l[k] * (d[k] / l[k]).round();
-            }
-        }
-        d
-    };
-    let wrap = |x: Vec3| -> Vec3 {
-        match period {
-            Some(l) => Vec3::new(x.x.rem_euclid(l[0]), x.y.rem_euclid(l[1]), x.z.rem_euclid(l[2])),
-            None => x,
-        }
-    };
+    let offset = |a: &Vec3, b: &Vec3| min_image(period, a, b);
+    let wrap = |x: Vec3| wrap_into(period, x);
     // Distance from x to the surface of sphere s (positive outside).
     let surface_distance = |x: &Vec3, s: &SphereSurface| offset(&s.centre, x).norm() - s.radius;
     let mut report = ConformReport {
@@ -339,27 +337,7 @@ pub fn conforming_sites(
     // Each sphere's samples and tangent-plane radius r'.
     let sample = params.spacing * h;
     let sites = SiteIndex::new(particles, container, 3.0 * h);
-    // The tangent polyhedron's volume depends on the sample count alone: once per count.
-    let mut volumes = std::collections::BTreeMap::new();
-    let sampled: Vec<(Vec<Vec3>, f64)> = spheres
-        .iter()
-        .map(|s| {
-            let count = ((4.0 * std::f64::consts::PI * s.radius * s.radius)
-                / (0.5 * 3f64.sqrt() * sample * sample))
-                .round()
-                .max(12.0) as usize;
-            let local = fibonacci_sphere(count);
-            let v1 = *volumes
-                .entry(count)
-                .or_insert_with(|| crate::laguerre::tangent_polyhedron_volume(&local));
-            let frame = sampling_frame(particles, &sites, &s.centre, &offset);
-            let normals = local
-                .iter()
-                .map(|n| frame[0] * n.x + frame[1] * n.y + frame[2] * n.z)
-                .collect();
-            (normals, s.radius * (4.0 / 3.0 * std::f64::consts::PI / v1).cbrt())
-        })
-        .collect();
+    let sampled = sample_spheres(particles, &sites, spheres, sample, &offset);
     // The packing sites that stay: wholly farther than 2δ from every seeded sphere (of radius
     // r', where the seeds sit at ±δ: no seed then overlaps a site).
     // The spheres indexed by their boxes (periodic images included), inflated by the farthest
@@ -371,53 +349,15 @@ pub fn conforming_sites(
         container,
         (r_max + 2.0 * delta).max(delta / NARROW),
     );
-    let mut kept = Vec::new();
-    for p in 0..particles.len() {
-        let x = &particles.centres[p];
-        let reach = particles.radii[p] + 2.0 * delta;
-        let near = index.near(&wrap(*x)).any(|k| {
-            let (s, (_, r_t)) = (&spheres[k], &sampled[k]);
-            (offset(&s.centre, x).norm() - r_t).abs() < reach
-        }) || planes.iter().any(|pl| pl.distance(x, &offset) < reach);
-        if near {
-            report.removed_sites += 1;
-        } else {
-            kept.push(p as u32);
-        }
-    }
-    // The seeds.
-    let mut seeds: Vec<Vec3> = Vec::new();
-    let mut grid = SeedGrid::new(2.0 * delta, period);
-    let mut seed_radii: Vec<f64> = Vec::new();
-    // Places the pair of a sample `at` on a surface of normal `n` whose nearest other surface is
-    // `gap` away (≤ 0: inside another sphere, no interface there).
-    let mut place = |at: Vec3, n: Vec3, gap: f64, sample: usize, report: &mut ConformReport| {
-        if gap <= 0.0 {
-            report.dropped_seeds += 2;
-            return;
-        }
-        let d = delta.min(NARROW * gap);
-        let pair = [-1.0, 1.0].map(|side| wrap(at + n * (side * d)));
-        // Each seed's ball inside the body (curved walls and carving included).
-        let inside = pair.iter().all(|x| body.depth(x) >= d);
-        if !inside
-            || d < MIN_OFFSET * delta
-            || pair
-                .iter()
-                .any(|x| grid.too_close(x, d, &seeds, &seed_radii, &offset))
-        {
-            report.dropped_seeds += 2;
-            return;
-        }
-        if d < delta {
-            report.narrowed_pairs += 1;
-        }
-        for x in pair {
-            grid.insert(&x, seeds.len());
-            seeds.push(x);
-            seed_radii.push(d * (1.0 - excess(sample)));
-        }
+    let mut seeder = Seeder {
+        seeds: Vec::new(),
+        seed_radii: Vec::new(),
+        grid: SeedGrid::new(2.0 * delta, period),
+        delta,
+        period,
+        body: &body,
     };
+    let kept = seeder.kept_sites(particles, &index, spheres, &sampled, planes, &mut report);
     // The unsigned distance from `at` to the plane patches other than `skip` and those in the
     // same plane as `skip` (the pieces of one crack, two boxes sharing a face: one surface,
     // whose samples meet only through the seed-overlap check).
@@ -440,35 +380,7 @@ pub fn conforming_sites(
             .map(|(_, pl)| pl.distance(at, &offset))
             .fold(f64::INFINITY, f64::min)
     };
-    for (si, (s, (normals, r_t))) in spheres.iter().zip(&sampled).enumerate() {
-        let r_t = *r_t;
-        report.max_radius_correction = report.max_radius_correction.max(1.0 - r_t / s.radius);
-        for (k, n) in normals.iter().enumerate() {
-            // Where another surface comes close, the pair closes in on the surface: δ at most
-            // NARROW × the gap to it (so the other surface's pair fits in the gap too); a
-            // sample inside another sphere is no interface and gets no pair.
-            let at = s.centre + n * r_t;
-            // Spheres farther than δ / NARROW leave the pair at δ: only the near ones are read.
-            let others = index
-                .near(&wrap(at))
-                .filter(|&o| o != si)
-                .map(|o| surface_distance(&at, &spheres[o]));
-            // In a periodic box the sphere's own images are neighbours too.
-            let images = period.into_iter().flat_map(|l| {
-                (0..27).filter(|&k| k != 13).map(move |k| {
-                    let shift = Vec3::new(
-                        (k % 3) as f64 - 1.0,
-                        ((k / 3) % 3) as f64 - 1.0,
-                        (k / 9) as f64 - 1.0,
-                    )
-                    .component_mul(&Vec3::new(l[0], l[1], l[2]));
-                    (at - s.centre - shift).norm() - s.radius
-                })
-            });
-            let gap = others.chain(images).fold(plane_gap(&at, None), f64::min);
-            place(at, *n, gap, k, &mut report);
-        }
-    }
+    seeder.seed_spheres(spheres, &sampled, &index, &plane_gap, &mut report);
     // The planes: a square lattice of samples at the spheres' spacing.
     for (pi, pl) in planes.iter().enumerate() {
         let (n, points) = pl.samples(sample);
@@ -482,10 +394,165 @@ pub fn conforming_sites(
                 .map(|o| surface_distance(&at, &spheres[o]).abs())
                 .fold(f64::INFINITY, f64::min);
             let gap = spheres_gap.min(plane_gap(&at, Some(pi)));
-            place(at, n, gap, k, &mut report);
+            seeder.place(at, n, gap, k, &mut report);
         }
     }
+    let Seeder {
+        seeds, seed_radii, ..
+    } = seeder;
     report.seeds = seeds.len();
+    let n_seeds = seeds.len();
+    Ok(Conformed {
+        particles: with_seeds(particles, &kept, seeds, seed_radii)?,
+        kept,
+        n_seeds,
+        report,
+    })
+}
+
+/// Minimum-image offset from a to b in a box of period `period` (the plain difference without).
+fn min_image(period: Option<[f64; 3]>, a: &Vec3, b: &Vec3) -> Vec3 {
+    let mut d = b - a;
+    if let Some(l) = period {
+        for k in 0..3 {
+            d[k] -= l[k] * (d[k] / l[k]).round();
+        }
+    }
+    d
+}
+
+/// `x` wrapped into the periodic cell (unchanged without a period).
+fn wrap_into(period: Option<[f64; 3]>, x: Vec3) -> Vec3 {
+    match period {
+        Some(l) => Vec3::new(x.x.rem_euclid(l[0]), x.y.rem_euclid(l[1]), x.z.rem_euclid(l[2])),
+        None => x,
+    }
+}
+
+/// The seeds placed so far, on a grid that finds their neighbours.
+struct Seeder<'b> {
+    seeds: Vec<Vec3>,
+    seed_radii: Vec<f64>,
+    grid: SeedGrid,
+    /// The pair offset δ (m).
+    delta: f64,
+    period: Option<[f64; 3]>,
+    body: &'b Body<'b>,
+}
+
+impl Seeder<'_> {
+    /// The packing sites that stay: wholly farther than 2δ from every seeded sphere (of radius
+    /// r', where the seeds sit at ±δ: no seed then overlaps a site) and every plane patch.
+    fn kept_sites(
+        &self,
+        particles: &ParticleSet,
+        index: &SphereIndex,
+        spheres: &[SphereSurface],
+        sampled: &[(Vec<Vec3>, f64)],
+        planes: &[PlanePatch],
+        report: &mut ConformReport,
+    ) -> Vec<u32> {
+        let (delta, period) = (self.delta, self.period);
+        let offset = |a: &Vec3, b: &Vec3| min_image(period, a, b);
+        let mut kept = Vec::new();
+        for p in 0..particles.len() {
+            let x = &particles.centres[p];
+            let reach = particles.radii[p] + 2.0 * delta;
+            let near = index.near(&wrap_into(period, *x)).any(|k| {
+                let (s, (_, r_t)) = (&spheres[k], &sampled[k]);
+                (offset(&s.centre, x).norm() - r_t).abs() < reach
+            }) || planes.iter().any(|pl| pl.distance(x, &offset) < reach);
+            if near {
+                report.removed_sites += 1;
+            } else {
+                kept.push(p as u32);
+            }
+        }
+        kept
+    }
+
+    /// A pair at each sample of every sphere: δ, or less where another surface comes close
+    /// (`plane_gap(at, skip)`: the distance to the plane patches).
+    fn seed_spheres(
+        &mut self,
+        spheres: &[SphereSurface],
+        sampled: &[(Vec<Vec3>, f64)],
+        index: &SphereIndex,
+        plane_gap: &dyn Fn(&Vec3, Option<usize>) -> f64,
+        report: &mut ConformReport,
+    ) {
+        let period = self.period;
+        for (si, (s, (normals, r_t))) in spheres.iter().zip(sampled).enumerate() {
+            let r_t = *r_t;
+            report.max_radius_correction = report.max_radius_correction.max(1.0 - r_t / s.radius);
+            for (k, n) in normals.iter().enumerate() {
+                // Where another surface comes close, the pair closes in on the surface: δ at most
+                // NARROW × the gap to it (so the other surface's pair fits in the gap too); a
+                // sample inside another sphere is no interface and gets no pair.
+                let at = s.centre + n * r_t;
+                // Spheres farther than δ / NARROW leave the pair at δ: only the near ones are read.
+                let others = index
+                    .near(&wrap_into(period, at))
+                    .filter(|&o| o != si)
+                    .map(|o| min_image(period, &spheres[o].centre, &at).norm() - spheres[o].radius);
+                // In a periodic box the sphere's own images are neighbours too.
+                let images = period.into_iter().flat_map(|l| {
+                    (0..27).filter(|&k| k != 13).map(move |k| {
+                        let shift = Vec3::new(
+                            (k % 3) as f64 - 1.0,
+                            ((k / 3) % 3) as f64 - 1.0,
+                            (k / 9) as f64 - 1.0,
+                        )
+                        .component_mul(&Vec3::new(l[0], l[1], l[2]));
+                        (at - s.centre - shift).norm() - s.radius
+                    })
+                });
+                let gap = others.chain(images).fold(plane_gap(&at, None), f64::min);
+                self.place(at, *n, gap, k, report);
+            }
+        }
+    }
+
+    /// Places the pair of a sample `at` on a surface of normal `n` whose nearest other surface
+    /// is `gap` away (≤ 0: inside another sphere, no interface there).
+    fn place(&mut self, at: Vec3, n: Vec3, gap: f64, sample: usize, report: &mut ConformReport) {
+        let (delta, period) = (self.delta, self.period);
+        if gap <= 0.0 {
+            report.dropped_seeds += 2;
+            return;
+        }
+        let d = delta.min(NARROW * gap);
+        let pair = [-1.0, 1.0].map(|side| wrap_into(period, at + n * (side * d)));
+        // Each seed's ball inside the body (curved walls and carving included).
+        let inside = pair.iter().all(|x| self.body.depth(x) >= d);
+        let offset = |a: &Vec3, b: &Vec3| min_image(period, a, b);
+        if !inside
+            || d < MIN_OFFSET * delta
+            || pair
+                .iter()
+                .any(|x| self.grid.too_close(x, d, &self.seeds, &self.seed_radii, &offset))
+        {
+            report.dropped_seeds += 2;
+            return;
+        }
+        if d < delta {
+            report.narrowed_pairs += 1;
+        }
+        for x in pair {
+            self.grid.insert(&x, self.seeds.len());
+            self.seeds.push(x);
+            self.seed_radii.push(d * (1.0 - excess(sample)));
+        }
+    }
+}
+
+/// The kept packing sites of `particles` followed by the seeds (phase 0).
+fn with_seeds(
+    particles: &ParticleSet,
+    kept: &[u32],
+    seeds: Vec<Vec3>,
+    seed_radii: Vec<f64>,
+) -> Result<ParticleSet, GraphError> {
     let mut centres: Vec<Vec3> = kept.iter().map(|&p| particles.centres[p as usize]).collect();
     let mut radii: Vec<f64> = kept.iter().map(|&p| particles.radii[p as usize]).collect();
     let mut phases: Vec<u16> = kept.iter().map(|&p| particles.phases[p as usize]).collect();
@@ -494,12 +561,40 @@ pub fn conforming_sites(
     phases.extend(std::iter::repeat_n(0, seeds.len()));
     let mut out = ParticleSet::new(centres, radii)?;
     out.phases = phases;
-    Ok(Conformed {
-        particles: out,
-        kept,
-        n_seeds: seeds.len(),
-        report,
-    })
+    Ok(out)
+}
+
+/// Each sphere's sample normals (laid in its [`sampling_frame`], about one per `sample`² of
+/// surface) and its tangent-plane radius r' (m): the radius whose tangent polyhedron holds the
+/// sphere's volume.
+fn sample_spheres(
+    particles: &ParticleSet,
+    sites: &SiteIndex,
+    spheres: &[SphereSurface],
+    sample: f64,
+    offset: &dyn Fn(&Vec3, &Vec3) -> Vec3,
+) -> Vec<(Vec<Vec3>, f64)> {
+    // The tangent polyhedron's volume depends on the sample count alone: once per count.
+    let mut volumes = std::collections::BTreeMap::new();
+    spheres
+        .iter()
+        .map(|s| {
+            let count = ((4.0 * std::f64::consts::PI * s.radius * s.radius)
+                / (0.5 * 3f64.sqrt() * sample * sample))
+                .round()
+                .max(12.0) as usize;
+            let local = fibonacci_sphere(count);
+            let v1 = *volumes
+                .entry(count)
+                .or_insert_with(|| crate::laguerre::tangent_polyhedron_volume(&local));
+            let frame = sampling_frame(particles, sites, &s.centre, offset);
+            let normals = local
+                .iter()
+                .map(|n| frame[0] * n.x + frame[1] * n.y + frame[2] * n.z)
+                .collect();
+            (normals, s.radius * (4.0 / 3.0 * std::f64::consts::PI / v1).cbrt())
+        })
+        .collect()
 }
 
 /// The orthonormal frame a sphere's samples are laid in, taken from the packing around its
