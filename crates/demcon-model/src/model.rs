@@ -640,31 +640,11 @@ pub fn build_model_staged(
     };
     let contacts_s = t1.elapsed().as_secs_f64();
     check_connected(&graph, particles.len())?;
-    let (graph, defects) = if params.defects.is_empty() {
-        let marks = vec![0; graph.len()];
-        (
-            graph,
-            Defects {
-                marks,
-                ..Defects::default()
-            },
-        )
-    } else {
-        stages.time("defects", || {
-            apply_defects(
-                graph,
-                &particles,
-                &container,
-                &mixes,
-                &params.defects,
-                Numbering {
-                    kept_ids: kept_ids.as_deref(),
-                    n_before,
-                },
-                n_phases,
-            )
-        })?
+    let numbering = Numbering {
+        kept_ids: kept_ids.as_deref(),
+        n_before,
     };
+    let (graph, mut defects) = defects(graph, &particles, &container, &mixes, params, numbering, stages)?;
     let bridges = bridges(
         params,
         conformed.as_ref().map(|c| &c.2),
@@ -673,7 +653,6 @@ pub fn build_model_staged(
         &container,
         stages,
     )?;
-    let mut defects = defects;
     if !bridges.is_empty() {
         update_interface_marks(
             &mut defects,
@@ -688,10 +667,10 @@ pub fn build_model_staged(
     let t2 = Instant::now();
     let network = stages.time("network", || Network::new(particles.len(), &graph.pairs))?;
     let network_s = t2.elapsed().as_secs_f64();
-    let mut phase_counts = vec![0; materials.materials.len()];
-    for &p in &particles.phases {
-        phase_counts[p as usize] += 1;
-    }
+    let phase_counts = particles.phases.iter().fold(vec![0; n_phases], |mut c, &p| {
+        c[p as usize] += 1;
+        c
+    });
     // The packing's own solid fraction (the conforming seeds are sites, not grains).
     let phi = packing_solid / domain_volume;
     let body_fractions = body_phase_fractions(&particles, &mixes, &graph, n_phases);
@@ -808,6 +787,41 @@ fn phases(
         inclusions,
         phase_fractions,
         conformed,
+    })
+}
+
+/// The "defects" stage: interfaces, cracks, damage and broken bonds on the graph (none: the
+/// graph as it is, no marks).
+fn defects(
+    graph: ContactGraph,
+    particles: &ParticleSet,
+    container: &Container,
+    mixes: &[Mix],
+    params: &ModelParams,
+    numbering: Numbering<'_>,
+    stages: &mut Stages,
+) -> Result<(ContactGraph, Defects), ModelError> {
+    if params.defects.is_empty() {
+        let marks = vec![0; graph.len()];
+        return Ok((
+            graph,
+            Defects {
+                marks,
+                ..Defects::default()
+            },
+        ));
+    }
+    let n_phases = params.materials.materials.len();
+    stages.time("defects", || {
+        apply_defects(
+            graph,
+            particles,
+            container,
+            mixes,
+            &params.defects,
+            numbering,
+            n_phases,
+        )
     })
 }
 

@@ -797,26 +797,35 @@ pub fn solve_thermal_checkpointed(
         }
     };
     let tr = tr?;
-    let r = &tr.report;
-    let report = ThermalSolveReport {
-        scheme: r.scheme.to_string(),
-        steps: r.steps,
-        dt: r.dt,
-        dt_bound: r.dt_bound,
-        dt_paper: setup.paper_dt,
-        iterations: r.solver_iterations,
-        residual: r.max_relative_residual,
-        wall_s: r.wall_s,
-        contacts_per_s: r.contacts_per_s,
-        energy_balance_error: r.energy_balance_error,
-        excluded: bcs.constraints.excluded().len(),
-    };
+    let report = transient_report(&tr.report, setup.paper_dt, bcs.constraints.excluded().len());
     Ok(ThermalRun::from_nodes(
         &setup.walls,
         tr.temperatures,
         snapshots.into_inner(),
         report,
     ))
+}
+
+/// The model's report of a transient run (`paper_dt`: the paper's step estimate, s;
+/// `excluded`: particles left out of the solve).
+fn transient_report(
+    r: &demcon_thermal::TransientReport,
+    paper_dt: Option<f64>,
+    excluded: usize,
+) -> ThermalSolveReport {
+    ThermalSolveReport {
+        scheme: r.scheme.to_string(),
+        steps: r.steps,
+        dt: r.dt,
+        dt_bound: r.dt_bound,
+        dt_paper: paper_dt,
+        iterations: r.solver_iterations,
+        residual: r.max_relative_residual,
+        wall_s: r.wall_s,
+        contacts_per_s: r.contacts_per_s,
+        energy_balance_error: r.energy_balance_error,
+        excluded,
+    }
 }
 
 /// The explicit step the scene asks for; `Paper` takes the paper's estimate (s), which only
