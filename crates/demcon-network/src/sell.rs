@@ -258,12 +258,8 @@ impl Sell {
             .sum();
         let (perm, slice_ptr) = sliced_layout(n, |i| lens[i] as usize);
         let pos = positions(&perm);
-        let mut ptr = Vec::with_capacity(n + 1);
-        ptr.push(0u32);
-        for (i, &m) in lens.iter().enumerate() {
-            // nnz ≤ A's entries, whose count fits u32 (the compressed rows' bound).
-            ptr.push(ptr[i] + m);
-        }
+        // nnz ≤ A's entries, whose count fits u32 (the compressed rows' bound).
+        let ptr = row_starts(&lens);
         drop(lens);
         let n_slices = slice_ptr.len() - 1;
         let total = slice_ptr[n_slices];
@@ -653,6 +649,16 @@ impl RowSell {
             },
         )
     }
+}
+
+/// Row starts of compressed rows of lengths `lens`: 0, then the running sums.
+fn row_starts(lens: &[u32]) -> Vec<u32> {
+    let mut ptr = Vec::with_capacity(lens.len() + 1);
+    ptr.push(0u32);
+    for (i, &m) in lens.iter().enumerate() {
+        ptr.push(ptr[i] + m);
+    }
+    ptr
 }
 
 #[cfg(test)]

@@ -192,23 +192,9 @@ impl<'a> ExplicitStepper<'a> {
         let source = source.iter().any(|&v| v != 0.0).then_some(source);
         let weights = match precision {
             WeightPrecision::F64 => Weights::F64 { w: weights, centre },
-            WeightPrecision::F32 => {
-                if let Some(k) = weights.iter().position(|&h| {
-                    h != 0.0 && !(h.abs() >= f32::MIN_POSITIVE as f64 && h.abs() <= f32::MAX as f64)
-                }) {
-                    return Err(ThermalError::invalid(
-                        "conductances",
-                        weights[k],
-                        "must lie in f32's normal range (1.2e-38 to 3.4e38 W/K) for f32 weights; use WeightPrecision::F64",
-                    ));
-                }
-                let mut h = huge_filled(total, 0.0f32);
-                h.par_iter_mut()
-                    .zip(weights.par_iter())
-                    .with_min_len(CHUNK)
-                    .for_each(|(h, &w)| *h = w as f32);
-                Weights::F32 { h }
-            }
+            WeightPrecision::F32 => Weights::F32 {
+                h: f32_weights(&weights)?,
+            },
         };
         Ok(Self {
             net: std::marker::PhantomData,
@@ -383,6 +369,27 @@ const PREFETCH_AHEAD: usize = 128;
 /// temperatures stay in cache and the hints only cost instructions: at 10⁵ particles the
 /// step was 13–17 % slower with them (`docs/performance.md` §8, "Levers tried").
 const PREFETCH_MIN_ROWS: usize = 1 << 17;
+
+/// The conductances H (W/K) rounded once to f32, in huge pages; refused outside f32's normal
+/// range (0, padding, stays 0).
+fn f32_weights(h: &[f64]) -> Result<Vec<f32>, ThermalError> {
+    if let Some(k) = h
+        .iter()
+        .position(|&v| v != 0.0 && !(v.abs() >= f32::MIN_POSITIVE as f64 && v.abs() <= f32::MAX as f64))
+    {
+        return Err(ThermalError::invalid(
+            "conductances",
+            h[k],
+            "must lie in f32's normal range (1.2e-38 to 3.4e38 W/K) for f32 weights; use WeightPrecision::F64",
+        ));
+    }
+    let mut out = huge_filled(h.len(), 0.0f32);
+    out.par_iter_mut()
+        .zip(h.par_iter())
+        .with_min_len(CHUNK)
+        .for_each(|(o, &w)| *o = w as f32);
+    Ok(out)
+}
 
 #[cfg(test)]
 mod tests {

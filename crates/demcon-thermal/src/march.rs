@@ -269,9 +269,12 @@ impl<'a, 'p, S: Stepper> Marching<'a, 'p, S> {
     ) -> Self {
         let (capacities, constraints) = (system.capacities(), system.constraints());
         let envelope = m.envelope.map(|widen| {
-            let (lo0, hi0) = from.t0.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                (a.min(v), b.max(v))
-            });
+            let (lo0, hi0) = from
+                .t0
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
             let [heat_base, cool_base, t_change] = from.envelope_base;
             let (heat_rate, cool_rate) = Envelope::rates(constraints.kinds(), capacities, &from.sources);
             Envelope {
@@ -337,7 +340,12 @@ impl<'a, 'p, S: Stepper> Marching<'a, 'p, S> {
         }
         self.report.steps += 1;
         self.ticker.tick(self.report.steps);
-        let t_now = t_start + if shortened { span } else { (k + 1) as f64 * segment.h };
+        let t_now = t_start
+            + if shortened {
+                span
+            } else {
+                (k + 1) as f64 * segment.h
+            };
         if let (Some(env), Some((lo, hi, bad))) = (&self.envelope, range) {
             let (env_lo, env_hi) = env.bounds(t_now);
             if bad || lo < env_lo || hi > env_hi {
