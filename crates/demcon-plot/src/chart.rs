@@ -107,12 +107,7 @@ fn range(vals: impl Iterator<Item = f64>, scale: Scale) -> (f64, f64) {
 /// Draws `chart` to a PNG file of 900 × 600 pixels. Non-finite points are left out (as are
 /// points ≤ 0 on a log axis).
 pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
-    if chart.series.iter().all(|s| s.points.is_empty()) {
-        return Err(PlotError::invalid(
-            format!("chart `{}`", chart.title),
-            "no points to draw",
-        ));
-    }
+    check(chart)?;
     let (x0, x1) = match chart.x_scale {
         Scale::Categories => (0.5, chart.series.len() as f64 + 0.5),
         _ => range(
@@ -120,12 +115,6 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
             chart.x_scale,
         ),
     };
-    if chart.y_scale == Scale::Categories {
-        return Err(PlotError::invalid(
-            format!("chart `{}`", chart.title),
-            "categories are for the x axis only",
-        ));
-    }
     let names: Vec<&str> = chart.series.iter().map(|s| s.label.as_str()).collect();
     let x_tick = |v: &f64| match chart.x_scale {
         Scale::Categories => {
@@ -147,15 +136,7 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
     // over a millikelvin at 263 °C reads 262.9392, 262.9394, …), light lines at fifths.
     let y_ticks = nice_ticks(y0, y1, 10);
     let y_labels = tick_labels(&y_ticks);
-    let y_light: Vec<f64> = match y_ticks[..] {
-        [a, b, ..] => {
-            let fifth = (b - a) / 5.0;
-            let first = (y0 / fifth).ceil() as i64;
-            let last = (y1 / fifth).floor() as i64;
-            (first..=last).map(|k| k as f64 * fifth).collect()
-        }
-        _ => Vec::new(),
-    };
+    let y_light = fifths(&y_ticks, y0, y1);
     let y_tick = |v: &f64| {
         y_ticks
             .iter()
@@ -236,6 +217,31 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), PlotError> {
         root.present()?;
         Ok(())
     })
+}
+
+/// Refuses a chart with no point, or categories on the y axis.
+fn check(chart: &Chart) -> Result<(), PlotError> {
+    let what = || format!("chart `{}`", chart.title);
+    if chart.series.iter().all(|s| s.points.is_empty()) {
+        return Err(PlotError::invalid(what(), "no points to draw"));
+    }
+    if chart.y_scale == Scale::Categories {
+        return Err(PlotError::invalid(what(), "categories are for the x axis only"));
+    }
+    Ok(())
+}
+
+/// The light grid lines: every fifth of the step of `ticks` within [lo, hi].
+fn fifths(ticks: &[f64], lo: f64, hi: f64) -> Vec<f64> {
+    match ticks {
+        [a, b, ..] => {
+            let fifth = (b - a) / 5.0;
+            let first = (lo / fifth).ceil() as i64;
+            let last = (hi / fifth).floor() as i64;
+            (first..=last).map(|k| k as f64 * fifth).collect()
+        }
+        _ => Vec::new(),
+    }
 }
 
 /// The corner (or side) of the plot where the legend covers the fewest points of the curves

@@ -79,38 +79,7 @@ const BAR_LABEL_AREA: u32 = 75;
 /// Errors: a shape that does not match the cells, no finite value to colour, a bad range or
 /// cell size, or a drawing or file failure.
 pub fn draw_raster(r: &Raster, path: &Path) -> Result<RasterReport, PlotError> {
-    if r.nx == 0 || r.ny == 0 || r.cells.len() != r.nx * r.ny {
-        return Err(PlotError::invalid(
-            format!("raster `{}`", r.title),
-            format!("{} cells for a {} × {} raster", r.cells.len(), r.nx, r.ny),
-        ));
-    }
-    if !(r.cell.is_finite() && r.cell > 0.0 && r.origin.iter().all(|o| o.is_finite())) {
-        return Err(PlotError::invalid(
-            format!("raster `{}`", r.title),
-            format!(
-                "cell {} m at {:?} m: a finite cell > 0 and a finite origin",
-                r.cell, r.origin
-            ),
-        ));
-    }
-    let (lo, hi) = match r.range {
-        Some(range) => range,
-        None => r
-            .cells
-            .iter()
-            .flatten()
-            .filter(|v| v.is_finite())
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                (a.min(v), b.max(v))
-            }),
-    };
-    if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-        return Err(PlotError::invalid(
-            format!("raster `{}`", r.title),
-            "no finite value to colour (or a colour range with lo > hi)",
-        ));
-    }
+    let (lo, hi) = colour_range(r)?;
     // The picture: cells square, the longer side SIDE pixels, plus label areas.
     let scale = SIDE / r.nx.max(r.ny) as f64;
     let (mut pw, ph) = (
@@ -215,6 +184,44 @@ pub fn draw_raster(r: &Raster, path: &Path) -> Result<RasterReport, PlotError> {
         range: (lo, hi),
         size: (width, height),
     })
+}
+
+/// Checks the raster's shape, cell and origin; returns the colour range: `r.range`, or the
+/// finite cells' range.
+fn colour_range(r: &Raster) -> Result<(f64, f64), PlotError> {
+    if r.nx == 0 || r.ny == 0 || r.cells.len() != r.nx * r.ny {
+        return Err(PlotError::invalid(
+            format!("raster `{}`", r.title),
+            format!("{} cells for a {} × {} raster", r.cells.len(), r.nx, r.ny),
+        ));
+    }
+    if !(r.cell.is_finite() && r.cell > 0.0 && r.origin.iter().all(|o| o.is_finite())) {
+        return Err(PlotError::invalid(
+            format!("raster `{}`", r.title),
+            format!(
+                "cell {} m at {:?} m: a finite cell > 0 and a finite origin",
+                r.cell, r.origin
+            ),
+        ));
+    }
+    let (lo, hi) = match r.range {
+        Some(range) => range,
+        None => r
+            .cells
+            .iter()
+            .flatten()
+            .filter(|v| v.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            }),
+    };
+    if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+        return Err(PlotError::invalid(
+            format!("raster `{}`", r.title),
+            "no finite value to colour (or a colour range with lo > hi)",
+        ));
+    }
+    Ok((lo, hi))
 }
 
 #[cfg(test)]
