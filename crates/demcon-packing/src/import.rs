@@ -265,6 +265,91 @@ pub fn read_liggghts_dump(path: &Path) -> Result<ImportedPacking, PackingError> 
         .and_then(|l| l.trim().parse().ok())
         .ok_or_else(|| perr(k_n + 1, "expected the number of atoms".into()))?;
     let k_b = find("ITEM: BOX BOUNDS").ok_or_else(|| missing("ITEM: BOX BOUNDS"))?;
+    let dbox = dump_box(path, &lines, k_b)?;
+    let k_a = find("ITEM: ATOMS").ok_or_else(|| missing("ITEM: ATOMS"))?;
+    let cols: Vec<&str> = lines[k_a].trim()["ITEM: ATOMS".len()..]
+        .split_whitespace()
+        .collect();
+    let columns = dump_columns(path, &cols)?;
+    let DumpBox {
+        ref flags,
+        lo,
+        size,
+        periodic,
+    } = dbox;
+    let mut rows: Vec<(i64, Vec3, f64)> = Vec::with_capacity(n);
+    let mut wrapped = 0usize;
+    for i in 0..n {
+        let k = k_a + 1 + i;
+        let Some(l) = lines.get(k) else {
+            return Err(import_err(
+                path,
+                format!(
+                    "the last snapshot (timestep {timestep}) stops after {i} of its {n} atoms: truncated?"
+                ),
+            ));
+        };
+        let (row, w) = columns.atom(path, k, i, l, &cols, &dbox)?;
+        wrapped += w;
+        rows.push(row);
+    }
+    rows.sort_by_key(|row| row.0);
+    let particles = particle_set(
+        path,
+        rows.iter().map(|row| row.1).collect(),
+        rows.iter().map(|row| row.2).collect(),
+    )?;
+    let mut notes = vec![format!(
+        "last snapshot, timestep {timestep}, box bounds {}",
+        flags.join(" ")
+    )];
+    if lo != [0.0; 3] {
+        notes.push(format!(
+            "coordinates shifted by ({}, {}, {}) so the box starts at 0",
+            short(-lo[0]),
+            short(-lo[1]),
+            short(-lo[2])
+        ));
+    }
+    if wrapped > 0 {
+        notes.push(format!(
+            "{wrapped} coordinates outside the periodic box wrapped into it"
+        ));
+    }
+    let container = if periodic {
+        Container::Periodic { size }
+    } else {
+        if flags.contains(&"pp") {
+            notes.push(format!(
+                "box bounds {}: partly periodic, imported as a box with walls on every face",
+                flags.join(" ")
+            ));
+        }
+        Container::Box { size }
+    };
+    Ok(ImportedPacking {
+        particles,
+        container: Some(container),
+        notes,
+    })
+}
+
+/// A dump's box: its boundary flags (`pp`, `ff`, …), its lower corner and size (m).
+struct DumpBox<'t> {
+    flags: Vec<&'t str>,
+    lo: [f64; 3],
+    size: [f64; 3],
+    /// All three axes `pp`.
+    periodic: bool,
+}
+
+/// The box of a dump's `ITEM: BOX BOUNDS` section at line `k_b` (orthogonal boxes only).
+fn dump_box<'t>(path: &Path, lines: &[&'t str], k_b: usize) -> Result<DumpBox<'t>, PackingError> {
+    let perr = |k: usize, message: String| PackingError::Parse {
+        path: path.to_path_buf(),
+        line: k + 1,
+        message,
+    };
     let flags: Vec<&str> = lines[k_b].trim()["ITEM: BOX BOUNDS".len()..]
         .split_whitespace()
         .collect();
@@ -296,10 +381,30 @@ pub fn read_liggghts_dump(path: &Path) -> Result<ImportedPacking, PackingError> 
         }
         (lo[a], hi[a]) = (v[0], v[1]);
     }
-    let k_a = find("ITEM: ATOMS").ok_or_else(|| missing("ITEM: ATOMS"))?;
-    let cols: Vec<&str> = lines[k_a].trim()["ITEM: ATOMS".len()..]
-        .split_whitespace()
-        .collect();
+    Ok(DumpBox {
+        periodic: flags.iter().all(|f| *f == "pp"),
+        flags,
+        lo,
+        size: std::array::from_fn(|a| hi[a] - lo[a]),
+    })
+}
+
+/// Where a dump's ATOMS columns hold the coordinates, the radius and the id.
+#[derive(Debug, Clone, Copy)]
+struct DumpColumns {
+    /// Column of x, y, z (`x`, `xu` or scaled `xs`).
+    xyz: [usize; 3],
+    /// Whether some coordinate is scaled (`xs`, fractions of the box).
+    scaled: bool,
+    /// Column of the radius, and the factor to a radius (1, or 0.5 for a diameter).
+    rcol: usize,
+    rscale: f64,
+    /// Column of the id, when there is one.
+    idcol: Option<usize>,
+}
+
+/// The coordinate, radius and id columns among the ATOMS columns `cols`.
+fn dump_columns(path: &Path, cols: &[&str]) -> Result<DumpColumns, PackingError> {
     let col = |names: &[&str]| names.iter().find_map(|n| cols.iter().position(|c| c == n));
     let mut xyz = [0usize; 3];
     let mut scaled = false;
@@ -330,20 +435,43 @@ pub fn read_liggghts_dump(path: &Path) -> Result<ImportedPacking, PackingError> 
         }
     };
     let idcol = col(&["id"]);
-    let periodic = flags.iter().all(|f| *f == "pp");
-    let size: [f64; 3] = std::array::from_fn(|a| hi[a] - lo[a]);
-    let mut rows: Vec<(i64, Vec3, f64)> = Vec::with_capacity(n);
-    let mut wrapped = 0usize;
-    for i in 0..n {
-        let k = k_a + 1 + i;
-        let Some(l) = lines.get(k) else {
-            return Err(import_err(
-                path,
-                format!(
-                    "the last snapshot (timestep {timestep}) stops after {i} of its {n} atoms: truncated?"
-                ),
-            ));
+    Ok(DumpColumns {
+        xyz,
+        scaled,
+        rcol,
+        rscale,
+        idcol,
+    })
+}
+
+impl DumpColumns {
+    /// Atom `i` of the snapshot, at line `k` (`line`, of the ATOMS columns `cols`): its id
+    /// (or `i`), centre shifted into the box (m) and radius (m), and how many of its
+    /// coordinates were wrapped into a periodic box.
+    fn atom(
+        &self,
+        path: &Path,
+        k: usize,
+        i: usize,
+        line: &str,
+        cols: &[&str],
+        dbox: &DumpBox<'_>,
+    ) -> Result<((i64, Vec3, f64), usize), PackingError> {
+        let perr = |k: usize, message: String| PackingError::Parse {
+            path: path.to_path_buf(),
+            line: k + 1,
+            message,
         };
+        let DumpColumns {
+            xyz,
+            scaled,
+            rcol,
+            rscale,
+            idcol,
+        } = *self;
+        let (lo, size, periodic) = (dbox.lo, dbox.size, dbox.periodic);
+        let l = line;
+        let mut wrapped = 0;
         let w: Vec<&str> = l.split_whitespace().collect();
         if w.len() != cols.len() {
             return Err(perr(
@@ -385,47 +513,8 @@ pub fn read_liggghts_dump(path: &Path) -> Result<ImportedPacking, PackingError> 
                 .map_err(|_| perr(k, format!("`{}` (id) is not an integer", w[c])))?,
             None => i as i64,
         };
-        rows.push((id, Vec3::new(p[0], p[1], p[2]), r));
+        Ok(((id, Vec3::new(p[0], p[1], p[2]), r), wrapped))
     }
-    rows.sort_by_key(|row| row.0);
-    let particles = particle_set(
-        path,
-        rows.iter().map(|row| row.1).collect(),
-        rows.iter().map(|row| row.2).collect(),
-    )?;
-    let mut notes = vec![format!(
-        "last snapshot, timestep {timestep}, box bounds {}",
-        flags.join(" ")
-    )];
-    if lo != [0.0; 3] {
-        notes.push(format!(
-            "coordinates shifted by ({}, {}, {}) so the box starts at 0",
-            short(-lo[0]),
-            short(-lo[1]),
-            short(-lo[2])
-        ));
-    }
-    if wrapped > 0 {
-        notes.push(format!(
-            "{wrapped} coordinates outside the periodic box wrapped into it"
-        ));
-    }
-    let container = if periodic {
-        Container::Periodic { size }
-    } else {
-        if flags.contains(&"pp") {
-            notes.push(format!(
-                "box bounds {}: partly periodic, imported as a box with walls on every face",
-                flags.join(" ")
-            ));
-        }
-        Container::Box { size }
-    };
-    Ok(ImportedPacking {
-        particles,
-        container: Some(container),
-        notes,
-    })
 }
 
 /// Reads YADE's `export.text`: a `#format x_y_z_r…` header (extra columns after `r` are
