@@ -715,41 +715,7 @@ pub fn detect_contacts(
             (search(eps)?, eps, 1, None, false)
         }
         ContactTolerance::TargetCoordination(z) => {
-            let need = (z * n as f64 / 2.0).ceil();
-            let all_pairs = n as f64 * (n as f64 - 1.0) / 2.0;
-            let cap = params.max_epsilon.min(eps_limit);
-            let mut eps_s = params.initial_epsilon.min(cap);
-            let mut rounds = 0;
-            let cands = loop {
-                rounds += 1;
-                let c = search(eps_s)?;
-                if c.len() as f64 >= need {
-                    break c;
-                }
-                if eps_s >= cap || c.len() as f64 >= all_pairs {
-                    return Err(GraphError::UnreachableCoordination {
-                        target: z,
-                        max_coordination: 2.0 * c.len() as f64 / n as f64,
-                        max_epsilon: eps_s,
-                    });
-                }
-                eps_s = (2.0 * eps_s).min(cap);
-            };
-            let (eps_k, next) = kth_gaps(&cands, need as usize - 1);
-            let epsilon = match next {
-                Some(nx) if nx > eps_k => {
-                    let mid = 0.5 * (eps_k + nx);
-                    if mid >= eps_k && mid < nx { mid } else { eps_k }
-                }
-                _ => eps_k,
-            };
-            let accepted: usize = cands
-                .parts
-                .par_iter()
-                .map(|part| part.iter().filter(|c| c.rel_gap <= epsilon).count())
-                .sum();
-            let reached = 2.0 * accepted as f64 / n as f64;
-            let overshoot = reached - z > params.coordination_tolerance;
+            let (cands, epsilon, rounds, overshoot) = target_search(z, n, params, eps_limit, &search)?;
             (cands, epsilon, rounds, Some(z), overshoot)
         }
     };
@@ -811,6 +777,56 @@ pub fn detect_contacts(
     summarise(&mut graph, radii);
     graph.report.wall_time_s = start.elapsed().as_secs_f64();
     Ok(graph)
+}
+
+/// The search to a target mean coordination `z` over `n` particles: the tolerance doubled from
+/// `params.initial_epsilon` (at most `params.max_epsilon` and `eps_limit`) until enough
+/// candidates, then set between the gaps of the contact that reaches `z` and the next.
+/// Returns the candidates, ε, the rounds and whether the coordination overshoots `z` by more
+/// than `params.coordination_tolerance`.
+fn target_search(
+    z: f64,
+    n: usize,
+    params: &ContactParams,
+    eps_limit: f64,
+    search: &dyn Fn(f64) -> Result<Candidates, GraphError>,
+) -> Result<(Candidates, f64, u32, bool), GraphError> {
+    let need = (z * n as f64 / 2.0).ceil();
+    let all_pairs = n as f64 * (n as f64 - 1.0) / 2.0;
+    let cap = params.max_epsilon.min(eps_limit);
+    let mut eps_s = params.initial_epsilon.min(cap);
+    let mut rounds = 0;
+    let cands = loop {
+        rounds += 1;
+        let c = search(eps_s)?;
+        if c.len() as f64 >= need {
+            break c;
+        }
+        if eps_s >= cap || c.len() as f64 >= all_pairs {
+            return Err(GraphError::UnreachableCoordination {
+                target: z,
+                max_coordination: 2.0 * c.len() as f64 / n as f64,
+                max_epsilon: eps_s,
+            });
+        }
+        eps_s = (2.0 * eps_s).min(cap);
+    };
+    let (eps_k, next) = kth_gaps(&cands, need as usize - 1);
+    let epsilon = match next {
+        Some(nx) if nx > eps_k => {
+            let mid = 0.5 * (eps_k + nx);
+            if mid >= eps_k && mid < nx { mid } else { eps_k }
+        }
+        _ => eps_k,
+    };
+    let accepted: usize = cands
+        .parts
+        .par_iter()
+        .map(|part| part.iter().filter(|c| c.rel_gap <= epsilon).count())
+        .sum();
+    let reached = 2.0 * accepted as f64 / n as f64;
+    let overshoot = reached - z > params.coordination_tolerance;
+    Ok((cands, epsilon, rounds, overshoot))
 }
 
 #[cfg(test)]
