@@ -605,6 +605,83 @@ impl Engine {
         self.thermostat(now, self.g_final);
     }
 
+    /// The budgets, checked every 1024 events: the stop reason when the events or the wall time
+    /// are spent; else a progress report at most every 0.2 s (`last_progress`, s).
+    fn budget_spent(
+        &self,
+        params: &PackingParams,
+        start: &Instant,
+        progress: Option<&dyn Fn(&PackProgress)>,
+        last_progress: &mut f64,
+        p_red: f64,
+    ) -> Option<StopReason> {
+        let events = self.collisions + self.wall_collisions + self.rebuilds;
+        if events >= params.max_events {
+            return Some(StopReason::EventBudget);
+        }
+        let wall = start.elapsed().as_secs_f64();
+        if wall >= params.max_wall_s {
+            return Some(StopReason::TimeBudget);
+        }
+        if let Some(cb) = progress
+            && wall - *last_progress >= 0.2
+        {
+            *last_progress = wall;
+            let s = self.s(self.queue.top().1.min((1.0 - self.s0) / self.g));
+            cb(&PackProgress {
+                phi: params.target_phi * s * s * s,
+                target_phi: params.target_phi,
+                events,
+                wall_s: wall,
+                reduced_pressure: p_red,
+            });
+        }
+        None
+    }
+
+    /// The collision of particles `i` and `j` at time `te` when `j` has not moved since the
+    /// event was predicted (its count is still `cj`; else `i` alone is advanced and predicted
+    /// again, and `false` returned). `ru`: the runner-up event's particle, whose memory is
+    /// prefetched between the two predictions.
+    #[inline(always)]
+    fn pair_event(&mut self, i: usize, j: usize, cj: u32, te: f64, ru: Option<usize>) -> bool {
+        if self.count[j] != cj {
+            self.stale += 1;
+            self.advance(i, te);
+            if let Some(k) = ru {
+                self.prefetch_event(k);
+            }
+            self.predict(i, te);
+            return false;
+        }
+        self.advance(i, te);
+        self.advance(j, te);
+        let r = min_image(self.period, self.p[j].x - self.p[i].x);
+        let dist = r.norm();
+        let nrm = r / dist;
+        let gamma = (self.p[i].a + self.p[j].a) * self.g;
+        let (mut vi, mut vj) = (self.p[i].v, self.p[j].v);
+        let imp = collide_pair(&mut vi, &mut vj, &nrm, gamma);
+        self.p[i].v = vi;
+        self.p[j].v = vj;
+        self.ke += imp * gamma;
+        self.virial += imp * dist;
+        self.count[i] += 1;
+        self.count[j] += 1;
+        self.collisions += 1;
+        self.predict(i, te);
+        if let Some(k) = ru {
+            self.prefetch_event(k);
+        }
+        self.predict(j, te);
+        if let Some(k) = ru
+            && let Ev::Pair { j: m, .. } = self.nb.event(k)
+        {
+            self.prefetch_neighbours(m as usize);
+        }
+        true
+    }
+
     /// The event loop. Returns the stop reason and the last reduced pressure.
     fn run(
         &mut self,
@@ -622,28 +699,10 @@ impl Engine {
         let mut checks = 0u64;
         loop {
             checks += 1;
-            if checks.is_multiple_of(1024) {
-                let events = self.collisions + self.wall_collisions + self.rebuilds;
-                if events >= params.max_events {
-                    return (StopReason::EventBudget, p_red);
-                }
-                let wall = start.elapsed().as_secs_f64();
-                if wall >= params.max_wall_s {
-                    return (StopReason::TimeBudget, p_red);
-                }
-                if let Some(cb) = progress
-                    && wall - last_progress >= 0.2
-                {
-                    last_progress = wall;
-                    let s = self.s(self.queue.top().1.min((1.0 - self.s0) / self.g));
-                    cb(&PackProgress {
-                        phi: params.target_phi * s * s * s,
-                        target_phi: params.target_phi,
-                        events,
-                        wall_s: wall,
-                        reduced_pressure: p_red,
-                    });
-                }
+            if checks.is_multiple_of(1024)
+                && let Some(stop) = self.budget_spent(params, start, progress, &mut last_progress, p_red)
+            {
+                return (stop, p_red);
             }
             let (i, te) = self.queue.top();
             let t_target = (1.0 - self.s0) / self.g;
@@ -670,42 +729,11 @@ impl Engine {
             }
             match self.nb.event(i) {
                 Ev::Pair { j, cj } => {
-                    let j = j as usize;
-                    if self.count[j] != cj {
-                        self.stale += 1;
-                        self.advance(i, te);
-                        if let Some(k) = ru {
-                            self.prefetch_event(k);
-                        }
-                        self.predict(i, te);
+                    if !self.pair_event(i, j as usize, cj, te, ru) {
+                        // A stale event: `i` predicted again, nothing collided.
                         continue;
                     }
-                    self.advance(i, te);
-                    self.advance(j, te);
-                    let r = min_image(self.period, self.p[j].x - self.p[i].x);
-                    let dist = r.norm();
-                    let nrm = r / dist;
-                    let gamma = (self.p[i].a + self.p[j].a) * self.g;
-                    let (mut vi, mut vj) = (self.p[i].v, self.p[j].v);
-                    let imp = collide_pair(&mut vi, &mut vj, &nrm, gamma);
-                    self.p[i].v = vi;
-                    self.p[j].v = vj;
-                    self.ke += imp * gamma;
-                    self.virial += imp * dist;
-                    self.count[i] += 1;
-                    self.count[j] += 1;
-                    self.collisions += 1;
                     win_collisions += 1;
-                    self.predict(i, te);
-                    if let Some(k) = ru {
-                        self.prefetch_event(k);
-                    }
-                    self.predict(j, te);
-                    if let Some(k) = ru
-                        && let Ev::Pair { j: m, .. } = self.nb.event(k)
-                    {
-                        self.prefetch_neighbours(m as usize);
-                    }
                 }
                 Ev::Wall(w) => {
                     self.advance(i, te);
