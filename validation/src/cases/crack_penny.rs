@@ -46,13 +46,15 @@
 //! cells, the crack's faces cut by covered area) gives a mean jump +1.9 / +2.0 / +4.1 % over
 //! the infinite-body formula at a/L = 1/8, 1/6, 1/4 (Q/Q₀ = 0.9947 / 0.9875 / 0.9584), still
 //! falling with the mesh: the finite cube is a few % of the excess, not most of it.
+//!
+//! Reference, method and tolerances, as documentation: `validation/notes/crack-penny.md`.
 
 use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
 use crate::table::Columns;
-use crate::{CaseOutcome, Comparison, Ctx};
+use crate::{CaseOutcome, Comparison, Ctx, Table};
 use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Cube edge (m).
@@ -502,7 +504,16 @@ impl Summary<'_> {
     }
 }
 
+/// The tables, the notes and the profile chart.
 fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) -> anyhow::Result<()> {
+    out.tables.push(jump_table(ladder, packings));
+    out.tables.push(packings_table(packings));
+    run_notes(ctx, ladder, packings, out);
+    profile_chart(ctx, ladder, packings, out)
+}
+
+/// The jump per N, model and a/L: mean jump per packing, the profile in bands, the excess.
+fn jump_table(ladder: &[usize], packings: &[PackingRun]) -> Table {
     let lines: Vec<Summary> = ladder
         .iter()
         .flat_map(|&n| {
@@ -516,8 +527,7 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
             })
         })
         .collect();
-    out.tables.push(
-        Columns::new()
+    Columns::new()
             .column("N", |l: &Summary| l.n.to_string())
             .column("model", |l| l.model.label())
             .column("a/L", |l| format!("1/{}", (1.0 / RATIOS[l.i]).round()))
@@ -556,37 +566,37 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
                 "Penny crack: the jump across its faces against (4q/(πλ))√(a² − r²), J₀ = 4qa/(πλ) (profile: mean \
                  over the cut contacts of each band, then over the packings)",
                 &lines,
-            ),
-    );
-    let rows: Vec<&PackingRun> = packings.iter().collect();
-    out.tables.push(
-        Columns::new()
-            .column("N", |p: &&PackingRun| p.n.to_string())
-            .column("packing", |p| (p.k + 1).to_string())
-            .columns_for(
-                CrackModel::ALL,
-                |s| format!("{}: λ_hom, |Q|/Q₀ through-section, solves (s)", s.id()),
-                |s, p: &&PackingRun| {
-                    let r = p.run(*s);
-                    format!("{:.4} / {:.1e} / {:.2}", r.lambda_hom, r.through, r.solve_s)
-                },
             )
-            .column("packing (s)", |p| format!("{:.2}", p.pack_s))
-            .table("Every packing", &rows),
-    );
+}
+
+/// λ_hom, the through-section flow and the cost of every model on every packing.
+fn packings_table(packings: &[PackingRun]) -> Table {
+    let rows: Vec<&PackingRun> = packings.iter().collect();
+    Columns::new()
+        .column("N", |p: &&PackingRun| p.n.to_string())
+        .column("packing", |p| (p.k + 1).to_string())
+        .columns_for(
+            CrackModel::ALL,
+            |s| format!("{}: λ_hom, |Q|/Q₀ through-section, solves (s)", s.id()),
+            |s, p: &&PackingRun| {
+                let r = p.run(*s);
+                format!("{:.4} / {:.1e} / {:.2}", r.lambda_hom, r.through, r.solve_s)
+            },
+        )
+        .column("packing (s)", |p| format!("{:.2}", p.pack_s))
+        .table("Every packing", &rows)
+}
+
+/// The run's sizes and this run's largest jump errors and excesses; the method is in the
+/// case's notes file.
+fn run_notes(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
     out.note(format!(
-        "{} mode: N = {:?}, {PACKINGS} packings each (seeds {}…{}); q = Q/A of the cracked cube, λ = the model's own \
-         λ_hom on the same packing. The infinite-body formula is the reference; the cube's fixed faces (at (L/2 − 0) = \
-         4a … 2a from the crack) and adiabatic sides make the finite-size part grow with a/L. Tolerances (Laguerre \
-         mean jump {:.0} %, through-section crack {TOL_THROUGH:e}) fixed before the numbers were seen. The \
-         through-section run solves to a relative residual of {THROUGH_REL_TOL:e} (the others to the default): the heat \
-         leaving a part held at one temperature is the sum of its residual entries, so the check is only as tight as \
-         the solve (at 1e-10 the K-cycle multigrid leaves 3e-11–4e-10 of Q₀).",
+        "{} mode: N = {:?}, {PACKINGS} packings each (seeds {}…{}). Method, reference and tolerances: \
+         validation/notes/crack-penny.md.",
         ctx.mode.name(),
         ladder,
         ctx.seed,
         ctx.seed + PACKINGS - 1,
-        100.0 * TOL_JUMP
     ));
     let largest = *ladder.last().expect("a ladder");
     let worst = |m: CrackModel| {
@@ -618,27 +628,30 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
     };
     let whole = CrackModel::ALL[2];
     out.note(format!(
-        "The conforming cells (the headline since issue 32): seed pairs mirrored across the disc put facets on its two \
-         faces, so the cut branches are the ones normal to it and the crack is its own size: largest mean-jump error \
-         {} (a/L = 1/8, 1/6, 1/4) at N = {largest}, within the finite cube's own few % (the module's continuum check: \
-         +1.9 / +2.0 / +4.1 %).",
+        "Headline (conforming cells): largest mean-jump error {} (a/L = 1/8, 1/6, 1/4) at N = {largest}; the finite \
+         cube's own excess (continuum) is +1.9 / +2.0 / +4.1 %.",
         worst(CrackModel::HEADLINE),
     ));
     out.note(format!(
-        "Reading: at N = {largest} the largest mean-jump error over the packings is {} (a/L = 1/8, 1/6, 1/4) with the \
-         covered part of each facet cut, {} with whole facets cut (the earlier rule). Read as a radius ([T](0) ∝ a) the \
-         excess is (mean jump error)·a ≈ {} mean particle radii ({} with whole facets), and the relative error falls \
-         with R̄/a: with N and with a/L (the finite cube adds 2–4 %, growing with a/L: the module's continuum check). \
-         The jump stays high over the whole profile, the centre band included: the network's crack is not a larger disc \
-         but a more compliant one — cutting an oblique branch also removes the conduction ALONG the crack that its \
-         facet carried in the layer of cells at the crack's faces (crack-density measures it: λ parallel to aligned \
-         cracks drops where the continuum's does not). The through-section crack is exact for every model.",
+        "At N = {largest} the largest mean-jump error over the packings is {} (a/L = 1/8, 1/6, 1/4) with the covered part \
+         of each facet cut, {} with whole facets cut; read as a radius, (mean jump error)·a ≈ {} mean particle radii \
+         ({} with whole facets).",
         worst(CrackModel::COVERED),
         worst(whole),
         excess(CrackModel::COVERED),
         excess(whole),
     ));
-    // The profile: band means over the packings of the largest N against the formula.
+}
+
+/// The profile: band means over the packings of the largest N against the formula.
+fn profile_chart(
+    ctx: &Ctx,
+    ladder: &[usize],
+    packings: &[PackingRun],
+    out: &mut CaseOutcome,
+) -> anyhow::Result<()> {
+    let largest = *ladder.last().expect("a ladder");
+    let whole = CrackModel::ALL[2];
     let at_largest: Vec<&PackingRun> = packings.iter().filter(|p| p.n_target == largest).collect();
     let band_series = |m: CrackModel, i: usize| {
         let points = (0..BANDS)

@@ -37,6 +37,8 @@
 //! insulating inclusion, falling only about as N^(-0.4)), and it was gated by a 2.5 %
 //! regression bound since. The conforming cells (the headline since, by design) meet the
 //! a-priori tolerance, which is gated again; the segment rule is reported beside them.
+//!
+//! Method, reference and tolerances, as documentation: `validation/notes/inclusion-etc.md`.
 
 use std::time::Instant;
 
@@ -50,7 +52,7 @@ use super::common::*;
 use super::composite::*;
 use crate::analytic::maxwell;
 use crate::table::Columns;
-use crate::{CaseOutcome, Comparison, Ctx};
+use crate::{CaseOutcome, Comparison, Ctx, Table};
 use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Matrix conductivity λ_m (W/(m·K)).
@@ -477,8 +479,17 @@ struct SideLine {
 
 /// The tables, the charts and the notes.
 fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    out.tables.push(contrast_table(m));
+    out.tables.push(side_table(m));
+    etc_chart(ctx, m, out)?;
+    cost_chart(ctx, m, out)?;
+    run_notes(ctx, m, out);
+    Ok(())
+}
+
+/// λ_e/λ_hom against the contrast: FEM, Maxwell and every model's error, first packing.
+fn contrast_table(m: &Measured) -> Table {
     let head = m.headline();
-    let rec = m.sweep(Variant::RECOMMENDED);
     let contrast = |i: usize| head.ratios[i].contrast;
     let blank_unless = |line: &ContrastLine, label: &str, cell: &dyn Fn(usize) -> String| match line {
         ContrastLine::Contrast(i) => cell(*i),
@@ -488,7 +499,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         .map(ContrastLine::Contrast)
         .chain([ContrastLine::MaxErr, ContrastLine::Cost, ContrastLine::Wall])
         .collect();
-    let t = Columns::new()
+    Columns::new()
         .column("λ_i/λ_m", |l: &ContrastLine| match l {
             ContrastLine::Contrast(i) => format!("{}", contrast(*i)),
             ContrastLine::MaxErr => "max |err|".into(),
@@ -524,8 +535,11 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
                 m.n,
             ),
             &lines,
-        );
-    out.tables.push(t);
+        )
+}
+
+/// The three surface models side by side over every packing: error and cost.
+fn side_table(m: &Measured) -> Table {
     let side: Vec<SideLine> = Variant::side_by_side()
         .into_iter()
         .map(|v| SideLine {
@@ -534,24 +548,28 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
             cost: m.cost(v),
         })
         .collect();
-    out.tables.push(
-        Columns::new()
-            .column("model", |l: &SideLine| l.v.id())
-            .column("packings", |l| l.error.count.to_string())
-            .column("max error over the contrasts, mean / max", |l| l.error.percent())
-            .column("wall time (s), mean / max", |l| {
-                format!("{:.2} / {:.2}", l.cost.mean, l.cost.max)
-            })
-            .table(
-                format!(
-                    "The three surface models side by side (walls, segment rule), N = {}: error against the FEM and \
-                     cost (network + calibration + solves) over every packing",
-                    m.n
-                ),
-                &side,
+    Columns::new()
+        .column("model", |l: &SideLine| l.v.id())
+        .column("packings", |l| l.error.count.to_string())
+        .column("max error over the contrasts, mean / max", |l| l.error.percent())
+        .column("wall time (s), mean / max", |l| {
+            format!("{:.2} / {:.2}", l.cost.mean, l.cost.max)
+        })
+        .table(
+            format!(
+                "The three surface models side by side (walls, segment rule), N = {}: error against the FEM and \
+                 cost (network + calibration + solves) over every packing",
+                m.n
             ),
-    );
+            &side,
+        )
+}
 
+/// λ_e/λ_m against the contrast (Fig. 14): the headline, the recommended and the former
+/// headline model, FEM and Maxwell.
+fn etc_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let head = m.headline();
+    let rec = m.sweep(Variant::RECOMMENDED);
     let maxwell_curve: Vec<(f64, f64)> = (0..=40)
         .map(|i| {
             let c = 10f64.powf(-2.0 + 4.0 * i as f64 / 40.0);
@@ -584,7 +602,11 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         &ctx.out.join("inclusion-etc.png"),
     )?;
     out.charts.push("inclusion-etc.png".into());
-    // Accuracy against cost: the ladder and the first packing, one curve per surface model.
+    Ok(())
+}
+
+/// Accuracy against cost: the ladder and the first packing, one curve per surface model.
+fn cost_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
     let series: Vec<Series> = Variant::side_by_side()
         .iter()
         .map(|&v| {
@@ -612,14 +634,19 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         &ctx.out.join("inclusion-etc-cost.png"),
     )?;
     out.charts.push("inclusion-etc-cost.png".into());
+    Ok(())
+}
+
+/// The notes that carry this run's figures, and the pointer to the case's notes file.
+fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+    let head = m.headline();
+    let rec = m.sweep(Variant::RECOMMENDED);
     out.note(format!(
         "{} mode: {} particles; the first packing runs {} contrasts × {} models (surface × boundary × phase rule), each a \
          steady solve ({} iterations, {:.2} s of solves in all, {:.1} s for the headline's sweep); the three surface models \
          with walls and the segment rule also run on {} more packings (seeds {}…{}) and on N = {:?} (seed {}) for the cost \
-         chart. λ_e/λ_m divides by λ measured on the same packing with one phase and the same model (headline: {:.6}·λ — the \
-         Laguerre network is exact in a homogeneous body). C_t (calibrated model, our own calibration: {:.4} with \
-         particle-fixed faces, {:.4} with walls) scales every conductance, so it cancels from λ_e/λ_hom. The Laguerre cells \
-         tile the cube (Σ V_cells/V − 1 = {:.1e}).",
+         chart. λ_hom of the headline: {:.6}·λ. C_t (calibrated model, our own calibration): {:.4} with particle-fixed \
+         faces, {:.4} with walls. The Laguerre cells tile the cube (Σ V_cells/V − 1 = {:.1e}).",
         ctx.mode.name(),
         m.n,
         m.fem.len(),
@@ -638,32 +665,21 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         m.volume_error,
     ));
     out.note(format!(
-        "Headline model, chosen before any of its numbers were seen, for its consistency property: {} — the Laguerre \
-         network solves a linear field exactly (no calibration, no bias in a homogeneous body; see homogeneous-exactness), \
-         the temperatures are held on the faces through the cells' wall facets, and the segment rule puts the interface \
-         along each half-bond. The papers' models keep their rows; the recommended contact model ({}: Terreros α \
-         surfaces, walls, segment rule) keeps its check at the tolerance it had.",
+        "Headline {}, recommended contact model {}. Method, reference and tolerances: validation/notes/inclusion-etc.md.",
         head.v.id(),
         rec.v.id()
     ));
     out.note(format!(
-        "Inclusion volume carried: {:.4} of the solid by centre, {:.4} with the laminate rule \
-         ({} cut particles), against the nominal 4π/81 = {F_SINGLE:.4}. Most of the difference is not the rule: the walled \
-         packing's wall layers are looser (overall φ = {:.4} against ≈ 0.64 in the bulk), so the inner sphere holds \
-         ≈ {:.4} of the solid. The ETC ratio to λ_hom is unaffected by that (the whole solid is scaled alike).",
+        "Inclusion volume carried: {:.4} of the solid by centre, {:.4} with the laminate rule ({} cut particles), against \
+         the nominal 4π/81 = {F_SINGLE:.4}; overall φ = {:.4} (≈ 0.64 in the bulk), so the inner sphere holds ≈ {:.4} \
+         of the solid.",
         m.f_centre, m.f_laminate, m.cut_particles, m.phi, m.f_bulk
     ));
     out.note(format!(
-        "Tolerances (a priori): the paper's 0.65 % at 1.5·10⁵ particles, scaled as an interface error ∝ particle size ∝ \
-         N^(-1/3): 0.65 % × (1.5·10⁵/N)^(1/3) = {:.2} % at N = {} — the recommended contact model's check (first packing), \
-         and in `--quick` the Laguerre headline's (largest of {PACKINGS} packings), chosen before this case's Laguerre \
-         numbers were seen but knowing the issue's 2·10⁴ probe (DESIGN.md §1: −1.30 % at contrast 0.05 with the series \
-         rule). The segment-rule headline's first quick run missed it (1.83 %, at contrast 0.01) and was gated by a \
-         2.5 % regression bound since; the conforming cells (the headline since issue 32) meet the a-priori tolerance, \
-         which is gated again. `--full` gates the headline at issue 32's 0.2 % at every contrast. Issue 10's 0.3 % \
-         scaled to this N, {:.2} %, is reported here, not gated: the headline is {} it.",
-        100.0 * m.tolerance(),
+        "Tolerance at N = {}: {:.2} % (the paper's 0.65 % × (1.5·10⁵/N)^(1/3)). Issue 10's 0.3 % scaled to this N, \
+         {:.2} %, is reported, not gated: the headline is {} it.",
         m.n,
+        100.0 * m.tolerance(),
         100.0 * m.laguerre_target(),
         if m.spread(Variant::HEADLINE).max <= m.laguerre_target() {
             "within"
@@ -688,5 +704,4 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
                 .join(", ")
         ));
     }
-    Ok(())
 }

@@ -37,6 +37,9 @@
 //! Halo's own smoothing of a field that has a minimum of |q| near B (beside the inclusion's
 //! equator) and the one-sided Halo cut by the face x = 0, both shrinking with the Halo radius
 //! ∝ N^(-1/3); so the quick gate stays at A.
+//!
+//! Reference, Halo phases, models and tolerances, as documentation:
+//! `validation/notes/inclusion-fields.md`.
 
 use std::time::Instant;
 
@@ -48,7 +51,7 @@ use serde_json::{Map, Value};
 use super::common::*;
 use super::composite::*;
 use crate::table::Columns;
-use crate::{CaseOutcome, Comparison, Ctx};
+use crate::{CaseOutcome, Comparison, Ctx, Table};
 
 /// The scene: matrix 33, inclusion 165 W/(m·K), Halo k = 11, probes at `points` (name, point
 /// in units of L) read at the nearest particle and as a ball average (named `<name>-ball`).
@@ -330,8 +333,9 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     })
 }
 
-/// Metrics, references and the checks of T and |q| (the quick |q| gate is at A).
-fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+/// The first run's metrics: calibration, solve, Halo, the main model's errors and every
+/// size's readings at the points.
+fn field_metrics(m: &Measured, out: &mut CaseOutcome) {
     let (first, main, refs) = (&m.first, m.main(), &m.refs);
     let th = first.thermal.as_ref().expect("thermal");
     let (_, _, hrep) = first.halo.as_ref().expect("halo requested");
@@ -381,6 +385,33 @@ fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
             .collect();
         out.metric(&format!("points_{}", s.n), Value::Object(points));
     }
+}
+
+/// Every model's errors and wall time, and the headline's spread over the packings.
+fn model_metrics(m: &Measured, out: &mut CaseOutcome) {
+    let by_model = |f: fn(&ModelErrors) -> f64| -> Value {
+        Value::Object(
+            m.by_model
+                .iter()
+                .map(|e| (e.id.clone(), Value::from(f(e))))
+                .collect(),
+        )
+    };
+    out.metric("max_rel_error_T_by_model", by_model(|e| e.t));
+    out.metric("max_rel_error_q_by_model", by_model(|e| e.q));
+    out.metric("max_rel_error_q_all_phases_by_model", by_model(|e| e.q_all));
+    out.metric("rel_error_q_A_by_model", by_model(|e| e.q_a));
+    out.metric("wall_s_by_model", by_model(|e| e.wall_s));
+    out.metric("max_rel_error_q_headline", m.headline_spread(|e| e.q).json());
+    out.metric("rel_error_q_A_headline", m.headline_spread(|e| e.q_a).json());
+}
+
+/// Metrics, references and the checks of T and |q| (the quick |q| gate is at A).
+fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+    let (main, refs) = (m.main(), &m.refs);
+    let headline = &m.by_model[0].id;
+    let recommended = Variant::RECOMMENDED.id();
+    field_metrics(m, out);
     out.reference("max_rel_error_T", 0.01);
     out.reference("max_rel_error_q", 0.040);
     out.reference(
@@ -409,21 +440,7 @@ fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
     let err_q_a = rel(main[0].q, refs[0].q);
     out.metric("rel_error_q_A", err_q_a);
     out.metric("rel_error_q_A_all_phases", rel(main[0].q_all, refs[0].q));
-    let by_model = |f: fn(&ModelErrors) -> f64| -> Value {
-        Value::Object(
-            m.by_model
-                .iter()
-                .map(|e| (e.id.clone(), Value::from(f(e))))
-                .collect(),
-        )
-    };
-    out.metric("max_rel_error_T_by_model", by_model(|e| e.t));
-    out.metric("max_rel_error_q_by_model", by_model(|e| e.q));
-    out.metric("max_rel_error_q_all_phases_by_model", by_model(|e| e.q_all));
-    out.metric("rel_error_q_A_by_model", by_model(|e| e.q_a));
-    out.metric("wall_s_by_model", by_model(|e| e.wall_s));
-    out.metric("max_rel_error_q_headline", m.headline_spread(|e| e.q).json());
-    out.metric("rel_error_q_A_headline", m.headline_spread(|e| e.q_a).json());
+    model_metrics(m, out);
     let (err_q_rec, err_q_a_rec) = (rec.q, rec.q_a);
     for (id, what, q, q_a) in [
         (
@@ -467,6 +484,15 @@ enum PointLine<'a> {
 
 /// The slices, the two tables and the notes.
 fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    slices(ctx, m, out)?;
+    out.tables.push(models_table(m));
+    out.tables.push(points_table(m));
+    run_notes(ctx, m, out);
+    Ok(())
+}
+
+/// The slice pictures of T and |q| on Z = 0.5L (Figs. 15a, 16a), and the note on their cost.
+fn slices(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
     let r = &m.first;
     let th = r.thermal.as_ref().expect("thermal");
     let (halo, _, hrep) = r.halo.as_ref().expect("halo requested");
@@ -498,8 +524,8 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
     out.charts.push("inclusion-fields-T.png".into());
     out.charts.push("inclusion-fields-q.png".into());
     out.note(format!(
-        "Slices: each pixel shows the particle whose section by the plane covers it ({:.0} % of the pixels); the gaps \
-         between sections show the particle with the nearest centre. Halo k = 11 cost {:.2} s ({:.0} members on \
+        "Slices: {:.0} % of the pixels lie in a particle's section by the plane (the rest show the particle with the \
+         nearest centre). Halo k = 11 cost {:.2} s ({:.0} members on \
          average, own phase; all phases: {:.2} s, {:.0} members), the steady solve {:.2} s ({} CG iterations).",
         100.0 * cov_t,
         hrep.wall_s,
@@ -509,10 +535,14 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         th.report.wall_s,
         th.report.iterations
     ));
+    Ok(())
+}
 
+/// The relative errors of T and |q| at A, B, C for every model on the first N.
+fn models_table(m: &Measured) -> Table {
     let n0 = m.n0();
     let refs = &m.refs;
-    let tm = Columns::new()
+    Columns::new()
         .column("model", |e: &ModelErrors| e.id.clone())
         .column("wall time (s)", |e| format!("{:.2}", e.wall_s))
         .columns_for(
@@ -546,27 +576,12 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
                  calibration + the run with its Halo)"
             ),
             &m.by_model,
-        );
-    out.tables.push(tm);
-    let (tol_t, tol_q) = m.tolerances();
-    out.note(format!(
-        "Tolerances (a priori): the paper's errors at 1.5·10⁵ particles (T < 1 %, |q| up to 4.0 %) scaled as an \
-         interface error ∝ particle size ∝ N^(-1/3): × (1.5·10⁵/N)^(1/3), i.e. T {:.2} % and |q| {:.2} % at N = {n0}. \
-         Both the headline ({}: the Laguerre cells, chosen for their consistency property before any of their numbers \
-         were seen; see inclusion-etc) and the recommended contact model ({}) are gated at them; the case had no Laguerre \
-         target of its own, so its tolerances were kept, chosen before the Laguerre numbers were seen. The headline also \
-         ran on {} more packing(s) (seeds {}…): over all, T error {}, |q| error {}, |q| error at A {} (mean / max).",
-        100.0 * tol_t,
-        100.0 * tol_q,
-        m.by_model[0].id,
-        Variant::RECOMMENDED.id(),
-        m.repeats.len(),
-        ctx.seed + 1,
-        m.headline_spread(|e| e.t).percent(),
-        m.headline_spread(|e| e.q).percent(),
-        m.headline_spread(|e| e.q_a).percent()
-    ));
+        )
+}
 
+/// T and |q| at the paper's points for every N, with the FEM and the paper's Table 2.
+fn points_table(m: &Measured) -> Table {
+    let refs = &m.refs;
     let paper = &m.paper_table2;
     let ours = |l: &PointLine, cell: &dyn Fn(usize, &Reading, &FemRef) -> String| match l {
         PointLine::Ours(n, x, f) => cell(*n, x, f),
@@ -583,7 +598,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         })
         .chain(refs.iter().map(|f| PointLine::Paper(&f.name)))
         .collect();
-    let t = Columns::new()
+    Columns::new()
         .column("N", |l: &PointLine| match l {
             PointLine::Ours(n, ..) => n.to_string(),
             PointLine::Paper(_) => "paper 150 000".into(),
@@ -621,14 +636,32 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         .table(
             "T and |q| at the paper's points (nearest particle; ball = volume average over r = 0.02L)",
             &lines,
-        );
-    out.tables.push(t);
+        )
+}
+
+/// The tolerances at this N and the headline's spread over the packings, the run's sizes, and
+/// the pointer to the case's notes file.
+fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+    let (tol_t, tol_q) = m.tolerances();
     out.note(format!(
-        "{} mode: N = {:?}; T and Halo flux from the scene pipeline (steady solver, C_t from our own calibration, \
-         harmonic-mean interface, Halo k = 11 on the particle's own radius, over the particle's own phase — the \
-         default; the all-phases Halo beside it). The metrics use the first N.",
+        "Tolerances at N = {}: T {:.2} % and |q| {:.2} % (the paper's errors at 1.5·10⁵ scaled by N^(-1/3)), for the \
+         headline ({}) and the recommended contact model ({}). The headline also ran on {} more packing(s) (seeds {}…): \
+         over all, T error {}, |q| error {}, |q| error at A {} (mean / max).",
+        m.n0(),
+        100.0 * tol_t,
+        100.0 * tol_q,
+        m.by_model[0].id,
+        Variant::RECOMMENDED.id(),
+        m.repeats.len(),
+        ctx.seed + 1,
+        m.headline_spread(|e| e.t).percent(),
+        m.headline_spread(|e| e.q).percent(),
+        m.headline_spread(|e| e.q_a).percent()
+    ));
+    out.note(format!(
+        "{} mode: N = {:?}; the metrics use the first N. Method, reference, Halo phases and tolerances: \
+         validation/notes/inclusion-fields.md.",
         ctx.mode.name(),
         m.sizes
     ));
-    Ok(())
 }

@@ -19,6 +19,8 @@
 //! implicit, on the largest error over the packings run ([`PACKINGS`]; `--quick` runs the
 //! implicit solver on the first only): the issue's target 0.2 % at 10⁵ in `--full`, scaled by N^(-1/3) in `--quick`
 //! (0.2 % × (10⁵/N)^(1/3), 0.34 % at 2·10⁴), both chosen before any Laguerre number was seen.
+//!
+//! Reference, models and tolerances, as documentation: `validation/notes/slab-transient.md`.
 
 use super::common::*;
 use super::transient::slab::{
@@ -26,7 +28,7 @@ use super::transient::slab::{
     scene_laguerre, scene_particle_bc,
 };
 use crate::table::Columns;
-use crate::{CaseOutcome, Comparison, Ctx};
+use crate::{CaseOutcome, Comparison, Ctx, Table};
 use demcon_plot::{Chart, Scale, Series, draw};
 
 /// The paper's error at 10⁵ particles, the papers' models' tolerance in both modes.
@@ -241,9 +243,16 @@ struct ProfileLine {
 
 /// The notes, the tables and the chart.
 fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    out.tables.push(models_table(m));
+    run_notes(ctx, m, out);
+    out.tables.push(profile_table(m));
+    profile_chart(ctx, m, out)
+}
+
+/// The models side by side on the first packing: errors, steps and costs.
+fn models_table(m: &Measured) -> Table {
     let (ex, im) = (&m.explicit, &m.implicit);
     let head = m.headline();
-    let head_im = m.implicit();
     let contacts_s = network_s(&m.model);
     let models = [
         ModelLine {
@@ -283,8 +292,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
             network_s: contacts_s,
         },
     ];
-    out.tables.push(
-        Columns::new()
+    Columns::new()
             .column("model", |l: &ModelLine| l.name.to_string())
             .column("solver", |l| l.solver.to_string())
             .column("max rel. error T(y)", |l| format!("{:.3} %", 100.0 * l.e.profile))
@@ -298,13 +306,17 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
                     m.model.particles.len()
                 ),
                 &models,
-            ),
-    );
+            )
+}
+
+/// The headline's spread over the packings, the papers' models' errors, the solvers' figures,
+/// and the pointer to the case's notes file.
+fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+    let (ex, im) = (&m.explicit, &m.implicit);
+    let (head, head_im) = (m.headline(), m.implicit());
     out.note(format!(
-        "Headline: the Laguerre cells (capacities ρ c V_cell, the temperatures held on the faces through the cells' wall \
-         facets), chosen for their consistency property (a linear field solves the network exactly) before any of their \
-         numbers were seen. Over {} packings (seeds {}…): explicit {} over {}, implicit {} over {} (mean / max); \
-         `--quick` runs the implicit solver on the first packing only (time).",
+        "Headline (Laguerre cells) over {} packings (seeds {}…): explicit {} over {}, implicit {} over {} (mean / max). \
+         Method, reference and tolerances: validation/notes/slab-transient.md.",
         m.laguerre.len(),
         ctx.seed,
         m.spread(|e| e.profile).percent(),
@@ -313,13 +325,9 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         m.spread_implicit(|e| e.profile).count,
     ));
     out.note(format!(
-        "The papers' models on the same packing and solver: Terreros α surfaces with per-particle representative volumes \
-         V_p/f_v(n_p), wall boundaries, {:.2} % explicit, {:.2} % implicit (their checks keep the paper's 0.7 %); calibrated \
-         C_t with wall boundaries {:.2} % (`max_rel_error_calibrated`); the paper's setup, calibrated C_t with the \
-         temperatures fixed on the particles touching the faces, {:.2} % (`max_rel_error_particle_bc`). Why: the layer next \
-         to a hard wall is less dense; one global C_t and one global φ in V_p/φ cannot follow it, while α(n_p) and f_v(n_p) \
-         adapt to each particle's neighbour count, and the Laguerre cells ARE the local volume and faces; particle-fixed \
-         temperatures put the boundary about a radius inside the face.",
+        "The papers' models on the same packing and solver: Terreros α, wall boundaries, {:.2} % explicit, {:.2} % \
+         implicit; calibrated C_t with wall boundaries {:.2} % (`max_rel_error_calibrated`); the paper's setup, calibrated \
+         C_t with the temperatures fixed on the particles touching the faces, {:.2} % (`max_rel_error_particle_bc`).",
         100.0 * ex.profile,
         100.0 * im.profile,
         100.0 * m.calibrated.profile,
@@ -331,6 +339,12 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
          overall (bulk ≈ 0.64).",
         head.explicit.steps, ex.steps, head_im.iterations, m.model.phi
     ));
+}
+
+/// T(y) at the three times (every fourth layer): Laguerre, Terreros, the paper's setup and the
+/// series.
+fn profile_table(m: &Measured) -> Table {
+    let (ex, head) = (&m.explicit, m.headline());
     let mut lines = Vec::new();
     for (((t, prof), (_, prof_t)), (_, prof_pb)) in head
         .explicit
@@ -351,7 +365,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
             });
         }
     }
-    let table = Columns::new()
+    Columns::new()
         .column("t (s)", |l: &ProfileLine| format!("{}", l.t))
         .column("y/L", |l| format!("{:.3}", l.y))
         .column("Laguerre (°C)", |l| format!("{:.3}", l.laguerre))
@@ -366,8 +380,12 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
                 m.model.particles.len()
             ),
             &lines,
-        );
-    out.tables.push(table);
+        )
+}
+
+/// The headline's T(y) at the three times against the series (Fig. 5).
+fn profile_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let head = m.headline();
     let mut series = Vec::new();
     for (t, prof) in &head.explicit.profiles {
         series.push(Series::markers(&format!("DEM Laguerre t = {t} s"), prof.clone()));

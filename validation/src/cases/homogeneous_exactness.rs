@@ -32,6 +32,8 @@
 //! cube packings of the same seeds (a C_t calibrated on the periodic packing by homogenisation
 //! would make the mean of the diagonal exact by construction: an identity, not a
 //! measurement). The Laguerre tolerance is the same 10⁻⁹, chosen with the others.
+//!
+//! Set-up, models and tolerances, as documentation: `validation/notes/homogeneous-exactness.md`.
 
 use std::time::Instant;
 
@@ -39,9 +41,9 @@ use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
-use super::cylinder::{LENGTH, RADIUS, cylinder_packing};
+use super::cylinder::{RADIUS, cylinder_packing};
 use crate::table::Columns;
-use crate::{CaseOutcome, Comparison, Ctx};
+use crate::{CaseOutcome, Comparison, Ctx, Table};
 
 /// Conductivity (W/(m·K)) of the homogeneous material (Haddad 2021 Table 1 steel).
 const LAMBDA: f64 = 33.0;
@@ -517,6 +519,14 @@ struct Summary {
 
 /// Tables and notes.
 fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+    out.tables.push(summary_table(m));
+    out.tables.push(packings_table(m));
+    run_notes(ctx, m, out);
+    out.tables.push(periodic_table(m));
+}
+
+/// λ_e/λ − 1 per geometry and model: mean and max over the packings, with the wall time.
+fn summary_table(m: &Measured) -> Table {
     let summary: Vec<Summary> = Geometry::ALL
         .iter()
         .flat_map(|&g| {
@@ -528,25 +538,28 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
             })
         })
         .collect();
-    out.tables.push(
-        Columns::new()
-            .column("geometry", |l: &Summary| l.geometry.id().to_string())
-            .column("model", |l| l.surface.label().to_string())
-            .column("mean |λ_e/λ − 1|", |l| format!("{:.3e}", l.error.mean))
-            .column("max |λ_e/λ − 1|", |l| format!("{:.3e}", l.error.max))
-            .column("packings", |l| l.error.count.to_string())
-            .column("wall time (s), mean / max", |l| {
-                format!("{:.2} / {:.2}", l.wall_s.mean, l.wall_s.max)
-            })
-            .table(
-                format!(
-                    "λ_e/λ − 1 of a homogeneous body, N = {} (largest over the axes, then mean and max over the \
+    Columns::new()
+        .column("geometry", |l: &Summary| l.geometry.id().to_string())
+        .column("model", |l| l.surface.label().to_string())
+        .column("mean |λ_e/λ − 1|", |l| format!("{:.3e}", l.error.mean))
+        .column("max |λ_e/λ − 1|", |l| format!("{:.3e}", l.error.max))
+        .column("packings", |l| l.error.count.to_string())
+        .column("wall time (s), mean / max", |l| {
+            format!("{:.2} / {:.2}", l.wall_s.mean, l.wall_s.max)
+        })
+        .table(
+            format!(
+                "λ_e/λ − 1 of a homogeneous body, N = {} (largest over the axes, then mean and max over the \
                      packings; nominal section; wall time = network + calibration + solves)",
-                    m.n
-                ),
-                &summary,
+                m.n
             ),
-    );
+            &summary,
+        )
+}
+
+/// Every packing and model: the error per axis (nominal and over the cells' section), the
+/// cells' section, and the costs.
+fn packings_table(m: &Measured) -> Table {
     let lines: Vec<Line> = m
         .packings
         .iter()
@@ -561,39 +574,42 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
             .collect::<Vec<_>>()
             .join("; ")
     };
-    out.tables.push(
-        Columns::new()
-            .column("geometry", |l: &Line| l.p.geometry.id().to_string())
-            .column("packing", |l| (l.p.k + 1).to_string())
-            .column("N", |l| l.p.n.to_string())
-            .column("φ", |l| format!("{:.4}", l.p.phi))
-            .column("model", |l| l.r.surface.label().to_string())
-            .column("λ_e/λ − 1 (nominal section)", move |l| axes(l, &l.r.errors))
-            .column("over the cells' section", move |l| {
-                if l.r.surface.needs_cells() {
-                    axes(l, &l.r.exact)
-                } else {
-                    String::new()
-                }
-            })
-            .column("A_cells/A − 1", move |l| {
-                if l.r.surface.needs_cells() {
-                    axes(l, &l.r.section)
-                } else {
-                    String::new()
-                }
-            })
-            .column("network (s)", |l| format!("{:.2}", l.r.network_s))
-            .column("calibration (s)", |l| {
-                if l.r.calibration_s > 0.0 {
-                    format!("{:.2} (C_t = {:.4})", l.r.calibration_s, l.p.c_t)
-                } else {
-                    String::new()
-                }
-            })
-            .column("solves (s)", |l| format!("{:.2}", l.r.solve_s))
-            .table("Every packing and model", &lines),
-    );
+    Columns::new()
+        .column("geometry", |l: &Line| l.p.geometry.id().to_string())
+        .column("packing", |l| (l.p.k + 1).to_string())
+        .column("N", |l| l.p.n.to_string())
+        .column("φ", |l| format!("{:.4}", l.p.phi))
+        .column("model", |l| l.r.surface.label().to_string())
+        .column("λ_e/λ − 1 (nominal section)", move |l| axes(l, &l.r.errors))
+        .column("over the cells' section", move |l| {
+            if l.r.surface.needs_cells() {
+                axes(l, &l.r.exact)
+            } else {
+                String::new()
+            }
+        })
+        .column("A_cells/A − 1", move |l| {
+            if l.r.surface.needs_cells() {
+                axes(l, &l.r.section)
+            } else {
+                String::new()
+            }
+        })
+        .column("network (s)", |l| format!("{:.2}", l.r.network_s))
+        .column("calibration (s)", |l| {
+            if l.r.calibration_s > 0.0 {
+                format!("{:.2} (C_t = {:.4})", l.r.calibration_s, l.p.c_t)
+            } else {
+                String::new()
+            }
+        })
+        .column("solves (s)", |l| format!("{:.2}", l.r.solve_s))
+        .table("Every packing and model", &lines)
+}
+
+/// The run's sizes and packing time, the tessellations' checks, and the pointer to the case's
+/// notes file (and, when the Laguerre cylinder misses its target, the figures of why).
+fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
     let tess = |g: Geometry| {
         let ps: Vec<&PackingRun> = m.of(g).collect();
         format!(
@@ -610,27 +626,17 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
         )
     };
     out.note(format!(
-        "{} mode: N = {} per packing, {PACKINGS} packings per geometry (seeds {}…{}); the cube (L = {L} m) along x, y and \
-         z, the cylinder (r = {} mm, l = {} mm) along its axis; temperatures {T_COLD}/{T_HOT} °C on the two faces through \
-         wall half-contacts, steady solve. Packing took {:.1} s in all (shared by the models, not in their wall time).",
+        "{} mode: N = {} per packing, {PACKINGS} packings per geometry (seeds {}…{}); the cube along x, y and z, the \
+         cylinder along its axis. Packing took {:.1} s in all (shared by the models, not in their wall time). Set-up, \
+         models and tolerances: validation/notes/homogeneous-exactness.md.",
         ctx.mode.name(),
         m.n,
         ctx.seed,
         ctx.seed + PACKINGS - 1,
-        1e3 * RADIUS,
-        1e3 * LENGTH,
         m.packings.iter().map(|p| p.pack_s).sum::<f64>(),
     ));
-    out.note(
-        "Why the contact models are not at 0: the calibrated C_t is fitted by the paper's protocol (a flux on one face, \
-         the particles touching the other held), whose boundary layer differs from the wall half-contacts used here; the \
-         Terreros α surfaces are not calibrated at all (α(n) from regular polyhedra), and both put one surface per contact \
-         whatever the cell the particle occupies. The Laguerre network solves a linear field exactly (facets normal to the \
-         centre lines, Σ S n = 0 per closed cell), so it is at the solver's residual.",
-    );
     out.note(format!(
-        "Laguerre tessellations — {}; {}. In the cylinder the mantle is followed by tangent planes, so the cells' section \
-         ('A_cells/A − 1') is slightly larger than π r²: the exactness check divides by it, the nominal column does not.",
+        "Laguerre tessellations — {}; {}.",
         tess(Geometry::Cube),
         tess(Geometry::Cylinder)
     ));
@@ -638,39 +644,33 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
     let exact = m.spread(Geometry::Cylinder, Surface::Laguerre, worst_exact);
     if exact.max > TOL_LAGUERRE {
         out.note(format!(
-            "The Laguerre cylinder misses the 10⁻⁹ target ({:.1e} over the cells' own section): each cell is clipped by its \
-             OWN planes tangent to the mantle, so a facet near the mantle has a different area seen from its two cells (up to \
-             {:.2} relative here); the network takes their mean, which leaves Σ S n ≠ 0 in the cells along the mantle \
-             (closure defect up to {:.1e} along the axis, against {:.1e} in the box) and a linear field is no longer \
-             exact. The box, whose walls are planes, is exact to round-off. This is the tessellation's, not the case's, to \
-             fix (e.g. one set of mantle planes shared by neighbouring cells).",
+            "The Laguerre cylinder misses the 10⁻⁹ target ({:.1e} over the cells' own section): a facet near the mantle has \
+             a different area seen from its two cells (up to {:.2} relative here), and the closure defect reaches {:.1e} \
+             along the axis, against {:.1e} in the box (why: the notes file).",
             exact.max,
             cyl.iter().map(|p| p.area_mismatch).fold(0.0, f64::max),
             cyl.iter().map(|p| p.closure).fold(0.0, f64::max),
             m.of(Geometry::Cube).map(|p| p.closure).fold(0.0, f64::max),
         ));
     }
+}
+
+/// The periodic packings: each model's homogenised-tensor error, symmetry and cost.
+fn periodic_table(m: &Measured) -> Table {
     let rows: Vec<&PeriodicRun> = m.periodic.iter().collect();
-    out.tables.push(
-        Columns::new()
-            .column("packing", |p: &&PeriodicRun| p.k.to_string())
-            .column("N", |p: &&PeriodicRun| p.n.to_string())
-            .columns_for(
-                Surface::ALL,
-                |s| format!("{} max |Λ_ij/λ − δ_ij| (symmetry, s)", s.id()),
-                |s, p: &&PeriodicRun| {
-                    let (e, sym, t) = p.of(*s);
-                    format!("{e:.2e} ({sym:.0e}, {t:.2})")
-                },
-            )
-            .table(
-                "Periodic packings: the homogenised tensor of a homogeneous body (Homogenize, three load cases)",
-                &rows,
-            ),
-    );
-    out.note(
-        "Periodic rows: the cube's edge as period, the same N and seeds as the cube; the calibrated model uses the C_t of \
-         the cube packing of the same seed (paper's protocol), since a C_t calibrated by homogenisation would make the \
-         mean of the diagonal exact by construction.",
-    );
+    Columns::new()
+        .column("packing", |p: &&PeriodicRun| p.k.to_string())
+        .column("N", |p: &&PeriodicRun| p.n.to_string())
+        .columns_for(
+            Surface::ALL,
+            |s| format!("{} max |Λ_ij/λ − δ_ij| (symmetry, s)", s.id()),
+            |s, p: &&PeriodicRun| {
+                let (e, sym, t) = p.of(*s);
+                format!("{e:.2e} ({sym:.0e}, {t:.2})")
+            },
+        )
+        .table(
+            "Periodic packings: the homogenised tensor of a homogeneous body (Homogenize, three load cases)",
+            &rows,
+        )
 }

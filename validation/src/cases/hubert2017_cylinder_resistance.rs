@@ -32,6 +32,9 @@
 //! reconstructed, `shared/refs/terreros-alpha.md`; the notes say why). The calibrated
 //! surfaces are calibrated with a heat flux along the same axis on the same packing, so they
 //! must do better than 2 %; this checks the scene's calibration path rather than the method.
+//!
+//! Samples, models, electrode biases and tolerances, as documentation:
+//! `validation/notes/cylinder-resistance.md`.
 
 use std::time::Instant;
 
@@ -42,7 +45,7 @@ use super::common::*;
 use super::cylinder::*;
 use crate::analytic::uniform_resistance;
 use crate::table::Columns;
-use crate::{CaseOutcome, Comparison, Ctx};
+use crate::{CaseOutcome, Comparison, Ctx, Table};
 use demcon_plot::{Chart, Scale, Series, draw};
 
 /// A line of the paper's Table 3.
@@ -481,7 +484,15 @@ fn pct(e: f64) -> String {
 
 /// The per-packing table, the chart and the notes.
 fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
-    let table = Columns::new()
+    out.tables.push(packings_table(m));
+    error_chart(ctx, m, out)?;
+    run_notes(ctx, m, out);
+    Ok(())
+}
+
+/// Every packing: each model's R and error, the geometry columns and the costs.
+fn packings_table(m: &Measured) -> Table {
+    Columns::new()
         .column("N", |p: &PackingLine| p.s.n.to_string())
         .column("packing", |p| (p.k + 1).to_string())
         .column("r̄ (µm)", |p| format!("{:.1}", 1e6 * p.s.mean_radius))
@@ -527,8 +538,11 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
                 1e3 * m.r_th
             ),
             &m.packings,
-        );
-    out.tables.push(table);
+        )
+}
+
+/// The mean error against N per model, with the paper's Table 3 (Fig. 4).
+fn error_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
     let series = |f: fn(&SizeMeans) -> f64| -> Vec<(f64, f64)> {
         m.means.iter().map(|s| (s.n as f64, 100.0 * f(s))).collect()
     };
@@ -568,12 +582,14 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         &ctx.out.join("cylinder-resistance.png"),
     )?;
     out.charts.push("cylinder-resistance.png".into());
+    Ok(())
+}
+
+/// The run's sizes, the headline's figures, and the pointer to the case's notes file.
+fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
     out.note(format!(
-        "Mode {}: N = {:?}, 3 packings each (seeds {}…{}); `--full` adds 20 000. LS packings in \
-         the cylinder, Gaussian radii std/mean 0.3, aiming at φ = 0.64 and accepting the jammed state (column φ: the narrow \
-         cylinder's wall layers jam below 0.64); contacts for Z = 7.5 (the column 'Z = 6.2' re-detects the contacts of the same \
-         packing for the electric paper's coordination); electrodes = particles touching each end face (surface within half a \
-         radius), {V0} V apart. Packing took {:.1} s in all (shared by the models, not in their wall time).",
+        "Mode {}: N = {:?}, 3 packings each (seeds {}…{}). Packing took {:.1} s in all (shared by the models, not in their \
+         wall time). Samples, models, electrode biases and tolerances: validation/notes/cylinder-resistance.md.",
         ctx.mode.name(),
         m.sizes,
         ctx.seed,
@@ -582,12 +598,8 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
     ));
     let lag = Spread::of(m.packings.iter().map(|p| p.e.laguerre.abs()));
     out.note(format!(
-        "Headline: the Laguerre cells of the same packings with the electrodes on the end faces (each face linked to the \
-         cells' wall facets on it), chosen for their consistency property before any of their numbers were seen: a \
-         uniform field solves the network exactly, so R = ρ_e l / A_cells, where A_cells is the section of the cells, which \
-         follow the curved mantle by tangent planes (column 'A_cells/A − 1', at most {:.1e}). Over all {} packings: \
-         |R/R_th − 1| mean {:.2e}, max {:.2e}; Laguerre costs a tessellation (column) where the contact models cost a \
-         contact detection (and the calibrated one a calibration).",
+        "Headline (Laguerre cells, face electrodes): A_cells/A − 1 at most {:.1e}; over all {} packings |R/R_th − 1| mean \
+         {:.2e}, max {:.2e}.",
         m.packings
             .iter()
             .map(|p| p.s.laguerre_section.abs())
@@ -596,38 +608,4 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         lag.mean,
         lag.max,
     ));
-    out.note(
-        "With the paper's particle electrodes (`mean_rel_error_particle_electrodes`), Terreros α is worse than the paper \
-         (R too LOW, about twice the paper's error at 5000–10 000 particles) and \
-         worse still at the paper's Z = 6.2: our α(n) is reconstructed from the regular polyhedra (the 2013 table was not \
-         available), and α rises steeply at low neighbour counts (α(4) = 10.4 against α(6) = 4). In this narrow cylinder a \
-         large share of the particles touch the wall and have fewer neighbours (column 'Z wall / bulk'), so they get large \
-         surfaces and the network conducts too well; the error shrinks with N as that share does. Most of the gap, though, is the \
-         particle electrodes' own bias (next note): with the faces as electrodes the same surfaces land within the paper's \
-         error.",
-    );
-    out.note(
-        "Electrode layers: the network only spans the distance L_eff between the mean centres of the two electrode layers \
-         (about one mean radius inside each face), and the electrode particles are equipotential, so the measured R is \
-         biased LOW by about 2 r̄ / l (5 % at 1000 particles, 2 % at 20 000). The column and the series 'L_eff-corrected' \
-         report R · l / L_eff, the resistance of a length-l conductor with the network's effective resistivity: it is NOT \
-         the paper's measure and is shown only to separate that bias from the bulk error of the surfaces.",
-    );
-    out.note(
-        "Face electrodes (Terreros: `mean_rel_error_terreros_face`, the headline before the Laguerre cells): each end face is one node held at its potential and linked to \
-         every particle touching it by a half-contact σ_p S_p / h_p (h_p the centre-to-face distance, S_p the particle's own \
-         surface), as the thermal `WallTemperature`. The network then spans the whole length l, so the electrode-layer bias \
-         (R low by about 2 r̄/l) is gone; what remains is the bulk error of the surfaces, which is why the check asks the \
-         face-electrode error to be no larger than the particle-electrode one. With the calibrated surfaces the C_t used is \
-         the paper-protocol one (particle boundary layers, column C_t), which absorbs the electrode-layer bias of THAT \
-         protocol, so with face electrodes R comes out HIGH ('error, calibrated, face electrodes'). Calibrating C_t with the \
-         faces held through wall links (`CalibrationBc::Walls`) would make R exact by construction (the same network up \
-         to the factor σ/λ), an identity and not a measurement, so it is not shown.",
-    );
-    out.note(
-        "Calibrated surfaces: C_t comes from a heat-flux calibration on the SAME packing along the same axis (the scene's \
-         `c_t: Auto`), so its error mostly measures the difference between a flux and a fixed-potential boundary on the \
-         top layer; it is a consistency check, not an independent prediction.",
-    );
-    Ok(())
 }

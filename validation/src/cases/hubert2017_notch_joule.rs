@@ -38,6 +38,8 @@
 //! `--quick` (2 % × (4·10⁴/N)^(1/3): 3.2 % at 10⁴). Its ΔT_max against Kohlrausch is reported,
 //! not gated: with walls the identity of the particle-held sets no longer holds on the
 //! network (a wall link's Joule power goes to its particle), so it measures the discretisation.
+//!
+//! Method, references and tolerances, as documentation: `validation/notes/notch-joule.md`.
 
 use std::time::Instant;
 
@@ -48,7 +50,7 @@ use super::common::*;
 use super::cylinder::*;
 use crate::analytic::kohlrausch_max_rise;
 use crate::table::Columns;
-use crate::{CaseOutcome, Comparison, Ctx};
+use crate::{CaseOutcome, Comparison, Ctx, Table};
 use demcon_plot::{Chart, Scale, Series, draw};
 
 /// Potential difference (V) between the end faces, as the FEM reference.
@@ -493,20 +495,15 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     })
 }
 
-/// Metrics, references and the three checks (R at the largest N, ΔT_max, the identity).
-fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+/// A metric per N: `f` of every size's run, keyed by the nominal N.
+fn per_n(m: &Measured, f: &dyn Fn(&SizeRun) -> Value) -> Value {
+    Value::Object(m.runs.iter().map(|r| (key(r.nominal), f(r))).collect())
+}
+
+/// The Laguerre (headline) model's metrics.
+fn laguerre_metrics(m: &Measured, out: &mut CaseOutcome) {
     let (r_fem, exact) = (m.r_fem, m.exact);
-    let by_n = |f: &dyn Fn(&SizeRun) -> Value| -> Value {
-        Value::Object(m.runs.iter().map(|r| (key(r.nominal), f(r))).collect())
-    };
-    // Worst over both carvings (whole-sphere first, as measured).
-    let worst_t = m.runs.iter().fold(0.0f64, |w, r| {
-        w.max((r.whole_sphere.rise / exact - 1.0).abs())
-            .max(r.e_t(exact).abs())
-    });
-    let worst_k = m.runs.iter().fold(0.0f64, |w, r| {
-        w.max(r.whole_sphere.kohl_particle).max(r.centre.kohl_particle)
-    });
+    let by_n = |f: &dyn Fn(&SizeRun) -> Value| per_n(m, f);
     out.metric("headline_model", "laguerre, face electrodes, centre carving");
     out.metric(
         "r_rel_error_vs_fem",
@@ -548,6 +545,12 @@ fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
             )
         }),
     );
+}
+
+/// The papers' model's metrics (Terreros α; particle and face electrodes, both carvings).
+fn terreros_metrics(m: &Measured, out: &mut CaseOutcome) {
+    let (r_fem, exact) = (m.r_fem, m.exact);
+    let by_n = |f: &dyn Fn(&SizeRun) -> Value| per_n(m, f);
     out.metric(
         "wall_s_terreros",
         by_n(&|r| {
@@ -584,6 +587,21 @@ fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
         "excluded_particles",
         m.runs.iter().map(|r| r.centre.excluded).sum::<usize>(),
     );
+}
+
+/// Metrics, references and the three checks (R at the largest N, ΔT_max, the identity).
+fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+    let (r_fem, exact) = (m.r_fem, m.exact);
+    // Worst over both carvings (whole-sphere first, as measured).
+    let worst_t = m.runs.iter().fold(0.0f64, |w, r| {
+        w.max((r.whole_sphere.rise / exact - 1.0).abs())
+            .max(r.e_t(exact).abs())
+    });
+    let worst_k = m.runs.iter().fold(0.0f64, |w, r| {
+        w.max(r.whole_sphere.kohl_particle).max(r.centre.kohl_particle)
+    });
+    laguerre_metrics(m, out);
+    terreros_metrics(m, out);
     out.reference(
         "r_rel_error_vs_fem",
         "0.092 at 5000 falling to 0.067 at 40 000 (paper, vs its FEM)",
@@ -600,6 +618,7 @@ fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
     );
     let last = m.runs.last().expect("at least one size");
     let (n_max, e_r) = (last.nominal, last.e_r(r_fem).abs());
+    let lag = m.laguerre_spread();
     out.compare(Comparison::at_most(
         &format!(
             "Laguerre (headline), face electrodes, centre carving: |R/R_FEM − 1| at N = {n_max}, largest of {} \
@@ -635,7 +654,6 @@ fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
 
 /// The per-N notes, the table, the axis-potential chart and the closing notes.
 fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
-    let (r_fem, exact) = (m.r_fem, m.exact);
     let series_slope = V0
         / (GROOVE_RADIUS * GROOVE_RADIUS)
         / ((LENGTH - (GROOVE_Z.1 - GROOVE_Z.0)) / (RADIUS * RADIUS)
@@ -643,12 +661,20 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
     for r in &m.runs {
         out.note(format!(
             "N = {}: axis potential gradient in the middle of the groove (2.3–2.7 mm) {:.3} V/m; the 1-D series model's mean \
-             gradient there is {series_slope:.3} V/m (the paper finds its DEM gradient 14.5 % above its FEM at 10 000; the FEM \
-             axis gradient is not in our reference).",
+             gradient there is {series_slope:.3} V/m.",
             r.nominal, r.centre.slope_groove
         ));
     }
-    let table = Columns::new()
+    out.tables.push(size_table(m));
+    axis_chart(ctx, m, out)?;
+    run_notes(ctx, m, out);
+    Ok(())
+}
+
+/// One line per N: both models' R and ΔT_max against their references, and the costs.
+fn size_table(m: &Measured) -> Table {
+    let (r_fem, exact) = (m.r_fem, m.exact);
+    Columns::new()
         .column("N (nominal)", |r: &SizeRun| r.nominal.to_string())
         .column("N", |r| r.centre.n.to_string())
         .column("r̄ (µm)", |r| format!("{:.1}", 1e6 * r.centre.mean_radius))
@@ -717,8 +743,11 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
                 1e3 * r_fem
             ),
             &m.runs,
-        );
-    out.tables.push(table);
+        )
+}
+
+/// The potential along the axis per N, with the 1-D series model (Fig. 7).
+fn axis_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
     let mut series: Vec<Series> = m
         .runs
         .iter()
@@ -754,12 +783,17 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         &ctx.out.join("notch-joule.png"),
     )?;
     out.charts.push("notch-joule.png".into());
+    Ok(())
+}
+
+/// The notes that carry this run's figures (sizes, the headline's spread, failures, the VTK),
+/// and the pointer to the case's notes file.
+fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
+    let r_fem = m.r_fem;
     out.note(format!(
         "Mode {}: N = {:?} particles in the grooved body (one packing each, seed {}, plus two for the Laguerre headline at the \
-         largest N; the cylinder is packed with N / 0.85 \
-         particles and the groove cut out by particle centre), Terreros α surfaces for both the electric \
-         and the thermal network, Z = 7.5, steady thermal solve with the Joule power per particle as its source. `--full` runs \
-         5000, 10 000, 20 000 and 40 000. The 1-D series resistance is {:.5} mΩ (FEM {:.5} mΩ).",
+         largest N). The 1-D series resistance is {:.5} mΩ (FEM {:.5} mΩ). Method, reference and tolerances: \
+         validation/notes/notch-joule.md.",
         ctx.mode.name(),
         m.sizes,
         ctx.seed,
@@ -768,13 +802,8 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
     ));
     let lag = m.laguerre_spread();
     out.note(format!(
-        "Headline: the Laguerre cells of the same cylinder packings, keeping the particles whose centre lies in the grooved \
-         body (or, beside it, the whole spheres), their cells clipped by planes tangent to the groove's surface (Σ V_cells/V \
-         − 1 in the table; V is the region's volume estimated on a 256³ grid, so that column carries the estimate's own \
-         error; 'against the exact V' divides by π (4 r² + (r/2)²) · 1 mm), the electrodes and the 20 °C on the end faces through the cells' wall facets, chosen for their consistency \
-         property before any of their numbers were seen. At N = {}: |R/R_FEM − 1| {:.2} % / {:.2} % (mean / max over {} \
-         packings, seeds {}…{}). The same cells with whole-sphere carving tile the same region, so they do not carry the whole-sphere \
-         carving's bias. The Laguerre ΔT_max is reported against Kohlrausch, not gated (no discrete identity with walls).",
+        "Headline (Laguerre cells, centre carving, face electrodes) at N = {}: |R/R_FEM − 1| {:.2} % / {:.2} % (mean / max \
+         over {} packings, seeds {}…{}).",
         m.runs.last().map_or(0, |r| r.nominal),
         100.0 * lag.mean,
         100.0 * lag.max,
@@ -823,24 +852,8 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
             failures.join("; ")
         ));
     }
-    out.note(
-        "The papers' model (Terreros α): the resistance is measured as in the paper between the particles touching the end faces; as in \
-         `cylinder-resistance` those layers sit about one radius inside the faces, which lowers R by about 2 r̄/l, while a \
-         carving that keeps only whole spheres raises it: spheres crossing the groove surface are removed, so the reduced \
-         section's solid ends a fraction of a radius inside r = 0.5 mm ('φ groove (whole-sphere) / plain' compares the solid \
-         fraction by centres in the middle of the groove with a plain part). The scene's `carve` (and scenes/notch-joule.ron) \
-         keeps whole spheres; a carving-by-centre option in the scene would remove that bias for users. The paper reports the same sign in the groove (its DEM potential gradient there is 14.5 % above its FEM).",
-    );
-    out.note(
-        "Face electrodes ('R error, face electrodes', `r_rel_error_vs_fem_face`): the end faces themselves held at 0 and V0, \
-         each linked to the particles touching it by half-contacts σ S/h (the FEM's electrodes are the end faces). This \
-         removes the electrode-layer bias (R low by about 2 r̄/l); it is measured on the same packings, electric only (the \
-         Kohlrausch identity needs the potential and the temperature fixed on the same sets, so the thermal check stays on \
-         particle electrodes).",
-    );
     out.note(format!(
         "VTK of the N = {0} run (potential, current density, Joule power, temperature): notch-joule-{0}/particles.vtu.",
         m.vtk_at
     ));
-    Ok(())
 }
