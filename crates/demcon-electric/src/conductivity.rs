@@ -36,11 +36,13 @@ impl ParticleConductivities {
 /// no resistivity, or ρ_e(T) is not finite and > 0.
 pub fn conductivity_at(material: &Material, t: f64) -> Result<f64, ElectricError> {
     let field = || format!("materials[{}].resistivity", material.name);
-    let rho = material.resistivity_at(t).ok_or_else(|| ElectricError::InvalidParameter {
-        field: field(),
-        value: "none".into(),
-        allowed: "an electric scene needs it".into(),
-    })?;
+    let rho = material
+        .resistivity_at(t)
+        .ok_or_else(|| ElectricError::InvalidParameter {
+            field: field(),
+            value: "none".into(),
+            allowed: "an electric scene needs it".into(),
+        })?;
     if !(rho.is_finite() && rho > 0.0) {
         return Err(ElectricError::InvalidParameter {
             field: field(),
