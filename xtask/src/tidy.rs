@@ -250,22 +250,12 @@ pub fn layer_violations(root: &Path) -> Result<Vec<Violation>> {
 
 /// `.rs` files under `dir` whose first line is not a `//!` doc comment.
 fn files_without_header(dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
-    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("reading {}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .collect();
-    entries.sort();
-    for p in entries {
-        if p.is_dir() {
-            if p.file_name().is_some_and(|n| n == "target") {
-                continue;
-            }
-            files_without_header(&p, out)?;
-        } else if p.extension().is_some_and(|e| e == "rs") {
-            let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-            if !text.lines().next().is_some_and(|l| l.starts_with("//!")) {
-                out.push(p);
-            }
+    let mut files = Vec::new();
+    rust_files(dir, &mut files)?;
+    for p in files {
+        let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+        if !text.lines().next().is_some_and(|l| l.starts_with("//!")) {
+            out.push(p);
         }
     }
     Ok(())
@@ -375,7 +365,7 @@ fn library_part(text: &str) -> &str {
     text.find("\n#[cfg(test)]").map_or(text, |i| &text[..i])
 }
 
-/// `.rs` files under `dir`, recursively, sorted.
+/// `.rs` files under `dir`, recursively (`target` folders skipped), sorted.
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("reading {}", dir.display()))?
@@ -384,6 +374,9 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
     entries.sort();
     for p in entries {
         if p.is_dir() {
+            if p.file_name().is_some_and(|n| n == "target") {
+                continue;
+            }
             rust_files(&p, out)?;
         } else if p.extension().is_some_and(|e| e == "rs") {
             out.push(p);

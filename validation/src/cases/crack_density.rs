@@ -31,6 +31,7 @@ use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
+use super::study::{Measured, Study};
 use crate::table::Columns;
 use crate::{CaseOutcome, Ctx};
 
@@ -162,7 +163,6 @@ impl Measure {
 }
 
 struct PackingRun {
-    k: u64,
     n: usize,
     mean_radius: f64,
     runs: Vec<Measure>,
@@ -172,18 +172,20 @@ struct PackingRun {
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let n = ctx.pick(20_000, 100_000);
     prepack(&(0..PACKINGS).map(|k| scene(n, ctx.seed + k)).collect::<Vec<_>>())?;
-    let mut packings = Vec::new();
-    for k in 0..PACKINGS {
-        packings.push(measure_packing(n, ctx.seed + k, k)?);
-    }
+    let study = Study::run(
+        &[n],
+        |_| PACKINGS,
+        ctx.seed,
+        |n, seed, _| measure_packing(n, seed),
+    )?;
     let mut out = CaseOutcome::new("crack-density", ctx.mode);
-    out.n_particles = packings.iter().map(|p| p.n).max().unwrap_or(0);
-    compare(&packings, &mut out);
-    report(ctx, &packings, &mut out);
+    out.n_particles = study.packings().iter().map(|p| p.rows.n).max().unwrap_or(0);
+    compare(&study, &mut out);
+    report(ctx, &study, &mut out);
     Ok(out)
 }
 
-fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
+fn measure_packing(n: usize, seed: u64) -> anyhow::Result<PackingRun> {
     let cfg = scene(n, seed);
     let contacts = model_of(&with_surface_model(&cfg, Surface::Terreros, None))?;
     let cells = laguerre_model(&cfg, &contacts)?;
@@ -222,23 +224,23 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     }
     let radii = &contacts.particles.radii;
     Ok(PackingRun {
-        k,
         n: contacts.particles.len(),
         mean_radius: radii.iter().sum::<f64>() / radii.len() as f64,
         runs,
     })
 }
 
-fn compare(packings: &[PackingRun], out: &mut CaseOutcome) {
+fn compare(study: &Study<PackingRun>, out: &mut CaseOutcome) {
     let mut by = Map::new();
     for model in CrackVariant::ALL {
         let mut grids = Map::new();
         for m in GRIDS {
             let pick = |f: fn(&Measure) -> f64| {
                 Spread::of(
-                    packings
+                    study
+                        .packings()
                         .iter()
-                        .flat_map(|p| p.runs.iter())
+                        .flat_map(|p| p.rows.runs.iter())
                         .filter(|r| r.model == model && r.m == m)
                         .map(f),
                 )
@@ -275,19 +277,20 @@ fn compare(packings: &[PackingRun], out: &mut CaseOutcome) {
 
 /// A line of the table.
 struct Line<'a> {
-    p: &'a PackingRun,
+    p: &'a Measured<PackingRun>,
     r: &'a Measure,
 }
 
-fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
-    let lines: Vec<Line> = packings
+fn report(ctx: &Ctx, study: &Study<PackingRun>, out: &mut CaseOutcome) {
+    let lines: Vec<Line> = study
+        .packings()
         .iter()
-        .flat_map(|p| p.runs.iter().map(move |r| Line { p, r }))
+        .flat_map(|p| p.rows.runs.iter().map(move |r| Line { p, r }))
         .collect();
     out.tables.push(
         Columns::new()
             .column("packing", |l: &Line| (l.p.k + 1).to_string())
-            .column("N", |l| l.p.n.to_string())
+            .column("N", |l| l.p.rows.n.to_string())
             .column("model", |l| l.r.model.label().to_string())
             .column("cracks", |l| (l.r.m * l.r.m * l.r.m).to_string())
             .column("ρ", |l| format!("{:.4}", density(l.r.m)))
@@ -307,7 +310,7 @@ fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
             })
             .column("a_eff/a (aligned); (a_eff − a)/R̄", |l| {
                 let x = l.r.efficiency_aligned().max(0.0).cbrt();
-                format!("{x:.3}; {:.2}", (x - 1.0) * A / l.p.mean_radius)
+                format!("{x:.3}; {:.2}", (x - 1.0) * A / l.p.rows.mean_radius)
             })
             .column("cut contacts aligned / random", |l| {
                 format!("{} / {}", l.r.cut_aligned, l.r.cut_random)

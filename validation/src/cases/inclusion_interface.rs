@@ -31,6 +31,7 @@ use serde_json::{Map, Value};
 use super::common::RuleVariant as Variant;
 use super::common::*;
 use super::composite::{F_SINGLE, L, centred_inclusion, slab_scene, with_conductivities};
+use super::study::{Measured, Study};
 use crate::analytic::hasselman_johnson;
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
@@ -129,9 +130,7 @@ impl Run {
 }
 
 struct PackingRun {
-    n_target: usize,
     n: usize,
-    k: u64,
     runs: Vec<Run>,
 }
 
@@ -148,22 +147,18 @@ impl PackingRun {
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let ladder: Vec<usize> = ctx.pick(vec![5_000, 20_000], vec![20_000, 150_000]);
     let tol = ctx.pick(0.025, 0.003);
-    let mut packings = Vec::new();
-    for (i, &n) in ladder.iter().enumerate() {
-        // Three packings at the largest N, one below it (the trend).
-        let count = if i + 1 == ladder.len() { PACKINGS } else { 1 };
-        for k in 0..count {
-            packings.push(measure_packing(n, ctx.seed + k, k)?);
-        }
-    }
+    // Three packings at the largest N, one below it (the trend).
+    let largest = *ladder.last().expect("a ladder");
+    let count = |n: usize| if n == largest { PACKINGS } else { 1 };
+    let study = Study::run(&ladder, count, ctx.seed, |n, seed, _| measure_packing(n, seed))?;
     let mut out = CaseOutcome::new("inclusion-interface", ctx.mode);
-    out.n_particles = packings.iter().map(|p| p.n).max().unwrap_or(0);
-    compare(&ladder, &packings, tol, &mut out);
-    report(ctx, &packings, &mut out);
+    out.n_particles = study.packings().iter().map(|p| p.rows.n).max().unwrap_or(0);
+    compare(&study, tol, &mut out);
+    report(ctx, &study, &mut out);
     Ok(out)
 }
 
-fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
+fn measure_packing(n: usize, seed: u64) -> anyhow::Result<PackingRun> {
     let segment = scene(n, seed, PhaseRuleConfig::Segment);
     let contacts = model_of(&with_surface_model(&segment, Surface::Terreros, None))?;
     let cells_segment = laguerre_model(&segment, &contacts)?;
@@ -202,9 +197,7 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
         runs.push(Run { variant: v, ratios });
     }
     Ok(PackingRun {
-        n_target: n,
         n: contacts.particles.len(),
-        k,
         runs,
     })
 }
@@ -213,9 +206,8 @@ fn alpha_key(a: f64) -> String {
     format!("alpha_{a}")
 }
 
-fn compare(ladder: &[usize], packings: &[PackingRun], tol: f64, out: &mut CaseOutcome) {
-    let largest = *ladder.last().expect("a ladder");
-    let at = |n: usize| packings.iter().filter(move |p| p.n_target == n);
+fn compare(study: &Study<PackingRun>, tol: f64, out: &mut CaseOutcome) {
+    let (ladder, largest) = (study.sizes(), study.largest());
     let mut by_model = Map::new();
     for v in VARIANTS {
         let mut by_n = Map::new();
@@ -223,7 +215,7 @@ fn compare(ladder: &[usize], packings: &[PackingRun], tol: f64, out: &mut CaseOu
             let mut cells = Map::new();
             for (i, c) in CONTRASTS.iter().enumerate() {
                 for (j, &a) in ALPHAS.iter().enumerate() {
-                    let e = Spread::of(at(n).map(|p| p.run(v).errors()[i][j].abs()));
+                    let e = study.spread(n, |p| p.run(v).errors()[i][j].abs());
                     cells.insert(format!("contrast_{c}_{}", alpha_key(a)), e.json());
                 }
             }
@@ -232,7 +224,7 @@ fn compare(ladder: &[usize], packings: &[PackingRun], tol: f64, out: &mut CaseOu
         by_model.insert(variant_id(v), Value::Object(by_n));
     }
     out.metric("abs_rel_error_vs_hj_by_model", Value::Object(by_model));
-    let e = Spread::of(at(largest).map(|p| p.run(HEADLINE).worst_interface()));
+    let e = study.spread(largest, |p| p.run(HEADLINE).worst_interface());
     out.metric("max_rel_error_vs_hj", e.json());
     out.compare(Comparison::at_most(
         &format!(
@@ -254,13 +246,14 @@ fn compare(ladder: &[usize], packings: &[PackingRun], tol: f64, out: &mut CaseOu
 
 /// A line of the table.
 struct Line<'a> {
-    p: &'a PackingRun,
+    p: &'a Measured<PackingRun>,
     v: Variant,
     i: usize,
 }
 
-fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
-    let lines: Vec<Line> = packings
+fn report(ctx: &Ctx, study: &Study<PackingRun>, out: &mut CaseOutcome) {
+    let lines: Vec<Line> = study
+        .packings()
         .iter()
         .flat_map(|p| {
             VARIANTS
@@ -270,7 +263,7 @@ fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
         .collect();
     out.tables.push(
         Columns::new()
-            .column("N", |l: &Line| l.p.n.to_string())
+            .column("N", |l: &Line| l.p.rows.n.to_string())
             .column("packing", |l| (l.p.k + 1).to_string())
             .column("model", |l| variant_id(l.v))
             .column("λ_i/λ_m", |l| CONTRASTS[l.i].to_string())
@@ -278,7 +271,7 @@ fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
                 0..ALPHAS.len(),
                 |j| format!("a_K/a = {}: λ_e/λ_hom (HJ), error", ALPHAS[*j]),
                 |j, l: &Line| {
-                    let r = l.p.run(l.v).ratios[l.i][*j];
+                    let r = l.p.rows.run(l.v).ratios[l.i][*j];
                     let hj = hasselman_johnson(1.0, CONTRASTS[l.i], F_SINGLE, ALPHAS[*j]);
                     format!("{r:.4} ({hj:.4}) {:+.2} %", 100.0 * (r / hj - 1.0))
                 },

@@ -34,6 +34,7 @@ use serde_json::{Map, Value};
 
 use super::common::RuleVariant as Variant;
 use super::common::*;
+use super::study::{Measured, Study};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
 
@@ -152,9 +153,7 @@ struct Run {
 
 /// One packing.
 struct PackingRun {
-    n_target: usize,
     n: usize,
-    k: u64,
     /// Particles cut by an interface (segment rule).
     cut: usize,
     /// Contacts (facets) crossing an interface, Laguerre-segment.
@@ -175,21 +174,21 @@ impl PackingRun {
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let ladder: Vec<usize> = ctx.pick(vec![2_000, 5_000, 20_000], vec![5_000, 20_000, 100_000]);
-    let mut packings = Vec::new();
-    for &n in &ladder {
-        for k in 0..PACKINGS {
-            packings.push(measure_packing(n, ctx.seed + k, k)?);
-        }
-    }
+    let study = Study::run(
+        &ladder,
+        |_| PACKINGS,
+        ctx.seed,
+        |n, seed, _| measure_packing(n, seed),
+    )?;
     let mut out = CaseOutcome::new("layered-interface", ctx.mode);
-    out.n_particles = packings.iter().map(|p| p.n).max().unwrap_or(0);
-    compare(&ladder, &packings, &mut out);
-    report(ctx, &ladder, &packings, &mut out);
+    out.n_particles = study.packings().iter().map(|p| p.rows.n).max().unwrap_or(0);
+    compare(&study, &mut out);
+    report(ctx, &study, &mut out);
     Ok(out)
 }
 
 /// Every variant and share on one packing.
-fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
+fn measure_packing(n: usize, seed: u64) -> anyhow::Result<PackingRun> {
     let segment = scene(n, seed, PhaseRuleConfig::Segment);
     let contacts = model_of(&with_surface_model(&segment, Surface::Terreros, None))?;
     let pack_s = contacts.report.pack_s;
@@ -225,9 +224,7 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
         runs.push(run);
     }
     Ok(PackingRun {
-        n_target: n,
         n: contacts.particles.len(),
-        k,
         cut: cells_segment.report.mixed_particles,
         crossing: cells_segment
             .report
@@ -240,13 +237,8 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
 }
 
 /// |error| of a variant at share index `s` over the packings of N = `n`.
-fn spread(packings: &[PackingRun], n: usize, v: Variant, s: usize) -> Spread {
-    Spread::of(
-        packings
-            .iter()
-            .filter(|p| p.n_target == n)
-            .map(|p| p.run(v).errors[s].abs()),
-    )
+fn spread(study: &Study<PackingRun>, n: usize, v: Variant, s: usize) -> Spread {
+    study.spread(n, |p| p.run(v).errors[s].abs())
 }
 
 fn share_key(share: f64) -> String {
@@ -254,26 +246,27 @@ fn share_key(share: f64) -> String {
 }
 
 /// Metrics (per variant, share and N) and the headline check at the largest N.
-fn compare(ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
+fn compare(study: &Study<PackingRun>, out: &mut CaseOutcome) {
+    let ladder = study.sizes();
     let mut by_model = Map::new();
     for v in VARIANTS {
         let mut shares = Map::new();
         for (s, &share) in SHARES.iter().enumerate() {
             let by_n: Map<String, Value> = ladder
                 .iter()
-                .map(|&n| (n.to_string(), spread(packings, n, v, s).json()))
+                .map(|&n| (n.to_string(), spread(study, n, v, s).json()))
                 .collect();
             shares.insert(share_key(share), Value::Object(by_n));
         }
         by_model.insert(variant_id(v), Value::Object(shares));
     }
     out.metric("abs_rel_error_by_model", Value::Object(by_model));
-    let largest = *ladder.last().expect("a ladder");
+    let largest = study.largest();
     for (s, &share) in SHARES.iter().enumerate() {
         // The largest error over every N (a NaN stays and fails).
         let worst = ladder
             .iter()
-            .map(|&n| spread(packings, n, HEADLINE, s).max)
+            .map(|&n| spread(study, n, HEADLINE, s).max)
             .fold(0.0, |a: f64, b| if b.is_nan() || b > a { b } else { a });
         out.metric(&format!("conforming_max_rel_error_{}", share_key(share)), worst);
         out.compare(Comparison::at_most(
@@ -282,13 +275,13 @@ fn compare(ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
                  of |λ_e/λ_ref − 1|",
                 100.0 * share,
                 fmt_h(conductance(share)),
-                packings.iter().filter(|p| p.n_target == largest).count()
+                study.at(largest).count()
             ),
             worst,
             CONFORMING_TOL,
             "λ_e = L/(Σ t_i/λ_i + n_int/h), exact; tolerance issue 32's 10⁻⁶ (the interfaces lie on facets)",
         ));
-        let e = spread(packings, largest, SEGMENT, s);
+        let e = spread(study, largest, SEGMENT, s);
         out.metric(&format!("max_rel_error_{}", share_key(share)), e.max);
         out.compare(Comparison::at_most(
             &format!(
@@ -328,20 +321,16 @@ struct Summary {
     solve_s: Spread,
 }
 
-fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
+fn report(ctx: &Ctx, study: &Study<PackingRun>, out: &mut CaseOutcome) {
+    let ladder = study.sizes();
     let lines: Vec<Summary> = ladder
         .iter()
         .flat_map(|&n| {
             VARIANTS.iter().map(move |&v| Summary {
                 n,
                 variant: v,
-                spreads: (0..SHARES.len()).map(|s| spread(packings, n, v, s)).collect(),
-                solve_s: Spread::of(
-                    packings
-                        .iter()
-                        .filter(|p| p.n_target == n)
-                        .map(|p| p.run(v).solve_s / SHARES.len() as f64),
-                ),
+                spreads: (0..SHARES.len()).map(|s| spread(study, n, v, s)).collect(),
+                solve_s: study.spread(n, |p| p.run(v).solve_s / SHARES.len() as f64),
             })
         })
         .collect();
@@ -366,18 +355,19 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
                 &lines,
             ),
     );
-    let rows: Vec<&PackingRun> = packings.iter().collect();
+    let rows: Vec<&Measured<PackingRun>> = study.packings().iter().collect();
     out.tables.push(
         Columns::new()
-            .column("N", |p: &&PackingRun| p.n.to_string())
+            .column("N", |p: &&Measured<PackingRun>| p.rows.n.to_string())
             .column("packing", |p| (p.k + 1).to_string())
-            .column("cut particles", |p| p.cut.to_string())
-            .column("crossing facets", |p| p.crossing.to_string())
+            .column("cut particles", |p| p.rows.cut.to_string())
+            .column("crossing facets", |p| p.rows.crossing.to_string())
             .columns_for(
                 VARIANTS,
                 |v| format!("{} (signed, per share)", variant_id(*v)),
-                |v, p: &&PackingRun| {
-                    p.run(*v)
+                |v, p: &&Measured<PackingRun>| {
+                    p.rows
+                        .run(*v)
                         .errors
                         .iter()
                         .map(|e| format!("{:+.3} %", 100.0 * e))
@@ -385,7 +375,7 @@ fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOu
                         .join(" / ")
                 },
             )
-            .column("packing (s)", |p| format!("{:.2}", p.pack_s))
+            .column("packing (s)", |p| format!("{:.2}", p.rows.pack_s))
             .table("Every packing: λ_e/λ_ref − 1 at shares 0 / 10 / 50 %", &rows),
     );
     out.note(format!(

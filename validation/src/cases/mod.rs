@@ -7,6 +7,7 @@ pub mod composite;
 pub mod cylinder;
 pub mod multi_inclusion_interface_periodic;
 pub mod multi_inclusion_periodic;
+pub mod study;
 pub mod transient;
 
 // The cases.
