@@ -227,6 +227,29 @@ fn random_point(c: &Container, r: f64, rng: &mut ChaCha8Rng) -> Vec3 {
     }
 }
 
+/// Gaussian velocities of scale `a_mean` for `n` particles, the mean drift removed and the
+/// kinetic energy set to its target 3/2 n a_mean² (returned beside them).
+fn initial_velocities(n: usize, a_mean: f64, rng: &mut ChaCha8Rng) -> (Vec<Vec3>, f64) {
+    let mut v: Vec<Vec3> = (0..n)
+        .map(|_| {
+            Vec3::new(
+                StandardNormal.sample(rng),
+                StandardNormal.sample(rng),
+                StandardNormal.sample(rng),
+            ) * a_mean
+        })
+        .collect();
+    let drift = v.iter().sum::<Vec3>() / n as f64;
+    if n > 1 {
+        v.iter_mut().for_each(|vi| *vi -= drift);
+    }
+    let ke_target = 1.5 * n as f64 * a_mean * a_mean;
+    let ke = 0.5 * v.iter().map(|v| v.norm_squared()).sum::<f64>();
+    let scale = if ke > 0.0 { (ke_target / ke).sqrt() } else { 1.0 };
+    v.iter_mut().for_each(|vi| *vi *= scale);
+    (v, ke_target)
+}
+
 impl Engine {
     /// Random sequential placement at a low volume fraction, velocities, lists, events.
     fn start(
@@ -278,23 +301,7 @@ impl Engine {
         let order = morton_order(&x, &c.bounds());
         let x: Vec<Vec3> = order.iter().map(|&i| x[i as usize]).collect();
         let a: Vec<f64> = order.iter().map(|&i| a[i as usize]).collect();
-        let mut v: Vec<Vec3> = (0..n)
-            .map(|_| {
-                Vec3::new(
-                    StandardNormal.sample(rng),
-                    StandardNormal.sample(rng),
-                    StandardNormal.sample(rng),
-                ) * a_mean
-            })
-            .collect();
-        let drift = v.iter().sum::<Vec3>() / n as f64;
-        if n > 1 {
-            v.iter_mut().for_each(|vi| *vi -= drift);
-        }
-        let ke_target = 1.5 * n as f64 * a_mean * a_mean;
-        let ke = 0.5 * v.iter().map(|v| v.norm_squared()).sum::<f64>();
-        let scale = if ke > 0.0 { (ke_target / ke).sqrt() } else { 1.0 };
-        v.iter_mut().for_each(|vi| *vi *= scale);
+        let (v, ke_target) = initial_velocities(n, a_mean, rng);
 
         let skin = params.neighbour_skin;
         let cell = 2.0 * (a_max + skin * a_mean);
