@@ -190,6 +190,133 @@ fn to_int(v: usize, what: &str) -> Result<PetscInt, SolveError> {
     })
 }
 
+/// Writes row k of the free block: its columns and values (the diagonal among them).
+type Row<'a> = dyn Fn(usize, &mut Vec<PetscInt>, &mut Vec<f64>) + 'a;
+
+/// Preallocation of this rank's rows `rows` (`row(k, …)`): the entries per row in the
+/// diagonal block and off it, and the number of distinct columns owned by other ranks.
+fn preallocation(rows: std::ops::Range<usize>, row: &Row<'_>) -> (Vec<PetscInt>, Vec<PetscInt>, usize) {
+    let (lo, hi) = (rows.start, rows.end);
+    let (mut c, mut v) = (Vec::new(), Vec::new());
+    let (mut d_nnz, mut o_nnz) = (Vec::with_capacity(hi - lo), Vec::with_capacity(hi - lo));
+    // Columns owned by other ranks: the values each matrix product receives (the halo).
+    let mut ghosts: Vec<PetscInt> = Vec::new();
+    for k in rows {
+        row(k, &mut c, &mut v);
+        let d = c.iter().filter(|&&j| (lo..hi).contains(&(j as usize))).count();
+        d_nnz.push(d as PetscInt);
+        o_nnz.push((c.len() - d) as PetscInt);
+        ghosts.extend(c.iter().filter(|&&j| !(lo..hi).contains(&(j as usize))));
+    }
+    ghosts.sort_unstable();
+    ghosts.dedup();
+    (d_nnz, o_nnz, ghosts.len())
+}
+
+/// Creates this rank's rows `rows` of the matrix (`m` local and `big_n` global rows,
+/// preallocated by `nnz`: diagonal-block and off-block counts per row) from `row(k, columns,
+/// values)`, and the right-hand side, solution and gathered vectors. Collective.
+fn assemble(
+    h: &mut Handles,
+    (m, big_n): (PetscInt, PetscInt),
+    rows: std::ops::Range<usize>,
+    (d_nnz, o_nnz): (&[PetscInt], &[PetscInt]),
+    row: &Row<'_>,
+) -> Result<(), SolveError> {
+    let (mut c, mut v) = (Vec::new(), Vec::new());
+    // SAFETY: every pointer passed is to a live local or to a vector of the stated
+    // length; the handles are created before use and destroyed by `Handles::drop`.
+    unsafe {
+        check(ffi::MatCreate(world(), &mut h.a), "MatCreate")?;
+        check(ffi::MatSetSizes(h.a, m, m, big_n, big_n), "MatSetSizes")?;
+        check(ffi::MatSetType(h.a, ffi::MATMPIAIJ.as_ptr()), "MatSetType")?;
+        check(
+            ffi::MatMPIAIJSetPreallocation(h.a, 0, d_nnz.as_ptr(), 0, o_nnz.as_ptr()),
+            "MatMPIAIJSetPreallocation",
+        )?;
+        for k in rows {
+            row(k, &mut c, &mut v);
+            let gk = k as PetscInt;
+            check(
+                ffi::MatSetValues(
+                    h.a,
+                    1,
+                    &gk,
+                    c.len() as PetscInt,
+                    c.as_ptr(),
+                    v.as_ptr(),
+                    ffi::INSERT_VALUES,
+                ),
+                "MatSetValues",
+            )?;
+        }
+        check(
+            ffi::MatAssemblyBegin(h.a, ffi::MAT_FINAL_ASSEMBLY),
+            "MatAssemblyBegin",
+        )?;
+        check(
+            ffi::MatAssemblyEnd(h.a, ffi::MAT_FINAL_ASSEMBLY),
+            "MatAssemblyEnd",
+        )?;
+        check(
+            ffi::MatSetOption(h.a, ffi::MAT_SYMMETRIC, ffi::PETSC_TRUE),
+            "MatSetOption(MAT_SYMMETRIC)",
+        )?;
+        check(
+            ffi::MatSetOption(h.a, ffi::MAT_SPD, ffi::PETSC_TRUE),
+            "MatSetOption(MAT_SPD)",
+        )?;
+        check(ffi::VecCreateMPI(world(), m, big_n, &mut h.b), "VecCreateMPI")?;
+        check(ffi::VecCreateMPI(world(), m, big_n, &mut h.x), "VecCreateMPI")?;
+        check(
+            ffi::VecScatterCreateToAll(h.x, &mut h.scatter, &mut h.x_all),
+            "VecScatterCreateToAll",
+        )?;
+    }
+    Ok(())
+}
+
+/// Creates and sets up KSPCG + PCGAMG on the assembled matrix of `h` (`PETSC_OPTIONS` may
+/// change both); returns what runs, e.g. "cg + gamg". Collective.
+fn set_up_ksp(h: &mut Handles) -> Result<String, SolveError> {
+    // SAFETY: as above; the strings are NUL-terminated constants.
+    unsafe {
+        check(ffi::KSPCreate(world(), &mut h.ksp), "KSPCreate")?;
+        check(ffi::KSPSetOperators(h.ksp, h.a, h.a), "KSPSetOperators")?;
+        check(ffi::KSPSetType(h.ksp, ffi::KSPCG.as_ptr()), "KSPSetType(KSPCG)")?;
+        let mut pc = ptr::null_mut();
+        check(ffi::KSPGetPC(h.ksp, &mut pc), "KSPGetPC")?;
+        check(ffi::PCSetType(pc, ffi::PCGAMG.as_ptr()), "PCSetType(PCGAMG)")?;
+        check(
+            ffi::KSPSetNormType(h.ksp, ffi::KSP_NORM_UNPRECONDITIONED),
+            "KSPSetNormType(KSP_NORM_UNPRECONDITIONED)",
+        )?;
+        // `PETSC_OPTIONS` may still change the method (e.g. -pc_type hypre).
+        check(ffi::KSPSetFromOptions(h.ksp), "KSPSetFromOptions")?;
+        check(ffi::KSPSetUp(h.ksp), "KSPSetUp")?;
+    }
+    // What runs after the options: "cg + gamg" unless PETSC_OPTIONS changed it.
+    let name = {
+        let (mut k, mut p): (*const std::ffi::c_char, *const std::ffi::c_char) = (ptr::null(), ptr::null());
+        let mut pc = ptr::null_mut();
+        // SAFETY: the type names are PETSc's static strings (or null).
+        unsafe {
+            check(ffi::KSPGetType(h.ksp, &mut k), "KSPGetType")?;
+            check(ffi::KSPGetPC(h.ksp, &mut pc), "KSPGetPC")?;
+            check(ffi::PCGetType(pc, &mut p), "PCGetType")?;
+            let name = |s: *const std::ffi::c_char| {
+                if s.is_null() {
+                    "?".to_string()
+                } else {
+                    CStr::from_ptr(s).to_string_lossy().into_owned()
+                }
+            };
+            format!("{} + {}", name(k), name(p))
+        }
+    };
+    Ok(name)
+}
+
 impl Solver {
     /// Assembles this rank's rows of the free block of `sys` (unknowns = `nodes`, in order)
     /// and sets up KSPCG + PCGAMG on it. Collective: every rank calls it with the same system.
@@ -272,21 +399,7 @@ impl Solver {
         drop(row_nnz);
         let (lo, hi) = (bounds[rank], bounds[rank + 1]);
         let m = to_int(hi - lo, "rows of a rank")?;
-        let (mut c, mut v) = (Vec::new(), Vec::new());
-        let (mut d_nnz, mut o_nnz) = (Vec::with_capacity(hi - lo), Vec::with_capacity(hi - lo));
-        // Columns owned by other ranks: the values each matrix product receives (the halo).
-        let mut ghosts: Vec<PetscInt> = Vec::new();
-        for k in lo..hi {
-            row(k, &mut c, &mut v);
-            let d = c.iter().filter(|&&j| (lo..hi).contains(&(j as usize))).count();
-            d_nnz.push(d as PetscInt);
-            o_nnz.push((c.len() - d) as PetscInt);
-            ghosts.extend(c.iter().filter(|&&j| !(lo..hi).contains(&(j as usize))));
-        }
-        ghosts.sort_unstable();
-        ghosts.dedup();
-        let n_ghosts = ghosts.len();
-        drop(ghosts);
+        let (d_nnz, o_nnz, n_ghosts) = preallocation(lo..hi, &row);
         let mut h = Handles {
             a: ptr::null_mut(),
             b: ptr::null_mut(),
@@ -295,94 +408,11 @@ impl Solver {
             x_all: ptr::null_mut(),
             ksp: ptr::null_mut(),
         };
-        // SAFETY: every pointer passed is to a live local or to a vector of the stated
-        // length; the handles are created before use and destroyed by `Handles::drop`.
-        unsafe {
-            check(ffi::MatCreate(world(), &mut h.a), "MatCreate")?;
-            check(ffi::MatSetSizes(h.a, m, m, big_n, big_n), "MatSetSizes")?;
-            check(ffi::MatSetType(h.a, ffi::MATMPIAIJ.as_ptr()), "MatSetType")?;
-            check(
-                ffi::MatMPIAIJSetPreallocation(h.a, 0, d_nnz.as_ptr(), 0, o_nnz.as_ptr()),
-                "MatMPIAIJSetPreallocation",
-            )?;
-            for k in lo..hi {
-                row(k, &mut c, &mut v);
-                let gk = k as PetscInt;
-                check(
-                    ffi::MatSetValues(
-                        h.a,
-                        1,
-                        &gk,
-                        c.len() as PetscInt,
-                        c.as_ptr(),
-                        v.as_ptr(),
-                        ffi::INSERT_VALUES,
-                    ),
-                    "MatSetValues",
-                )?;
-            }
-            check(
-                ffi::MatAssemblyBegin(h.a, ffi::MAT_FINAL_ASSEMBLY),
-                "MatAssemblyBegin",
-            )?;
-            check(
-                ffi::MatAssemblyEnd(h.a, ffi::MAT_FINAL_ASSEMBLY),
-                "MatAssemblyEnd",
-            )?;
-            check(
-                ffi::MatSetOption(h.a, ffi::MAT_SYMMETRIC, ffi::PETSC_TRUE),
-                "MatSetOption(MAT_SYMMETRIC)",
-            )?;
-            check(
-                ffi::MatSetOption(h.a, ffi::MAT_SPD, ffi::PETSC_TRUE),
-                "MatSetOption(MAT_SPD)",
-            )?;
-            check(ffi::VecCreateMPI(world(), m, big_n, &mut h.b), "VecCreateMPI")?;
-            check(ffi::VecCreateMPI(world(), m, big_n, &mut h.x), "VecCreateMPI")?;
-            check(
-                ffi::VecScatterCreateToAll(h.x, &mut h.scatter, &mut h.x_all),
-                "VecScatterCreateToAll",
-            )?;
-        }
-        drop((d_nnz, o_nnz, c, v, index));
+        assemble(&mut h, (m, big_n), lo..hi, (&d_nnz, &o_nnz), &row)?;
+        drop((d_nnz, o_nnz, index));
         let assembly_s = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        // SAFETY: as above; the strings are NUL-terminated constants.
-        unsafe {
-            check(ffi::KSPCreate(world(), &mut h.ksp), "KSPCreate")?;
-            check(ffi::KSPSetOperators(h.ksp, h.a, h.a), "KSPSetOperators")?;
-            check(ffi::KSPSetType(h.ksp, ffi::KSPCG.as_ptr()), "KSPSetType(KSPCG)")?;
-            let mut pc = ptr::null_mut();
-            check(ffi::KSPGetPC(h.ksp, &mut pc), "KSPGetPC")?;
-            check(ffi::PCSetType(pc, ffi::PCGAMG.as_ptr()), "PCSetType(PCGAMG)")?;
-            check(
-                ffi::KSPSetNormType(h.ksp, ffi::KSP_NORM_UNPRECONDITIONED),
-                "KSPSetNormType(KSP_NORM_UNPRECONDITIONED)",
-            )?;
-            // `PETSC_OPTIONS` may still change the method (e.g. -pc_type hypre).
-            check(ffi::KSPSetFromOptions(h.ksp), "KSPSetFromOptions")?;
-            check(ffi::KSPSetUp(h.ksp), "KSPSetUp")?;
-        }
-        // What runs after the options: "cg + gamg" unless PETSC_OPTIONS changed it.
-        let solver = {
-            let (mut k, mut p): (*const std::ffi::c_char, *const std::ffi::c_char) =
-                (ptr::null(), ptr::null());
-            let mut pc = ptr::null_mut();
-            // SAFETY: the type names are PETSc's static strings (or null).
-            unsafe {
-                check(ffi::KSPGetType(h.ksp, &mut k), "KSPGetType")?;
-                check(ffi::KSPGetPC(h.ksp, &mut pc), "KSPGetPC")?;
-                check(ffi::PCGetType(pc, &mut p), "PCGetType")?;
-                let name = |s: *const std::ffi::c_char| {
-                    if s.is_null() {
-                        "?".to_string()
-                    } else {
-                        CStr::from_ptr(s).to_string_lossy().into_owned()
-                    }
-                };
-                format!("{} + {}", name(k), name(p))
-            }
-        };
+        let solver = set_up_ksp(&mut h)?;
         let setup_s = t1.elapsed().as_secs_f64();
         record(|s| {
             s.systems += 1;
