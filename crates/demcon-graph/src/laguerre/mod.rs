@@ -1037,6 +1037,210 @@ fn cell_error(
     }
 }
 
+/// Particles per block of the graph's fill (each block writes its own slices).
+const FILL_BLOCK: usize = 4096;
+
+/// The blocks `lo..hi` of [`FILL_BLOCK`] particles that cover `0..n`.
+fn fill_blocks(n: usize) -> Vec<(usize, usize)> {
+    (0..n)
+        .step_by(FILL_BLOCK)
+        .map(|b| (b, (b + FILL_BLOCK).min(n)))
+        .collect()
+}
+
+/// How many facets each cell records (those towards larger ids that `facet` keeps), as the
+/// start of each cell's range in the graph's arrays (n + 1 offsets): the arrays are then
+/// allocated once at their final size and filled in place.
+fn facet_offsets<F>(cells: &[CellOut], facet: &F) -> Vec<usize>
+where
+    F: Fn(usize, u32, f64, Vec3) -> Option<(f64, Vec3, f64, bool)> + Sync,
+{
+    let counts: Vec<u32> = cells
+        .par_iter()
+        .enumerate()
+        .map(|(p, c)| {
+            c.up.iter()
+                .filter(|&&(q, a1, _, c1)| facet(p, q, a1, c1).is_some())
+                .count() as u32
+        })
+        .collect();
+    let mut offsets = Vec::with_capacity(cells.len() + 1);
+    offsets.push(0usize);
+    for &c in &counts {
+        offsets.push(offsets[offsets.len() - 1] + c as usize);
+    }
+    offsets
+}
+
+/// One block's share of the graph's arrays.
+struct BlockOut<'a> {
+    pairs: &'a mut [[u32; 2]],
+    geometry: &'a mut [ContactGeometry],
+    area: &'a mut [f64],
+    split: &'a mut [f64],
+    centroid: &'a mut [Vec3],
+}
+
+impl<'a> BlockOut<'a> {
+    /// The first `len` facets, and the rest.
+    fn split_at(self, len: usize) -> (BlockOut<'a>, BlockOut<'a>) {
+        let (a0, a1) = self.pairs.split_at_mut(len);
+        let (b0, b1) = self.geometry.split_at_mut(len);
+        let (c0, c1) = self.area.split_at_mut(len);
+        let (d0, d1) = self.split.split_at_mut(len);
+        let (e0, e1) = self.centroid.split_at_mut(len);
+        (
+            BlockOut {
+                pairs: a0,
+                geometry: b0,
+                area: c0,
+                split: d0,
+                centroid: e0,
+            },
+            BlockOut {
+                pairs: a1,
+                geometry: b1,
+                area: c1,
+                split: d1,
+                centroid: e1,
+            },
+        )
+    }
+}
+
+/// Fills the facets the cells `lo..hi` record (towards larger ids, kept by `facet`) into
+/// `out`, in the particles' order; returns the block's counts. `threshold`: the area below
+/// which a facet drops (m²); `radii` (m) place each facet's split point.
+fn fill_block<F>(
+    cells: &[CellOut],
+    (lo, hi): (usize, usize),
+    out: BlockOut<'_>,
+    facet: &F,
+    (threshold, radii): (f64, &[f64]),
+    period: Option<[f64; 3]>,
+) -> BlockStats
+where
+    F: Fn(usize, u32, f64, Vec3) -> Option<(f64, Vec3, f64, bool)> + Sync,
+{
+    let (mut dropped, mut one_sided, mut mismatch, mut too_small) = (0, 0, 0.0f64, None);
+    let mut k = 0;
+    for p in lo..hi {
+        // Facets towards smaller ids are counted from q's side, unless q does not list
+        // p at all (then it is lost: reported as one-sided).
+        for &(q, a1) in &cells[p].down {
+            let listed = cells[q as usize]
+                .up
+                .binary_search_by_key(&(p as u32), |e| e.0)
+                .is_ok();
+            if a1 >= threshold && !listed {
+                one_sided += 1;
+            }
+        }
+        for &(q, a1, disp, c1) in &cells[p].up {
+            let Some((area, c, mis, one)) = facet(p, q, a1, c1) else {
+                dropped += 1;
+                continue;
+            };
+            if one {
+                one_sided += 1;
+            } else {
+                mismatch = mismatch.max(mis);
+            }
+            if let Some(l) = period
+                && too_small.is_none()
+                && (0..3).any(|i| disp[i].abs() > 0.5 * l[i])
+            {
+                too_small = Some((p as u32, q));
+            }
+            let d = disp.norm();
+            let (rp, rq) = (radii[p], radii[q as usize]);
+            out.pairs[k] = [p as u32, q];
+            out.geometry[k] = ContactGeometry {
+                distance: d,
+                normal: disp / d,
+            };
+            out.area[k] = area;
+            out.centroid[k] = c;
+            out.split[k] = (d * d + rp * rp - rq * rq) / (2.0 * d * d);
+            k += 1;
+        }
+    }
+    debug_assert_eq!(k, out.pairs.len());
+    (dropped, one_sided, mismatch, too_small)
+}
+
+/// Per block of cells: dropped facets, one-sided facets, largest area mismatch, first pair
+/// across more than half a period.
+type BlockStats = (usize, usize, f64, Option<(u32, u32)>);
+
+/// The blocks' totals: dropped facets, one-sided facets, largest area mismatch; refused when a
+/// facet spans more than half the period of the box `period`.
+fn block_totals(stats: &[BlockStats], period: Option<[f64; 3]>) -> Result<(usize, usize, f64), GraphError> {
+    let (mut one_sided, mut mismatch, mut dropped_facets) = (0usize, 0.0f64, 0usize);
+    for &(d, o, m, too_small) in stats {
+        dropped_facets += d;
+        one_sided += o;
+        mismatch = mismatch.max(m);
+        if let (Some((p, q)), Some(l)) = (too_small, period) {
+            return Err(CoreError::invalid(
+                "container.size",
+                format!("{l:?} m"),
+                format!(
+                    "the periodic box is too small for the tessellation: particles {p} and {q} share a facet \
+                     across more than half a period"
+                ),
+            )
+            .into());
+        }
+    }
+    Ok((dropped_facets, one_sided, mismatch))
+}
+
+/// How the cells met the container's curved walls and the planes they tried.
+#[derive(Debug, Clone, Copy, Default)]
+struct PlaneCounts {
+    curved_cells: usize,
+    curved_planes: usize,
+    max_layers: usize,
+    tried: u64,
+    cut: u64,
+}
+
+/// The cells' wall facets at or above the area `threshold` (m²), per particle in face order,
+/// and the plane counts.
+fn wall_facets(cells: &[CellOut], threshold: f64) -> (Vec<WallFacet>, PlaneCounts) {
+    let mut k = PlaneCounts::default();
+    let mut walls = Vec::new();
+    for (p, c) in cells.iter().enumerate() {
+        if c.curved_planes > 0 {
+            k.curved_cells += 1;
+        }
+        k.curved_planes += c.curved_planes;
+        k.max_layers = k.max_layers.max(c.layers);
+        k.tried += c.tried;
+        k.cut += c.cut;
+        let mut w: Vec<WallFacet> = c
+            .walls
+            .iter()
+            .filter(|w| w.3 >= threshold)
+            .map(|&(tag, a, h, area, c)| WallFacet {
+                particle: p as u32,
+                wall: wall_of(tag),
+                area,
+                distance: h / area,
+                normal: a.normalize(),
+                centroid: c / area,
+            })
+            .collect();
+        w.sort_by_key(|f| match f.wall {
+            CellWall::Face(face) => FACES.iter().position(|&x| x == face).unwrap_or(0),
+            CellWall::Carved => 7,
+        });
+        walls.extend(w);
+    }
+    (walls, k)
+}
+
 /// Pairs the two sides of every facet into the graph, and reports.
 fn assemble(
     particles: &ParticleSet,
@@ -1070,21 +1274,7 @@ fn assemble(
     // Pass 1: how many facets each cell records (those towards larger ids that are kept), so
     // that the graph's arrays are allocated once at their final size and filled in place (a
     // list per cell, or arrays grown by doubling, cost up to three times the graph's memory).
-    let counts: Vec<u32> = cells
-        .par_iter()
-        .enumerate()
-        .map(|(p, c)| {
-            c.up.iter()
-                .filter(|&&(q, a1, _, c1)| facet(p, q, a1, c1).is_some())
-                .count() as u32
-        })
-        .collect();
-    let mut offsets = Vec::with_capacity(n + 1);
-    offsets.push(0usize);
-    for &c in &counts {
-        offsets.push(offsets[offsets.len() - 1] + c as usize);
-    }
-    drop(counts);
+    let offsets = facet_offsets(&cells, &facet);
     let total = offsets[n];
     let mut pairs = vec![[0u32; 2]; total];
     let mut geometry = vec![ContactGeometry::default(); total];
@@ -1093,140 +1283,33 @@ fn assemble(
     let mut centroid = vec![Vec3::zeros(); total];
     // Pass 2: fill, in blocks of particles writing to disjoint slices (the order is the
     // particles', so the result is the same for any thread count).
-    const BLOCK: usize = 4096;
     let period = container.period();
-    let blocks: Vec<(usize, usize)> = (0..n).step_by(BLOCK).map(|b| (b, (b + BLOCK).min(n))).collect();
+    let blocks = fill_blocks(n);
     let mut slices = Vec::with_capacity(blocks.len());
-    {
-        let (mut pr, mut ge, mut fa, mut sp, mut ce) = (
-            &mut pairs[..],
-            &mut geometry[..],
-            &mut facet_area[..],
-            &mut split[..],
-            &mut centroid[..],
-        );
-        for &(lo, hi) in &blocks {
-            let len = offsets[hi] - offsets[lo];
-            let (a, r) = pr.split_at_mut(len);
-            pr = r;
-            let (b, r) = ge.split_at_mut(len);
-            ge = r;
-            let (c, r) = fa.split_at_mut(len);
-            fa = r;
-            let (d, r) = sp.split_at_mut(len);
-            sp = r;
-            let (e, r) = ce.split_at_mut(len);
-            ce = r;
-            slices.push(((lo, hi), a, b, c, d, e));
-        }
+    let mut rest = BlockOut {
+        pairs: &mut pairs,
+        geometry: &mut geometry,
+        area: &mut facet_area,
+        split: &mut split,
+        centroid: &mut centroid,
+    };
+    for &(lo, hi) in &blocks {
+        let (head, tail) = rest.split_at(offsets[hi] - offsets[lo]);
+        slices.push(((lo, hi), head));
+        rest = tail;
     }
-    /// Per block: dropped facets, one-sided facets, largest area mismatch, first pair across
-    /// more than half a period.
-    type BlockStats = (usize, usize, f64, Option<(u32, u32)>);
     let stats: Vec<BlockStats> = slices
         .into_par_iter()
-        .map(|((lo, hi), pr, ge, fa, sp, ce)| {
-            let (mut dropped, mut one_sided, mut mismatch, mut too_small) = (0, 0, 0.0f64, None);
-            let mut k = 0;
-            for p in lo..hi {
-                // Facets towards smaller ids are counted from q's side, unless q does not list
-                // p at all (then it is lost: reported as one-sided).
-                for &(q, a1) in &cells[p].down {
-                    let listed = cells[q as usize]
-                        .up
-                        .binary_search_by_key(&(p as u32), |e| e.0)
-                        .is_ok();
-                    if a1 >= threshold && !listed {
-                        one_sided += 1;
-                    }
-                }
-                for &(q, a1, disp, c1) in &cells[p].up {
-                    let Some((area, c, mis, one)) = facet(p, q, a1, c1) else {
-                        dropped += 1;
-                        continue;
-                    };
-                    if one {
-                        one_sided += 1;
-                    } else {
-                        mismatch = mismatch.max(mis);
-                    }
-                    if let Some(l) = period
-                        && too_small.is_none()
-                        && (0..3).any(|i| disp[i].abs() > 0.5 * l[i])
-                    {
-                        too_small = Some((p as u32, q));
-                    }
-                    let d = disp.norm();
-                    let (rp, rq) = (radii[p], radii[q as usize]);
-                    pr[k] = [p as u32, q];
-                    ge[k] = ContactGeometry {
-                        distance: d,
-                        normal: disp / d,
-                    };
-                    fa[k] = area;
-                    ce[k] = c;
-                    sp[k] = (d * d + rp * rp - rq * rq) / (2.0 * d * d);
-                    k += 1;
-                }
-            }
-            debug_assert_eq!(k, pr.len());
-            (dropped, one_sided, mismatch, too_small)
-        })
+        .map(|(range, out)| fill_block(&cells, range, out, &facet, (threshold, radii), period))
         .collect();
-    let (mut one_sided, mut mismatch, mut dropped_facets) = (0usize, 0.0f64, 0usize);
-    for &(d, o, m, too_small) in &stats {
-        dropped_facets += d;
-        one_sided += o;
-        mismatch = mismatch.max(m);
-        if let (Some((p, q)), Some(l)) = (too_small, period) {
-            return Err(CoreError::invalid(
-                "container.size",
-                format!("{l:?} m"),
-                format!(
-                    "the periodic box is too small for the tessellation: particles {p} and {q} share a facet \
-                     across more than half a period"
-                ),
-            )
-            .into());
-        }
-    }
-    let mut walls = Vec::new();
-    let (mut curved_cells, mut curved_planes, mut max_layers) = (0, 0, 0);
-    let (mut tried, mut cut) = (0u64, 0u64);
-    for (p, c) in cells.iter().enumerate() {
-        if c.curved_planes > 0 {
-            curved_cells += 1;
-        }
-        curved_planes += c.curved_planes;
-        max_layers = max_layers.max(c.layers);
-        tried += c.tried;
-        cut += c.cut;
-        let mut w: Vec<WallFacet> = c
-            .walls
-            .iter()
-            .filter(|w| w.3 >= threshold)
-            .map(|&(tag, a, h, area, c)| WallFacet {
-                particle: p as u32,
-                wall: wall_of(tag),
-                area,
-                distance: h / area,
-                normal: a.normalize(),
-                centroid: c / area,
-            })
-            .collect();
-        w.sort_by_key(|f| match f.wall {
-            CellWall::Face(face) => FACES.iter().position(|&x| x == face).unwrap_or(0),
-            CellWall::Carved => 7,
-        });
-        walls.extend(w);
-    }
+    let (dropped_facets, one_sided, mismatch) = block_totals(&stats, period)?;
+    let (walls, planes) = wall_facets(&cells, threshold);
     let volume: Vec<f64> = cells.iter().map(|c| c.volume).collect();
     let cells_volume: f64 = volume.iter().sum();
     let domain_volume = match carve {
         Some(r) => r.volume(256),
         None => container.volume(),
     };
-    let n_pairs = pairs.len();
     let mut graph = ContactGraph {
         n_particles: n,
         pairs,
@@ -1243,7 +1326,7 @@ fn assemble(
             largest_component: 0,
             search: crate::NeighbourSearch::CellGrid,
             search_rounds: 1,
-            candidates: tried as usize,
+            candidates: planes.tried as usize,
             wall_time_s: 0.0,
             diagnostics: Vec::new(),
         },
@@ -1261,17 +1344,16 @@ fn assemble(
                 cells_volume,
                 domain_volume,
                 volume_error: cells_volume / domain_volume - 1.0,
-                curved_cells,
-                curved_planes,
-                max_layers,
-                planes_tried: tried,
-                planes_cut: cut,
+                curved_cells: planes.curved_cells,
+                curved_planes: planes.curved_planes,
+                max_layers: planes.max_layers,
+                planes_tried: planes.tried,
+                planes_cut: planes.cut,
                 wall_s: 0.0,
             },
         })),
         cut_degrees: Vec::new(),
     };
-    debug_assert_eq!(graph.pairs.len(), n_pairs);
     summarise(&mut graph, radii);
     let wall_s = start.elapsed().as_secs_f64();
     graph.report.wall_time_s = wall_s;
