@@ -463,27 +463,7 @@ impl Setup<'_> {
         let rp = self.radii[p];
         let tol = 1e-12 * rp.max(self.grid.width);
         let mut out = CellOut::default();
-        // The starting box.
-        match (self.container, self.container.period()) {
-            (_, Some(l)) => {
-                // Large enough for any cell the search can certify; BOUND faces that survive
-                // mean the cell was not closed by its neighbours.
-                let h = Vec3::new(l[0], l[1], l[2]) * 0.5;
-                cell.reset_box(-h, h, [BOUND; 6]);
-            }
-            (c, None) => {
-                let b = c.bounds();
-                let tags: [Tag; 6] = match c {
-                    Container::Box { .. } => std::array::from_fn(|k| wall_tag(k as u32)),
-                    Container::Cylinder { .. } => {
-                        let o = wall_tag(6);
-                        [o, o, o, o, wall_tag(4), wall_tag(5)]
-                    }
-                    _ => [wall_tag(6); 6],
-                };
-                cell.reset_box(b.min - x, b.max - x, tags);
-            }
-        }
+        self.start_box(x, cell);
         // Curved container walls and the carving surface: the tangent plane nearest the site
         // first, so that the neighbour search starts from a small cell.
         self.curve_clip(x, rp, cell, &mut out, true)?;
@@ -563,9 +543,52 @@ impl Setup<'_> {
             return Err(f);
         }
         self.curve_clip(x, rp, cell, &mut out, false)?;
+        self.faces(p, cell, cands, &mut out)?;
+        out.up.sort_unstable_by_key(|f| f.0);
+        out.down.sort_unstable_by_key(|f| f.0);
+        if out.up.windows(2).any(|w| w[0].0 == w[1].0) || out.down.windows(2).any(|w| w[0].0 == w[1].0) {
+            // Two facets with one neighbour: two of its images (refused in periodic boxes).
+            return Err(CellFail::TooSmallPeriod {
+                layers: out.layers as i64,
+            });
+        }
+        Ok(out)
+    }
+
+    /// The cell of the site at `x` before any neighbour: half a period around it in a
+    /// periodic box (BOUND faces), else the container's bounding box with its walls' tags.
+    #[inline]
+    fn start_box(&self, x: Vec3, cell: &mut Cell) {
+        match (self.container, self.container.period()) {
+            (_, Some(l)) => {
+                // Large enough for any cell the search can certify; BOUND faces that survive
+                // mean the cell was not closed by its neighbours.
+                let h = Vec3::new(l[0], l[1], l[2]) * 0.5;
+                cell.reset_box(-h, h, [BOUND; 6]);
+            }
+            (c, None) => {
+                let b = c.bounds();
+                let tags: [Tag; 6] = match c {
+                    Container::Box { .. } => std::array::from_fn(|k| wall_tag(k as u32)),
+                    Container::Cylinder { .. } => {
+                        let o = wall_tag(6);
+                        [o, o, o, o, wall_tag(4), wall_tag(5)]
+                    }
+                    _ => [wall_tag(6); 6],
+                };
+                cell.reset_box(b.min - x, b.max - x, tags);
+            }
+        }
+    }
+
+    /// The clipped cell's volume, facets (towards larger ids with their geometry, towards
+    /// smaller ids with their area) and wall facets into `out`; refused when a face is still
+    /// the starting box's (the period is too small).
+    #[inline]
+    fn faces(&self, p: usize, cell: &Cell, cands: &[Candidate], out: &mut CellOut) -> Result<(), CellFail> {
+        out.volume = cell.volume();
         // Faces. The facet list is allocated at its exact length: a million cells' lists
         // grown by doubling would hold a third more memory than their facets.
-        out.volume = cell.volume();
         let (mut ups, mut downs) = (0, 0);
         for f in 0..cell.n_faces() {
             let tag = cell.tags[f];
@@ -608,15 +631,7 @@ impl Setup<'_> {
                 }
             }
         }
-        out.up.sort_unstable_by_key(|f| f.0);
-        out.down.sort_unstable_by_key(|f| f.0);
-        if out.up.windows(2).any(|w| w[0].0 == w[1].0) || out.down.windows(2).any(|w| w[0].0 == w[1].0) {
-            // Two facets with one neighbour: two of its images (refused in periodic boxes).
-            return Err(CellFail::TooSmallPeriod {
-                layers: out.layers as i64,
-            });
-        }
-        Ok(out)
+        Ok(())
     }
 
     /// Clips the cell by the power plane of site `q` (displaced by `shift`) when it can reach
