@@ -792,16 +792,15 @@ fn phase_normals(graph: &ContactGraph, phases: &[u16], areas: &[f64]) -> Vec<Vec
     u
 }
 
-/// The interface resistances of contact `k` (thermal m²·K/W, electric Ω·m², count).
-/// `normals` ([`phase_normals`]) give the |e·n| of a crossing at the facet (the centre
-/// reading); without them it is 1. A contact with a `bridge` reads its two crossings instead.
-#[allow(clippy::too_many_arguments)]
+/// The interface resistances of contact `k` (thermal m²·K/W, electric Ω·m², count), `table`
+/// the interfaces between each pair of the `n` phases. `normals` ([`phase_normals`]) give the
+/// |e·n| of a crossing at the facet (the centre reading); without them it is 1. A contact with a
+/// `bridge` reads its two crossings instead.
 fn contact_interface(
     graph: &ContactGraph,
     phases: &[u16],
     lam: &Laminates<'_>,
-    table: &[Option<(f64, f64)>],
-    n: usize,
+    (table, n): (&[Option<(f64, f64)>], usize),
     k: usize,
     normals: Option<&[Vec3]>,
     bridge: Option<&PhaseBridge>,
@@ -863,7 +862,7 @@ pub(crate) fn update_interface_marks(
     let mut count = 0;
     for (k, bridge) in bridge_of(graph, bridges).enumerate() {
         let crossed = !defects.spec.interfaces.is_empty()
-            && contact_interface(graph, phases, &lam, &table, n_phases, k, None, bridge).2 > 0;
+            && contact_interface(graph, phases, &lam, (&table, n_phases), k, None, bridge).2 > 0;
         if crossed {
             defects.marks[k] |= MARK_INTERFACE;
             count += 1;
@@ -962,8 +961,7 @@ pub(crate) fn apply_to_contacts(view: &DefectView<'_>, areas: &[f64], g: &mut [f
                 graph,
                 phases,
                 &lam,
-                &table,
-                n_phases,
+                (&table, n_phases),
                 k,
                 normals.as_deref(),
                 bridge,

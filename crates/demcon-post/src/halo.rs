@@ -248,9 +248,9 @@ pub fn halo_flux_blocked(
         .map(|&i| {
             let (c, r) = (&grid.centres[i as usize], halo_radius(i as usize));
             match params.phases {
-                HaloPhases::All => grid.ball_sum::<false>(c, r, &pos, &dv, &phase, 0, blocked),
+                HaloPhases::All => grid.ball_sum::<false>((c, r), &pos, &dv, &phase, 0, blocked),
                 HaloPhases::Same => {
-                    grid.ball_sum::<true>(c, r, &pos, &dv, &phase, particles.phases[i as usize], blocked)
+                    grid.ball_sum::<true>((c, r), &pos, &dv, &phase, particles.phases[i as usize], blocked)
                 }
             }
         })
@@ -431,11 +431,9 @@ impl ColumnGrid {
     /// Sum of `dv` over the particles (and periodic images) whose centre lies within `r` of
     /// `c` and, if `SAME`, whose phase (`phase`, grid order) is `want`; and their number.
     /// Sequential in a fixed order. Members for which `blocked(c, member)` holds are left out.
-    #[allow(clippy::too_many_arguments)]
     fn ball_sum<const SAME: bool>(
         &self,
-        c: &Vec3,
-        r: f64,
+        (c, r): (&Vec3, f64),
         pos: &[Vec3],
         dv: &[[f64; 4]],
         phase: &[u16],
