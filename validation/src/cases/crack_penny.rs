@@ -53,6 +53,7 @@ use demcon_scene::config::*;
 use serde_json::{Map, Value};
 
 use super::common::*;
+use super::study::{Measured, Study};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx, Table};
 use demcon_plot::{Chart, Scale, Series, draw};
@@ -226,11 +227,9 @@ struct Run {
 
 /// One packing.
 struct PackingRun {
-    n_target: usize,
     n: usize,
     /// Mean particle radius (m).
     mean_radius: f64,
-    k: u64,
     pack_s: f64,
     runs: Vec<Run>,
 }
@@ -247,20 +246,20 @@ impl PackingRun {
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let ladder: Vec<usize> = ctx.pick(vec![5_000, 20_000], vec![20_000, 100_000]);
-    let mut packings = Vec::new();
-    for &n in &ladder {
-        for k in 0..PACKINGS {
-            packings.push(measure_packing(n, ctx.seed + k, k)?);
-        }
-    }
+    let study = Study::run(
+        &ladder,
+        |_| PACKINGS,
+        ctx.seed,
+        |n, seed, _| measure_packing(n, seed),
+    )?;
     let mut out = CaseOutcome::new("crack-penny", ctx.mode);
-    out.n_particles = packings.iter().map(|p| p.n).max().unwrap_or(0);
-    compare(ctx.mode, &ladder, &packings, &mut out);
-    report(ctx, &ladder, &packings, &mut out)?;
+    out.n_particles = study.packings().iter().map(|p| p.rows.n).max().unwrap_or(0);
+    compare(ctx.mode, &study, &mut out);
+    report(ctx, &study, &mut out)?;
     Ok(out)
 }
 
-fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
+fn measure_packing(n: usize, seed: u64) -> anyhow::Result<PackingRun> {
     let cfg = scene(n, seed);
     let contacts = model_of(&with_surface_model(&cfg, Surface::Terreros, None))?;
     let pack_s = contacts.report.pack_s;
@@ -339,10 +338,8 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     }
     let radii = &contacts.particles.radii;
     Ok(PackingRun {
-        n_target: n,
         n: contacts.particles.len(),
         mean_radius: radii.iter().sum::<f64>() / radii.len() as f64,
-        k,
         pack_s,
         runs,
     })
@@ -402,34 +399,30 @@ fn read_jump(model: &Model, temps: &[f64], a: f64, q: f64, lambda: f64, flow_rat
 }
 
 /// |mean jump error| of `s` at crack `i` over the packings of N = `n`.
-fn spread(packings: &[PackingRun], n: usize, s: CrackModel, i: usize) -> Spread {
-    Spread::of(
-        packings
-            .iter()
-            .filter(|p| p.n_target == n)
-            .map(|p| p.run(s).jumps[i].mean_error.abs()),
-    )
+fn spread(study: &Study<PackingRun>, n: usize, s: CrackModel, i: usize) -> Spread {
+    study.spread(n, |p| p.run(s).jumps[i].mean_error.abs())
 }
 
 fn ratio_key(r: f64) -> String {
     format!("a_over_l_1_{}", (1.0 / r).round() as u32)
 }
 
-fn compare(mode: crate::Mode, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
+fn compare(mode: crate::Mode, study: &Study<PackingRun>, out: &mut CaseOutcome) {
+    let ladder = study.sizes();
     let mut by_model = Map::new();
     for s in CrackModel::ALL {
         let mut cracks = Map::new();
         for (i, &r) in RATIOS.iter().enumerate() {
             let by_n: Map<String, Value> = ladder
                 .iter()
-                .map(|&n| (n.to_string(), spread(packings, n, s, i).json()))
+                .map(|&n| (n.to_string(), spread(study, n, s, i).json()))
                 .collect();
             cracks.insert(ratio_key(r), Value::Object(by_n));
         }
         by_model.insert(s.id(), Value::Object(cracks));
     }
     out.metric("mean_jump_abs_rel_error_by_model", Value::Object(by_model));
-    let largest = *ladder.last().expect("a ladder");
+    let largest = study.largest();
     let (tol_jump, why) = match mode {
         crate::Mode::Full => (
             FULL_JUMP,
@@ -442,7 +435,7 @@ fn compare(mode: crate::Mode, ladder: &[usize], packings: &[PackingRun], out: &m
         ),
     };
     for (i, &r) in RATIOS.iter().enumerate() {
-        let e = spread(packings, largest, CrackModel::HEADLINE, i);
+        let e = spread(study, largest, CrackModel::HEADLINE, i);
         out.metric(&format!("mean_jump_rel_error_{}", ratio_key(r)), e.max);
         out.compare(Comparison::at_most(
             &format!(
@@ -458,19 +451,16 @@ fn compare(mode: crate::Mode, ladder: &[usize], packings: &[PackingRun], out: &m
         ));
     }
     for (i, &r) in RATIOS.iter().enumerate() {
-        let x = Spread::of(
-            packings
-                .iter()
-                .filter(|p| p.n_target == largest)
-                .map(|p| p.run(CrackModel::HEADLINE).jumps[i].mean_error * r * L / p.mean_radius),
-        );
+        let x = study.spread(largest, |p| {
+            p.run(CrackModel::HEADLINE).jumps[i].mean_error * r * L / p.mean_radius
+        });
         out.metric(
             &format!("laguerre_excess_radius_in_mean_radii_{}", ratio_key(r)),
             x.json(),
         );
     }
     for s in CrackModel::ALL {
-        let t = Spread::of(packings.iter().map(|p| p.run(s).through));
+        let t = Spread::of(study.packings().iter().map(|p| p.rows.run(s).through));
         out.metric(&format!("through_crack_flow_ratio_{}", s.id()), t.json());
         out.compare(Comparison::at_most(
             &format!(
@@ -505,16 +495,17 @@ impl Summary<'_> {
 }
 
 /// The tables, the notes and the profile chart.
-fn report(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) -> anyhow::Result<()> {
-    out.tables.push(jump_table(ladder, packings));
-    out.tables.push(packings_table(packings));
-    run_notes(ctx, ladder, packings, out);
-    profile_chart(ctx, ladder, packings, out)
+fn report(ctx: &Ctx, study: &Study<PackingRun>, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    out.tables.push(jump_table(study));
+    out.tables.push(packings_table(study));
+    run_notes(ctx, study, out);
+    profile_chart(ctx, study, out)
 }
 
 /// The jump per N, model and a/L: mean jump per packing, the profile in bands, the excess.
-fn jump_table(ladder: &[usize], packings: &[PackingRun]) -> Table {
-    let lines: Vec<Summary> = ladder
+fn jump_table(study: &Study<PackingRun>) -> Table {
+    let lines: Vec<Summary> = study
+        .sizes()
         .iter()
         .flat_map(|&n| {
             CrackModel::ALL.iter().flat_map(move |&s| {
@@ -522,7 +513,7 @@ fn jump_table(ladder: &[usize], packings: &[PackingRun]) -> Table {
                     n,
                     model: s,
                     i,
-                    packings: packings.iter().filter(|p| p.n_target == n).collect(),
+                    packings: study.at(n).collect(),
                 })
             })
         })
@@ -570,48 +561,47 @@ fn jump_table(ladder: &[usize], packings: &[PackingRun]) -> Table {
 }
 
 /// λ_hom, the through-section flow and the cost of every model on every packing.
-fn packings_table(packings: &[PackingRun]) -> Table {
-    let rows: Vec<&PackingRun> = packings.iter().collect();
+fn packings_table(study: &Study<PackingRun>) -> Table {
+    let rows: Vec<&Measured<PackingRun>> = study.packings().iter().collect();
     Columns::new()
-        .column("N", |p: &&PackingRun| p.n.to_string())
+        .column("N", |p: &&Measured<PackingRun>| p.rows.n.to_string())
         .column("packing", |p| (p.k + 1).to_string())
         .columns_for(
             CrackModel::ALL,
             |s| format!("{}: λ_hom, |Q|/Q₀ through-section, solves (s)", s.id()),
-            |s, p: &&PackingRun| {
-                let r = p.run(*s);
+            |s, p: &&Measured<PackingRun>| {
+                let r = p.rows.run(*s);
                 format!("{:.4} / {:.1e} / {:.2}", r.lambda_hom, r.through, r.solve_s)
             },
         )
-        .column("packing (s)", |p| format!("{:.2}", p.pack_s))
+        .column("packing (s)", |p| format!("{:.2}", p.rows.pack_s))
         .table("Every packing", &rows)
 }
 
 /// The run's sizes and this run's largest jump errors and excesses; the method is in the
 /// case's notes file.
-fn run_notes(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
+fn run_notes(ctx: &Ctx, study: &Study<PackingRun>, out: &mut CaseOutcome) {
     out.note(format!(
         "{} mode: N = {:?}, {PACKINGS} packings each (seeds {}…{}). Method, reference and tolerances: \
          validation/notes/crack-penny.md.",
         ctx.mode.name(),
-        ladder,
+        study.sizes(),
         ctx.seed,
         ctx.seed + PACKINGS - 1,
     ));
-    let largest = *ladder.last().expect("a ladder");
+    let largest = study.largest();
     let worst = |m: CrackModel| {
         RATIOS
             .iter()
             .enumerate()
-            .map(|(i, _)| spread(packings, largest, m, i).max)
+            .map(|(i, _)| spread(study, largest, m, i).max)
             .map(|e| format!("{:.0} %", 100.0 * e))
             .collect::<Vec<_>>()
             .join(" / ")
     };
     let excess = |m: CrackModel| {
-        let xs: Vec<f64> = packings
-            .iter()
-            .filter(|p| p.n_target == largest)
+        let xs: Vec<f64> = study
+            .at(largest)
             .flat_map(|p| {
                 RATIOS
                     .iter()
@@ -644,15 +634,10 @@ fn run_notes(ctx: &Ctx, ladder: &[usize], packings: &[PackingRun], out: &mut Cas
 }
 
 /// The profile: band means over the packings of the largest N against the formula.
-fn profile_chart(
-    ctx: &Ctx,
-    ladder: &[usize],
-    packings: &[PackingRun],
-    out: &mut CaseOutcome,
-) -> anyhow::Result<()> {
-    let largest = *ladder.last().expect("a ladder");
+fn profile_chart(ctx: &Ctx, study: &Study<PackingRun>, out: &mut CaseOutcome) -> anyhow::Result<()> {
+    let largest = study.largest();
     let whole = CrackModel::ALL[2];
-    let at_largest: Vec<&PackingRun> = packings.iter().filter(|p| p.n_target == largest).collect();
+    let at_largest: Vec<&PackingRun> = study.at(largest).collect();
     let band_series = |m: CrackModel, i: usize| {
         let points = (0..BANDS)
             .filter_map(|b| {

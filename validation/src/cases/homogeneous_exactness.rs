@@ -42,6 +42,7 @@ use serde_json::{Map, Value};
 
 use super::common::*;
 use super::cylinder::{RADIUS, cylinder_packing};
+use super::study::{Measured as Packing, Study};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx, Table};
 
@@ -177,7 +178,6 @@ impl ModelRun {
 /// One packing of one geometry.
 struct PackingRun {
     geometry: Geometry,
-    k: u64,
     n: usize,
     phi: f64,
     c_t: f64,
@@ -207,13 +207,22 @@ impl PackingRun {
 /// Everything the case measures.
 struct Measured {
     n: usize,
-    packings: Vec<PackingRun>,
+    /// The packings of each geometry, in [`Geometry::ALL`] order.
+    studies: Vec<(Geometry, Study<PackingRun>)>,
     periodic: Vec<PeriodicRun>,
 }
 
 impl Measured {
     fn of(&self, g: Geometry) -> impl Iterator<Item = &PackingRun> {
-        self.packings.iter().filter(move |p| p.geometry == g)
+        self.studies
+            .iter()
+            .filter(move |(h, _)| *h == g)
+            .flat_map(|(_, s)| s.at(self.n))
+    }
+
+    /// Every packing, geometry by geometry.
+    fn packings(&self) -> impl Iterator<Item = &Packing<PackingRun>> {
+        self.studies.iter().flat_map(|(_, s)| s.packings())
     }
 
     /// Mean and max over the packings of `g` of `f(run of s)`.
@@ -226,7 +235,7 @@ impl Measured {
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let m = measure(ctx)?;
     let mut out = CaseOutcome::new("homogeneous-exactness", ctx.mode);
-    out.n_particles = m.packings.iter().map(|p| p.n).max().unwrap_or(0);
+    out.n_particles = m.packings().map(|p| p.rows.n).max().unwrap_or(0);
     compare(&m, &mut out);
     report(ctx, &m, &mut out);
     Ok(out)
@@ -241,27 +250,28 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
         .collect();
     scenes.extend((0..PACKINGS).map(|k| periodic_scene(n, ctx.seed + k)));
     prepack(&scenes)?;
-    let mut packings = Vec::new();
+    let mut studies = Vec::new();
     for g in Geometry::ALL {
-        for k in 0..PACKINGS {
-            packings.push(measure_packing(g, n, ctx.seed + k, k)?);
-        }
+        let study = Study::run(
+            &[n],
+            |_| PACKINGS,
+            ctx.seed,
+            |n, seed, _| measure_packing(g, n, seed),
+        )?;
+        studies.push((g, study));
     }
-    let seeds: Vec<(u64, f64)> = packings
+    let seeds: Vec<(u64, f64)> = studies
         .iter()
-        .filter(|p| p.geometry == Geometry::Cube)
-        .map(|p| (ctx.seed + p.k, p.c_t))
+        .filter(|(g, _)| *g == Geometry::Cube)
+        .flat_map(|(_, s)| s.packings())
+        .map(|p| (ctx.seed + p.k, p.rows.c_t))
         .collect();
     let periodic = measure_periodic(n, &seeds)?;
-    Ok(Measured {
-        n,
-        packings,
-        periodic,
-    })
+    Ok(Measured { n, studies, periodic })
 }
 
 /// One packing: its contact model (calibrated and Terreros) and its Laguerre model.
-fn measure_packing(g: Geometry, n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
+fn measure_packing(g: Geometry, n: usize, seed: u64) -> anyhow::Result<PackingRun> {
     let axes = g.axes();
     let contacts = model_of(&g.scene(n, seed, &axes[0]))?;
     let pack_s = contacts.report.pack_s;
@@ -305,7 +315,6 @@ fn measure_packing(g: Geometry, n: usize, seed: u64, k: u64) -> anyhow::Result<P
     let t = cells.report.tessellation.as_ref();
     Ok(PackingRun {
         geometry: g,
-        k,
         n: contacts.particles.len(),
         phi: contacts.phi,
         c_t,
@@ -505,7 +514,7 @@ fn periodic_scene(n: usize, seed: u64) -> SceneConfig {
 
 /// A line of the per-packing table.
 struct Line<'a> {
-    p: &'a PackingRun,
+    p: &'a Packing<PackingRun>,
     r: &'a ModelRun,
 }
 
@@ -561,12 +570,12 @@ fn summary_table(m: &Measured) -> Table {
 /// cells' section, and the costs.
 fn packings_table(m: &Measured) -> Table {
     let lines: Vec<Line> = m
-        .packings
-        .iter()
-        .flat_map(|p| p.runs.iter().map(move |r| Line { p, r }))
+        .packings()
+        .flat_map(|p| p.rows.runs.iter().map(move |r| Line { p, r }))
         .collect();
     let axes = |l: &Line, v: &[f64]| {
-        l.p.geometry
+        l.p.rows
+            .geometry
             .axes()
             .iter()
             .zip(v)
@@ -575,10 +584,10 @@ fn packings_table(m: &Measured) -> Table {
             .join("; ")
     };
     Columns::new()
-        .column("geometry", |l: &Line| l.p.geometry.id().to_string())
+        .column("geometry", |l: &Line| l.p.rows.geometry.id().to_string())
         .column("packing", |l| (l.p.k + 1).to_string())
-        .column("N", |l| l.p.n.to_string())
-        .column("φ", |l| format!("{:.4}", l.p.phi))
+        .column("N", |l| l.p.rows.n.to_string())
+        .column("φ", |l| format!("{:.4}", l.p.rows.phi))
         .column("model", |l| l.r.surface.label().to_string())
         .column("λ_e/λ − 1 (nominal section)", move |l| axes(l, &l.r.errors))
         .column("over the cells' section", move |l| {
@@ -598,7 +607,7 @@ fn packings_table(m: &Measured) -> Table {
         .column("network (s)", |l| format!("{:.2}", l.r.network_s))
         .column("calibration (s)", |l| {
             if l.r.calibration_s > 0.0 {
-                format!("{:.2} (C_t = {:.4})", l.r.calibration_s, l.p.c_t)
+                format!("{:.2} (C_t = {:.4})", l.r.calibration_s, l.p.rows.c_t)
             } else {
                 String::new()
             }
@@ -633,7 +642,7 @@ fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
         m.n,
         ctx.seed,
         ctx.seed + PACKINGS - 1,
-        m.packings.iter().map(|p| p.pack_s).sum::<f64>(),
+        m.packings().map(|p| p.rows.pack_s).sum::<f64>(),
     ));
     out.note(format!(
         "Laguerre tessellations — {}; {}.",

@@ -43,6 +43,7 @@ use serde_json::{Map, Value};
 
 use super::common::*;
 use super::cylinder::*;
+use super::study::{Measured as Packing, Study};
 use crate::analytic::uniform_resistance;
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx, Table};
@@ -169,10 +170,8 @@ impl Sample {
     }
 }
 
-/// One packing of the table: requested N, packing index, its measurements and errors.
+/// One packing of the table: its measurements and errors.
 struct PackingLine {
-    n: usize,
-    k: u64,
     s: Sample,
     e: Errors,
 }
@@ -195,10 +194,9 @@ struct SizeMeans {
 
 /// Everything the case measures.
 struct Measured {
-    sizes: Vec<usize>,
     /// ρ_e l / A (Ω).
     r_th: f64,
-    packings: Vec<PackingLine>,
+    study: Study<PackingLine>,
     means: Vec<SizeMeans>,
     worst_mismatch: f64,
     excluded: usize,
@@ -321,16 +319,19 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
         vec![1000, 2000, 5000, 10_000, 20_000],
     );
     let r_th = uniform_resistance(RHO_E, LENGTH, std::f64::consts::PI * RADIUS * RADIUS);
-    let mut packings = Vec::new();
+    let study = Study::run(
+        &sizes,
+        |_| REALISATIONS,
+        ctx.seed,
+        |n, seed, _| {
+            let s = measure_packing(n, seed)?;
+            let e = s.errors(r_th);
+            Ok(PackingLine { s, e })
+        },
+    )?;
     let mut means = Vec::new();
     for &n in &sizes {
-        let first = packings.len();
-        for k in 0..REALISATIONS {
-            let s = measure_packing(n, ctx.seed + k)?;
-            let e = s.errors(r_th);
-            packings.push(PackingLine { n, k, s, e });
-        }
-        let these = &packings[first..];
+        let these: Vec<&PackingLine> = study.at(n).collect();
         let mean =
             |f: fn(&PackingLine) -> f64| these.iter().fold(0.0, |acc, p| acc + f(p)) / REALISATIONS as f64;
         means.push(SizeMeans {
@@ -347,14 +348,14 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
             face_calibrated: mean(|p| p.e.face_calibrated.abs()),
         });
     }
+    let packings = study.packings();
     Ok(Measured {
         r_th,
-        worst_mismatch: packings.iter().map(|p| p.s.mismatch).fold(0.0f64, f64::max),
-        excluded: packings.iter().map(|p| p.s.excluded).sum(),
-        pack_s: packings.iter().fold(0.0, |acc, p| acc + p.s.pack_s),
-        n_particles: packings.iter().map(|p| p.s.n).max().unwrap_or(0),
-        sizes,
-        packings,
+        worst_mismatch: packings.iter().map(|p| p.rows.s.mismatch).fold(0.0f64, f64::max),
+        excluded: packings.iter().map(|p| p.rows.s.excluded).sum(),
+        pack_s: packings.iter().fold(0.0, |acc, p| acc + p.rows.s.pack_s),
+        n_particles: packings.iter().map(|p| p.rows.s.n).max().unwrap_or(0),
+        study,
         means,
     })
 }
@@ -391,12 +392,10 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
     out.reference("max_rel_error", "0.01 at every N (issue 10, Laguerre)");
     let wall = |f: fn(&PackingLine) -> f64| -> Value {
         Value::Object(
-            m.sizes
+            m.study
+                .sizes()
                 .iter()
-                .map(|&n| {
-                    let these: Vec<&PackingLine> = m.packings.iter().filter(|p| p.n == n).collect();
-                    (key(n), Value::from(Spread::of(these.iter().map(|p| f(p))).mean))
-                })
+                .map(|&n| (key(n), Value::from(m.study.spread(n, f).mean)))
                 .collect(),
         )
     };
@@ -414,9 +413,10 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
     );
     out.metric(
         "laguerre_section_error_max",
-        m.packings
+        m.study
+            .packings()
             .iter()
-            .map(|p| p.s.laguerre_section.abs())
+            .map(|p| p.rows.s.laguerre_section.abs())
             .fold(0.0, f64::max),
     );
     out.reference(
@@ -428,7 +428,7 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
     out.compare(Comparison::at_most(
         &format!(
             "Laguerre (headline), face electrodes: largest |R/R_th − 1| over every packing at every N ({} packings)",
-            m.packings.len()
+            m.study.packings().len()
         ),
         m.means.iter().map(|s| s.laguerre_max).fold(0.0, f64::max),
         0.01,
@@ -493,42 +493,54 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
 /// Every packing: each model's R and error, the geometry columns and the costs.
 fn packings_table(m: &Measured) -> Table {
     Columns::new()
-        .column("N", |p: &PackingLine| p.s.n.to_string())
+        .column("N", |p: &Packing<PackingLine>| p.rows.s.n.to_string())
         .column("packing", |p| (p.k + 1).to_string())
-        .column("r̄ (µm)", |p| format!("{:.1}", 1e6 * p.s.mean_radius))
-        .column("φ", |p| format!("{:.3}", p.s.phi))
+        .column("r̄ (µm)", |p| format!("{:.1}", 1e6 * p.rows.s.mean_radius))
+        .column("φ", |p| format!("{:.3}", p.rows.s.phi))
         .column("Z wall / bulk", |p| {
-            format!("{:.2} / {:.2}", p.s.z_wall, p.s.z_bulk)
+            format!("{:.2} / {:.2}", p.rows.s.z_wall, p.rows.s.z_bulk)
         })
         .column("R Laguerre, face electrodes (mΩ)", |p| {
-            format!("{:.5}", 1e3 * p.s.r_laguerre)
+            format!("{:.5}", 1e3 * p.rows.s.r_laguerre)
         })
-        .column("error", |p| format!("{:+.4} %", 100.0 * p.e.laguerre))
-        .column("A_cells/A − 1", |p| format!("{:+.1e}", p.s.laguerre_section))
+        .column("error", |p| format!("{:+.4} %", 100.0 * p.rows.e.laguerre))
+        .column("A_cells/A − 1", |p| {
+            format!("{:+.1e}", p.rows.s.laguerre_section)
+        })
         .column("Laguerre: tessellation (s); solve (ms)", |p| {
-            format!("{:.3}; {:.1}", p.s.laguerre_network_s, p.s.laguerre_ms)
+            format!("{:.3}; {:.1}", p.rows.s.laguerre_network_s, p.rows.s.laguerre_ms)
         })
-        .column("R Terreros (mΩ)", |p| format!("{:.5}", 1e3 * p.s.r_terreros))
-        .column("error", |p| pct(p.e.terreros))
-        .column("error, Z = 6.2", |p| pct(p.e.z62))
-        .column("R calibrated (mΩ)", |p| format!("{:.5}", 1e3 * p.s.r_calibrated))
-        .column("error", |p| pct(p.e.calibrated))
+        .column("R Terreros (mΩ)", |p| {
+            format!("{:.5}", 1e3 * p.rows.s.r_terreros)
+        })
+        .column("error", |p| pct(p.rows.e.terreros))
+        .column("error, Z = 6.2", |p| pct(p.rows.e.z62))
+        .column("R calibrated (mΩ)", |p| {
+            format!("{:.5}", 1e3 * p.rows.s.r_calibrated)
+        })
+        .column("error", |p| pct(p.rows.e.calibrated))
         .column("C_t (calibration s)", |p| {
-            format!("{:.4} ({:.2})", p.s.c_t, p.s.calibration_s)
+            format!("{:.4} ({:.2})", p.rows.s.c_t, p.rows.s.calibration_s)
         })
-        .column("L_eff / l", |p| format!("{:.4}", p.s.l_eff / LENGTH))
-        .column("Terreros error, L_eff-corrected", |p| pct(p.e.length_corrected))
+        .column("L_eff / l", |p| format!("{:.4}", p.rows.s.l_eff / LENGTH))
+        .column("Terreros error, L_eff-corrected", |p| {
+            pct(p.rows.e.length_corrected)
+        })
         .column("R Terreros, face electrodes (mΩ)", |p| {
-            format!("{:.5}", 1e3 * p.s.r_face)
+            format!("{:.5}", 1e3 * p.rows.s.r_face)
         })
-        .column("error", |p| pct(p.e.face))
-        .column("error, calibrated, face electrodes", |p| pct(p.e.face_calibrated))
-        .column("CG iter.", |p| p.s.iterations.to_string())
-        .column("solve (ms)", |p| format!("{:.1}", p.s.solve_ms))
-        .column("solve, face electrodes (ms)", |p| format!("{:.1}", p.s.face_ms))
-        .column("contacts (s)", |p| format!("{:.3}", p.s.contacts_s))
+        .column("error", |p| pct(p.rows.e.face))
+        .column("error, calibrated, face electrodes", |p| {
+            pct(p.rows.e.face_calibrated)
+        })
+        .column("CG iter.", |p| p.rows.s.iterations.to_string())
+        .column("solve (ms)", |p| format!("{:.1}", p.rows.s.solve_ms))
+        .column("solve, face electrodes (ms)", |p| {
+            format!("{:.1}", p.rows.s.face_ms)
+        })
+        .column("contacts (s)", |p| format!("{:.3}", p.rows.s.contacts_s))
         .column("paper error", |p| {
-            paper_at(p.n)
+            paper_at(p.n_target)
                 .map(|row| format!("{:.2} %", row.errors_percent[p.k as usize]))
                 .unwrap_or_default()
         })
@@ -537,7 +549,7 @@ fn packings_table(m: &Measured) -> Table {
                 "Equivalent resistance against ρ_e l / A = {:.5} mΩ, per packing",
                 1e3 * m.r_th
             ),
-            &m.packings,
+            m.study.packings(),
         )
 }
 
@@ -548,7 +560,7 @@ fn error_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result
     };
     let paper: Vec<(f64, f64)> = PAPER
         .iter()
-        .filter(|p| m.sizes.contains(&p.n))
+        .filter(|p| m.study.sizes().contains(&p.n))
         .map(|p| (p.n as f64, p.mean_percent()))
         .collect();
     draw(
@@ -591,18 +603,19 @@ fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
         "Mode {}: N = {:?}, 3 packings each (seeds {}…{}). Packing took {:.1} s in all (shared by the models, not in their \
          wall time). Samples, models, electrode biases and tolerances: validation/notes/cylinder-resistance.md.",
         ctx.mode.name(),
-        m.sizes,
+        m.study.sizes(),
         ctx.seed,
         ctx.seed + REALISATIONS - 1,
         m.pack_s,
     ));
-    let lag = Spread::of(m.packings.iter().map(|p| p.e.laguerre.abs()));
+    let lag = Spread::of(m.study.packings().iter().map(|p| p.rows.e.laguerre.abs()));
     out.note(format!(
         "Headline (Laguerre cells, face electrodes): A_cells/A − 1 at most {:.1e}; over all {} packings |R/R_th − 1| mean \
          {:.2e}, max {:.2e}.",
-        m.packings
+        m.study
+            .packings()
             .iter()
-            .map(|p| p.s.laguerre_section.abs())
+            .map(|p| p.rows.s.laguerre_section.abs())
             .fold(0.0, f64::max),
         lag.count,
         lag.mean,

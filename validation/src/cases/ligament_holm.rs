@@ -26,6 +26,7 @@ use serde_json::{Map, Value};
 
 use super::common::*;
 use super::cylinder::{LENGTH, RADIUS, RHO_E, electric_scene, face_electrodes};
+use super::study::{Measured, Study};
 use crate::table::Columns;
 use crate::{CaseOutcome, Ctx};
 
@@ -90,9 +91,7 @@ struct Run {
 }
 
 struct PackingRun {
-    n_target: usize,
     n: usize,
-    k: u64,
     mean_radius: f64,
     runs: Vec<Run>,
 }
@@ -111,27 +110,22 @@ const MODELS: [CrackVariant; 3] = CrackVariant::ALL;
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let ladder: Vec<usize> = ctx.pick(vec![5_000, 20_000], vec![20_000, 100_000]);
-    let count = |i: usize| if i + 1 == ladder.len() { PACKINGS } else { 1 };
+    let largest = *ladder.last().expect("a ladder");
+    let count = |n: usize| if n == largest { PACKINGS } else { 1 };
     let scenes: Vec<SceneConfig> = ladder
         .iter()
-        .enumerate()
-        .flat_map(|(i, &n)| (0..count(i)).map(move |k| scene(n, ctx.seed + k)))
+        .flat_map(|&n| (0..count(n)).map(move |k| scene(n, ctx.seed + k)))
         .collect();
     prepack(&scenes)?;
-    let mut packings = Vec::new();
-    for (i, &n) in ladder.iter().enumerate() {
-        for k in 0..count(i) {
-            packings.push(measure_packing(n, ctx.seed + k, k)?);
-        }
-    }
+    let study = Study::run(&ladder, count, ctx.seed, |n, seed, _| measure_packing(n, seed))?;
     let mut out = CaseOutcome::new("ligament-holm", ctx.mode);
-    out.n_particles = packings.iter().map(|p| p.n).max().unwrap_or(0);
-    compare(&ladder, &packings, &mut out);
-    report(ctx, &packings, &mut out);
+    out.n_particles = study.packings().iter().map(|p| p.rows.n).max().unwrap_or(0);
+    compare(&study, &mut out);
+    report(ctx, &study, &mut out);
     Ok(out)
 }
 
-fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
+fn measure_packing(n: usize, seed: u64) -> anyhow::Result<PackingRun> {
     let cfg = scene(n, seed);
     let contacts = model_of(&cfg)?;
     let cells = laguerre_model(&cfg, &contacts)?;
@@ -171,29 +165,23 @@ fn measure_packing(n: usize, seed: u64, k: u64) -> anyhow::Result<PackingRun> {
     }
     let radii = &contacts.particles.radii;
     Ok(PackingRun {
-        n_target: n,
         n: contacts.particles.len(),
-        k,
         mean_radius: radii.iter().sum::<f64>() / radii.len() as f64,
         runs,
     })
 }
 
-fn compare(ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
+fn compare(study: &Study<PackingRun>, out: &mut CaseOutcome) {
     let mut by_model = Map::new();
     for s in MODELS {
         let mut by_ratio = Map::new();
         for (i, &ratio) in RATIOS.iter().enumerate() {
             let a = ratio * RADIUS;
-            let by_n: Map<String, Value> = ladder
+            let by_n: Map<String, Value> = study
+                .sizes()
                 .iter()
                 .map(|&n| {
-                    let e = Spread::of(
-                        packings
-                            .iter()
-                            .filter(|p| p.n_target == n)
-                            .map(|p| p.run(s).delta[i] / holm_cylinder(a) - 1.0),
-                    );
+                    let e = study.spread(n, |p| p.run(s).delta[i] / holm_cylinder(a) - 1.0);
                     (n.to_string(), e.json())
                 })
                 .collect();
@@ -217,13 +205,14 @@ fn compare(ladder: &[usize], packings: &[PackingRun], out: &mut CaseOutcome) {
 
 /// A line of the table.
 struct Line<'a> {
-    p: &'a PackingRun,
+    p: &'a Measured<PackingRun>,
     s: CrackVariant,
     i: usize,
 }
 
-fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
-    let lines: Vec<Line> = packings
+fn report(ctx: &Ctx, study: &Study<PackingRun>, out: &mut CaseOutcome) {
+    let lines: Vec<Line> = study
+        .packings()
         .iter()
         .flat_map(|p| {
             MODELS
@@ -233,22 +222,22 @@ fn report(ctx: &Ctx, packings: &[PackingRun], out: &mut CaseOutcome) {
         .collect();
     out.tables.push(
         Columns::new()
-            .column("N", |l: &Line| l.p.n.to_string())
+            .column("N", |l: &Line| l.p.rows.n.to_string())
             .column("packing", |l| (l.p.k + 1).to_string())
             .column("model", |l| l.s.label().to_string())
             .column("a/b", |l| RATIOS[l.i].to_string())
-            .column("a/R̄", |l| format!("{:.1}", RATIOS[l.i] * RADIUS / l.p.mean_radius))
-            .column("cut contacts", |l| l.p.run(l.s).cut[l.i].to_string())
-            .column("R₀ / bulk", |l| format!("{:.4}", l.p.run(l.s).r0 / bulk()))
-            .column("ΔR (mΩ)", |l| format!("{:.4}", 1e3 * l.p.run(l.s).delta[l.i]))
+            .column("a/R̄", |l| format!("{:.1}", RATIOS[l.i] * RADIUS / l.p.rows.mean_radius))
+            .column("cut contacts", |l| l.p.rows.run(l.s).cut[l.i].to_string())
+            .column("R₀ / bulk", |l| format!("{:.4}", l.p.rows.run(l.s).r0 / bulk()))
+            .column("ΔR (mΩ)", |l| format!("{:.4}", 1e3 * l.p.rows.run(l.s).delta[l.i]))
             .column("(1 − a/b)^1.5 ρ/(2a) (mΩ), error", |l| {
                 let a = RATIOS[l.i] * RADIUS;
-                let d = l.p.run(l.s).delta[l.i];
+                let d = l.p.rows.run(l.s).delta[l.i];
                 format!("{:.4}, {:+.1} %", 1e3 * holm_cylinder(a), 100.0 * (d / holm_cylinder(a) - 1.0))
             })
             .column("ρ/(2a) (mΩ), error", |l| {
                 let a = RATIOS[l.i] * RADIUS;
-                let d = l.p.run(l.s).delta[l.i];
+                let d = l.p.rows.run(l.s).delta[l.i];
                 format!("{:.4}, {:+.1} %", 1e3 * holm(a), 100.0 * (d / holm(a) - 1.0))
             })
             .table(

@@ -57,6 +57,7 @@ use super::composite::{
     LAMBDA_EPOXY, LAMBDA_SILICA, SIZE_RATIO, Variant, epoxy_silica, etc_of, slab_scene, with_inclusions,
 };
 use super::multi_inclusion_interface_periodic::ALPHAS;
+use super::study::{Measured, Study};
 use crate::analytic::{hasselman_johnson, third_order};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx, Table};
@@ -136,9 +137,7 @@ impl Run {
 }
 
 struct PackingRun {
-    n_target: usize,
     n: usize,
-    k: u64,
     /// Spheres placed per fraction.
     spheres: Vec<usize>,
     runs: Vec<Run>,
@@ -158,10 +157,12 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         vec![Variant::SEGMENT, Variant::HEADLINE],
         vec![Variant::SEGMENT, Variant::HEADLINE, Variant::RECOMMENDED],
     );
-    let mut packings = Vec::new();
-    for &n in &ladder {
-        for k in 0..PACKINGS {
-            let p = measure_packing(n, ctx.seed + k, k, &variants)?;
+    let m = Study::run(
+        &ladder,
+        |_| PACKINGS,
+        ctx.seed,
+        |n, seed, k| {
+            let p = measure_packing(n, seed, &variants)?;
             eprintln!(
                 "   packing {} (N = {}): ETC at f = 0.2, α = 0 / 0.1: {:.4} / {:.4}",
                 k + 1,
@@ -169,16 +170,15 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
                 p.runs[0].etc[1][0],
                 p.runs[0].etc[1][3]
             );
-            packings.push(p);
-        }
-    }
-    let m = Measured { ladder, packings };
+            Ok(p)
+        },
+    )?;
     let periodic = super::multi_inclusion_interface_periodic::measure(ctx)?;
     let mut out = CaseOutcome::new("multi-inclusion-interface", ctx.mode);
     out.n_particles = m
-        .packings
+        .packings()
         .iter()
-        .map(|p| p.n)
+        .map(|p| p.rows.n)
         .max()
         .unwrap_or(0)
         .max(periodic.n_max());
@@ -188,40 +188,30 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     Ok(out)
 }
 
-/// The packings of every N.
-struct Measured {
-    /// Requested particle counts, ascending.
-    ladder: Vec<usize>,
-    packings: Vec<PackingRun>,
+/// The packings of the largest N.
+fn at_largest(m: &Study<PackingRun>) -> Vec<&PackingRun> {
+    m.at(m.largest()).collect()
 }
 
-impl Measured {
-    /// The packings of the largest N.
-    fn largest(&self) -> Vec<&PackingRun> {
-        let n = *self.ladder.last().expect("a ladder");
-        self.packings.iter().filter(|p| p.n_target == n).collect()
-    }
-
-    /// Mean over the packings of N = `n` of `value(run)` for model `v`, with their mean
-    /// particle count.
-    fn mean_at(&self, n: usize, v: Variant, value: impl Fn(&Run) -> f64) -> (f64, f64) {
-        let at: Vec<&PackingRun> = self.packings.iter().filter(|p| p.n_target == n).collect();
-        let count = at.iter().map(|p| p.n as f64).sum::<f64>() / at.len() as f64;
-        (mean_of(&at, v, value), count)
-    }
-
-    /// The ratio ETC(α)/ETC(0) of model `v` at (i, j) extrapolated to N → ∞ from the two
-    /// largest N, linear in N^(-1/3).
-    fn extrapolated_ratio(&self, v: Variant, i: usize, j: usize) -> f64 {
-        let k = self.ladder.len();
-        let (r1, n1) = self.mean_at(self.ladder[k - 2], v, |r| r.ratio(i, j));
-        let (r2, n2) = self.mean_at(self.ladder[k - 1], v, |r| r.ratio(i, j));
-        let (h1, h2) = (n1.powf(-1.0 / 3.0), n2.powf(-1.0 / 3.0));
-        r2 + (r2 - r1) * h2 / (h1 - h2)
-    }
+/// Mean over the packings of N = `n` of `value(run)` for model `v`, with their mean particle
+/// count.
+fn mean_at(m: &Study<PackingRun>, n: usize, v: Variant, value: impl Fn(&Run) -> f64) -> (f64, f64) {
+    let at: Vec<&PackingRun> = m.at(n).collect();
+    let count = at.iter().map(|p| p.n as f64).sum::<f64>() / at.len() as f64;
+    (mean_of(&at, v, value), count)
 }
 
-fn measure_packing(n: usize, seed: u64, k: u64, variants: &[Variant]) -> anyhow::Result<PackingRun> {
+/// The ratio ETC(α)/ETC(0) of model `v` at (i, j) extrapolated to N → ∞ from the two largest
+/// N (the ladder ascending), linear in N^(-1/3).
+fn extrapolated_ratio(m: &Study<PackingRun>, v: Variant, i: usize, j: usize) -> f64 {
+    let (ladder, k) = (m.sizes(), m.sizes().len());
+    let (r1, n1) = mean_at(m, ladder[k - 2], v, |r| r.ratio(i, j));
+    let (r2, n2) = mean_at(m, ladder[k - 1], v, |r| r.ratio(i, j));
+    let (h1, h2) = (n1.powf(-1.0 / 3.0), n2.powf(-1.0 / 3.0));
+    r2 + (r2 - r1) * h2 / (h1 - h2)
+}
+
+fn measure_packing(n: usize, seed: u64, variants: &[Variant]) -> anyhow::Result<PackingRun> {
     let cfg = scene(n, seed);
     let contacts = model_of(&with_surface_model(&cfg, Surface::Terreros, None))?;
     let cells = laguerre_model(&cfg, &contacts)?;
@@ -277,9 +267,7 @@ fn measure_packing(n: usize, seed: u64, k: u64, variants: &[Variant]) -> anyhow:
         });
     }
     Ok(PackingRun {
-        n_target: n,
         n: contacts.particles.len(),
-        k,
         spheres,
         runs,
     })
@@ -325,21 +313,15 @@ fn all_cells() -> impl Iterator<Item = (usize, usize)> {
     (0..FS.len()).flat_map(|i| (1..ALPHAS.len()).map(move |j| (i, j)))
 }
 
-fn compare(ctx: &Ctx, m: &Measured, variants: &[Variant], tol: f64, out: &mut CaseOutcome) {
+fn compare(ctx: &Ctx, m: &Study<PackingRun>, variants: &[Variant], tol: f64, out: &mut CaseOutcome) {
     let head = Variant::SEGMENT;
     let mut by_model = Map::new();
     for &v in variants {
         let mut by_n = Map::new();
-        for &n in &m.ladder {
+        for &n in m.sizes() {
             let mut cells = Map::new();
             for (i, j) in all_cells() {
-                let e = Spread::of(
-                    m.packings
-                        .iter()
-                        .filter(|p| p.n_target == n)
-                        .filter_map(|p| p.run(v))
-                        .map(|r| r.error(i, j)),
-                );
+                let e = Spread::of(m.at(n).filter_map(|p| p.run(v)).map(|r| r.error(i, j)));
                 cells.insert(format!("f_{}_alpha_{}", FS[i], ALPHAS[j]), e.json());
             }
             by_n.insert(n.to_string(), Value::Object(cells));
@@ -347,7 +329,7 @@ fn compare(ctx: &Ctx, m: &Measured, variants: &[Variant], tol: f64, out: &mut Ca
         by_model.insert(v.id(), Value::Object(by_n));
     }
     out.metric("ratio_abs_rel_error_by_model", Value::Object(by_model));
-    let largest = m.largest();
+    let largest = at_largest(m);
     let worst = Spread::of(
         largest
             .iter()
@@ -356,7 +338,7 @@ fn compare(ctx: &Ctx, m: &Measured, variants: &[Variant], tol: f64, out: &mut Ca
     );
     out.metric("max_ratio_rel_error", worst.json());
     let extrapolated = all_cells()
-        .map(|(i, j)| (m.extrapolated_ratio(head, i, j) / reference_ratio(FS[i], ALPHAS[j]) - 1.0).abs())
+        .map(|(i, j)| (extrapolated_ratio(m, head, i, j) / reference_ratio(FS[i], ALPHAS[j]) - 1.0).abs())
         .fold(0.0, f64::max);
     out.metric("max_ratio_rel_error_extrapolated", extrapolated);
     out.compare(Comparison::at_most(
@@ -383,7 +365,7 @@ fn compare(ctx: &Ctx, m: &Measured, variants: &[Variant], tol: f64, out: &mut Ca
             format!("f_{f}"),
             serde_json::json!({
                 "alpha_dem": dem,
-                "alpha_dem_extrapolated": alpha_for_gap(|j| m.extrapolated_ratio(head, i, j)),
+                "alpha_dem_extrapolated": alpha_for_gap(|j| extrapolated_ratio(m, head, i, j)),
                 "alpha_reference": alpha_for_gap(|j| reference_ratio(*f, ALPHAS[j])),
                 "largest_radius_m_at_h_low": dem.map(|a| LAMBDA_EPOXY / (H_PUBLISHED.0 * a)),
             }),
@@ -413,7 +395,12 @@ impl Line<'_> {
 }
 
 /// The tables, the chart and the notes.
-fn report(ctx: &Ctx, m: &Measured, variants: &[Variant], out: &mut CaseOutcome) -> anyhow::Result<()> {
+fn report(
+    ctx: &Ctx,
+    m: &Study<PackingRun>,
+    variants: &[Variant],
+    out: &mut CaseOutcome,
+) -> anyhow::Result<()> {
     out.tables.push(ratio_table(m, variants));
     out.tables.push(extrapolation_table(m));
     out.tables.push(gap_table(m));
@@ -424,13 +411,13 @@ fn report(ctx: &Ctx, m: &Measured, variants: &[Variant], out: &mut CaseOutcome) 
 }
 
 /// ETC(α)/ETC(0) per model, N and f against the reference (mean over the packings, max error).
-fn ratio_table(m: &Measured, variants: &[Variant]) -> Table {
+fn ratio_table(m: &Study<PackingRun>, variants: &[Variant]) -> Table {
     let lines: Vec<Line> = variants
         .iter()
         .flat_map(|&v| {
-            m.ladder.iter().flat_map(move |&n| {
+            m.sizes().iter().flat_map(move |&n| {
                 (0..FS.len()).map(move |i| Line {
-                    packings: m.packings.iter().filter(|p| p.n_target == n).collect(),
+                    packings: m.at(n).collect(),
                     v,
                     i,
                 })
@@ -476,7 +463,7 @@ fn ratio_table(m: &Measured, variants: &[Variant]) -> Table {
 }
 
 /// The gated model's ratios extrapolated to N → ∞ against the reference.
-fn extrapolation_table(m: &Measured) -> Table {
+fn extrapolation_table(m: &Study<PackingRun>) -> Table {
     let head = Variant::SEGMENT;
     let rows: Vec<usize> = (0..FS.len()).collect();
     Columns::new()
@@ -485,7 +472,7 @@ fn extrapolation_table(m: &Measured) -> Table {
                 1..ALPHAS.len(),
                 |j| format!("α = {}: extrapolated ratio (reference), error", ALPHAS[*j]),
                 |j, i: &usize| {
-                    let r = m.extrapolated_ratio(head, *i, *j);
+                    let r = extrapolated_ratio(m, head, *i, *j);
                     let reference = reference_ratio(FS[*i], ALPHAS[*j]);
                     format!("{r:.4} ({reference:.4}) {:+.2} %", 100.0 * (r / reference - 1.0))
                 },
@@ -494,7 +481,7 @@ fn extrapolation_table(m: &Measured) -> Table {
                 format!(
                     "{}: ETC(α)/ETC(0) extrapolated to N → ∞ from N = {:?}, linear in N^(-1/3) (means over the packings)",
                     head.id(),
-                    &m.ladder[m.ladder.len() - 2..]
+                    &m.sizes()[m.sizes().len() - 2..]
                 ),
                 &rows,
             )
@@ -502,10 +489,10 @@ fn extrapolation_table(m: &Measured) -> Table {
 
 /// How much of the paper's 7 % a barrier could explain: the α, h·a and radius for a 7 % drop,
 /// and the drops at the low-end published h.
-fn gap_table(m: &Measured) -> Table {
+fn gap_table(m: &Study<PackingRun>) -> Table {
     let head = Variant::SEGMENT;
     let rows: Vec<usize> = (0..FS.len()).collect();
-    let largest = m.largest();
+    let largest = at_largest(m);
     let ratio_mean = |i: usize, j: usize| mean_of(&largest, head, |r| r.ratio(i, j));
     let show = |x: Option<f64>| x.map_or("beyond α = 1".to_string(), |a| format!("{a:.3}"));
     Columns::new()
@@ -514,7 +501,7 @@ fn gap_table(m: &Measured) -> Table {
                 format!(
                     "{}; {} ({})",
                     show(alpha_for_gap(|j| ratio_mean(*i, j))),
-                    show(alpha_for_gap(|j| m.extrapolated_ratio(head, *i, j))),
+                    show(alpha_for_gap(|j| extrapolated_ratio(m, head, *i, j))),
                     show(alpha_for_gap(|j| reference_ratio(FS[*i], ALPHAS[j])))
                 )
             })
@@ -541,23 +528,25 @@ fn gap_table(m: &Measured) -> Table {
 }
 
 /// The solve time of every model on every packing.
-fn packings_table(m: &Measured, variants: &[Variant]) -> Table {
-    let every: Vec<&PackingRun> = m.packings.iter().collect();
+fn packings_table(m: &Study<PackingRun>, variants: &[Variant]) -> Table {
+    let every: Vec<&Measured<PackingRun>> = m.packings().iter().collect();
     Columns::new()
-        .column("packing", |p: &&PackingRun| (p.k + 1).to_string())
-        .column("N", |p| p.n.to_string())
+        .column("packing", |p: &&Measured<PackingRun>| (p.k + 1).to_string())
+        .column("N", |p| p.rows.n.to_string())
         .columns_for(
             variants.to_vec(),
             |v| format!("{}: solves (s)", v.id()),
-            |v, p: &&PackingRun| p.run(*v).map_or("—".into(), |r| format!("{:.1}", r.solve_s)),
+            |v, p: &&Measured<PackingRun>| {
+                p.rows.run(*v).map_or("—".into(), |r| format!("{:.1}", r.solve_s))
+            },
         )
         .table("Every packing", &every)
 }
 
 /// The gated model's ETC against f per α at the largest N, with the reference at α = 0, 0.1.
-fn etc_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
+fn etc_chart(ctx: &Ctx, m: &Study<PackingRun>, out: &mut CaseOutcome) -> anyhow::Result<()> {
     let head = Variant::SEGMENT;
-    let largest = m.largest();
+    let largest = at_largest(m);
     let series = ALPHAS
         .iter()
         .enumerate()
@@ -599,15 +588,15 @@ fn etc_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<(
 
 /// The run's sizes and models, and the reading at the low-end published h with this run's
 /// figures; the method is in the case's notes file.
-fn run_notes(ctx: &Ctx, m: &Measured, variants: &[Variant], out: &mut CaseOutcome) {
+fn run_notes(ctx: &Ctx, m: &Study<PackingRun>, variants: &[Variant], out: &mut CaseOutcome) {
     let head = Variant::SEGMENT;
-    let largest = m.largest();
+    let largest = at_largest(m);
     let ratio_mean = |i: usize, j: usize| mean_of(&largest, head, |r| r.ratio(i, j));
     out.note(format!(
         "{} mode: N = {:?}, {PACKINGS} packings each (seeds {}…{}), each with its own inclusion layout; models: {}. \
          Method, reference and tolerances: validation/notes/multi-inclusion-interface.md.",
         ctx.mode.name(),
-        m.ladder,
+        m.sizes(),
         ctx.seed,
         ctx.seed + PACKINGS - 1,
         variants.iter().map(|v| v.id()).collect::<Vec<_>>().join(", "),
