@@ -316,7 +316,11 @@ impl<'a, 'p, S: Stepper> Marching<'a, 'p, S> {
         let edges_b = &self.edges_b;
         let shortened = k >= segment.n_full;
         let h = if shortened { segment.last } else { segment.h };
-        let p_b_old = boundary_power(edges_b, &self.cur);
+        // The boundary flow at the start of the step, for the schemes whose ledger reads it.
+        let p_b_old = match self.ledger {
+            Ledger::End => 0.0,
+            Ledger::Start | Ledger::Trapezoid => boundary_power(edges_b, &self.cur),
+        };
         if self.ledger == Ledger::Start {
             self.report.energy_boundary_j += h * p_b_old;
             self.turnover.boundary_j += h * boundary_gross(edges_b, &self.cur);
