@@ -119,7 +119,7 @@ fn calibrate_particles(model: &Model, axis: Option<Axis>, g: Vec<f64>) -> Result
     let select = |f: Face, what: &str| {
         Selector::Face(f)
             .select_nonempty(particles, &model.container, what)
-            .map_err(|e| ModelError::at("surface.c_t", e))
+            .map_err(|e| ModelError::at(&format!("{}.c_t", model.fields.surface), e))
     };
     let (method, fixed_ids, sources, lam_e, lam_e_centres);
     let q = 1.0; // W/m³ of solid (sphere) or W/m² (flux)
@@ -228,7 +228,7 @@ fn calibrate_walls(
             )
         }
     };
-    let walls = model.wall_contacts(&faces, "thermal.bcs")?;
+    let walls = model.wall_contacts(&faces, model.fields.bcs)?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), sm);
     let wall_g = walls.conductances(&wall_s, |_, _, _| 1.0);
     let (net, g) = network_with_walls(model, &walls, g, wall_g)?;

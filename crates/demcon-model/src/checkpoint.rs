@@ -8,7 +8,7 @@
 
 use demcon_thermal::{CheckpointEvery, TransientState};
 
-use crate::error::ModelError;
+use crate::error::{FieldNames, ModelError};
 
 /// Everything a transient on a model needs to continue bit-identically.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,9 +59,9 @@ impl std::fmt::Debug for Checkpointing<'_, '_> {
 
 /// The refusal of a run that cannot continue from `resume` because of what it is
 /// (`what`, e.g. "a steady solve").
-pub(crate) fn not_resumable(what: &str) -> ModelError {
+pub(crate) fn not_resumable(fields: &FieldNames, what: &str) -> ModelError {
     ModelError::invalid(
-        "thermal.solver",
+        fields.solver,
         what,
         "only a transient (Explicit or Implicit) can be resumed: a steady solve has nothing to resume",
     )
@@ -69,7 +69,13 @@ pub(crate) fn not_resumable(what: &str) -> ModelError {
 
 /// Checks that a checkpoint carries a coupling state exactly when the run is a coupled
 /// transient (`coupled`), and that state's length.
-pub(crate) fn check_coupling(ck: &RunCheckpoint, coupled: bool, n: usize) -> Result<(), ModelError> {
+pub(crate) fn check_coupling(
+    ck: &RunCheckpoint,
+    coupled: bool,
+    n: usize,
+    fields: &FieldNames,
+) -> Result<(), ModelError> {
+    let field = format!("{}.coupling", fields.checkpoint);
     match (&ck.coupling, coupled) {
         (None, false) => Ok(()),
         (Some(c), true)
@@ -78,12 +84,12 @@ pub(crate) fn check_coupling(ck: &RunCheckpoint, coupled: bool, n: usize) -> Res
             Ok(())
         }
         (Some(c), true) => Err(ModelError::invalid(
-            "checkpoint.coupling",
+            &field,
             format!("{} temperatures", c.last_temperatures.len()),
             format!("must hold one finite temperature per particle ({n})"),
         )),
         (c, _) => Err(ModelError::invalid(
-            "checkpoint.coupling",
+            &field,
             if c.is_some() { "present" } else { "absent" },
             if coupled {
                 "this run re-solves the potential during the transient (recouple_tolerance): its checkpoint must carry the coupling"

@@ -97,13 +97,16 @@ pub fn couple_checkpointed(
         }
         (Some(tol), false) => {
             if checkpointing.as_ref().is_some_and(|c| c.resume.is_some()) {
-                return Err(not_resumable("Steady (electro-thermal fixed point)"));
+                return Err(not_resumable(
+                    &model.fields,
+                    "Steady (electro-thermal fixed point)",
+                ));
             }
             fixed_point(model, setup, bcs, thermal, e, tol, &mut diagnostics)?
         }
         (None, _) => {
             if let Some(ck) = checkpointing.as_ref().and_then(|c| c.resume) {
-                check_coupling(ck, false, model.particles.len())?;
+                check_coupling(ck, false, model.particles.len(), &model.fields)?;
             }
             let el = solve_electric(model, e, None)?;
             let th = solve_thermal_checkpointed(
@@ -185,7 +188,7 @@ fn fixed_point(
         }
         if round + 1 == MAX_STEADY_ROUNDS {
             return Err(ModelError::invalid(
-                "electric.recouple_tolerance",
+                model.fields.recouple_tolerance,
                 tol,
                 format!(
                     "the coupling did not settle in {MAX_STEADY_ROUNDS} rounds (last change {moved:.3e} K)"
@@ -215,7 +218,7 @@ fn coupled_transient(
     let resume = checkpointing.as_ref().and_then(|c| c.resume);
     let last_t = match resume {
         Some(ck) => {
-            check_coupling(ck, true, n)?;
+            check_coupling(ck, true, n, &model.fields)?;
             ck.coupling
                 .as_ref()
                 .map(|c| c.last_temperatures.clone())

@@ -59,7 +59,7 @@ use demcon_graph::{
 };
 use serde::Serialize;
 
-use crate::error::ModelError;
+use crate::error::{FieldNames, ModelError};
 
 /// A contact crossing the interface between the two phases.
 pub const MARK_INTERFACE: u8 = 1;
@@ -131,14 +131,20 @@ impl DefectSpec {
             && self.cut_pairs.is_empty()
     }
 
-    /// Checks every value; errors name the scene fields (`interfaces[i]…`, `cracks[i]…`,
-    /// `damage[i].factor`). `n_phases` is the number of materials.
-    pub fn validate(&self, n_phases: usize) -> Result<(), ModelError> {
+    /// Checks every value; errors name the caller's fields (`{interfaces}[i]…`,
+    /// `{cracks}[i]…`, `{damage}[i].factor` of `fields`). `n_phases` is the number of materials.
+    pub fn validate(&self, n_phases: usize, fields: &FieldNames) -> Result<(), ModelError> {
+        let FieldNames {
+            interfaces,
+            cracks,
+            damage,
+            ..
+        } = fields;
         for (i, it) in self.interfaces.iter().enumerate() {
             for (j, &ph) in it.phases.iter().enumerate() {
                 if ph as usize >= n_phases {
                     return Err(ModelError::invalid(
-                        &format!("interfaces[{i}].between[{j}]"),
+                        &format!("{interfaces}[{i}].between[{j}]"),
                         ph,
                         format!("a phase of the material table (0..{n_phases})"),
                     ));
@@ -146,22 +152,22 @@ impl DefectSpec {
             }
             if it.phases[0] == it.phases[1] {
                 return Err(ModelError::invalid(
-                    &format!("interfaces[{i}].between"),
+                    &format!("{interfaces}[{i}].between"),
                     format!("({}, {})", it.phases[0], it.phases[1]),
                     "two different materials",
                 ));
             }
             positive(
-                &format!("interfaces[{i}].conductance"),
+                &format!("{interfaces}[{i}].conductance"),
                 it.conductance,
                 "W/(m²·K)",
             )?;
             if let Some(r) = it.electric_resistance {
-                non_negative(&format!("interfaces[{i}].electric_resistance"), r, "Ω·m²")?;
+                non_negative(&format!("{interfaces}[{i}].electric_resistance"), r, "Ω·m²")?;
             }
         }
         for (i, c) in self.cracks.iter().enumerate() {
-            c.shape.validate(&format!("cracks[{i}]")).map_err(|e| match e {
+            c.shape.validate(&format!("{cracks}[{i}]")).map_err(|e| match e {
                 demcon_core::CoreError::InvalidParameter {
                     field,
                     value,
@@ -171,19 +177,19 @@ impl DefectSpec {
                     value,
                     allowed,
                 },
-                other => ModelError::at(&format!("cracks[{i}]"), other),
+                other => ModelError::at(&format!("{cracks}[{i}]"), other),
             })?;
             if let Some(h) = c.gap_conductance {
-                positive(&format!("cracks[{i}].gap_conductance"), h, "W/(m²·K)")?;
+                positive(&format!("{cracks}[{i}].gap_conductance"), h, "W/(m²·K)")?;
             }
             if let Some(r) = c.gap_electric_resistance {
-                non_negative(&format!("cracks[{i}].gap_electric_resistance"), r, "Ω·m²")?;
+                non_negative(&format!("{cracks}[{i}].gap_electric_resistance"), r, "Ω·m²")?;
             }
         }
         for (i, d) in self.damage.iter().enumerate() {
             if !(d.factor.is_finite() && d.factor > 0.0 && d.factor <= 1.0) {
                 return Err(ModelError::invalid(
-                    &format!("damage[{i}].factor"),
+                    &format!("{damage}[{i}].factor"),
                     d.factor,
                     "a factor in (0, 1] (0 would cut the contacts: use a crack or cut_contacts)",
                 ));
@@ -332,11 +338,12 @@ impl Defects {
 
 /// How the particle ids of `cut_pairs` map to the model's: `kept_ids[k]` is the id before
 /// carving of the model's particle k (`None`: no carving), `n_before` the particle count
-/// before carving (the range of `cut_pairs`).
+/// before carving (the range of `cut_pairs`); `fields` the caller's names for its defects.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Numbering<'a> {
     pub kept_ids: Option<&'a [u32]>,
     pub n_before: usize,
+    pub fields: &'a FieldNames,
 }
 
 /// Applies `spec` to a freshly built graph: cuts the contacts crossed by open cracks and the
@@ -367,6 +374,7 @@ pub(crate) fn apply_defects(
     if !spec.cut_pairs.is_empty() {
         c.break_bonds(&graph, spec, numbering)?;
     }
+    let cracks = numbering.fields.cracks;
     c.open_cracks(&graph, particles, container, spec);
     c.filled_cracks(&graph, particles, container, spec);
     // Wall links (of every face the container has) count as hits too: a crack lying between
@@ -381,7 +389,7 @@ pub(crate) fn apply_defects(
     for (i, &hits) in c.crack_hits.iter().enumerate() {
         if hits == 0 {
             c.report.warnings.push(format!(
-                "cracks[{i}] crosses no contact or wall link (outside the domain, or smaller than a \
+                "{cracks}[{i}] crosses no contact or wall link (outside the domain, or smaller than a \
                  particle)"
             ));
         }
@@ -418,7 +426,11 @@ impl Cutting {
         spec: &DefectSpec,
         numbering: Numbering<'_>,
     ) -> Result<(), ModelError> {
-        let Numbering { kept_ids, n_before } = numbering;
+        let Numbering {
+            kept_ids,
+            n_before,
+            fields,
+        } = numbering;
         let mut new_id = vec![u32::MAX; n_before];
         match kept_ids {
             Some(ids) => ids
@@ -433,7 +445,7 @@ impl Cutting {
             for (j, x) in [a, b].into_iter().enumerate() {
                 if x as usize >= n_before {
                     return Err(ModelError::invalid(
-                        &format!("cut_contacts[{i}][{j}]"),
+                        &format!("{}[{i}][{j}]", fields.cut_contacts),
                         x,
                         format!("a particle index of the packing (0..{n_before})"),
                     ));

@@ -180,11 +180,12 @@ pub fn particle_conductivities(
         &model.laminates(),
         temperatures,
     )
-    .map_err(scene_field)
+    .map_err(refusal)
 }
 
-/// A bad value of the electric physics as the scene field it names (the others unchanged).
-fn scene_field(e: ElectricError) -> ModelError {
+/// A bad value of the electric physics as a refusal at the field it names (a material's
+/// resistivity), the other errors unchanged.
+fn refusal(e: ElectricError) -> ModelError {
     match e {
         ElectricError::InvalidParameter {
             field,
@@ -239,7 +240,7 @@ pub fn solve_electric(
     let sigma = particle_conductivities(model, temperatures)?;
     let g = conductances_with_defects(model, &sm, problem.interface, &sigma)?;
     let (faces, _) = problem.face_electrodes();
-    let walls = model.wall_contacts(&faces, "electric.electrodes")?;
+    let walls = model.wall_contacts(&faces, model.fields.electrodes)?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), &sm);
     let mut wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
     apply_to_walls(
@@ -257,7 +258,7 @@ pub fn solve_electric(
     for (i, e) in problem.electrodes.iter().enumerate() {
         match &e.at {
             ElectrodeAt::Particles(sel) => {
-                let field = format!("electric.electrodes[{i}].select");
+                let field = format!("{}[{i}].select", model.fields.electrodes);
                 let ids = sel
                     .select_nonempty(&model.particles, &model.container, &format!("electrode {i}"))
                     .map_err(|err| ModelError::at(&field, err))?;

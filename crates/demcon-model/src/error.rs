@@ -1,5 +1,5 @@
-//! Model errors: a bad value names the scene field it came from; numerical failures keep the
-//! lower crate's error (with its values) as the source.
+//! Model errors: a bad value names the caller's field it came from ([`FieldNames`]); numerical
+//! failures keep the lower crate's error (with its values) as the source.
 
 use demcon_core::CoreError;
 
@@ -7,9 +7,9 @@ use demcon_core::CoreError;
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
     /// A value is not allowed.
-    #[error("scene field `{field}` = {value}: {allowed}")]
+    #[error("field `{field}` = {value}: {allowed}")]
     Invalid {
-        /// Field path, e.g. `thermal.bcs[0].value`.
+        /// Field path in the caller's terms ([`FieldNames`]), e.g. `thermal.bcs[0].face`.
         field: String,
         /// The value.
         value: String,
@@ -17,7 +17,7 @@ pub enum ModelError {
         allowed: String,
     },
     /// A lower-level input error, with the field it came from.
-    #[error("scene field `{field}`: {source}")]
+    #[error("field `{field}`: {source}")]
     Core {
         /// Field path.
         field: String,
@@ -58,5 +58,82 @@ impl ModelError {
             field: field.into(),
             source,
         }
+    }
+}
+
+/// The names a caller gives the parts of its input, so that a refused value is named where the
+/// user wrote it: the scene passes its RON paths (`thermal.bcs`, `outputs.etc_axis`, …); the
+/// default is the model's own parameter names. A refusal appends the item and sub-field
+/// (`{bcs}[2].face`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FieldNames {
+    /// [`crate::ThermalProblem::bcs`].
+    pub bcs: &'static str,
+    /// [`crate::ThermalProblem::sources`].
+    pub sources: &'static str,
+    /// [`crate::ThermalProblem::solver`] (its time step is `{solver}.dt`).
+    pub solver: &'static str,
+    /// [`crate::ElectricProblem::electrodes`].
+    pub electrodes: &'static str,
+    /// The choice of a periodic electric homogenisation.
+    pub electric_homogenize: &'static str,
+    /// The tolerance of the electro-thermal coupling.
+    pub recouple_tolerance: &'static str,
+    /// A checkpoint a run resumes from ([`crate::RunCheckpoint`]).
+    pub checkpoint: &'static str,
+    /// The surface model (its C_t is `{surface}.c_t`).
+    pub surface: &'static str,
+    /// [`crate::ModelParams::phases`].
+    pub phases: &'static str,
+    /// A [`crate::PhaseSpec::Inclusions`] phase.
+    pub inclusions: &'static str,
+    /// [`crate::ModelParams::phase_rule`].
+    pub phase_rule: &'static str,
+    /// [`crate::ModelParams::carve`].
+    pub carve: &'static str,
+    /// [`crate::ModelParams::contacts`].
+    pub contacts: &'static str,
+    /// [`crate::ModelParams::defects`] as a whole.
+    pub defects: &'static str,
+    /// [`crate::DefectSpec::interfaces`].
+    pub interfaces: &'static str,
+    /// [`crate::DefectSpec::cracks`].
+    pub cracks: &'static str,
+    /// [`crate::DefectSpec::damage`].
+    pub damage: &'static str,
+    /// [`crate::DefectSpec::cut_pairs`].
+    pub cut_contacts: &'static str,
+    /// The axis of an effective conductivity ([`crate::effective_conductivity`]).
+    pub etc_axis: &'static str,
+}
+
+impl FieldNames {
+    /// The model's own parameter names.
+    pub const MODEL: Self = Self {
+        bcs: "bcs",
+        sources: "sources",
+        solver: "solver",
+        electrodes: "electrodes",
+        electric_homogenize: "homogenize",
+        recouple_tolerance: "recouple_tolerance",
+        checkpoint: "checkpoint",
+        surface: "surface",
+        phases: "phases",
+        inclusions: "phases.Inclusions",
+        phase_rule: "phase_rule",
+        carve: "carve",
+        contacts: "contacts",
+        defects: "defects",
+        interfaces: "interfaces",
+        cracks: "cracks",
+        damage: "damage",
+        cut_contacts: "cut_pairs",
+        etc_axis: "axis",
+    };
+}
+
+impl Default for FieldNames {
+    fn default() -> Self {
+        Self::MODEL
     }
 }

@@ -31,9 +31,6 @@ use crate::error::ModelError;
 use crate::model::Model;
 use crate::thermal::{FixedSet, FixedTarget, ThermalBcs, ThermalSetup};
 
-/// The scene field the ETC's refusals name.
-const FIELD: &str = "outputs.etc_axis";
-
 /// Relative mismatch of the heat through the two held sets above which it is reported (the
 /// steady solves stop at a relative residual of 1e-10 and keep the two within ~1e-8).
 const FLOW_MISMATCH_WARNING: f64 = 1e-6;
@@ -96,7 +93,7 @@ pub fn effective_conductivity(
     extra_heat: bool,
 ) -> Result<EtcValue, ModelError> {
     let ax = format!("{axis:?}");
-    let refuse = |why: String| ModelError::invalid(FIELD, &ax, why);
+    let refuse = |why: String| ModelError::invalid(model.fields.etc_axis, &ax, why);
     if model.container.period().is_some() {
         return Err(refuse(
             "a periodic box conducts round its period as well as between held sets, so no λ_e along one \
@@ -211,7 +208,7 @@ fn span(model: &Model, setup: &ThermalSetup, s: &FixedSet, axis: Axis) -> Result
             let face = setup.walls.faces[*w];
             if face.axis() != Some(axis) {
                 return Err(ModelError::invalid(
-                    FIELD,
+                    model.fields.etc_axis,
                     format!("{axis:?}"),
                     format!(
                         "the held face {} is not normal to {axis:?}, so the held sets do not face each other \
@@ -265,7 +262,7 @@ fn mean_section(model: &Model, axis: Axis) -> Result<f64, ModelError> {
     let extent = body_extent(&model.container, model.carve.as_ref(), k);
     if !(extent > 0.0 && volume > 0.0) {
         return Err(ModelError::invalid(
-            FIELD,
+            model.fields.etc_axis,
             format!("{axis:?}"),
             format!("the body has no extent along this axis (volume {volume:e} m³, extent {extent:e} m)"),
         ));

@@ -93,7 +93,7 @@ pub fn homogenize_thermal(
     interface: InterfaceRule,
     solve: &SolveParams,
 ) -> Result<HomogenizeRun, ModelError> {
-    let volume = periodic_volume(model, "thermal.solver", "Homogenize")?;
+    let volume = periodic_volume(model, model.fields.solver, "Homogenize")?;
     let (g, calibration) = thermal_conductances(model, surface, interface)?;
     tensor(model, &g, volume, solve, calibration)
 }
@@ -109,7 +109,7 @@ pub fn homogenize_electric(
     interface: InterfaceRule,
     solve: &SolveParams,
 ) -> Result<HomogenizeRun, ModelError> {
-    let volume = periodic_volume(model, "electric.homogenize", "true")?;
+    let volume = periodic_volume(model, model.fields.electric_homogenize, "true")?;
     let g = electric_conductances(model, surface, interface, None)?;
     tensor(model, &g, volume, solve, None)
 }

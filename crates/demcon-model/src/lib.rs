@@ -56,7 +56,7 @@ pub use electric::{
     ElectricProblem, ElectricReport, ElectricRun, Electrode, ElectrodeAt, electric_conductances,
     electric_surface_model, particle_conductivities, solve_electric,
 };
-pub use error::ModelError;
+pub use error::{FieldNames, ModelError};
 pub use etc::{EtcValue, effective_conductivity};
 pub use flux::{flux_density, flux_dipoles};
 pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogenize_thermal};

@@ -19,7 +19,7 @@ use crate::defects::{
     CutContact, DefectReport, DefectSpec, DefectView, Defects, Numbering, PhaseBridge, apply_defects,
     cut_wall_links, update_interface_marks,
 };
-use crate::error::ModelError;
+use crate::error::{FieldNames, ModelError};
 
 /// Everything the solvers need that does not depend on the physics.
 #[derive(Debug, Clone)]
@@ -61,6 +61,9 @@ pub struct Model {
     pub bridges: Vec<PhaseBridge>,
     /// What the build did.
     pub report: ModelReport,
+    /// The caller's names for its input ([`ModelParams::fields`]), which this model's refusals
+    /// use.
+    pub fields: FieldNames,
 }
 
 impl Model {
@@ -416,6 +419,9 @@ pub struct ModelParams {
     pub defects: DefectSpec,
     /// Seed (inclusion placement).
     pub seed: u64,
+    /// The caller's names for its input, used by every refusal of the model and its problems
+    /// ([`FieldNames::MODEL`] by default).
+    pub fields: FieldNames,
 }
 
 /// Builds the model: carving, phases, contacts, network structure.
@@ -452,7 +458,7 @@ fn conform(
 ) -> Result<(demcon_graph::Conformed, Vec<SphereSurface>), ModelError> {
     if params.laguerre.is_none() {
         return Err(ModelError::invalid(
-            "phase_rule",
+            params.fields.phase_rule,
             "Conforming",
             "conforming seeds shape the Laguerre cells: set `surface: Laguerre`",
         ));
@@ -500,7 +506,13 @@ fn sphere_surfaces(params: &ModelParams, container: &Container) -> Result<Vec<Sp
             PhaseSpec::Inclusions {
                 fraction, size_ratio, ..
             } => {
-                let (centres, radius) = place_inclusions(container, *fraction, *size_ratio, params.seed)?;
+                let (centres, radius) = place_inclusions(
+                    container,
+                    *fraction,
+                    *size_ratio,
+                    params.seed,
+                    params.fields.inclusions,
+                )?;
                 spheres.extend(centres.into_iter().map(|centre| SphereSurface { centre, radius }));
             }
             PhaseSpec::Region {
@@ -616,7 +628,7 @@ pub fn build_model_staged(
     } = packed;
     let materials = params.materials.clone();
     let n_phases = materials.materials.len();
-    params.defects.validate(n_phases)?;
+    params.defects.validate(n_phases, &params.fields)?;
     let n_before = particles.len();
     let Phased {
         particles,
@@ -639,10 +651,11 @@ pub fn build_model_staged(
         })?,
     };
     let contacts_s = t1.elapsed().as_secs_f64();
-    check_connected(&graph, particles.len())?;
+    check_connected(&graph, particles.len(), &params.fields)?;
     let numbering = Numbering {
         kept_ids: kept_ids.as_deref(),
         n_before,
+        fields: &params.fields,
     };
     let (graph, mut defects) = defects(graph, &particles, &container, &mixes, params, numbering, stages)?;
     let bridges = bridges(
@@ -715,6 +728,7 @@ pub fn build_model_staged(
         network: OnceLock::from(network),
         defects,
         bridges,
+        fields: params.fields,
     })
 }
 
@@ -753,7 +767,7 @@ fn phases(
         carved_away = particles.len() - kept.len();
         if kept.is_empty() {
             return Err(ModelError::invalid(
-                "carve",
+                params.fields.carve,
                 "region",
                 "no particle lies inside the carving region",
             ));
@@ -857,11 +871,11 @@ pub const MIN_CONNECTED_FRACTION: f64 = 0.5;
 
 /// Fails when the largest connected cluster holds less than [`MIN_CONNECTED_FRACTION`] of the
 /// particles.
-fn check_connected(graph: &ContactGraph, n: usize) -> Result<(), ModelError> {
+fn check_connected(graph: &ContactGraph, n: usize, fields: &FieldNames) -> Result<(), ModelError> {
     let largest = graph.report.largest_component;
     if n > 1 && (largest as f64) < MIN_CONNECTED_FRACTION * n as f64 {
         return Err(ModelError::invalid(
-            "contacts",
+            fields.contacts,
             format!(
                 "Z = {:.3e}, ε = {:.3e}",
                 graph.report.coordination, graph.report.epsilon
@@ -878,23 +892,25 @@ fn check_connected(graph: &ContactGraph, n: usize) -> Result<(), ModelError> {
 
 /// Places monodisperse, non-overlapping inclusion spheres in the container's bounding box
 /// with the LS algorithm and returns them (centres (m), radius (m)). `fraction` is their
-/// volume fraction, `size_ratio` the box edge over the inclusion diameter.
+/// volume fraction, `size_ratio` the box edge over the inclusion diameter; refusals name
+/// `{field}.fraction` and `{field}.size_ratio`.
 pub fn place_inclusions(
     container: &Container,
     fraction: f64,
     size_ratio: f64,
     seed: u64,
+    field: &str,
 ) -> Result<(Vec<Vec3>, f64), ModelError> {
     if !(fraction > 0.0 && fraction < 0.6) {
         return Err(ModelError::invalid(
-            "phases.Inclusions.fraction",
+            &format!("{field}.fraction"),
             fraction,
             "must be in (0, 0.6)",
         ));
     }
     if !(size_ratio.is_finite() && size_ratio >= 1.0) {
         return Err(ModelError::invalid(
-            "phases.Inclusions.size_ratio",
+            &format!("{field}.size_ratio"),
             size_ratio,
             "must be ≥ 1 (box edge / diameter)",
         ));
@@ -914,7 +930,7 @@ pub fn place_inclusions(
         .map_err(|e| ModelError::Packing(format!("placing inclusions: {e}")))?;
     if report.stop != StopReason::TargetReached {
         return Err(ModelError::invalid(
-            "phases.Inclusions.fraction",
+            &format!("{field}.fraction"),
             fraction,
             format!(
                 "the inclusions could not be placed: reached φ = {:.4} ({:?}) with {count} spheres",
@@ -1019,9 +1035,9 @@ fn assign(
 
 /// A phase entry that claims no particle: its region lies outside the body or falls between
 /// the particles' centres (smaller than they are).
-fn claims_nobody(i: usize, what: &str) -> ModelError {
+fn claims_nobody(fields: &FieldNames, i: usize, what: &str) -> ModelError {
     ModelError::invalid(
-        &format!("phases[{i}]"),
+        &format!("{}[{i}]", fields.phases),
         what,
         "claims no particle: no particle centre lies inside it (and it cuts none): it lies outside the body, \
          or is smaller than the particles; move or enlarge it, or use more particles",
@@ -1046,9 +1062,15 @@ fn apply_phases(
                 radius,
                 centres,
             } => {
-                let union = spheres_region(container, *radius, centres, reach, &format!("phases[{i}]"))?;
+                let union = spheres_region(
+                    container,
+                    *radius,
+                    centres,
+                    reach,
+                    &format!("{}[{i}]", params.fields.phases),
+                )?;
                 if assign(particles, &union, *phase, params.phase_rule, mixes) == 0 {
-                    return Err(claims_nobody(i, "Spheres"));
+                    return Err(claims_nobody(&params.fields, i, "Spheres"));
                 }
                 inclusion_phase = Some(*phase);
                 inclusions = Some(InclusionReport {
@@ -1063,7 +1085,7 @@ fn apply_phases(
             }
             PhaseSpec::Region { phase, region } => {
                 if assign(particles, region, *phase, params.phase_rule, mixes) == 0 {
-                    return Err(claims_nobody(i, "Region"));
+                    return Err(claims_nobody(&params.fields, i, "Region"));
                 }
             }
             PhaseSpec::Inclusions {
@@ -1071,10 +1093,22 @@ fn apply_phases(
                 fraction,
                 size_ratio,
             } => {
-                let (centres, radius) = place_inclusions(container, *fraction, *size_ratio, params.seed)?;
-                let union = spheres_region(container, radius, &centres, reach, &format!("phases[{i}]"))?;
+                let (centres, radius) = place_inclusions(
+                    container,
+                    *fraction,
+                    *size_ratio,
+                    params.seed,
+                    params.fields.inclusions,
+                )?;
+                let union = spheres_region(
+                    container,
+                    radius,
+                    &centres,
+                    reach,
+                    &format!("{}[{i}]", params.fields.phases),
+                )?;
                 if assign(particles, &union, *phase, params.phase_rule, mixes) == 0 {
-                    return Err(claims_nobody(i, "Inclusions"));
+                    return Err(claims_nobody(&params.fields, i, "Inclusions"));
                 }
                 let b = container.bounds();
                 inclusion_phase = Some(*phase);
@@ -1092,7 +1126,7 @@ fn apply_phases(
     }
     materials
         .check_phases(&particles.phases)
-        .map_err(|e| ModelError::at("phases", e))?;
+        .map_err(|e| ModelError::at(params.fields.phases, e))?;
     if let Some(inc) = inclusions.as_mut() {
         let phase = inclusion_phase.unwrap_or(0);
         let f = Laminates::new(particles.len(), mixes).phase_fractions(particles, materials.materials.len());
@@ -1116,7 +1150,7 @@ pub fn set_region_phases(
 ) -> Result<(), ModelError> {
     if rule == PhaseRule::Conforming || model.report.phase_rule == PhaseRule::Conforming {
         return Err(ModelError::invalid(
-            "phase_rule",
+            model.fields.phase_rule,
             "Conforming",
             "conforming cells are built for their surfaces: build a new model with the new phases",
         ));
@@ -1197,10 +1231,10 @@ pub fn set_region_phases(
 /// Errors: a value `spec` refuses, or a model that already has defects (build it without).
 pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelError> {
     let n_phases = model.materials.materials.len();
-    spec.validate(n_phases)?;
+    spec.validate(n_phases, &model.fields)?;
     if !model.defects.spec.is_empty() {
         return Err(ModelError::invalid(
-            "defects",
+            model.fields.defects,
             "a model with defects",
             "apply defects to a model built without any",
         ));
@@ -1215,6 +1249,7 @@ pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelErro
         Numbering {
             kept_ids: None,
             n_before: n,
+            fields: &model.fields,
         },
         n_phases,
     )?;
@@ -1247,5 +1282,6 @@ pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelErro
         defects,
         bridges: model.bridges.clone(),
         report,
+        fields: model.fields,
     })
 }

@@ -258,7 +258,7 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
         _ => RepresentativeVolume::VolumeFraction(&fv),
     };
     let mut caps = capacities(&vols, &c, &rho, rv)?;
-    let walls = model.wall_contacts(&faces, "thermal.bcs")?;
+    let walls = model.wall_contacts(&faces, model.fields.bcs)?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), &sm);
     let mut wall_g = walls.conductances(&wall_s, |p, e, h| lam.half_bond(p, phases, &lam_phase, e, h));
     apply_to_walls(
@@ -431,7 +431,7 @@ pub fn thermal_bcs(
     let transient = problem.solver.is_transient();
     if fixed_sets.is_empty() && !transient {
         return Err(ModelError::invalid(
-            "thermal.bcs",
+            model.fields.bcs,
             "no FixedTemperature or WallTemperature",
             "a steady thermal solve needs at least one fixed temperature",
         ));
@@ -489,7 +489,7 @@ fn boundary_conditions(
     let mut next_wall = 0..setup.walls.n_walls();
     let mut fixed_sets = Vec::new();
     for (i, bc) in problem.bcs.iter().enumerate() {
-        let field = format!("thermal.bcs[{i}]");
+        let field = format!("{}[{i}]", model.fields.bcs);
         match bc {
             ThermalBc::FixedTemperature { select, value } => {
                 let ids = select
@@ -557,7 +557,7 @@ fn add_volume_sources(
     sources: &mut [f64],
 ) -> Result<(), ModelError> {
     for (i, src) in problem.sources.iter().enumerate() {
-        let field = format!("thermal.sources[{i}]");
+        let field = format!("{}[{i}]", model.fields.sources);
         let ids = src
             .select
             .select_nonempty(&model.particles, &model.container, &field)
@@ -755,7 +755,7 @@ pub fn solve_thermal_checkpointed(
         ThermalSolver::Explicit { t_end, dt } => {
             let params = ExplicitParams {
                 t_end,
-                dt: explicit_step(dt, setup.paper_dt)?,
+                dt: explicit_step(dt, setup.paper_dt, model.fields.solver)?,
                 output_times: problem.output_times.clone(),
                 paper_dt: setup.paper_dt,
                 progress: problem.progress.clone(),
@@ -791,7 +791,7 @@ pub fn solve_thermal_checkpointed(
         }
         ThermalSolver::Steady => {
             if resume.is_some() {
-                return Err(not_resumable("Steady"));
+                return Err(not_resumable(&model.fields, "Steady"));
             }
             return steady_run(setup, bcs, problem, &system, &sources);
         }
@@ -828,16 +828,16 @@ fn transient_report(
     }
 }
 
-/// The explicit step the scene asks for; `Paper` takes the paper's estimate (s), which only
-/// the calibrated surface model has.
-fn explicit_step(spec: TimeStepSpec, paper_dt: Option<f64>) -> Result<TimeStep, ModelError> {
+/// The explicit step the caller asks for; `Paper` takes the paper's estimate (s), which only
+/// the calibrated surface model has (refused at `{solver}.dt`).
+fn explicit_step(spec: TimeStepSpec, paper_dt: Option<f64>, solver: &str) -> Result<TimeStep, ModelError> {
     Ok(match spec {
         TimeStepSpec::Auto { safety } => TimeStep::Auto { safety },
         TimeStepSpec::Fixed { dt, allow_unstable } => TimeStep::Fixed { dt, allow_unstable },
         TimeStepSpec::Paper { allow_unstable } => {
             let dt = paper_dt.ok_or_else(|| {
                 ModelError::invalid(
-                    "thermal.solver.dt",
+                    &format!("{solver}.dt"),
                     "Paper",
                     "the paper's estimate needs the Calibrated surface model",
                 )

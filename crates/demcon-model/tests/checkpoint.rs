@@ -191,7 +191,7 @@ fn steady_solves_refuse_to_resume_and_checkpoints_of_another_run_are_refused() {
     let steady = problems(ThermalSolver::Steady, Some(0.5));
     let err = run(&model, &steady, 5, Some(ck)).0.unwrap_err().to_string();
     assert!(
-        err.contains("thermal.solver") && err.contains("nothing to resume"),
+        err.contains("`solver`") && err.contains("nothing to resume"),
         "{err}"
     );
     let setup = thermal_setup(&model, &steady.0).unwrap();

@@ -68,6 +68,7 @@ fn lattice(
         laguerre: laguerre.then(LaguerreParams::default),
         defects,
         seed: 1,
+        fields: FieldNames::default(),
     };
     build_model(packed, &params)
 }
@@ -367,7 +368,7 @@ fn broken_bonds_are_cut_and_bad_pairs_reported() {
     let e = lattice([2, 2, 4], None, PhaseRule::Centre, false, defects)
         .unwrap_err()
         .to_string();
-    assert!(e.contains("cut_contacts[1][1]") && e.contains("0..16"), "{e}");
+    assert!(e.contains("`cut_pairs[1][1]`") && e.contains("0..16"), "{e}");
 }
 
 #[test]
@@ -633,6 +634,7 @@ fn laguerre_model(
         laguerre: Some(LaguerreParams::default()),
         defects,
         seed: 1,
+        fields: FieldNames::default(),
     };
     build_model(packed, &params).unwrap()
 }

@@ -32,6 +32,7 @@ fn model(container: Container, n: usize, seed: u64) -> Model {
         laguerre: Some(LaguerreParams::default()),
         defects: Default::default(),
         seed,
+        fields: FieldNames::default(),
     };
     build_model(packed, &params).unwrap()
 }
@@ -167,6 +168,7 @@ fn mixing_the_laguerre_surface_with_a_contact_graph_is_refused() {
         laguerre: None,
         defects: Default::default(),
         seed: 1,
+        fields: FieldNames::default(),
     };
     let m = build_model(packed, &params).unwrap();
     let p = problem(Vec::new(), ThermalSolver::Steady);
@@ -222,7 +224,7 @@ fn a_homogeneous_periodic_packing_homogenises_to_lambda_times_identity() {
         .unwrap_err()
         .to_string();
     assert!(
-        err.contains("thermal.solver") && err.contains("Periodic"),
+        err.contains("`solver`") && err.contains("Periodic"),
         "{err}"
     );
 }

@@ -91,6 +91,7 @@ fn calibration_with_walls_finds_four_over_pi_on_the_lattice() {
             laguerre: None,
             defects: Default::default(),
             seed: 1,
+            fields: FieldNames::default(),
         },
     )
     .unwrap();
@@ -174,17 +175,38 @@ fn bad_selections_name_the_field() {
     ]);
     let setup = thermal_setup(&model, &problem).unwrap();
     let err = thermal_bcs(&model, &setup, &problem).unwrap_err().to_string();
-    assert!(err.contains("thermal.bcs[0]"), "{err}");
+    assert!(err.contains("`bcs[0]"), "{err}");
     // A wall on a face the container lacks.
     let bad = steady(vec![ThermalBc::WallTemperature {
         face: Face::Outer,
         value: 1.0,
     }]);
     let err = thermal_setup(&model, &bad).unwrap_err().to_string();
-    assert!(err.contains("thermal.bcs"), "{err}");
+    assert!(err.contains("bcs"), "{err}");
     // A steady solve with nothing fixed.
     let none = steady(vec![]);
     let setup = thermal_setup(&model, &none).unwrap();
     let err = thermal_bcs(&model, &setup, &none).unwrap_err().to_string();
     assert!(err.contains("at least one fixed temperature"), "{err}");
+}
+
+#[test]
+fn refusals_name_the_callers_fields() {
+    let mut model = lattice(2, 2, 2, vec![metal()]);
+    let no_hold = steady(Vec::new());
+    let setup = thermal_setup(&model, &no_hold).unwrap();
+    let by_default = thermal_bcs(&model, &setup, &no_hold).unwrap_err().to_string();
+    assert!(by_default.starts_with("field `bcs`"), "{by_default}");
+    model.fields = FieldNames {
+        bcs: "study.holds",
+        ..FieldNames::MODEL
+    };
+    let named = thermal_bcs(&model, &setup, &no_hold).unwrap_err().to_string();
+    assert!(named.starts_with("field `study.holds`"), "{named}");
+    let nowhere = steady(vec![ThermalBc::FixedTemperature {
+        select: Selector::Phase(7),
+        value: 1.0,
+    }]);
+    let err = thermal_bcs(&model, &setup, &nowhere).unwrap_err().to_string();
+    assert!(err.contains("`study.holds[0].select`"), "{err}");
 }

@@ -6,7 +6,7 @@
 use demcon_core::{Axis, Container, CoreError, Face, Material, MaterialTable, Region, Selector, Vec3};
 use demcon_graph::{ContactParams, CrackShape, InterfaceRule, LaguerreParams};
 use demcon_model::{
-    CarveRule, Crack, CtSpec, Damage, DefectSpec, ElectricProblem, Electrode, ElectrodeAt,
+    CarveRule, Crack, CtSpec, Damage, DefectSpec, ElectricProblem, Electrode, ElectrodeAt, FieldNames,
     InterfaceResistance, ModelParams, PhaseRule, PhaseSpec, SurfaceSpec, ThermalBc, ThermalProblem,
     ThermalSolver, TimeStepSpec, VolumeSource,
 };
@@ -16,6 +16,30 @@ use demcon_thermal::{CheckpointEvery, Scheme};
 
 use crate::config::*;
 use crate::error::SceneError;
+
+/// Where each part of the model's input sits in a scene file: the model names a refused value
+/// by these paths.
+pub const SCENE_FIELDS: FieldNames = FieldNames {
+    bcs: "thermal.bcs",
+    sources: "thermal.sources",
+    solver: "thermal.solver",
+    electrodes: "electric.electrodes",
+    electric_homogenize: "electric.homogenize",
+    recouple_tolerance: "electric.recouple_tolerance",
+    checkpoint: "checkpoint",
+    surface: "surface",
+    phases: "phases",
+    inclusions: "phases.Inclusions",
+    phase_rule: "phase_rule",
+    carve: "carve",
+    contacts: "contacts",
+    defects: "defects",
+    interfaces: "interfaces",
+    cracks: "cracks",
+    damage: "damage",
+    cut_contacts: "cut_contacts",
+    etc_axis: "outputs.etc_axis",
+};
 
 fn v3(t: (f64, f64, f64)) -> Vec3 {
     Vec3::new(t.0, t.1, t.2)
@@ -287,6 +311,7 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
         laguerre: uses_laguerre(cfg).then(LaguerreParams::default),
         defects,
         seed: cfg.seed,
+        fields: SCENE_FIELDS,
     })
 }
 

@@ -625,7 +625,13 @@ fn check_sphere_centres(c: &SceneConfig, container: &Container) -> Result<(), Sc
     for (i, ph) in c.phases.iter().enumerate() {
         if let PhaseConfig::Spheres { radius, centres, .. } = ph {
             let centres: Vec<Vec3> = centres.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
-            demcon_model::spheres_region(container, *radius, &centres, 0.0, &format!("phases[{i}]"))?;
+            demcon_model::spheres_region(
+                container,
+                *radius,
+                &centres,
+                0.0,
+                &format!("{}[{i}]", convert::SCENE_FIELDS.phases),
+            )?;
         }
     }
     Ok(())
@@ -1022,7 +1028,7 @@ fn check_etc(
 fn check_defects(c: &SceneConfig, base_dir: &Path) -> Result<(), SceneError> {
     let materials = convert::materials(&c.materials)?;
     let spec = convert::defect_spec(c, &materials)?;
-    spec.validate(materials.materials.len())?;
+    spec.validate(materials.materials.len(), &convert::SCENE_FIELDS)?;
     for (i, it) in spec.interfaces.iter().enumerate() {
         let same = |o: &demcon_model::InterfaceResistance| {
             o.phases == it.phases || o.phases == [it.phases[1], it.phases[0]]

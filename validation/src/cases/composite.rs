@@ -617,7 +617,7 @@ pub fn epoxy_silica() -> Vec<MaterialConfig> {
 /// `PhaseConfig::Inclusions` does (LS placement in the container's box), phases set by each
 /// rule of [`RULES`]; and the number of spheres.
 pub fn with_inclusions(model: &Model, f: f64, seed: u64) -> anyhow::Result<(ModelsByRule, usize)> {
-    let (centres, radius) = place_inclusions(&model.container, f, SIZE_RATIO, seed)?;
+    let (centres, radius) = place_inclusions(&model.container, f, SIZE_RATIO, seed, "inclusions")?;
     let union = Region::Union(
         centres
             .iter()

@@ -6,8 +6,8 @@ use demcon_core::{Container, Material, MaterialTable, ParticleSet, Vec3};
 use demcon_graph::ContactParams;
 use demcon_graph::InterfaceRule;
 use demcon_model::{
-    ElectricProblem, Electrode, ElectrodeAt, Model, ModelParams, Packed, PhaseRule, SurfaceSpec, ThermalBc,
-    build_model, default_solve_params,
+    ElectricProblem, Electrode, ElectrodeAt, FieldNames, Model, ModelParams, Packed, PhaseRule, SurfaceSpec,
+    ThermalBc, build_model, default_solve_params,
 };
 use demcon_network::FloatingPolicy;
 
@@ -40,6 +40,7 @@ pub fn lattice(nx: usize, ny: usize, nz: usize, materials: Vec<Material>) -> Mod
         laguerre: None,
         defects: Default::default(),
         seed: 1,
+        fields: FieldNames::default(),
     };
     build_model(packed, &params).unwrap()
 }
