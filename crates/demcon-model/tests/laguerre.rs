@@ -223,10 +223,7 @@ fn a_homogeneous_periodic_packing_homogenises_to_lambda_times_identity() {
     let err = homogenize_thermal(&b, &SurfaceSpec::Laguerre, InterfaceRule::HarmonicMean, &solve)
         .unwrap_err()
         .to_string();
-    assert!(
-        err.contains("`solver`") && err.contains("Periodic"),
-        "{err}"
-    );
+    assert!(err.contains("`solver`") && err.contains("Periodic"), "{err}");
 }
 
 #[test]
