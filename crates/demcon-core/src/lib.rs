@@ -25,6 +25,7 @@ pub mod check;
 mod components;
 mod diagnostic;
 mod error;
+mod inclusion;
 mod material;
 pub mod mem;
 mod morton;
@@ -38,6 +39,7 @@ pub use available::{AvailableMemory, MemoryBound, available_memory, available_me
 pub use components::Components;
 pub use diagnostic::Diagnostic;
 pub use error::{CoreError, short_number};
+pub use inclusion::{Ends, Inclusion, unit_axis};
 pub use material::{Material, MaterialTable};
 pub use morton::morton_order;
 pub use particles::{ParticleSet, RadiusStats};

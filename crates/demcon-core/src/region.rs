@@ -1,7 +1,7 @@
-//! Regions of space (boxes, cylinders, spheres and their combinations) used to carve
-//! packings, assign phases and select particles. Each region has a signed distance.
+//! Regions of space (boxes, cylinders, spheres, shaped inclusions and their combinations) used
+//! to carve packings, assign phases and select particles. Each region has a signed distance.
 
-use crate::{Aabb, Axis, Vec3};
+use crate::{Aabb, Axis, Inclusion, Vec3};
 
 /// A region of space described by primitives and set operations.
 ///
@@ -35,6 +35,8 @@ pub enum Region {
         /// Radius (m).
         radius: f64,
     },
+    /// A spheroid or a cylinder of any orientation ([`Inclusion`]).
+    Inclusion(Inclusion),
     /// Points in the first region and not in the second (e.g. a cylinder minus a groove).
     Difference(Box<Region>, Box<Region>),
     /// Points in any of the regions.
@@ -71,6 +73,7 @@ impl Region {
                 outside + qr.max(qa).min(0.0)
             }
             Region::Sphere { centre, radius } => (p - centre).norm() - radius,
+            Region::Inclusion(s) => s.signed_distance(p),
             Region::Difference(a, b) => a.signed_distance(p).max(-b.signed_distance(p)),
             Region::Union(rs) => rs
                 .iter()
@@ -110,11 +113,11 @@ impl Region {
         sphere_points(SPHERE_SAMPLES).all(|u| self.contains_point(&(c + r * u)))
     }
 
-    /// Whether this is a box, cylinder or sphere (exact signed distance).
+    /// Whether this is a box, cylinder, sphere or inclusion (exact signed distance).
     fn is_primitive(&self) -> bool {
         matches!(
             self,
-            Region::Box { .. } | Region::Cylinder { .. } | Region::Sphere { .. }
+            Region::Box { .. } | Region::Cylinder { .. } | Region::Sphere { .. } | Region::Inclusion(_)
         )
     }
 
@@ -139,6 +142,7 @@ impl Region {
                 min: centre - Vec3::repeat(*radius),
                 max: centre + Vec3::repeat(*radius),
             },
+            Region::Inclusion(s) => s.bounds(),
             Region::Difference(a, _) => a.bounds(),
             Region::Union(rs) => rs
                 .iter()
@@ -173,6 +177,7 @@ impl Region {
             Region::Box { min, max } => Aabb { min: *min, max: *max }.volume(),
             Region::Cylinder { radius, length, .. } => PI * radius * radius * length,
             Region::Sphere { radius, .. } => 4.0 / 3.0 * PI * radius.powi(3),
+            Region::Inclusion(s) => s.volume(),
             _ => {
                 let b = self.bounds();
                 let n = cells_per_axis.max(1);
