@@ -276,10 +276,47 @@ impl Inclusion {
     }
 
     /// The distance between two shapes (m): 0 when they touch or overlap, else the length of
-    /// the shortest segment between them, by GJK on the support functions (relative
-    /// tolerance 1e-10 of the shapes' size; exact for the segment parts, converging on the
-    /// curved ones).
+    /// the shortest segment between them: closed form for two round-ended cylinders (segment
+    /// to segment), otherwise GJK on the support functions (relative tolerance 1e-10 of the
+    /// shapes' size; exact for the segment parts, converging on the curved ones).
     pub fn distance(&self, other: &Inclusion) -> f64 {
+        if let (Some((p0, p1, r)), Some((q0, q1, s))) = (self.capsule(), other.capsule()) {
+            return (segment_distance(p0, p1, q0, q1) - r - s).max(0.0);
+        }
+        self.gjk(other, None)
+    }
+
+    /// Whether the two shapes are at least `gap` (m) apart and do not touch
+    /// ([`Inclusion::distance`] `≥ gap` and `> 0`), stopping GJK as soon as its bounds decide.
+    pub fn apart(&self, other: &Inclusion, gap: f64) -> bool {
+        let d = if self.capsule().is_some() && other.capsule().is_some() {
+            self.distance(other)
+        } else {
+            self.gjk(other, Some(gap))
+        };
+        d >= gap && d > 0.0
+    }
+
+    /// A round-ended cylinder's axis segment (ends) and radius.
+    fn capsule(&self) -> Option<(Vec3, Vec3, f64)> {
+        match *self {
+            Self::Cylinder {
+                centre,
+                axis,
+                radius,
+                length,
+                ends: Ends::Round,
+            } => {
+                let h = (0.5 * length - radius) * axis;
+                Some((centre - h, centre + h, radius))
+            }
+            _ => None,
+        }
+    }
+
+    /// GJK distance; with `decide`, it returns as soon as the bounds put the distance on one
+    /// side of that value (a lower bound ≥ it, or an upper bound below it).
+    fn gjk(&self, other: &Inclusion, decide: Option<f64>) -> f64 {
         let support = |d: &Vec3| self.support(&-d) - other.support(d);
         let scale = self.circumradius() + other.circumradius();
         let mut v = self.centre() - other.centre();
@@ -293,6 +330,15 @@ impl Inclusion {
             // The lower bound v·w/|v| met the upper bound |v|: converged.
             if vv - v.dot(&w) <= 1e-10 * scale * vv.sqrt() {
                 return vv.sqrt();
+            }
+            if let Some(g) = decide {
+                let lower = v.dot(&w) / vv.sqrt();
+                if lower >= g && lower > 0.0 {
+                    return lower;
+                }
+                if vv.sqrt() < g {
+                    return vv.sqrt();
+                }
             }
             if simplex
                 .iter()
@@ -311,6 +357,43 @@ impl Inclusion {
         }
         v.norm()
     }
+}
+
+/// The distance between the segments [p0, p1] and [q0, q1] (m), closed form (the clamped
+/// solution of the two-parameter least-squares problem; Ericson, Real-Time Collision Detection,
+/// §5.1.9).
+fn segment_distance(p0: Vec3, p1: Vec3, q0: Vec3, q1: Vec3) -> f64 {
+    let (d1, d2, r) = (p1 - p0, q1 - q0, p0 - q0);
+    let (a, e, f) = (d1.dot(&d1), d2.dot(&d2), d2.dot(&r));
+    let tiny = 1e-30;
+    let (s, t) = if a <= tiny && e <= tiny {
+        (0.0, 0.0)
+    } else if a <= tiny {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(&r);
+        if e <= tiny {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(&d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > tiny * a * e {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    ((p0 + s * d1) - (q0 + t * d2)).norm()
 }
 
 /// The point of the simplex (1–4 points) nearest the origin and the smallest face that holds it,
@@ -631,6 +714,14 @@ mod tests {
                 a.distance(&b)
             );
             assert!((b.distance(&a) - exact).abs() < 1e-7);
+            assert!(
+                (a.gjk(&b, None) - exact).abs() < 1e-7,
+                "{} vs {exact}",
+                a.gjk(&b, None)
+            );
+            for gap in [0.0, 0.1, 0.5] {
+                assert_eq!(a.apart(&b, gap), exact >= gap && exact > 0.0);
+            }
         }
         // Spheres as spheroids; a spheroid and a point-like ball along its axis and across.
         let s1 = Inclusion::spheroid(Vec3::zeros(), Vec3::x(), 1.0, 1.0, "s").unwrap();

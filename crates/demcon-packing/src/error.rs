@@ -25,6 +25,27 @@ pub enum PackingError {
         /// Lowest starting volume fraction tried.
         phi: f64,
     },
+    /// Random sequential addition of shapes stalled before the target fraction.
+    #[error(
+        "the shapes could not reach volume fraction {target}: random sequential addition stalled at \
+         {reached:.4} ({placed} of {count} shapes placed, the next found no room in {attempts} tries after \
+         {relaxations} rattles); the attainable fraction for these shapes and this gap is about {reached:.3}: \
+         lower the fraction or the min_gap"
+    )]
+    ShapesStalled {
+        /// The volume fraction asked.
+        target: f64,
+        /// The volume fraction placed when it stalled.
+        reached: f64,
+        /// Shapes placed.
+        placed: usize,
+        /// Shapes drawn for the target.
+        count: usize,
+        /// Tries between rattles.
+        attempts: usize,
+        /// Rattles in a row without room.
+        relaxations: usize,
+    },
     /// The event-driven run left overlapping spheres: an internal numerical failure.
     #[error(
         "numerical failure: spheres overlap by {overlap:.3e} of the smaller radius (allowed {allowed:.0e})"
