@@ -11,6 +11,7 @@
 use serde_json::{Map, Value};
 
 use super::common::*;
+use super::study::Study;
 use super::transient::{slab, sphere};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
@@ -30,6 +31,8 @@ struct Cost {
     problem: Problem,
     /// Requested particles.
     n: usize,
+    /// Particles packed.
+    particles: usize,
     /// `explicit` or `implicit`.
     solver: &'static str,
     /// Slab: relative error (fraction); sphere: °C.
@@ -41,86 +44,83 @@ struct Cost {
     build_s: f64,
 }
 
-/// Everything the case measures.
-struct Measured {
-    /// Slab and sphere, explicit then implicit, per N in order.
-    runs: Vec<Cost>,
-    /// Largest slab packing.
-    n_particles: usize,
-}
+/// Slab and sphere, explicit then implicit, per N (one packing each).
+type Measured = Study<Vec<Cost>>;
 
-impl Measured {
-    /// The runs of one problem and solver, in N order.
-    fn of(&self, problem: Problem, solver: &str) -> impl Iterator<Item = &Cost> {
-        self.runs
-            .iter()
-            .filter(move |c| c.problem == problem && c.solver == solver)
-    }
+/// The runs of one problem and solver, in N order.
+fn of<'a>(m: &'a Measured, problem: Problem, solver: &'a str) -> impl Iterator<Item = &'a Cost> {
+    m.rows()
+        .flatten()
+        .filter(move |c| c.problem == problem && c.solver == solver)
 }
 
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
-    let m = measure(ctx)?;
+    let sizes: Vec<usize> = ctx.pick(
+        vec![2_000, 5_000, 10_000, 20_000],
+        vec![10_000, 30_000, 100_000, 300_000],
+    );
+    let m = Study::run(&sizes, |_| 1, ctx.seed, |n, seed, _| measure(n, seed))?;
     let mut out = CaseOutcome::new("cost-accuracy-thermal", ctx.mode);
-    out.n_particles = m.n_particles;
+    out.n_particles = m
+        .rows()
+        .flatten()
+        .filter(|c| c.problem == Problem::Slab)
+        .map(|c| c.particles)
+        .max()
+        .unwrap_or(0);
     compare(&m, &mut out);
     report(ctx, &m, &mut out)?;
     Ok(out)
 }
 
-/// Slab and sphere (to 10 s), explicit and implicit, at every N.
-fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
-    let sizes: Vec<usize> = ctx.pick(
-        vec![2_000, 5_000, 10_000, 20_000],
-        vec![10_000, 30_000, 100_000, 300_000],
-    );
+/// Slab and sphere (to 10 s), explicit and implicit, at `n`.
+fn measure(n: usize, seed: u64) -> anyhow::Result<Vec<Cost>> {
     let mut runs = Vec::new();
-    let mut n_particles = 0;
-    for &n in &sizes {
-        // Slab.
-        let (model, build_s) = model_of_timed(&slab::scene(n, ctx.seed, slab::explicit()))?;
-        n_particles = n_particles.max(model.particles.len());
-        for (solver, cfg) in [
-            ("explicit", slab::scene(n, ctx.seed, slab::explicit())),
-            ("implicit", slab::scene(n, ctx.seed, slab::implicit())),
-        ] {
-            let e = slab::measure(&model, &cfg)?;
-            runs.push(Cost {
-                problem: Problem::Slab,
-                n,
-                solver,
-                error: e.profile,
-                wall_s: e.wall_s,
-                steps: e.steps,
-                build_s,
-            });
-        }
-        // Sphere, to 10 s.
-        let (model, build_s) = model_of_timed(&sphere::scene(n, ctx.seed, sphere::explicit(10.0)))?;
-        for (solver, cfg) in [
-            ("explicit", sphere::scene(n, ctx.seed, sphere::explicit(10.0))),
-            ("implicit", sphere::scene(n, ctx.seed, sphere::implicit(10.0))),
-        ] {
-            let e = sphere::measure(&model, &cfg)?;
-            runs.push(Cost {
-                problem: Problem::Sphere,
-                n,
-                solver,
-                error: e.max_abs_error_centre,
-                wall_s: e.wall_s,
-                steps: e.steps,
-                build_s,
-            });
-        }
+    // Slab.
+    let (model, build_s) = model_of_timed(&slab::scene(n, seed, slab::explicit()))?;
+    for (solver, cfg) in [
+        ("explicit", slab::scene(n, seed, slab::explicit())),
+        ("implicit", slab::scene(n, seed, slab::implicit())),
+    ] {
+        let e = slab::measure(&model, &cfg)?;
+        runs.push(Cost {
+            problem: Problem::Slab,
+            n,
+            particles: model.particles.len(),
+            solver,
+            error: e.profile,
+            wall_s: e.wall_s,
+            steps: e.steps,
+            build_s,
+        });
     }
-    Ok(Measured { runs, n_particles })
+    // Sphere, to 10 s.
+    let (model, build_s) = model_of_timed(&sphere::scene(n, seed, sphere::explicit(10.0)))?;
+    for (solver, cfg) in [
+        ("explicit", sphere::scene(n, seed, sphere::explicit(10.0))),
+        ("implicit", sphere::scene(n, seed, sphere::implicit(10.0))),
+    ] {
+        let e = sphere::measure(&model, &cfg)?;
+        runs.push(Cost {
+            problem: Problem::Sphere,
+            n,
+            particles: model.particles.len(),
+            solver,
+            error: e.max_abs_error_centre,
+            wall_s: e.wall_s,
+            steps: e.steps,
+            build_s,
+        });
+    }
+    Ok(runs)
 }
 
 /// Metrics keyed by N and the sanity check (every error finite).
 fn compare(m: &Measured, out: &mut CaseOutcome) {
     let by_n = |problem: Problem, error_key: &str| -> Map<String, Value> {
-        m.of(problem, "explicit")
-            .zip(m.of(problem, "implicit"))
+        of(m, problem, "explicit")
+            .zip(of(m, problem, "implicit"))
             .map(|(ex, im)| {
                 let mut v = Map::new();
                 v.insert(format!("explicit{error_key}"), Value::from(ex.error));
@@ -131,7 +131,7 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
             })
             .collect()
     };
-    let all_finite = m.runs.iter().all(|c| c.error.is_finite());
+    let all_finite = m.rows().flatten().all(|c| c.error.is_finite());
     out.metric("slab_max_rel_error", Value::Object(by_n(Problem::Slab, "")));
     out.metric(
         "sphere_max_abs_error_centre_c",
@@ -166,7 +166,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         .column("solver wall (s)", |c| format!("{:.2}", c.wall_s))
         .column("steps", |c| c.steps.to_string())
         .column("build (s)", |c| format!("{:.1}", c.build_s))
-        .table("Error and cost against N", &m.runs);
+        .table("Error and cost against N", m.rows().flatten());
     out.tables.push(table);
     let against_n = |c: &Cost| (c.n as f64, c.error);
     let against_time = |c: &Cost| (c.wall_s.max(1e-3), c.error);
@@ -182,11 +182,11 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
                     series: vec![
                         Series::line(
                             "explicit (forward Euler)",
-                            m.of(problem, "explicit").map(point).collect(),
+                            of(m, problem, "explicit").map(point).collect(),
                         ),
                         Series::line(
                             "implicit (backward Euler)",
-                            m.of(problem, "implicit").map(point).collect(),
+                            of(m, problem, "implicit").map(point).collect(),
                         ),
                     ],
                 },

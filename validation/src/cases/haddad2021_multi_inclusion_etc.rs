@@ -36,6 +36,7 @@ use serde_json::{Map, Value};
 
 use super::common::*;
 use super::composite::*;
+use super::study::Study;
 use crate::analytic::{maxwell, third_order};
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx, Table};
@@ -147,6 +148,8 @@ struct Rung {
     run: PackingRun,
     /// Wall time of the rung (s).
     wall_s: f64,
+    /// Its packing's model, reused by the sweep's first realisation at the same N.
+    model: Model,
 }
 
 impl Rung {
@@ -168,18 +171,15 @@ struct Convergence {
 
 /// Per model: the smallest N from which every finer rung stays within 0.5 % of the finest;
 /// the finest rung itself proves nothing, so "converged" needs a coarser rung that qualifies.
-fn convergence(ladder: &[Rung], k: usize) -> Convergence {
-    let finest = ladder.last().expect("ladder").etc(k);
-    let idx = (0..ladder.len())
-        .find(|&i| {
-            ladder[i..]
-                .iter()
-                .all(|r| (r.etc(k) - finest).abs() / finest <= 0.005)
-        })
-        .unwrap_or(ladder.len() - 1);
+fn convergence(ladder: &Study<Rung>, k: usize) -> Convergence {
+    let etc: Vec<f64> = ladder.rows().map(|r| r.etc(k)).collect();
+    let finest = *etc.last().expect("ladder");
+    let idx = (0..etc.len())
+        .find(|&i| etc[i..].iter().all(|e| (e - finest).abs() / finest <= 0.005))
+        .unwrap_or(etc.len() - 1);
     Convergence {
         idx,
-        converged: idx + 1 < ladder.len(),
+        converged: idx + 1 < etc.len(),
         finest,
     }
 }
@@ -207,13 +207,10 @@ struct SweepRow {
 struct Measured {
     variants: Vec<Variant>,
     fft: Vec<FftPoint>,
-    /// Requested ladder sizes.
-    ladder_n: Vec<usize>,
-    ladder: Vec<Rung>,
-    /// The sweep's particle count (requested) and realisations.
-    n_sweep: usize,
-    realisations: u64,
-    runs: Vec<PackingRun>,
+    /// One packing per requested size.
+    ladder: Study<Rung>,
+    /// The sweep's realisations at its one size.
+    runs: Study<PackingRun>,
     sweep: Vec<SweepRow>,
 }
 
@@ -234,7 +231,12 @@ impl Measured {
 
     /// Particles of the first sweep realisation (the checked N).
     fn n_checked(&self) -> usize {
-        self.runs[0].n
+        self.runs.rows().next().expect("a realisation").n
+    }
+
+    /// Rung `i` of the ladder.
+    fn rung(&self, i: usize) -> &Rung {
+        &self.ladder.packings()[i].rows
     }
 
     /// The discretisation share of the tolerance and the whole tolerance.
@@ -251,9 +253,9 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let mut out = CaseOutcome::new("multi-inclusion-etc", ctx.mode);
     out.n_particles = m
         .ladder
-        .iter()
+        .rows()
         .map(|r| r.run.n)
-        .chain(m.runs.iter().map(|r| r.n))
+        .chain(m.runs.rows().map(|r| r.n))
         .max()
         .unwrap_or(0)
         .max(periodic.n_max());
@@ -293,54 +295,55 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     // 1. Convergence ladder at f = 0.3 on one inclusion layout, every model.
     let variants = Variant::all();
     let ladder_n = ctx.pick(vec![5_000, 20_000], vec![25_000, 50_000, 100_000, 200_000]);
-    let mut ladder = Vec::new();
-    let mut models = Vec::new();
-    for &n in &ladder_n {
-        let t0 = Instant::now();
-        let (r, m) = run_packing(n, ctx.seed, &[F_LADDER], &variants, None)?;
-        let wall = t0.elapsed().as_secs_f64();
-        eprintln!(
-            "   ladder N = {}: ETC {:.5} ({}), build {:.1} s, solves {:.1} s, rung {wall:.1} s",
-            r.n,
-            r.rows[0].etc[0],
-            variants[0].id(),
-            r.build_s,
-            r.solve_s
-        );
-        ladder.push(Rung { run: r, wall_s: wall });
-        models.push((n, m));
-    }
-    let n_sweep = ctx.pick(20_000, ladder_n[convergence(&ladder, 0).idx]);
+    let ladder = Study::run(
+        &ladder_n,
+        |_| 1,
+        ctx.seed,
+        |n, seed, _| {
+            let t0 = Instant::now();
+            let (run, model) = run_packing(n, seed, &[F_LADDER], &variants, None)?;
+            let wall_s = t0.elapsed().as_secs_f64();
+            eprintln!(
+                "   ladder N = {}: ETC {:.5} ({}), build {:.1} s, solves {:.1} s, rung {wall_s:.1} s",
+                run.n,
+                run.rows[0].etc[0],
+                variants[0].id(),
+                run.build_s,
+                run.solve_s
+            );
+            Ok(Rung { run, wall_s, model })
+        },
+    )?;
+    let n_sweep = ctx.pick(20_000, ladder.packings()[convergence(&ladder, 0).idx].n_target);
 
-    // 2. Sweep over f at n_sweep: every model on the first realisation, the recommended one
-    // on the others.
-    let realisations = ctx.pick(1u64, 3);
-    let mut runs = Vec::new();
-    for k in 0..realisations {
-        // Realisation 0 reuses the ladder's packing of the same size (same seed).
-        let built = models
-            .iter()
-            .zip(&ladder)
-            .find(|((n, _), _)| k == 0 && *n == n_sweep)
-            .map(|((_, m), r)| (m, r.run.build_s));
-        let vs = if k == 0 { &variants[..] } else { &variants[..1] };
-        runs.push(run_packing(n_sweep, ctx.seed + k, &fs, vs, built)?.0);
-    }
+    // 2. Sweep over f at n_sweep: every model on the first realisation (reusing the ladder's
+    // packing of the same size and seed), the recommended one on the others.
+    let runs = Study::run(
+        &[n_sweep],
+        |_| ctx.pick(1, 3),
+        ctx.seed,
+        |n, seed, k| {
+            let built = ladder.at(n).next().filter(|_| k == 0);
+            let vs = if k == 0 { &variants[..] } else { &variants[..1] };
+            Ok(run_packing(n, seed, &fs, vs, built.map(|r| (&r.model, r.run.build_s)))?.0)
+        },
+    )?;
 
     let ratio = LAMBDA_SILICA / LAMBDA_EPOXY;
+    let first = runs.rows().next().expect("a realisation");
     let sweep = fft
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let vals: Vec<f64> = runs.iter().map(|r| r.rows[i].etc[0]).collect();
+            let vals: Vec<f64> = runs.rows().map(|r| r.rows[i].etc[0]).collect();
             let mean = vals.iter().sum::<f64>() / vals.len() as f64;
             let sd = (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / vals.len() as f64).sqrt();
             let avg = |g: fn(&FractionRow) -> f64| {
-                runs.iter().map(|r| g(&r.rows[i])).sum::<f64>() / runs.len() as f64
+                runs.rows().map(|r| g(&r.rows[i])).sum::<f64>() / vals.len() as f64
             };
             SweepRow {
                 f: p.f,
-                spheres: runs[0].rows[i].spheres,
+                spheres: first.rows[i].spheres,
                 carried_centre: avg(|r| r.carried_centre),
                 carried_laminate: avg(|r| r.carried_laminate),
                 mean,
@@ -349,17 +352,14 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
                 fft_sd: p.sd,
                 maxwell: LAMBDA_EPOXY * maxwell(1.0, ratio, p.f),
                 third_order: LAMBDA_EPOXY * third_order(1.0, ratio, p.f),
-                first_etc: runs[0].rows[i].etc.clone(),
+                first_etc: first.rows[i].etc.clone(),
             }
         })
         .collect();
     Ok(Measured {
         variants,
         fft,
-        ladder_n,
         ladder,
-        n_sweep,
-        realisations,
         runs,
         sweep,
     })
@@ -400,7 +400,7 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
     );
     let converged_n = |c: Convergence| {
         if c.converged {
-            Value::from(m.ladder[c.idx].run.n)
+            Value::from(m.rung(c.idx).run.n)
         } else {
             Value::Null
         }
@@ -413,11 +413,11 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
         .map(|(k, v)| (v.id(), converged_n(convergence(&m.ladder, k))))
         .collect();
     out.metric("n_converged_by_model", Value::Object(conv_by));
-    out.metric("n_sweep", m.n_sweep);
-    out.metric("realisations", m.realisations);
+    out.metric("n_sweep", m.runs.largest());
+    out.metric("realisations", m.runs.packings().len());
     let lad: Map<String, Value> = m
         .ladder
-        .iter()
+        .rows()
         .map(|r| (r.run.n.to_string(), Value::from(r.etc(0))))
         .collect();
     out.metric("etc_f0.3_by_n", Value::Object(lad));
@@ -425,7 +425,7 @@ fn compare(m: &Measured, out: &mut CaseOutcome) {
         "ladder_wall_s",
         Value::Object(
             m.ladder
-                .iter()
+                .rows()
                 .map(|r| (r.run.n.to_string(), Value::from(r.wall_s)))
                 .collect(),
         ),
@@ -459,7 +459,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
 
 /// The ETC against f: the recommended model's mean, the references, every model's error.
 fn sweep_table(m: &Measured) -> Table {
-    let (n_sweep, realisations) = (m.n_sweep, m.realisations);
+    let (n_sweep, realisations) = (m.runs.largest(), m.runs.packings().len());
     let variants = &m.variants;
     Columns::new()
         .column("f", |r: &SweepRow| format!("{}", r.f))
@@ -493,7 +493,7 @@ fn ladder_table(ctx: &Ctx, m: &Measured) -> Table {
     let fft03 = m.fft_ladder();
     // Particles whose centre falls in one sphere: N × (sphere volume / cube volume).
     let d = std::f64::consts::PI / 6.0 / SIZE_RATIO.powi(3);
-    let finest = m.ladder.last().expect("ladder");
+    let finest = m.ladder.rows().last().expect("ladder");
     Columns::new()
         .column("N", |r: &Rung| r.run.n.to_string())
         .column("particles per inclusion", |r| format!("{:.0}", r.run.n as f64 * d))
@@ -520,13 +520,13 @@ fn ladder_table(ctx: &Ctx, m: &Measured) -> Table {
                  the finest rung and to the FFT; converged = within 0.5 % of the finest",
                 ctx.seed
             ),
-            &m.ladder,
+            m.ladder.rows(),
         )
 }
 
 /// The ETC against f (Fig. 17): the recommended model and the next, FFT, Maxwell, third order.
 fn etc_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
-    let (n_sweep, variants) = (m.n_sweep, &m.variants);
+    let (n_sweep, variants) = (m.runs.largest(), &m.variants);
     let curve = |g: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
         (0..=25)
             .map(|i| {
@@ -580,12 +580,12 @@ fn ladder_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Resul
                 .map(|(k, v)| {
                     Series::line(
                         &format!("DEM {}", v.id()),
-                        m.ladder.iter().map(|r| (r.run.n as f64, r.etc(k))).collect(),
+                        m.ladder.rows().map(|r| (r.run.n as f64, r.etc(k))).collect(),
                     )
                 })
                 .chain(std::iter::once(Series::markers(
                     "FFT (periodic, mean of 3 layouts)",
-                    m.ladder.iter().map(|r| (r.run.n as f64, fft03)).collect(),
+                    m.ladder.rows().map(|r| (r.run.n as f64, fft03)).collect(),
                 )))
                 .collect(),
         },
@@ -598,15 +598,15 @@ fn ladder_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Resul
 /// The ladder's convergence, the sweep's size and the tolerance at this N, and the pointer to
 /// the case's notes file.
 fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
-    let (n_sweep, realisations) = (m.n_sweep, m.realisations);
+    let (n_sweep, realisations) = (m.runs.largest(), m.runs.packings().len());
     let variants = &m.variants;
     let conv = m.convergence();
-    let n_conv = m.ladder[conv.idx].run.n;
+    let n_conv = m.rung(conv.idx).run.n;
     out.note(format!(
         "{} mode: ladder N = {:?} at f = {F_LADDER}; recommended model: {}; the sweep over f runs at N = {n_sweep} with \
          {realisations} realisation(s); the {} models share each packing.",
         ctx.mode.name(),
-        m.ladder_n,
+        m.ladder.sizes(),
         if conv.converged {
             format!(
                 "the ETC stays within 0.5 % of the finest rung ({:.4}) from N = {n_conv}",

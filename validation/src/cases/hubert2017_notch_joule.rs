@@ -48,6 +48,7 @@ use serde_json::Value;
 
 use super::common::*;
 use super::cylinder::*;
+use super::study::Study;
 use crate::analytic::kohlrausch_max_rise;
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx, Table};
@@ -404,35 +405,54 @@ impl SizeRun {
     }
 }
 
+/// One packing: every model on the first at each N, the Laguerre headline (centre carving)
+/// alone on the further packings at the largest N.
+enum PackingRun {
+    Every(Box<SizeRun>),
+    Laguerre(LaguerreSample),
+}
+
+impl PackingRun {
+    /// The Laguerre cells, centre carving.
+    fn laguerre(&self) -> &LaguerreSample {
+        match self {
+            Self::Every(r) => &r.laguerre,
+            Self::Laguerre(l) => l,
+        }
+    }
+}
+
 /// Everything the case measures.
 struct Measured {
-    sizes: Vec<usize>,
     /// FEM resistance and its 1-D series lower bound (Ω).
     r_fem: f64,
     r_series: f64,
     /// Kohlrausch ΔT_max (K).
     exact: f64,
-    runs: Vec<SizeRun>,
-    /// The Laguerre cells (centre carving) on the further packings at the largest N.
-    repeats: Vec<LaguerreSample>,
+    study: Study<PackingRun>,
     /// The N whose VTK was written.
     vtk_at: usize,
 }
 
 impl Measured {
+    /// Every model's run at each N (the first packing), in N order.
+    fn runs(&self) -> impl Iterator<Item = &SizeRun> {
+        self.study.rows().filter_map(|p| match p {
+            PackingRun::Every(r) => Some(r.as_ref()),
+            PackingRun::Laguerre(_) => None,
+        })
+    }
+
     /// |R/R_FEM − 1| of the Laguerre cells (centre carving) over every packing at the largest N.
     fn laguerre_spread(&self) -> Spread {
-        let last = self.runs.last().expect("at least one size");
-        Spread::of(
-            std::iter::once(&last.laguerre)
-                .chain(&self.repeats)
-                .map(|l| (l.r / self.r_fem - 1.0).abs()),
-        )
+        let r_fem = self.r_fem;
+        self.study
+            .spread(self.study.largest(), |p| (p.laguerre().r / r_fem - 1.0).abs())
     }
 
     /// The Laguerre tolerance at the largest N: 2 % at 4·10⁴, scaled by N^(-1/3) below.
     fn laguerre_tolerance(&self, ctx: &Ctx) -> f64 {
-        let n = self.runs.last().expect("at least one size").nominal as f64;
+        let n = self.study.largest() as f64;
         ctx.pick(0.02 * (40_000.0 / n).cbrt().max(1.0), 0.02)
     }
 }
@@ -444,7 +464,7 @@ const PACKINGS: u64 = 3;
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let m = measure(ctx)?;
     let mut out = CaseOutcome::new("notch-joule", ctx.mode);
-    out.n_particles = m.runs.iter().map(|r| r.centre.n).max().unwrap_or(0);
+    out.n_particles = m.runs().map(|r| r.centre.n).max().unwrap_or(0);
     compare(ctx, &m, &mut out);
     report(ctx, &m, &mut out)?;
     Ok(out)
@@ -461,43 +481,40 @@ fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
         .as_f64()
         .unwrap_or(f64::NAN);
     let vtk_at = *sizes.iter().find(|&&n| n == 10_000).unwrap_or(&sizes[0]);
-    let n_max = *sizes.last().expect("at least one size");
+    let n_max = sizes.iter().copied().max().expect("at least one size");
+    let packings = |n: usize| if n == n_max { PACKINGS } else { 1 };
     let scenes: Vec<SceneConfig> = sizes
         .iter()
-        .map(|&n| full_scene(n, ctx.seed).0)
-        .chain((1..PACKINGS).map(|k| full_scene(n_max, ctx.seed + k).0))
+        .flat_map(|&n| (0..packings(n)).map(move |k| full_scene(n, ctx.seed + k).0))
         .collect();
     prepack(&scenes)?;
-    let mut runs = Vec::new();
-    for &n in &sizes {
-        let (centre, sphere, build_s, (full, count)) = models(n, ctx.seed)?;
-        runs.push(SizeRun {
+    let study = Study::run(&sizes, packings, ctx.seed, |n, seed, k| {
+        if k > 0 {
+            let (full, count, _) = full_model(n, seed)?;
+            let l = measure_laguerre(&full, count, seed, Carving::Centre);
+            return Ok(PackingRun::Laguerre(l));
+        }
+        let (centre, sphere, build_s, (full, count)) = models(n, seed)?;
+        Ok(PackingRun::Every(Box::new(SizeRun {
             nominal: n,
             centre: measure_model(ctx, n, &centre, build_s, n == vtk_at)?,
             whole_sphere: measure_model(ctx, n, &sphere, build_s, false)?,
-            laguerre: measure_laguerre(&full, count, ctx.seed, Carving::Centre),
-            laguerre_whole_sphere: measure_laguerre(&full, count, ctx.seed, Carving::WholeSphere),
-        });
-    }
-    let mut repeats = Vec::new();
-    for k in 1..PACKINGS {
-        let (full, count, _) = full_model(n_max, ctx.seed + k)?;
-        repeats.push(measure_laguerre(&full, count, ctx.seed + k, Carving::Centre));
-    }
+            laguerre: measure_laguerre(&full, count, seed, Carving::Centre),
+            laguerre_whole_sphere: measure_laguerre(&full, count, seed, Carving::WholeSphere),
+        })))
+    })?;
     Ok(Measured {
-        sizes,
         r_fem,
         r_series,
         exact: kohlrausch_max_rise(V0, RHO_E, LAMBDA),
-        runs,
-        repeats,
+        study,
         vtk_at,
     })
 }
 
 /// A metric per N: `f` of every size's run, keyed by the nominal N.
 fn per_n(m: &Measured, f: &dyn Fn(&SizeRun) -> Value) -> Value {
-    Value::Object(m.runs.iter().map(|r| (key(r.nominal), f(r))).collect())
+    Value::Object(m.runs().map(|r| (key(r.nominal), f(r))).collect())
 }
 
 /// The Laguerre (headline) model's metrics.
@@ -585,7 +602,7 @@ fn terreros_metrics(m: &Measured, out: &mut CaseOutcome) {
     );
     out.metric(
         "excluded_particles",
-        m.runs.iter().map(|r| r.centre.excluded).sum::<usize>(),
+        m.runs().map(|r| r.centre.excluded).sum::<usize>(),
     );
 }
 
@@ -593,11 +610,11 @@ fn terreros_metrics(m: &Measured, out: &mut CaseOutcome) {
 fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
     let (r_fem, exact) = (m.r_fem, m.exact);
     // Worst over both carvings (whole-sphere first, as measured).
-    let worst_t = m.runs.iter().fold(0.0f64, |w, r| {
+    let worst_t = m.runs().fold(0.0f64, |w, r| {
         w.max((r.whole_sphere.rise / exact - 1.0).abs())
             .max(r.e_t(exact).abs())
     });
-    let worst_k = m.runs.iter().fold(0.0f64, |w, r| {
+    let worst_k = m.runs().fold(0.0f64, |w, r| {
         w.max(r.whole_sphere.kohl_particle).max(r.centre.kohl_particle)
     });
     laguerre_metrics(m, out);
@@ -616,7 +633,7 @@ fn compare(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
         "source",
         "Hubert 2017 §3.2 Figs. 6–8; FEM shared/refs/notch-electric-fem.json; Kohlrausch analytic.md §6",
     );
-    let last = m.runs.last().expect("at least one size");
+    let last = m.runs().last().expect("at least one size");
     let (n_max, e_r) = (last.nominal, last.e_r(r_fem).abs());
     let lag = m.laguerre_spread();
     out.compare(Comparison::at_most(
@@ -658,7 +675,7 @@ fn report(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> 
         / (GROOVE_RADIUS * GROOVE_RADIUS)
         / ((LENGTH - (GROOVE_Z.1 - GROOVE_Z.0)) / (RADIUS * RADIUS)
             + (GROOVE_Z.1 - GROOVE_Z.0) / (GROOVE_RADIUS * GROOVE_RADIUS));
-    for r in &m.runs {
+    for r in m.runs() {
         out.note(format!(
             "N = {}: axis potential gradient in the middle of the groove (2.3–2.7 mm) {:.3} V/m; the 1-D series model's mean \
              gradient there is {series_slope:.3} V/m.",
@@ -742,15 +759,14 @@ fn size_table(m: &Measured) -> Table {
                 "Grooved cylinder, V0 = {V0} V: R against the FEM ({:.5} mΩ), ΔT_max against Kohlrausch ({exact:.4} K)",
                 1e3 * r_fem
             ),
-            &m.runs,
+            m.runs(),
         )
 }
 
 /// The potential along the axis per N, with the 1-D series model (Fig. 7).
 fn axis_chart(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) -> anyhow::Result<()> {
     let mut series: Vec<Series> = m
-        .runs
-        .iter()
+        .runs()
         .map(|r| {
             Series::line(
                 &format!("demcon N = {}", r.centre.n),
@@ -795,16 +811,15 @@ fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
          largest N). The 1-D series resistance is {:.5} mΩ (FEM {:.5} mΩ). Method, reference and tolerances: \
          validation/notes/notch-joule.md.",
         ctx.mode.name(),
-        m.sizes,
+        m.study.sizes(),
         ctx.seed,
         1e3 * m.r_series,
         1e3 * r_fem
     ));
-    let lag = m.laguerre_spread();
+    let (lag, n_max) = (m.laguerre_spread(), m.study.largest());
     out.note(format!(
-        "Headline (Laguerre cells, centre carving, face electrodes) at N = {}: |R/R_FEM − 1| {:.2} % / {:.2} % (mean / max \
-         over {} packings, seeds {}…{}).",
-        m.runs.last().map_or(0, |r| r.nominal),
+        "Headline (Laguerre cells, centre carving, face electrodes) at N = {n_max}: |R/R_FEM − 1| {:.2} % / {:.2} % (mean / \
+         max over {} packings, seeds {}…{}).",
         100.0 * lag.mean,
         100.0 * lag.max,
         lag.count,
@@ -812,10 +827,10 @@ fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
         ctx.seed + PACKINGS - 1,
     ));
     out.note(format!(
-        "Laguerre, centre carving, at N = {} on each packing (seed: R error): {}.",
-        m.runs.last().map_or(0, |r| r.nominal),
-        std::iter::once(&m.runs[m.runs.len() - 1].laguerre)
-            .chain(&m.repeats)
+        "Laguerre, centre carving, at N = {n_max} on each packing (seed: R error): {}.",
+        m.study
+            .at(n_max)
+            .map(PackingRun::laguerre)
             .enumerate()
             .map(|(k, l)| match &l.error {
                 None => format!("{}: {:+.2} %", ctx.seed + k as u64, 100.0 * (l.r / r_fem - 1.0)),
@@ -825,20 +840,16 @@ fn run_notes(ctx: &Ctx, m: &Measured, out: &mut CaseOutcome) {
             .join(", ")
     ));
     let failures: Vec<String> = m
-        .runs
+        .study
+        .packings()
         .iter()
-        .flat_map(|r| {
-            [
-                (r.nominal, "centre", 0, &r.laguerre),
-                (r.nominal, "whole-sphere", 0, &r.laguerre_whole_sphere),
-            ]
+        .flat_map(|p| match &p.rows {
+            PackingRun::Every(r) => vec![
+                (p.n_target, "centre", p.k, &r.laguerre),
+                (p.n_target, "whole-sphere", p.k, &r.laguerre_whole_sphere),
+            ],
+            PackingRun::Laguerre(l) => vec![(p.n_target, "centre", p.k, l)],
         })
-        .chain(
-            m.repeats
-                .iter()
-                .enumerate()
-                .map(|(k, l)| (m.sizes[m.sizes.len() - 1], "centre", k as u64 + 1, l)),
-        )
         .filter_map(|(n, how, k, l)| {
             l.error
                 .as_ref()

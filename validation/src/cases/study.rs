@@ -65,6 +65,11 @@ impl<R> Study<R> {
         &self.packings
     }
 
+    /// Every packing's rows, in ladder order then packing order.
+    pub fn rows(&self) -> impl Iterator<Item = &R> {
+        self.packings.iter().map(|p| &p.rows)
+    }
+
     /// The rows of the packings of size `n`.
     pub fn at(&self, n: usize) -> impl Iterator<Item = &R> {
         self.packings
@@ -90,6 +95,8 @@ mod tests {
         assert_eq!(s.largest(), 20);
         let at20: Vec<_> = s.at(20).copied().collect();
         assert_eq!(at20, vec![(20, 7, 0), (20, 8, 1), (20, 9, 2)]);
+        let seeds: Vec<u64> = s.rows().map(|r| r.1).collect();
+        assert_eq!(seeds, vec![7, 8, 9, 7, 8, 9]);
         let sp = s.spread(10, |r| r.1 as f64);
         assert_eq!((sp.mean, sp.max, sp.count), (8.0, 9.0, 3));
         let nan = s.spread(10, |r| if r.2 == 1 { f64::NAN } else { 0.0 });
