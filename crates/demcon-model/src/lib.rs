@@ -10,6 +10,8 @@
 //! - [`defects`]: imperfect interfaces, cracks, damage and broken bonds ([`DefectSpec`] in
 //!   [`ModelParams`], applied by [`build_model`]: cut contacts leave the graph, the others
 //!   carry series resistances and factors that both physics' conductances apply).
+//! - [`shapes`](mod@shapes): shaped-inclusion phases (spheroids, cylinders, listed or placed at
+//!   random) as the region the phase rules cut, and their report.
 //! - [`etc`]: the effective conductivity of a steady run from its two held sets
 //!   ([`effective_conductivity`]), refused where it is not defined.
 //! - `assembly`: what both physics share — the surface choice ([`SurfaceSpec`]), the default
@@ -43,6 +45,7 @@ pub mod etc;
 pub mod flux;
 pub mod homogenize;
 pub mod model;
+pub mod shapes;
 pub mod thermal;
 
 pub use calibrate::{CalibrationBc, CtCalibration, calibrate_ct, calibrate_ct_with};
@@ -65,6 +68,7 @@ pub use model::{
     PhaseRule, PhaseSpec, TessellationSummary, build_model, build_model_staged, place_inclusions,
     set_region_phases, spheres_region, with_defects,
 };
+pub use shapes::ShapesReport;
 pub use thermal::{
     CtSpec, ExtraSourceUpdate, ExtraSources, FixedSet, FixedTarget, SurfaceSpec, ThermalBc, ThermalBcs,
     ThermalProblem, ThermalRun, ThermalSetup, ThermalSolveReport, ThermalSolver, TimeStepSpec, VolumeSource,

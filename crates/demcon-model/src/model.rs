@@ -5,14 +5,16 @@
 use std::sync::OnceLock;
 use std::time::Instant;
 
-use demcon_core::{Container, Face, MaterialTable, ParticleSet, Region, Stages, Vec3};
+use demcon_core::{Container, Face, Inclusion, MaterialTable, ParticleSet, Region, Stages, Vec3};
 use demcon_graph::{
     ConformParams, ConformReport, ContactGraph, ContactParams, ContactReport, HalfBond, LaguerreParams,
     Laminates, Mix, PlanePatch, SphereSurface, TessellationReport, WallContacts, assign_phase,
     assign_phase_laminate, conforming_sites, detect_contacts, tessellate,
 };
 use demcon_network::Network;
-use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReason, carve, pack};
+use demcon_packing::{
+    PackingParams, PackingReport, RadiusDistribution, ShapeParams, ShapeReport, StopReason, carve, pack,
+};
 use serde::Serialize;
 
 use crate::defects::{
@@ -20,6 +22,7 @@ use crate::defects::{
     cut_wall_links, update_interface_marks,
 };
 use crate::error::{FieldNames, ModelError};
+use crate::shapes::{ShapesReport, check_placement, orientation_tensor, random_shapes, shapes_region};
 
 /// Everything the solvers need that does not depend on the physics.
 #[derive(Debug, Clone)]
@@ -180,6 +183,8 @@ pub struct ModelReport {
     pub conform: Option<ConformSummary>,
     /// Inclusions placed (centres and radius), when asked for.
     pub inclusions: Option<InclusionReport>,
+    /// The shaped-inclusion phase entries: count, fraction, orientation tensor, placement.
+    pub shapes: Vec<ShapesReport>,
     /// Contact detection summary (the facet graph's, for a tessellation).
     pub contacts: ContactSummary,
     /// The Laguerre tessellation, when the graph is one.
@@ -382,6 +387,25 @@ pub enum PhaseSpec {
         /// Centres (m), inside the container's bounding box.
         centres: Vec<Vec3>,
     },
+    /// Spheroids and cylinders at given places (centres inside the container's bounding box;
+    /// in a walled container each shape wholly inside it); in a periodic container their
+    /// periodic images count. Cut by their exact level set: the centre, laminate and segment
+    /// rules (not `Conforming`).
+    Shapes {
+        /// Phase id.
+        phase: u16,
+        /// The shapes (m).
+        shapes: Vec<Inclusion>,
+    },
+    /// Shapes placed at random to a volume fraction ([`demcon_packing::place_shapes`]) in the
+    /// container (a `Box` or `Periodic`: `placement.container` is replaced by it), seeded by
+    /// [`ModelParams::seed`]; cut as [`PhaseSpec::Shapes`].
+    RandomShapes {
+        /// Phase id.
+        phase: u16,
+        /// What to place.
+        placement: ShapeParams,
+    },
 }
 
 /// The particles a model starts from, and where they came from.
@@ -522,7 +546,7 @@ fn sphere_surfaces(params: &ModelParams, container: &Container) -> Result<Vec<Sp
                 centre: *centre,
                 radius: *radius,
             }),
-            PhaseSpec::Region { .. } => {}
+            PhaseSpec::Region { .. } | PhaseSpec::Shapes { .. } | PhaseSpec::RandomShapes { .. } => {}
         }
     }
     Ok(spheres)
@@ -638,6 +662,7 @@ pub fn build_model_staged(
         carved_away,
         mixes,
         inclusions,
+        shapes,
         phase_fractions,
         conformed,
     } = stages.time("phases", || phases(params, particles, &container, &materials))?;
@@ -706,6 +731,7 @@ pub fn build_model_staged(
                 ..ConformSummary::from(&c.1)
             }),
             inclusions,
+            shapes,
             contacts: ContactSummary::from(&graph.report),
             tessellation: graph
                 .cells
@@ -744,6 +770,7 @@ struct Phased {
     carved_away: usize,
     mixes: Vec<Mix>,
     inclusions: Option<InclusionReport>,
+    shapes: Vec<ShapesReport>,
     phase_fractions: Vec<f64>,
     /// Seeds, report and sphere surfaces of the conforming cells.
     conformed: Option<(usize, ConformReport, Vec<SphereSurface>)>,
@@ -788,7 +815,7 @@ fn phases(
         conformed = Some((c.n_seeds, c.report, spheres));
     }
     let mut mixes = Vec::new();
-    let inclusions = apply_phases(params, &mut particles, container, materials, &mut mixes)?;
+    let (inclusions, shapes) = apply_phases(params, &mut particles, container, materials, &mut mixes)?;
     let phase_fractions =
         Laminates::new(particles.len(), &mixes).phase_fractions(&particles, materials.materials.len());
     Ok(Phased {
@@ -799,6 +826,7 @@ fn phases(
         carved_away,
         mixes,
         inclusions,
+        shapes,
         phase_fractions,
         conformed,
     })
@@ -1044,6 +1072,43 @@ fn claims_nobody(fields: &FieldNames, i: usize, what: &str) -> ModelError {
     )
 }
 
+/// Gives the particles inside phase entry `entry`'s `shapes` its phase (under the model's rule)
+/// and reports them.
+fn apply_shapes(
+    params: &ModelParams,
+    particles: &mut ParticleSet,
+    container: &Container,
+    mixes: &mut Vec<Mix>,
+    (entry, phase): (usize, u16),
+    shapes: &[Inclusion],
+    placement: Option<ShapeReport>,
+) -> Result<ShapesReport, ModelError> {
+    let field = format!("{}[{entry}]", params.fields.phases);
+    if params.phase_rule == PhaseRule::Conforming {
+        return Err(ModelError::invalid(
+            params.fields.phase_rule,
+            "Conforming",
+            format!(
+                "conforming seeds follow spheres, box faces and cracks; the shapes of {field} are cut by \
+                 their level set: use the Segment or Laminate rule"
+            ),
+        ));
+    }
+    check_placement(container, shapes, &field)?;
+    let region = shapes_region(container, shapes);
+    if assign(particles, &region, phase, params.phase_rule, mixes) == 0 {
+        return Err(claims_nobody(&params.fields, entry, "Shapes"));
+    }
+    Ok(ShapesReport {
+        entry,
+        phase,
+        count: shapes.len(),
+        fraction: shapes.iter().map(Inclusion::volume).sum::<f64>() / container.bounds().volume(),
+        orientation_tensor: orientation_tensor(shapes),
+        placement,
+    })
+}
+
 /// Applies the phase assignments in order.
 fn apply_phases(
     params: &ModelParams,
@@ -1051,8 +1116,9 @@ fn apply_phases(
     container: &Container,
     materials: &MaterialTable,
     mixes: &mut Vec<Mix>,
-) -> Result<Option<InclusionReport>, ModelError> {
+) -> Result<(Option<InclusionReport>, Vec<ShapesReport>), ModelError> {
     let mut inclusions = None;
+    let mut shape_reports = Vec::new();
     let mut inclusion_phase = None;
     let reach = particles.radii.iter().copied().fold(0.0, f64::max);
     for (i, ph) in params.phases.iter().enumerate() {
@@ -1087,6 +1153,30 @@ fn apply_phases(
                 if assign(particles, region, *phase, params.phase_rule, mixes) == 0 {
                     return Err(claims_nobody(&params.fields, i, "Region"));
                 }
+            }
+            PhaseSpec::Shapes { phase, shapes } => {
+                shape_reports.push(apply_shapes(
+                    params,
+                    particles,
+                    container,
+                    mixes,
+                    (i, *phase),
+                    shapes,
+                    None,
+                )?);
+            }
+            PhaseSpec::RandomShapes { phase, placement } => {
+                let field = format!("{}[{i}]", params.fields.phases);
+                let (shapes, report) = random_shapes(container, placement, params.seed, &field)?;
+                shape_reports.push(apply_shapes(
+                    params,
+                    particles,
+                    container,
+                    mixes,
+                    (i, *phase),
+                    &shapes,
+                    Some(report),
+                )?);
             }
             PhaseSpec::Inclusions {
                 phase,
@@ -1132,7 +1222,7 @@ fn apply_phases(
         let f = Laminates::new(particles.len(), mixes).phase_fractions(particles, materials.materials.len());
         inc.particle_fraction = f.get(phase as usize).copied().unwrap_or(0.0);
     }
-    Ok(inclusions)
+    Ok((inclusions, shape_reports))
 }
 
 /// Re-assigns the phases of a built model (same packing and contacts): every particle back

@@ -398,6 +398,132 @@ pub enum PhaseConfig {
         /// Centres (m), inside the container's bounding box.
         centres: Vec<(f64, f64, f64)>,
     },
+    /// Spheroids and cylinders at given places, listed and/or read from `file`:
+    /// `Shapes(material: "fibre", shapes: [Spheroid(centre: (x, y, z), axis: (0, 0, 1), a: 5e-4,
+    /// b: 1e-4), Cylinder(centre: (…), axis: (…), radius: 1e-4, length: 2e-3, ends: Round)])`, in
+    /// metres. Centres inside the container's bounding box; in a walled container each shape
+    /// wholly inside it; in a periodic container their periodic images count. Cut by their
+    /// level set under the `Segment` (default with shapes), `Laminate` or `Centre` rule.
+    Shapes {
+        /// Material name.
+        material: String,
+        /// The shapes.
+        #[serde(default)]
+        shapes: Vec<ShapeConfig>,
+        /// A text file of more shapes (relative to the scene file), one per line,
+        /// whitespace- or comma-separated, `#` comments: `spheroid x y z ux uy uz a b`, or
+        /// `cylinder x y z ux uy uz radius length flat|round` (m).
+        #[serde(default)]
+        file: Option<String>,
+    },
+    /// Shapes placed at random (random sequential addition with rattling) to a volume fraction
+    /// of the container (a `Box`, shapes wholly inside, or `Periodic`), seeded by `seed`:
+    /// `RandomShapes(material: "fibre", shape: Cylinder(ends: Round), aspect: 10, radius: 5e-5,
+    /// fraction: 0.2, min_gap: 1e-6, orientation: Isotropic)`.
+    RandomShapes {
+        /// Material name.
+        material: String,
+        /// Spheroids or cylinders.
+        shape: ShapeKindConfig,
+        /// Length over diameter (spheroid: a / b), > 0 (< 1: platelets).
+        aspect: f64,
+        /// Mean radius across the axis (m), > 0.
+        radius: f64,
+        /// Spread of the radius (std / mean of a Gaussian truncated at ± 2.5 σ), ≥ 0; the aspect
+        /// is kept.
+        #[serde(default)]
+        radius_cov: f64,
+        /// Target volume fraction of the shapes in the container, in (0, 1).
+        fraction: f64,
+        /// Smallest distance between two shapes (m), ≥ 0.
+        #[serde(default)]
+        min_gap: f64,
+        /// Axes: `Isotropic` (default), `Aligned((x, y, z))`, or `Tensor(((a11, a12, a13), (a21,
+        /// a22, a23), (a31, a32, a33)))`, the second moment ⟨u uᵀ⟩ (symmetric, trace 1).
+        #[serde(default)]
+        orientation: OrientationConfig,
+    },
+}
+
+impl PhaseConfig {
+    /// The material the entry gives its particles.
+    pub fn material(&self) -> &str {
+        match self {
+            Self::Region { material, .. }
+            | Self::Inclusions { material, .. }
+            | Self::Spheres { material, .. }
+            | Self::Shapes { material, .. }
+            | Self::RandomShapes { material, .. } => material,
+        }
+    }
+}
+
+/// One shaped inclusion (m).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+pub enum ShapeConfig {
+    /// A spheroid: semi-axis `a` along `axis`, `b` across (prolate when a > b, oblate when a < b).
+    Spheroid {
+        /// Centre (m).
+        centre: (f64, f64, f64),
+        /// Direction of the symmetry axis (any non-zero length).
+        axis: (f64, f64, f64),
+        /// Semi-axis along `axis` (m), > 0.
+        a: f64,
+        /// Semi-axis across `axis` (m), > 0.
+        b: f64,
+    },
+    /// A circular cylinder of total length `length` (tip to tip, caps included) along `axis`.
+    Cylinder {
+        /// Centre (m).
+        centre: (f64, f64, f64),
+        /// Direction of the axis (any non-zero length).
+        axis: (f64, f64, f64),
+        /// Radius (m), > 0.
+        radius: f64,
+        /// Total length (m), > 0; ≥ 2 radius with round ends.
+        length: f64,
+        /// `Flat` or `Round` (hemispherical) ends; `Round` by default.
+        #[serde(default)]
+        ends: EndsConfig,
+    },
+}
+
+/// The ends of a cylinder.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+pub enum EndsConfig {
+    /// Flat discs.
+    Flat,
+    /// Hemispheres (a spherocylinder).
+    #[default]
+    Round,
+}
+
+/// The kind of shape [`PhaseConfig::RandomShapes`] places.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+pub enum ShapeKindConfig {
+    /// Spheroids.
+    Spheroid,
+    /// Cylinders.
+    Cylinder {
+        /// `Flat` or `Round` ends; `Round` by default.
+        #[serde(default)]
+        ends: EndsConfig,
+    },
+}
+
+/// A 3 × 3 matrix by rows.
+pub type Rows3 = ((f64, f64, f64), (f64, f64, f64), (f64, f64, f64));
+
+/// How [`PhaseConfig::RandomShapes`] draws the axes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, Serialize)]
+pub enum OrientationConfig {
+    /// Uniform on the sphere.
+    #[default]
+    Isotropic,
+    /// Every axis along this direction.
+    Aligned((f64, f64, f64)),
+    /// Drawn so that ⟨u uᵀ⟩ is this tensor (rows; symmetric, eigenvalues ≥ 0, trace 1).
+    Tensor(Rows3),
 }
 
 /// An imperfect interface between two materials:

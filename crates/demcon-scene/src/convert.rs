@@ -3,6 +3,8 @@
 //! build, the thermal and electric physics, the post-processing). Value checks live in
 //! `validate.rs`; this file only translates.
 
+use std::path::Path;
+
 use demcon_core::{Axis, Container, CoreError, Face, Material, MaterialTable, Region, Selector, Vec3};
 use demcon_graph::{ContactParams, CrackShape, InterfaceRule, LaguerreParams};
 use demcon_model::{
@@ -226,11 +228,21 @@ pub fn floating(f: FloatingConfig) -> FloatingPolicy {
 /// The scene's phase rule: its own, or by default `Conforming` when every network is the
 /// Laguerre cells' and `Centre` otherwise.
 pub fn phase_rule_of(cfg: &SceneConfig) -> PhaseRuleConfig {
-    cfg.phase_rule.unwrap_or(if only_laguerre(cfg) {
+    cfg.phase_rule.unwrap_or(if has_shapes(cfg) {
+        PhaseRuleConfig::Segment
+    } else if only_laguerre(cfg) {
         PhaseRuleConfig::Conforming
     } else {
         PhaseRuleConfig::Centre
     })
+}
+
+/// Whether a phase entry is made of shaped inclusions (`Shapes`, `RandomShapes`): their
+/// surfaces are cut by their level set, so the default phase rule is then `Segment`.
+pub fn has_shapes(cfg: &SceneConfig) -> bool {
+    cfg.phases
+        .iter()
+        .any(|p| matches!(p, PhaseConfig::Shapes { .. } | PhaseConfig::RandomShapes { .. }))
 }
 
 /// The phase rule.
@@ -258,7 +270,7 @@ pub fn contact_params(c: &ContactsConfig) -> Result<ContactParams, SceneError> {
 }
 
 /// What to build on the packed particles: materials, carving, phases, contacts.
-pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
+pub fn model_params(cfg: &SceneConfig, base_dir: &Path) -> Result<ModelParams, SceneError> {
     let materials = materials(&cfg.materials)?;
     let carve = match &cfg.carve {
         Some(r) => Some((
@@ -273,9 +285,7 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
     let mut phases = Vec::with_capacity(cfg.phases.len());
     for (i, ph) in cfg.phases.iter().enumerate() {
         let field = format!("phases[{i}]");
-        let (PhaseConfig::Region { material, .. }
-        | PhaseConfig::Inclusions { material, .. }
-        | PhaseConfig::Spheres { material, .. }) = ph;
+        let material = ph.material();
         let phase = materials
             .phase_of(material)
             .map_err(|e| SceneError::at(&format!("{field}.material"), e))?;
@@ -299,6 +309,15 @@ pub fn model_params(cfg: &SceneConfig) -> Result<ModelParams, SceneError> {
                     centres: centres.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect(),
                 }
             }
+            PhaseConfig::Shapes { shapes, file, .. } => PhaseSpec::Shapes {
+                phase,
+                shapes: crate::shapes::shape_list(&field, shapes, file.as_deref(), base_dir)?,
+            },
+            PhaseConfig::RandomShapes { .. } => PhaseSpec::RandomShapes {
+                phase,
+                placement: crate::shapes::random_shape_params(&field, ph)?
+                    .expect("a RandomShapes entry has a placement"),
+            },
         });
     }
     let defects = defect_spec(cfg, &materials)?;
@@ -729,8 +748,8 @@ pub fn homogenize_plan(cfg: &SceneConfig) -> Option<HomogenizePlan> {
 }
 
 /// Converts the whole scene (every conversion error names its field).
-pub fn problem(cfg: &SceneConfig) -> Result<Problem, SceneError> {
-    let model = model_params(cfg)?;
+pub fn problem(cfg: &SceneConfig, base_dir: &Path) -> Result<Problem, SceneError> {
+    let model = model_params(cfg, base_dir)?;
     let homogenize = homogenize_plan(cfg);
     let (thermal, electric) = match (&homogenize, &cfg.thermal, &cfg.electric) {
         (Some(_), _, _) => (None, None),

@@ -42,6 +42,7 @@ pub mod output;
 pub mod plots;
 pub mod run;
 mod scene;
+pub mod shapes;
 pub mod validate;
 
 pub use build::build_model;

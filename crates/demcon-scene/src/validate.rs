@@ -44,7 +44,7 @@ impl Refusals {
 pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<convert::Problem, SceneError> {
     let mut r = Refusals::default();
     // Materials, contacts, carving, phases, selectors, electrodes' select/face: by conversion.
-    let problem = r.check(convert::problem(c));
+    let problem = r.check(convert::problem(c, base_dir));
     let container = r.check(known_container(c, base_dir)).flatten();
     if let Some(Some(n)) = r.check(known_count(&c.packing, "packing")) {
         let field = match c.packing {
@@ -77,6 +77,9 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<convert::Problem, Sc
     r.check(check_tile_walls(c));
     if let Some(k) = container.as_ref() {
         r.check(check_sphere_centres(c, k));
+    }
+    if let Some(p) = problem.as_ref() {
+        r.check(check_shapes(c, &p.model, container.as_ref()));
     }
     if convert::is_homogenization(c) {
         check_homogenization(c, container.as_ref(), &mut r);
@@ -120,11 +123,7 @@ pub fn scene_warnings(c: &SceneConfig) -> Vec<String> {
         }
     };
     for ph in &c.phases {
-        match ph {
-            PhaseConfig::Region { material, .. }
-            | PhaseConfig::Inclusions { material, .. }
-            | PhaseConfig::Spheres { material, .. } => mark(material),
-        }
+        mark(ph.material());
     }
     for (k, m) in c.materials.iter().enumerate() {
         if !used[k] {
@@ -359,6 +358,8 @@ pub fn conforming_extra_sites(n: usize, c: &SceneConfig, container: &Container) 
                 fraction, size_ratio, ..
             } => 3.0 * fraction * volume / (0.5 * e.x.min(e.y).min(e.z) / size_ratio),
             PhaseConfig::Region { region, .. } => region_area(region),
+            // Not followed by conforming seeds (refused under that rule).
+            PhaseConfig::Shapes { .. } | PhaseConfig::RandomShapes { .. } => 0.0,
         })
         .sum();
     area += c
@@ -618,6 +619,52 @@ fn check_thermal(
         check_checkpoint(ck, &t.solver)?;
     }
     Ok(())
+}
+
+/// Shaped-inclusion phases: not under the `Conforming` rule; listed shapes where they may lie
+/// and random ones in a `Box` or `Periodic` container (when the container is known before
+/// packing).
+fn check_shapes(
+    c: &SceneConfig,
+    model: &demcon_model::ModelParams,
+    container: Option<&Container>,
+) -> Result<(), SceneError> {
+    let mut errors = Vec::new();
+    for (i, ph) in model.phases.iter().enumerate() {
+        let field = format!("phases[{i}]");
+        let shaped = matches!(
+            ph,
+            demcon_model::PhaseSpec::Shapes { .. } | demcon_model::PhaseSpec::RandomShapes { .. }
+        );
+        if shaped && c.phase_rule == Some(PhaseRuleConfig::Conforming) {
+            errors.push(SceneError::invalid(
+                "phase_rule",
+                "Conforming",
+                format!(
+                    "conforming seeds follow spheres, box faces and cracks; the shapes of {field} are cut by \
+                     their level set: use `Segment` (the default with shapes) or `Laminate`"
+                ),
+            ));
+        }
+        match (ph, container) {
+            (demcon_model::PhaseSpec::Shapes { shapes, .. }, Some(k)) => {
+                if let Err(e) = demcon_model::shapes::check_placement(k, shapes, &field) {
+                    errors.push(e.into());
+                }
+            }
+            (demcon_model::PhaseSpec::RandomShapes { .. }, Some(k))
+                if !matches!(k, Container::Box { .. } | Container::Periodic { .. }) =>
+            {
+                errors.push(SceneError::invalid(
+                    &field,
+                    format!("RandomShapes in a {} container", k.kind()),
+                    "random shapes are placed in a Box or a Periodic container",
+                ));
+            }
+            _ => {}
+        }
+    }
+    SceneError::all(errors)
 }
 
 /// `Spheres` phases: every centre inside the container's bounding box.

@@ -131,7 +131,7 @@ proptest! {
         match Scene::parse(&t, Path::new(name), PathBuf::from(&base)) {
             Ok(scene) => {
                 // A valid scene converts without error too.
-                prop_assert!(demcon_scene::convert::problem(scene.config()).is_ok());
+                prop_assert!(demcon_scene::convert::problem(scene.config(), &base).is_ok());
             }
             Err(e) => {
                 let msg = e.to_string();
