@@ -88,8 +88,16 @@ fn a_shapes_file_equals_the_same_shapes_listed() {
         Cylinder(centre: (0.7, 0.7, 0.5), axis: (0.0, 1.0, 1.0), radius: 0.1, length: 0.5, ends: Flat),
     ])"#;
     let filed = r#"Shapes(material: "f", file: Some("shapes.txt"))"#;
-    let a = run(&parse(&text(PERIODIC, listed, ""), &dir).unwrap(), &RunOptions::default()).unwrap();
-    let b = run(&parse(&text(PERIODIC, filed, ""), &dir).unwrap(), &RunOptions::default()).unwrap();
+    let a = run(
+        &parse(&text(PERIODIC, listed, ""), &dir).unwrap(),
+        &RunOptions::default(),
+    )
+    .unwrap();
+    let b = run(
+        &parse(&text(PERIODIC, filed, ""), &dir).unwrap(),
+        &RunOptions::default(),
+    )
+    .unwrap();
     let (ja, jb) = (summary_json("a", &a), summary_json("b", &b));
     assert_eq!(ja["etc_tensor"], jb["etc_tensor"]);
     assert_eq!(ja["build"]["phase_fractions"], jb["build"]["phase_fractions"]);
@@ -158,7 +166,8 @@ fn bad_shapes_are_refused_by_name() {
             "phase_rule",
         ),
         (
-            r#"RandomShapes(material: "f", shape: Spheroid, aspect: 0.0, radius: 0.05, fraction: 0.1)"#.into(),
+            r#"RandomShapes(material: "f", shape: Spheroid, aspect: 0.0, radius: 0.05, fraction: 0.1)"#
+                .into(),
             String::new(),
             "phases[0].aspect",
         ),
@@ -170,13 +179,19 @@ fn bad_shapes_are_refused_by_name() {
             "phases[0].orientation",
         ),
         (
-            r#"RandomShapes(material: "g", shape: Spheroid, aspect: 2.0, radius: 0.05, fraction: 0.1)"#.into(),
+            r#"RandomShapes(material: "g", shape: Spheroid, aspect: 2.0, radius: 0.05, fraction: 0.1)"#
+                .into(),
             String::new(),
             "phases[0].material",
         ),
     ];
     // All of these before packing: the scene does not parse.
-    let before = |t: &str| parse(t, &dir).err().map(|e| e.to_string()).expect("refused at parse");
+    let before = |t: &str| {
+        parse(t, &dir)
+            .err()
+            .map(|e| e.to_string())
+            .expect("refused at parse")
+    };
     for (phases, extra, field) in cases {
         let e = before(&text(PERIODIC, &phases, &extra));
         assert!(e.contains(field), "expected `{field}` in: {e}");
