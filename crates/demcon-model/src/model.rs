@@ -1106,6 +1106,7 @@ fn apply_shapes(
         fraction: shapes.iter().map(Inclusion::volume).sum::<f64>() / container.bounds().volume(),
         orientation_tensor: orientation_tensor(shapes),
         placement,
+        shapes: shapes.to_vec(),
     })
 }
 

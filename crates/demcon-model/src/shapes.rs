@@ -29,6 +29,10 @@ pub struct ShapesReport {
     pub orientation_tensor: [[f64; 3]; 3],
     /// How the random placement went, for [`crate::PhaseSpec::RandomShapes`].
     pub placement: Option<ShapeReport>,
+    /// The shapes themselves (m; without periodic images), for drawing (`inclusions.vtp`); not
+    /// in `summary.json`.
+    #[serde(skip)]
+    pub shapes: Vec<Inclusion>,
 }
 
 /// The volume-weighted orientation tensor of `shapes` (row-major; zero when empty).

@@ -64,5 +64,8 @@ pub use halo::{
 pub use probe::{Line, MAX_PROFILE_POINTS, ProbeIndex, ProbeMethod, line_points, probe, profile};
 pub use slice::{Grid, SliceParams, slice_grid};
 pub use stats::{coefficient_of_variation, components, effective_conductivity, magnitudes};
-pub use vtk::{Field, FieldData, Polyhedra, write_lines_vtp, write_polyhedra_vtu, write_pvd, write_vtu};
+pub use vtk::{
+    Field, FieldData, Polyhedra, write_lines_vtp, write_polyhedra_vtu, write_pvd, write_triangles_vtp,
+    write_vtu,
+};
 pub use vtu_read::{VtuArray, VtuData, read_vtu};

@@ -255,8 +255,11 @@ fn data_blocks<'a>(
 /// One piece of a VTK XML file: points, their data, cells (of an unstructured grid, or lines
 /// of a poly-data file) and their data.
 struct Piece<'a> {
-    /// `UnstructuredGrid` (topology under `<Cells>`) or `PolyData` (under `<Lines>`).
+    /// `UnstructuredGrid` (topology under `<Cells>`) or `PolyData` (under `<Lines>` or
+    /// `<Polys>`).
     kind: &'static str,
+    /// `Cells`, `Lines` or `Polys`.
+    cells_tag: &'static str,
     n_points: usize,
     n_cells: usize,
     point_data: Vec<(String, Block<'a>)>,
@@ -281,10 +284,8 @@ impl Piece<'_> {
             s
         };
         let (kind, n, m) = (self.kind, self.n_points, self.n_cells);
-        let (cells_tag, count) = match kind {
-            "PolyData" => ("Lines", "NumberOfLines"),
-            _ => ("Cells", "NumberOfCells"),
-        };
+        let cells_tag = self.cells_tag;
+        let count = format!("NumberOf{cells_tag}");
         let mut xml = String::new();
         xml.push_str("<?xml version=\"1.0\"?>\n");
         xml.push_str(&format!(
@@ -350,6 +351,7 @@ pub fn write_vtu(
     let wide = n >= i32::MAX as usize;
     Piece {
         kind: "UnstructuredGrid",
+        cells_tag: "Cells",
         n_points: n,
         n_cells: n,
         point_data,
@@ -420,6 +422,7 @@ pub fn write_lines_vtp(
     let connectivity: Vec<i64> = lines.iter().flatten().map(|&i| i64::from(i)).collect();
     Piece {
         kind: "PolyData",
+        cells_tag: "Lines",
         n_points: points.len(),
         n_cells: lines.len(),
         point_data: Vec::new(),
@@ -433,6 +436,55 @@ pub fn write_lines_vtp(
                     first: 2,
                     step: 2,
                     n: lines.len(),
+                    wide: true,
+                },
+            ),
+        ],
+    }
+    .write(path.as_ref())
+}
+
+/// Writes a triangulated surface as VTK XML poly data (`.vtp`): `points` (m), one triangle per
+/// `triangles[k]` (indices into `points`, counter-clockwise seen from outside), with `fields`
+/// as cell data, one value per triangle. Returns the number of bytes written.
+///
+/// Errors: a triangle naming a point that does not exist, a non-finite point, a field of the
+/// wrong length, with non-finite values or a bad or repeated name, or a file-system failure.
+pub fn write_triangles_vtp(
+    path: impl AsRef<Path>,
+    points: &[Vec3],
+    triangles: &[[u32; 3]],
+    fields: &[Field],
+) -> Result<u64, PostError> {
+    check_points("points", points)?;
+    if let Some(k) = triangles
+        .iter()
+        .position(|t| t.iter().any(|&i| i as usize >= points.len()))
+    {
+        return Err(PostError::invalid(
+            format!("triangles[{k}]"),
+            format!("{:?}", triangles[k]),
+            format!("indices of points (fewer than {})", points.len()),
+        ));
+    }
+    let cell_data = data_blocks(Vec::new(), fields, triangles.len(), "triangle")?;
+    let connectivity: Vec<i64> = triangles.iter().flatten().map(|&i| i64::from(i)).collect();
+    Piece {
+        kind: "PolyData",
+        cells_tag: "Polys",
+        n_points: points.len(),
+        n_cells: triangles.len(),
+        point_data: Vec::new(),
+        cell_data,
+        points: Block::Vec3(points),
+        topology: vec![
+            ("connectivity", Block::I64(&connectivity)),
+            (
+                "offsets",
+                Block::Seq {
+                    first: 3,
+                    step: 3,
+                    n: triangles.len(),
                     wide: true,
                 },
             ),
@@ -515,6 +567,7 @@ pub fn write_polyhedra_vtu(
     let types = vec![42u8; m]; // VTK_POLYHEDRON
     Piece {
         kind: "UnstructuredGrid",
+        cells_tag: "Cells",
         n_points: cells.points.len(),
         n_cells: m,
         point_data: Vec::new(),

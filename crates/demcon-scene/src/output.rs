@@ -283,6 +283,10 @@ fn write_files(
         write_cells(r, cells, &dir.join("cells.vtu"))?;
         written.push("cells.vtu".into());
     }
+    if outputs.vtk && !r.model.report.shapes.is_empty() {
+        write_inclusions(r, &dir.join("inclusions.vtp"))?;
+        written.push("inclusions.vtp".into());
+    }
     if outputs.particles_csv {
         fields.write_csv(r, &dir.join("particles.csv"))?;
         written.push("particles.csv".into());
@@ -514,6 +518,46 @@ impl<'a> ParticleFields<'a> {
         write_csv(path, &header, &cols)?;
         Ok(())
     }
+}
+
+/// Pieces of each shape's meridian in `inclusions.vtp` (a spheroid: 2 · 16 · 7 triangles).
+const SHAPE_RINGS: usize = 8;
+
+/// Writes `inclusions.vtp`: the shaped inclusions' surfaces as triangles (m; periodic images
+/// not drawn), with cell data `phase` (the material index), `entry` (the phase entry) and
+/// `shape` (the shape's index in its entry).
+fn write_inclusions(r: &RunResult, path: &std::path::Path) -> Result<(), SceneError> {
+    let (mut points, mut triangles) = (Vec::new(), Vec::new());
+    let (mut phase, mut entry, mut shape) = (Vec::new(), Vec::new(), Vec::new());
+    for rep in &r.model.report.shapes {
+        for (k, s) in rep.shapes.iter().enumerate() {
+            let (p, t) = s.surface_mesh(SHAPE_RINGS);
+            let base = points.len() as u32;
+            points.extend(p);
+            triangles.extend(t.iter().map(|t| t.map(|i| i + base)));
+            for _ in 0..t.len() {
+                phase.push(i32::from(rep.phase));
+                entry.push(rep.entry as i32);
+                shape.push(k as i32);
+            }
+        }
+    }
+    let fields = [
+        demcon_post::Field {
+            name: "phase",
+            data: demcon_post::FieldData::Ints(&phase),
+        },
+        demcon_post::Field {
+            name: "entry",
+            data: demcon_post::FieldData::Ints(&entry),
+        },
+        demcon_post::Field {
+            name: "shape",
+            data: demcon_post::FieldData::Ints(&shape),
+        },
+    ];
+    demcon_post::write_triangles_vtp(path, &points, &triangles, &fields)?;
+    Ok(())
 }
 
 /// What a line of `contacts.vtp` is (its `kind` cell value).

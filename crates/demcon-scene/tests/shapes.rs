@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use demcon_scene::{RunOptions, Scene, SceneError, run, summary_json};
+use demcon_scene::{RunOptions, Scene, SceneError, run, summary_json, write_outputs};
 
 /// A small periodic homogenisation of a matrix `m` (λ = 1) with inclusions `f` (λ = 10); the
 /// phases (and a phase rule line) are spliced in.
@@ -70,6 +70,15 @@ fn aligned_fibres_conduct_more_along_their_axis_and_are_reported() {
     let carried = j["build"]["phase_fractions"][1].as_f64().unwrap();
     assert!((carried - exact).abs() < 0.1 * exact, "{carried} vs {exact}");
     assert_eq!(j["build"]["phase_rule"], "Segment");
+    // The shapes themselves for ParaView: four closed surfaces of 2 · 16 · 7 triangles each.
+    let dir = std::env::temp_dir().join(format!("demcon-shapes-vtp-{}", std::process::id()));
+    let mut outputs = s.config().outputs.clone();
+    outputs.vtk = true;
+    write_outputs("s", &outputs, &r, &dir).unwrap();
+    let vtp = std::fs::read(dir.join("inclusions.vtp")).unwrap();
+    let head = String::from_utf8_lossy(&vtp[..vtp.len().min(2000)]);
+    assert!(head.contains("NumberOfPolys=\"896\""), "{head}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
