@@ -33,6 +33,7 @@ pub mod layered_interface;
 pub mod ligament_holm;
 pub mod multi_inclusion_interface;
 pub mod packing_stress;
+pub mod shapes_aligned;
 pub mod sphere_arrays;
 
 use crate::Case;
@@ -109,6 +110,11 @@ pub fn registry() -> Vec<Case> {
             id: "multi-inclusion-fields",
             about: "Haddad 2021 §5.2: f = 0.2, T and Halo |q| at A–D beside Table 3; flux slice",
             run: haddad2021_multi_inclusion_fields::run,
+        },
+        Case {
+            id: "shapes-aligned",
+            about: "issue 34: aligned prolate (a/b = 3) and oblate (1/3) spheroids, f ≈ 0.15, contrasts 10 and 0.1, periodic, tensor diagonal vs a voxel FFT on the identical microstructure",
+            run: shapes_aligned::run,
         },
         Case {
             id: "layered-interface",
