@@ -44,6 +44,7 @@ impl Ctx {
 }
 
 /// A registered validation case.
+#[derive(Clone, Copy)]
 pub struct Case {
     /// Stable id (e.g. `slab-transient`).
     pub id: &'static str,

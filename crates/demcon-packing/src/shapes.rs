@@ -482,6 +482,41 @@ impl Placement<'_> {
         self.shapes.push(s);
     }
 
+    /// Up to [`ShapeParams::attempts`] random candidates of radius `r`, each nudged at random
+    /// up to [`NUDGES`] times by up to its radius (axis kept) before it is given up: near
+    /// saturation most rejected candidates miss by a little. Places the first that fits and
+    /// returns its axis, and the candidates drawn.
+    fn try_place(&mut self, r: f64, axes: &AxisSampler, rng: &mut impl Rng) -> (Option<Vec3>, usize) {
+        for tries in 1..=self.params.attempts {
+            let u = axes.draw(rng);
+            let mut s = self.params.shape(self.random_centre(rng), u, r);
+            for nudge in 0..=NUDGES {
+                if nudge > 0 {
+                    let d = Vec3::new(
+                        rng.random_range(-r..r),
+                        rng.random_range(-r..r),
+                        rng.random_range(-r..r),
+                    );
+                    s = self.wrapped(s.translated(d));
+                }
+                if self.fits(&s, None) {
+                    self.add(s);
+                    return (Some(u), tries);
+                }
+            }
+        }
+        (None, self.params.attempts)
+    }
+
+    /// `s` with its centre wrapped into the periodic box (itself when walled).
+    fn wrapped(&self, s: Inclusion) -> Inclusion {
+        if !self.periodic {
+            return s;
+        }
+        let c = s.centre();
+        s.translated(Vec3::from_fn(|k, _| c[k].rem_euclid(self.size[k])) - c)
+    }
+
     fn random_centre(&self, rng: &mut impl Rng) -> Vec3 {
         Vec3::new(
             rng.random::<f64>() * self.size.x,
@@ -533,26 +568,7 @@ pub fn place_shapes(params: &ShapeParams, seed: u64) -> Result<(Vec<Inclusion>, 
     let volume = size.x * size.y * size.z;
     let periodic = params.container.period().is_some();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    // Draw sizes until their volume reaches the target; largest first.
-    let unit = params.shape(Vec3::zeros(), Vec3::z(), 1.0).volume();
-    let mut radii = Vec::new();
-    let mut total = 0.0;
-    while total < params.fraction * volume {
-        let r = params.radius * params.sizes.sample(1, &mut rng)[0];
-        total += unit * r.powi(3);
-        radii.push(r);
-        if radii.len() > 50_000_000 {
-            return Err(PackingError::ContainerTooSmall {
-                reason: "over 5·10⁷ shapes would be needed: the shapes are too small for the box".into(),
-            });
-        }
-    }
-    // The last shape overshoots: drop it when that lands nearer the target.
-    let last = unit * radii.last().copied().unwrap_or(0.0).powi(3);
-    if radii.len() > 1 && (total - params.fraction * volume) > (params.fraction * volume - (total - last)) {
-        radii.pop();
-    }
-    radii.sort_by(|a, b| b.total_cmp(a));
+    let radii = draw_radii(params, volume, &mut rng)?;
     let r_max = radii.first().copied().unwrap_or(params.radius);
     let circum = params.shape(Vec3::zeros(), Vec3::z(), r_max).circumradius();
     let reach = 2.0 * circum + params.min_gap;
@@ -589,36 +605,12 @@ pub fn place_shapes(params: &ShapeParams, seed: u64) -> Result<(Vec<Inclusion>, 
     let mut axis_sum = Matrix3::zeros();
     for &r in &radii {
         let mut stalls = 0;
-        'place: loop {
-            for _ in 0..params.attempts {
-                attempts += 1;
-                let u = axes.draw(&mut rng);
-                let mut s = params.shape(p.random_centre(&mut rng), u, r);
-                // A candidate that does not fit gets a few random nudges of up to its radius
-                // (axis kept) before it is given up: near saturation most rejected
-                // candidates miss by a little.
-                let mut nudges = 0;
-                loop {
-                    if p.fits(&s, None) {
-                        p.add(s);
-                        axis_sum += u * u.transpose();
-                        break 'place;
-                    }
-                    if nudges == NUDGES {
-                        break;
-                    }
-                    nudges += 1;
-                    let d = Vec3::new(
-                        rng.random_range(-r..r),
-                        rng.random_range(-r..r),
-                        rng.random_range(-r..r),
-                    );
-                    s = s.translated(d);
-                    if periodic {
-                        let c = s.centre();
-                        s = s.translated(Vec3::from_fn(|k, _| c[k].rem_euclid(size[k])) - c);
-                    }
-                }
+        loop {
+            let (placed, tries) = p.try_place(r, &axes, &mut rng);
+            attempts += tries;
+            if let Some(u) = placed {
+                axis_sum += u * u.transpose();
+                break;
             }
             if stalls == params.relaxations {
                 let placed: f64 = p.shapes.iter().map(Inclusion::volume).sum();
@@ -662,6 +654,31 @@ pub fn place_shapes(params: &ShapeParams, seed: u64) -> Result<(Vec<Inclusion>, 
         wall_s: start.elapsed().as_secs_f64(),
     };
     Ok((shapes, report))
+}
+
+/// Radii drawn until their shapes' volume reaches the target fraction of `volume` (m³), the
+/// last dropped when that lands nearer the target; largest first.
+fn draw_radii(params: &ShapeParams, volume: f64, rng: &mut impl Rng) -> Result<Vec<f64>, PackingError> {
+    let unit = params.shape(Vec3::zeros(), Vec3::z(), 1.0).volume();
+    let target = params.fraction * volume;
+    let mut radii = Vec::new();
+    let mut total = 0.0;
+    while total < target {
+        let r = params.radius * params.sizes.sample(1, rng)[0];
+        total += unit * r.powi(3);
+        radii.push(r);
+        if radii.len() > 50_000_000 {
+            return Err(PackingError::ContainerTooSmall {
+                reason: "over 5·10⁷ shapes would be needed: the shapes are too small for the box".into(),
+            });
+        }
+    }
+    let last = unit * radii.last().copied().unwrap_or(0.0).powi(3);
+    if radii.len() > 1 && (total - target) > (target - (total - last)) {
+        radii.pop();
+    }
+    radii.sort_by(|a, b| b.total_cmp(a));
+    Ok(radii)
 }
 
 /// The smallest distance between two of `shapes` (m; minimum image in a periodic box) whose
