@@ -34,6 +34,7 @@ pub mod ligament_holm;
 pub mod multi_inclusion_interface;
 pub mod packing_stress;
 pub mod shapes_aligned;
+pub mod shapes_generator;
 pub mod sphere_arrays;
 
 use crate::Case;
@@ -114,6 +115,11 @@ const CASES: &[Case] = &[
         id: "multi-inclusion-fields",
         about: "Haddad 2021 §5.2: f = 0.2, T and Halo |q| at A–D beside Table 3; flux slice",
         run: haddad2021_multi_inclusion_fields::run,
+    },
+    Case {
+        id: "shapes-generator",
+        about: "issue 34: random placement of fibres, platelets and cylinders over 10 seeds: fraction, smallest gap and orientation tensor against what was asked; an unreachable fraction refused",
+        run: shapes_generator::run,
     },
     Case {
         id: "shapes-aligned",

@@ -16,7 +16,8 @@
 //! Tolerances, chosen before any run of this case: at 2·10⁴ (quick) the headline's largest
 //! error ≤ 5 % (the segment rule's error on spheres is −0.3 … −2.2 %, and a spheroid here is 3
 //! to 6 particles thick); at the largest N of `--full` ≤ 2.5 %, and its mean error below the
-//! mean at 2·10⁴. The target, ≤ 0.5 % at 2·10⁵, is reported beside.
+//! mean at 2·10⁴. The target, ≤ 0.5 % at 2·10⁵, is reported beside. Figures and notes:
+//! `validation/notes/shapes-aligned.md`.
 
 use demcon_scene::config::*;
 use serde_json::Value;
