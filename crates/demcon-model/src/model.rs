@@ -1155,28 +1155,19 @@ fn apply_phases(
                     return Err(claims_nobody(&params.fields, i, "Region"));
                 }
             }
-            PhaseSpec::Shapes { phase, shapes } => {
+            PhaseSpec::Shapes { phase, .. } | PhaseSpec::RandomShapes { phase, .. } => {
+                let (shapes, placement) = match ph {
+                    PhaseSpec::RandomShapes { placement, .. } => {
+                        let field = format!("{}[{i}]", params.fields.phases);
+                        let (s, r) = random_shapes(container, placement, params.seed, &field)?;
+                        (std::borrow::Cow::Owned(s), Some(r))
+                    }
+                    PhaseSpec::Shapes { shapes, .. } => (std::borrow::Cow::Borrowed(shapes), None),
+                    _ => unreachable!("matched as a shape entry"),
+                };
+                let entry = (i, *phase);
                 shape_reports.push(apply_shapes(
-                    params,
-                    particles,
-                    container,
-                    mixes,
-                    (i, *phase),
-                    shapes,
-                    None,
-                )?);
-            }
-            PhaseSpec::RandomShapes { phase, placement } => {
-                let field = format!("{}[{i}]", params.fields.phases);
-                let (shapes, report) = random_shapes(container, placement, params.seed, &field)?;
-                shape_reports.push(apply_shapes(
-                    params,
-                    particles,
-                    container,
-                    mixes,
-                    (i, *phase),
-                    &shapes,
-                    Some(report),
+                    params, particles, container, mixes, entry, &shapes, placement,
                 )?);
             }
             PhaseSpec::Inclusions {

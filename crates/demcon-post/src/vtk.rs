@@ -407,41 +407,7 @@ pub fn write_lines_vtp(
     lines: &[[u32; 2]],
     fields: &[Field],
 ) -> Result<u64, PostError> {
-    check_points("points", points)?;
-    if let Some(k) = lines
-        .iter()
-        .position(|l| l.iter().any(|&i| i as usize >= points.len()))
-    {
-        return Err(PostError::invalid(
-            format!("lines[{k}]"),
-            format!("{:?}", lines[k]),
-            format!("indices of points (fewer than {})", points.len()),
-        ));
-    }
-    let cell_data = data_blocks(Vec::new(), fields, lines.len(), "line")?;
-    let connectivity: Vec<i64> = lines.iter().flatten().map(|&i| i64::from(i)).collect();
-    Piece {
-        kind: "PolyData",
-        cells_tag: "Lines",
-        n_points: points.len(),
-        n_cells: lines.len(),
-        point_data: Vec::new(),
-        cell_data,
-        points: Block::Vec3(points),
-        topology: vec![
-            ("connectivity", Block::I64(&connectivity)),
-            (
-                "offsets",
-                Block::Seq {
-                    first: 2,
-                    step: 2,
-                    n: lines.len(),
-                    wide: true,
-                },
-            ),
-        ],
-    }
-    .write(path.as_ref())
+    write_poly_vtp(path.as_ref(), points, lines, ("Lines", "lines", "line"), fields)
 }
 
 /// Writes a triangulated surface as VTK XML poly data (`.vtp`): `points` (m), one triangle per
@@ -456,24 +422,42 @@ pub fn write_triangles_vtp(
     triangles: &[[u32; 3]],
     fields: &[Field],
 ) -> Result<u64, PostError> {
+    write_poly_vtp(
+        path.as_ref(),
+        points,
+        triangles,
+        ("Polys", "triangles", "triangle"),
+        fields,
+    )
+}
+
+/// Poly data of cells of `K` points each: `Lines` (K = 2) or `Polys`; `names` = (VTK tag, the
+/// argument's name, one cell's name) for the file and the errors.
+fn write_poly_vtp<const K: usize>(
+    path: &Path,
+    points: &[Vec3],
+    cells: &[[u32; K]],
+    (tag, arg, one): (&'static str, &str, &str),
+    fields: &[Field],
+) -> Result<u64, PostError> {
     check_points("points", points)?;
-    if let Some(k) = triangles
+    if let Some(k) = cells
         .iter()
-        .position(|t| t.iter().any(|&i| i as usize >= points.len()))
+        .position(|c| c.iter().any(|&i| i as usize >= points.len()))
     {
         return Err(PostError::invalid(
-            format!("triangles[{k}]"),
-            format!("{:?}", triangles[k]),
+            format!("{arg}[{k}]"),
+            format!("{:?}", cells[k]),
             format!("indices of points (fewer than {})", points.len()),
         ));
     }
-    let cell_data = data_blocks(Vec::new(), fields, triangles.len(), "triangle")?;
-    let connectivity: Vec<i64> = triangles.iter().flatten().map(|&i| i64::from(i)).collect();
+    let cell_data = data_blocks(Vec::new(), fields, cells.len(), one)?;
+    let connectivity: Vec<i64> = cells.iter().flatten().map(|&i| i64::from(i)).collect();
     Piece {
         kind: "PolyData",
-        cells_tag: "Polys",
+        cells_tag: tag,
         n_points: points.len(),
-        n_cells: triangles.len(),
+        n_cells: cells.len(),
         point_data: Vec::new(),
         cell_data,
         points: Block::Vec3(points),
@@ -482,15 +466,15 @@ pub fn write_triangles_vtp(
             (
                 "offsets",
                 Block::Seq {
-                    first: 3,
-                    step: 3,
-                    n: triangles.len(),
+                    first: K as u64,
+                    step: K as u64,
+                    n: cells.len(),
                     wide: true,
                 },
             ),
         ],
     }
-    .write(path.as_ref())
+    .write(path)
 }
 
 /// Convex polyhedra for [`write_polyhedra_vtu`]: each cell's vertices (m, not shared between
