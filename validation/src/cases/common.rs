@@ -313,6 +313,22 @@ pub fn packing(container: ContainerConfig, count: usize) -> PackingConfig {
     }
 }
 
+/// A Gaussian-0.3 LS packing recipe of `count` particles in a periodic cube of edge `edge`
+/// (m) at φ = 0.6: dense enough for every surface model, far enough from jamming to pack fast
+/// (the Laguerre network needs no particular density).
+pub fn periodic_packing(edge: f64, count: usize) -> PackingConfig {
+    PackingConfig::Generate {
+        container: ContainerConfig::Periodic {
+            size: (edge, edge, edge),
+        },
+        count,
+        phi: 0.6,
+        radius_cov: 0.3,
+        radius_range: None,
+        allow_short: false,
+    }
+}
+
 /// Fixed temperature on a face.
 pub fn fixed(face: FaceConfig, value: f64) -> ThermalBcConfig {
     ThermalBcConfig::FixedTemperature {

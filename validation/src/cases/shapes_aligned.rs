@@ -104,16 +104,7 @@ fn scene(n: usize, seed: u64, shapes: &[ShapeConfig], contrast: f64, rule: Phase
     let mut s = thermal_scene(
         "shapes-aligned",
         seed,
-        PackingConfig::Generate {
-            container: ContainerConfig::Periodic {
-                size: (CELL, CELL, CELL),
-            },
-            count: n,
-            phi: 0.6,
-            radius_cov: 0.3,
-            radius_range: None,
-            allow_short: false,
-        },
+        periodic_packing(CELL, n),
         vec![
             material("matrix", LAMBDA_M, 1000.0, 1000.0),
             material("spheroids", LAMBDA_M * contrast, 1000.0, 1000.0),

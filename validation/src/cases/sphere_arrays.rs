@@ -202,16 +202,7 @@ fn scene(a: &Array, side_over_radius: f64, n: usize, seed: u64, rule: PhaseRuleC
     let mut s = thermal_scene(
         &format!("sphere-arrays-{}-{}-{}", a.lattice, a.f, a.contrast),
         seed,
-        PackingConfig::Generate {
-            container: ContainerConfig::Periodic {
-                size: (CELL, CELL, CELL),
-            },
-            count: n,
-            phi: 0.6,
-            radius_cov: 0.3,
-            radius_range: None,
-            allow_short: false,
-        },
+        periodic_packing(CELL, n),
         vec![
             material("matrix", LAMBDA_M, 1000.0, 1000.0),
             material("spheres", LAMBDA_M * a.contrast, 1000.0, 1000.0),
