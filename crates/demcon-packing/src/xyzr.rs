@@ -99,6 +99,9 @@ fn clip(s: &str) -> String {
 pub struct XyzrFile {
     /// The spheres (m), all of phase 0.
     pub particles: ParticleSet,
+    /// Each particle's label from an optional fifth column (`x y z r label`: a material's name
+    /// or index), with its line; `None` when the lines have four columns.
+    pub labels: Option<Vec<(String, usize)>>,
     /// The container from the `# container` line, if any.
     pub container: Option<Container>,
     /// The other `#` lines, without the `#` and leading blanks.
@@ -291,6 +294,7 @@ pub fn parse_xyzr(text: &str) -> Result<XyzrFile, (usize, String)> {
     let mut container = None;
     let mut notes = vec![];
     let mut lines = vec![];
+    let mut labels: Vec<(String, usize)> = vec![];
     let mut count: Option<(usize, usize)> = None;
     let mut last_line = 0;
     for (k, raw) in text.lines().enumerate() {
@@ -330,14 +334,28 @@ pub fn parse_xyzr(text: &str) -> Result<XyzrFile, (usize, String)> {
             .split(|c: char| c.is_whitespace() || c == ',')
             .filter(|s| !s.is_empty())
             .collect();
-        if fields.len() != 4 {
+        let labelled = !radii.is_empty() && !labels.is_empty() || radii.is_empty() && fields.len() == 5;
+        let want = if labelled { 5 } else { 4 };
+        if fields.len() != want {
             return Err((
                 line,
-                format!("expected 4 numbers `x y z r`, found {} fields", fields.len()),
+                format!(
+                    "expected {} `x y z r{}` (as the first particle line), found {} fields",
+                    if labelled {
+                        "4 numbers and a label"
+                    } else {
+                        "4 numbers"
+                    },
+                    if labelled { " label" } else { "" },
+                    fields.len()
+                ),
             ));
         }
+        if labelled {
+            labels.push((fields[4].to_string(), line));
+        }
         let mut v = [0.0; 4];
-        for (q, f) in fields.iter().enumerate() {
+        for (q, f) in fields.iter().take(4).enumerate() {
             v[q] = f
                 .parse::<f64>()
                 .ok()
@@ -394,6 +412,7 @@ pub fn parse_xyzr(text: &str) -> Result<XyzrFile, (usize, String)> {
     }
     Ok(XyzrFile {
         particles,
+        labels: (!labels.is_empty()).then_some(labels),
         container,
         notes,
     })
@@ -478,6 +497,46 @@ mod tests {
             })
         );
         assert_eq!(ok.notes, vec!["hello".to_string()]);
+    }
+
+    #[test]
+    fn a_fifth_column_labels_every_particle_or_none() {
+        let f = parse_xyzr(
+            "0 0 0 0.1 epoxy
+1 0 0 0.1 2
+",
+        )
+        .unwrap();
+        assert_eq!(
+            f.labels,
+            Some(vec![("epoxy".to_string(), 1), ("2".to_string(), 2)])
+        );
+        assert!(
+            parse_xyzr(
+                "0 0 0 0.1
+1 0 0 0.1
+"
+            )
+            .unwrap()
+            .labels
+            .is_none()
+        );
+        // Mixed lines are refused at the first that differs, naming it.
+        let e = parse_xyzr(
+            "0 0 0 0.1 a
+1 0 0 0.1
+",
+        )
+        .unwrap_err();
+        assert_eq!(e.0, 2);
+        assert!(e.1.contains("label"), "{}", e.1);
+        let e = parse_xyzr(
+            "0 0 0 0.1
+1 0 0 0.1 a
+",
+        )
+        .unwrap_err();
+        assert_eq!(e.0, 2);
     }
 
     /// Fuzz finding: x = 1 m in a 0.01 m box was accepted.

@@ -6,7 +6,9 @@ use std::time::Instant;
 
 use demcon_core::{Container, ParticleSet, Stages};
 use demcon_model::{Model, Packed};
-use demcon_packing::{PackingParams, PackingReport, RadiusDistribution, StopReason, pack, read_xyzr, tile};
+use demcon_packing::{
+    PackingParams, PackingReport, RadiusDistribution, StopReason, pack, read_xyzr_file, tile,
+};
 
 use crate::config::*;
 use crate::convert;
@@ -20,7 +22,38 @@ pub fn make_particles(
     base_dir: &Path,
     progress: Option<&dyn Fn(&demcon_packing::PackProgress)>,
 ) -> Result<(ParticleSet, Container, Option<PackingReport>, Option<String>), SceneError> {
-    particles_of(&cfg.packing, cfg.seed, base_dir, progress)
+    particles_of(&cfg.packing, cfg.seed, base_dir, progress, &cfg.materials)
+}
+
+/// The phase of each particle from its label in a packing file (`x y z r label`): a material's
+/// name, or its index in `materials`.
+fn label_phases(
+    labels: &[(String, usize)],
+    materials: &[MaterialConfig],
+    file: &Path,
+) -> Result<Vec<u16>, SceneError> {
+    labels
+        .iter()
+        .map(|(label, line)| {
+            materials
+                .iter()
+                .position(|m| m.name == *label)
+                .or_else(|| label.parse::<usize>().ok().filter(|&k| k < materials.len()))
+                .map(|k| k as u16)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+                    SceneError::invalid(
+                        "packing.path",
+                        format!("{}:{line}: label `{label}`", file.display()),
+                        format!(
+                            "the fifth column names a material or its index (0..{}): {}",
+                            materials.len(),
+                            names.join(", ")
+                        ),
+                    )
+                })
+        })
+        .collect()
 }
 
 /// The particles of one packing section (a tiling holds another).
@@ -29,6 +62,7 @@ fn particles_of(
     seed: u64,
     base_dir: &Path,
     progress: Option<&dyn Fn(&demcon_packing::PackProgress)>,
+    materials: &[MaterialConfig],
 ) -> Result<(ParticleSet, Container, Option<PackingReport>, Option<String>), SceneError> {
     match packing {
         PackingConfig::Generate {
@@ -63,8 +97,12 @@ fn particles_of(
         }
         PackingConfig::File { path, container } => {
             let full = base_dir.join(path);
-            let (particles, header) = read_xyzr(&full)
+            let file = read_xyzr_file(&full)
                 .map_err(|e| SceneError::Packing(format!("reading {}: {e}", full.display())))?;
+            let (mut particles, header) = (file.particles, file.container);
+            if let Some(labels) = &file.labels {
+                particles.phases = label_phases(labels, materials, &full)?;
+            }
             let container = match (container, header) {
                 (Some(c), _) => convert::container(c, "packing.container")?,
                 (None, Some(c)) => c,
@@ -86,7 +124,8 @@ fn particles_of(
             repeat,
             walls,
         } => {
-            let (particles, container, report, from) = particles_of(packing, seed, base_dir, progress)?;
+            let (particles, container, report, from) =
+                particles_of(packing, seed, base_dir, progress, materials)?;
             let (tiled, container) = tile(&particles, &container, [repeat.0, repeat.1, repeat.2])
                 .map_err(|e| SceneError::Packing(format!("packing (Tile): {e}")))?;
             let container = match (container, walls) {

@@ -392,7 +392,7 @@ pub fn check_run_memory(
     };
     let per = run_bytes_per_particle(c);
     let seeds = container.map_or(0, |k| conforming_extra_sites(n, c, k));
-    let need = ((n + seeds) as u64).saturating_mul(per);
+    let need = (n as u64).saturating_add(seeds as u64).saturating_mul(per);
     if need > available.bytes {
         let with_seeds = if seeds > 0 {
             format!(" and ~{seeds} conforming seeds")

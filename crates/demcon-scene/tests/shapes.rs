@@ -1,6 +1,7 @@
 //! Shaped-inclusion phases from a scene: listed spheroids and cylinders, a shapes file, shapes
 //! placed at random; what `summary.json` reports of them (count, fraction, orientation tensor,
 //! the body's phase fractions); the anisotropy of aligned fibres; and every refusal by name.
+//! Also each particle's phase from a labelled packing file (`x y z r label`).
 
 use std::path::Path;
 
@@ -230,5 +231,59 @@ fn bad_shapes_are_refused_by_name() {
     );
     let e = error_of(&dense, &dir);
     assert!(e.contains("phases[0]") && e.contains("attainable"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A simple-cubic lattice of 10³ spheres in the periodic unit cell, labelled by layer: x < 0.5
+/// `m`, the others `f` (by name) or `1` (by index); the Laguerre cells are cubes, so the layers
+/// conduct exactly: in series along x, in parallel across.
+#[test]
+fn phases_come_from_a_labelled_packing_file() {
+    let dir = std::env::temp_dir().join(format!("demcon-labels-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut text = String::from("# container periodic 1 1 1\n");
+    let h = 1.0 / 10.0;
+    for i in 0..10 {
+        for j in 0..10 {
+            for k in 0..10 {
+                let label = match (i < 5, (i + j + k) % 2) {
+                    (true, _) => "m",
+                    (false, 0) => "f",
+                    (false, _) => "1",
+                };
+                let c = [i, j, k].map(|v| (v as f64 + 0.5) * h);
+                text.push_str(&format!("{} {} {} {} {label}\n", c[0], c[1], c[2], 0.5 * h));
+            }
+        }
+    }
+    std::fs::write(dir.join("layers.xyzr"), &text).unwrap();
+    let scene = r#"(
+    packing: File(path: "layers.xyzr"),
+    surface: Laguerre,
+    materials: [
+        (name: "m", conductivity: 1.0, density: 1000.0, specific_heat: 500.0),
+        (name: "f", conductivity: 10.0, density: 1000.0, specific_heat: 500.0),
+    ],
+    thermal: Some((bcs: [], solver: Homogenize)),
+    outputs: (vtk: false),
+)"#;
+    let r = run(&parse(scene, &dir).unwrap(), &RunOptions::default()).unwrap();
+    let j = summary_json("labels", &r);
+    let t = tensor(&j["etc_tensor"]);
+    let (series, parallel) = (2.0 / (1.0 + 0.1), 5.5);
+    assert!((t[0][0] - series).abs() < 1e-9 * series, "{t:?}");
+    assert!((t[1][1] - parallel).abs() < 1e-9 * parallel, "{t:?}");
+    assert_eq!(j["build"]["phase_counts"], serde_json::json!([500, 500]));
+    // An unknown label is refused naming the file, the line and the label.
+    std::fs::write(
+        dir.join("bad.xyzr"),
+        "# container periodic 1 1 1\n0.5 0.5 0.5 0.1 glass\n",
+    )
+    .unwrap();
+    let e = error_of(&scene.replace("layers.xyzr", "bad.xyzr"), &dir);
+    assert!(
+        e.contains("bad.xyzr:2") && e.contains("glass") && e.contains("packing.path"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
