@@ -50,7 +50,7 @@ pub use params::{
 pub use radius::{DEFAULT_TRUNCATION_SIGMAS, MIN_RATIO_FLOOR, RadiusDistribution, jamming_estimate};
 pub use report::{PackingReport, PackingSummary, RadiusSummary, bulk_phi, max_overlap, summarize};
 pub use shapes::{
-    Orientation, ShapeKind, ShapeParams, ShapeReport, ShapeStop, periodic_images, place_shapes,
+    Orientation, ShapeKind, ShapeParams, ShapeReport, ShapeStop, first_overlap, periodic_images, place_shapes,
 };
 pub use stress::{STRESS_GROWTH_RATES, StressFailure, StressReport, stress_packings};
 pub use tile::{Repeat, TILE_BYTES_PER_PARTICLE, check_tile_memory, tile, tiled_count};

@@ -700,6 +700,37 @@ fn min_distance(p: &Placement<'_>, shapes: &[Inclusion]) -> f64 {
     best
 }
 
+/// The first pair of `shapes` (i < j, by j then i) that touch or overlap — minimum image in a
+/// periodic container — or `None`. Each shape is tested against those whose boxes meet its own.
+pub fn first_overlap(shapes: &[Inclusion], container: &Container) -> Option<(usize, usize)> {
+    let b = container.bounds();
+    let size = b.extent();
+    let periodic = container.period().is_some();
+    let largest = shapes
+        .iter()
+        .max_by(|x, y| x.circumradius().total_cmp(&y.circumradius()))?;
+    let mut grid = Grid::new(size, cell_width(largest, 0.0), periodic);
+    let local = |s: &Inclusion| s.translated(-b.min);
+    let mut near = Vec::new();
+    for (j, s) in shapes.iter().enumerate() {
+        let s = local(s);
+        grid.near(&s.bounds(), &mut near);
+        near.sort_unstable();
+        for &i in &near {
+            let mut o = local(&shapes[i as usize]);
+            if periodic {
+                let d = s.centre() - o.centre();
+                o = o.translated(Vec3::from_fn(|k, _| size[k] * (d[k] / size[k]).round()));
+            }
+            if boxes_meet(&s.bounds(), &o.bounds()) && s.distance(&o) <= 0.0 {
+                return Some((i as usize, j));
+            }
+        }
+        grid.insert(&s.bounds(), j as u32);
+    }
+    None
+}
+
 /// The shapes and their periodic images that reach into the box `[0, L)³` of `period` (m): a
 /// shape crossing a face appears again shifted by the period, so that a region made of them
 /// covers the periodic microstructure.
@@ -825,6 +856,24 @@ mod tests {
         );
         p.orientation = Orientation::Tensor(Matrix3::identity());
         assert!(place_shapes(&p, 3).unwrap_err().to_string().contains("trace 1"));
+    }
+
+    #[test]
+    fn overlapping_pairs_are_found_across_the_period() {
+        let ball =
+            |x: f64, y: f64| Inclusion::spheroid(Vec3::new(x, y, 5.0), Vec3::z(), 0.5, 0.5, "s").unwrap();
+        let box10 = Container::Box { size: [10.0; 3] };
+        let apart = [ball(1.0, 1.0), ball(3.0, 1.0), ball(5.0, 1.0)];
+        assert_eq!(first_overlap(&apart, &box10), None);
+        let touching = [ball(1.0, 1.0), ball(3.0, 1.0), ball(3.9, 1.0)];
+        assert_eq!(first_overlap(&touching, &box10), Some((1, 2)));
+        // 0.6 and 9.6 are 1.0 apart through the periodic face.
+        let across = [ball(0.6, 5.0), ball(5.0, 5.0), ball(9.6, 5.0)];
+        assert_eq!(first_overlap(&across, &box10), None);
+        assert_eq!(
+            first_overlap(&across, &Container::Periodic { size: [10.0; 3] }),
+            Some((0, 2))
+        );
     }
 
     #[test]

@@ -415,6 +415,10 @@ pub enum PhaseConfig {
         /// `cylinder x y z ux uy uz radius length flat|round` (m).
         #[serde(default)]
         file: Option<String>,
+        /// The shapes must not touch or overlap (checked before packing; a pair that does is
+        /// refused by index). By default they may: the phase is their union.
+        #[serde(default)]
+        disjoint: bool,
     },
     /// Shapes placed at random (random sequential addition with rattling) to a volume fraction
     /// of the container (a `Box`, shapes wholly inside, or `Periodic`), seeded by `seed`:

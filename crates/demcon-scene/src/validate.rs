@@ -651,6 +651,15 @@ fn check_shapes(
                 if let Err(e) = demcon_model::shapes::check_placement(k, shapes, &field) {
                     errors.push(e.into());
                 }
+                let disjoint = matches!(c.phases.get(i), Some(PhaseConfig::Shapes { disjoint: true, .. }));
+                if let (true, Some((a, b))) = (disjoint, demcon_packing::first_overlap(shapes, k)) {
+                    errors.push(SceneError::invalid(
+                        &format!("{field}.shapes[{b}]"),
+                        format!("touches or overlaps {field}.shapes[{a}]"),
+                        "`disjoint: true` asks that no two shapes touch or overlap (shapes from `file` count after \
+                         the listed ones)",
+                    ));
+                }
             }
             (demcon_model::PhaseSpec::RandomShapes { .. }, Some(k))
                 if !matches!(k, Container::Box { .. } | Container::Periodic { .. }) =>

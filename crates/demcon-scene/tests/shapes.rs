@@ -206,6 +206,23 @@ fn bad_shapes_are_refused_by_name() {
         let e = before(&text(PERIODIC, &phases, &extra));
         assert!(e.contains(field), "expected `{field}` in: {e}");
     }
+    // Shapes that must not overlap, and do.
+    let two = r#"Shapes(material: "f", disjoint: true, shapes: [
+        Spheroid(centre: (0.3, 0.5, 0.5), axis: (1.0, 0.0, 0.0), a: 0.2, b: 0.1),
+        Cylinder(centre: (0.55, 0.5, 0.5), axis: (0.0, 1.0, 0.0), radius: 0.1, length: 0.4),
+    ])"#;
+    let e = before(&text(PERIODIC, two, ""));
+    assert!(
+        e.contains("phases[0].shapes[1]") && e.contains("shapes[0]") && e.contains("disjoint"),
+        "{e}"
+    );
+    assert!(
+        parse(
+            &text(PERIODIC, &two.replace("disjoint: true", "disjoint: false"), ""),
+            &dir
+        )
+        .is_ok()
+    );
     // Walled: a shape must lie wholly inside; random shapes need a box.
     let walled = text(
         "Box(size: (1.0, 1.0, 1.0))",

@@ -116,6 +116,7 @@ fn scene(n: usize, seed: u64, shapes: &[ShapeConfig], contrast: f64, rule: Phase
         material: "spheroids".into(),
         shapes: shapes.to_vec(),
         file: None,
+        disjoint: true,
     }];
     s.phase_rule = Some(rule);
     s
