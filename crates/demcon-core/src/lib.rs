@@ -34,6 +34,7 @@ mod region;
 mod selector;
 mod shape;
 mod stages;
+mod voxels;
 
 pub use available::{AvailableMemory, MemoryBound, available_memory, available_memory_bound};
 pub use components::Components;
@@ -49,6 +50,7 @@ pub use shape::{Aabb, Axis, Container};
 pub use stages::{
     StageObserver, StageRecord, Stages, release_free_memory, reset_peak_resident, resident_bytes,
 };
+pub use voxels::Voxels;
 
 /// A point or vector in 3-D space (m).
 pub type Vec3 = nalgebra::Vector3<f64>;

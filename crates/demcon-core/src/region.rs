@@ -1,7 +1,7 @@
 //! Regions of space (boxes, cylinders, spheres, shaped inclusions and their combinations) used
 //! to carve packings, assign phases and select particles. Each region has a signed distance.
 
-use crate::{Aabb, Axis, Inclusion, Vec3};
+use crate::{Aabb, Axis, Inclusion, Vec3, Voxels};
 
 /// A region of space described by primitives and set operations.
 ///
@@ -37,6 +37,8 @@ pub enum Region {
     },
     /// A spheroid or a cylinder of any orientation ([`Inclusion`]).
     Inclusion(Inclusion),
+    /// The voxels of one label of an image, with a smoothed signed distance ([`Voxels`]).
+    Voxels(Voxels),
     /// Points in the first region and not in the second (e.g. a cylinder minus a groove).
     Difference(Box<Region>, Box<Region>),
     /// Points in any of the regions.
@@ -74,6 +76,7 @@ impl Region {
             }
             Region::Sphere { centre, radius } => (p - centre).norm() - radius,
             Region::Inclusion(s) => s.signed_distance(p),
+            Region::Voxels(v) => v.signed_distance(p),
             Region::Difference(a, b) => a.signed_distance(p).max(-b.signed_distance(p)),
             Region::Union(rs) => rs
                 .iter()
@@ -143,6 +146,7 @@ impl Region {
                 max: centre + Vec3::repeat(*radius),
             },
             Region::Inclusion(s) => s.bounds(),
+            Region::Voxels(v) => v.bounds(),
             Region::Difference(a, _) => a.bounds(),
             Region::Union(rs) => rs
                 .iter()
@@ -178,6 +182,7 @@ impl Region {
             Region::Cylinder { radius, length, .. } => PI * radius * radius * length,
             Region::Sphere { radius, .. } => 4.0 / 3.0 * PI * radius.powi(3),
             Region::Inclusion(s) => s.volume(),
+            Region::Voxels(v) => v.volume(),
             _ => {
                 let b = self.bounds();
                 let n = cells_per_axis.max(1);

@@ -406,6 +406,12 @@ pub enum PhaseSpec {
         /// What to place.
         placement: ShapeParams,
     },
+    /// The labels of a voxel image, each its phase's voxels (in order; a later label wins
+    /// where they meet), cut by their smoothed level set as [`PhaseSpec::Shapes`].
+    Image {
+        /// (phase id, its voxels) per label.
+        labels: Vec<(u16, demcon_core::Voxels)>,
+    },
 }
 
 /// The particles a model starts from, and where they came from.
@@ -546,7 +552,10 @@ fn sphere_surfaces(params: &ModelParams, container: &Container) -> Result<Vec<Sp
                 centre: *centre,
                 radius: *radius,
             }),
-            PhaseSpec::Region { .. } | PhaseSpec::Shapes { .. } | PhaseSpec::RandomShapes { .. } => {}
+            PhaseSpec::Region { .. }
+            | PhaseSpec::Shapes { .. }
+            | PhaseSpec::RandomShapes { .. }
+            | PhaseSpec::Image { .. } => {}
         }
     }
     Ok(spheres)
@@ -1072,6 +1081,23 @@ fn claims_nobody(fields: &FieldNames, i: usize, what: &str) -> ModelError {
     )
 }
 
+/// Refuses the `Conforming` rule for phase entry `entry`, whose surfaces (shapes, an image's
+/// labels) are cut by their level set.
+fn level_set_only(params: &ModelParams, entry: usize) -> Result<(), ModelError> {
+    if params.phase_rule == PhaseRule::Conforming {
+        return Err(ModelError::invalid(
+            params.fields.phase_rule,
+            "Conforming",
+            format!(
+                "conforming seeds follow spheres, box faces and cracks; the surfaces of {}[{entry}] are cut by \
+                 their level set: use the Segment or Laminate rule",
+                params.fields.phases
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Gives the particles inside phase entry `entry`'s `shapes` its phase (under the model's rule)
 /// and reports them.
 fn apply_shapes(
@@ -1084,16 +1110,7 @@ fn apply_shapes(
     placement: Option<ShapeReport>,
 ) -> Result<ShapesReport, ModelError> {
     let field = format!("{}[{entry}]", params.fields.phases);
-    if params.phase_rule == PhaseRule::Conforming {
-        return Err(ModelError::invalid(
-            params.fields.phase_rule,
-            "Conforming",
-            format!(
-                "conforming seeds follow spheres, box faces and cracks; the shapes of {field} are cut by \
-                 their level set: use the Segment or Laminate rule"
-            ),
-        ));
-    }
+    level_set_only(params, entry)?;
     check_placement(container, shapes, &field)?;
     let region = shapes_region(container, shapes);
     if assign(particles, &region, phase, params.phase_rule, mixes) == 0 {
@@ -1153,6 +1170,18 @@ fn apply_phases(
             PhaseSpec::Region { phase, region } => {
                 if assign(particles, region, *phase, params.phase_rule, mixes) == 0 {
                     return Err(claims_nobody(&params.fields, i, "Region"));
+                }
+            }
+            PhaseSpec::Image { labels } => {
+                level_set_only(params, i)?;
+                for (phase, voxels) in labels {
+                    assign(
+                        particles,
+                        &Region::Voxels(voxels.clone()),
+                        *phase,
+                        params.phase_rule,
+                        mixes,
+                    );
                 }
             }
             PhaseSpec::Shapes { phase, .. } | PhaseSpec::RandomShapes { phase, .. } => {

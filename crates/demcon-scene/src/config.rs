@@ -447,17 +447,41 @@ pub enum PhaseConfig {
         #[serde(default)]
         orientation: OrientationConfig,
     },
+    /// Phases from a labelled 3-D image: `Image(path: "scan.npy", voxel: 2e-6, labels: [(0,
+    /// "epoxy"), (1, "glass")])`. Each label's voxels take its material (a smoothed level set
+    /// through the voxel faces, cut under the `Segment` rule, the default with images). The image
+    /// must cover the container's box; every label in it needs a material.
+    Image {
+        /// The image (relative to the scene file): `.npy` (a 3-D integer array, axes x, y, z),
+        /// `.tif`/`.tiff` (one grey page per z-slice, x along the rows) or `.raw` (with `dims`
+        /// and `dtype`, x fastest, little-endian).
+        path: String,
+        /// Edge of a voxel (m), > 0.
+        voxel: f64,
+        /// The image's lower corner (m).
+        #[serde(default)]
+        origin: (f64, f64, f64),
+        /// Label → material name, for every label the image holds.
+        labels: Vec<(i64, String)>,
+        /// Voxels along x, y, z of a `.raw` image.
+        #[serde(default)]
+        dims: Option<(usize, usize, usize)>,
+        /// Element type of a `.raw` image: `u8`, `u16`, `u32`, `i8`, `i16` or `i32`.
+        #[serde(default)]
+        dtype: Option<String>,
+    },
 }
 
 impl PhaseConfig {
-    /// The material the entry gives its particles.
-    pub fn material(&self) -> &str {
+    /// The materials the entry gives its particles.
+    pub fn materials(&self) -> Vec<&str> {
         match self {
             Self::Region { material, .. }
             | Self::Inclusions { material, .. }
             | Self::Spheres { material, .. }
             | Self::Shapes { material, .. }
-            | Self::RandomShapes { material, .. } => material,
+            | Self::RandomShapes { material, .. } => vec![material.as_str()],
+            Self::Image { labels, .. } => labels.iter().map(|(_, m)| m.as_str()).collect(),
         }
     }
 }

@@ -240,9 +240,12 @@ pub fn phase_rule_of(cfg: &SceneConfig) -> PhaseRuleConfig {
 /// Whether a phase entry is made of shaped inclusions (`Shapes`, `RandomShapes`): their
 /// surfaces are cut by their level set, so the default phase rule is then `Segment`.
 pub fn has_shapes(cfg: &SceneConfig) -> bool {
-    cfg.phases
-        .iter()
-        .any(|p| matches!(p, PhaseConfig::Shapes { .. } | PhaseConfig::RandomShapes { .. }))
+    cfg.phases.iter().any(|p| {
+        matches!(
+            p,
+            PhaseConfig::Shapes { .. } | PhaseConfig::RandomShapes { .. } | PhaseConfig::Image { .. }
+        )
+    })
 }
 
 /// The phase rule.
@@ -285,7 +288,39 @@ pub fn model_params(cfg: &SceneConfig, base_dir: &Path) -> Result<ModelParams, S
     let mut phases = Vec::with_capacity(cfg.phases.len());
     for (i, ph) in cfg.phases.iter().enumerate() {
         let field = format!("phases[{i}]");
-        let material = ph.material();
+        if let PhaseConfig::Image {
+            path,
+            voxel,
+            origin,
+            labels,
+            dims,
+            dtype,
+        } = ph
+        {
+            let mut map = Vec::with_capacity(labels.len());
+            for (k, (label, name)) in labels.iter().enumerate() {
+                let phase = materials
+                    .phase_of(name)
+                    .map_err(|e| SceneError::at(&format!("{field}.labels[{k}]"), e))?;
+                map.push((*label, phase));
+            }
+            if !(voxel.is_finite() && *voxel > 0.0) {
+                return Err(SceneError::invalid(
+                    &format!("{field}.voxel"),
+                    voxel,
+                    "a finite size > 0 (m)",
+                ));
+            }
+            let image = crate::image::read_image(&base_dir.join(path), *dims, dtype.as_deref(), &field)?;
+            let periodic = matches!(
+                known_container(cfg, base_dir),
+                Ok(Some(Container::Periodic { .. }))
+            );
+            let labels = crate::image::label_regions(&image, *voxel, v3(*origin), &map, periodic, &field)?;
+            phases.push(PhaseSpec::Image { labels });
+            continue;
+        }
+        let material = ph.materials()[0];
         let phase = materials
             .phase_of(material)
             .map_err(|e| SceneError::at(&format!("{field}.material"), e))?;
@@ -313,6 +348,7 @@ pub fn model_params(cfg: &SceneConfig, base_dir: &Path) -> Result<ModelParams, S
                 phase,
                 shapes: crate::shapes::shape_list(&field, shapes, file.as_deref(), base_dir)?,
             },
+            PhaseConfig::Image { .. } => unreachable!("converted above"),
             PhaseConfig::RandomShapes { .. } => PhaseSpec::RandomShapes {
                 phase,
                 placement: crate::shapes::random_shape_params(&field, ph)?
@@ -768,5 +804,66 @@ pub fn problem(cfg: &SceneConfig, base_dir: &Path) -> Result<Problem, SceneError
         electric,
         homogenize,
         post: post_plan(&cfg.outputs),
+    })
+}
+
+/// The container, when it is known before packing: a generated packing's, the one the scene
+/// gives a file, or the one in the file's header (read alone; a file that cannot be read is
+/// reported by the build, as the first thing it does); a tiling's is its packing's, copied.
+pub fn known_container(c: &SceneConfig, base_dir: &Path) -> Result<Option<Container>, SceneError> {
+    container_of(&c.packing, "packing", base_dir)
+}
+
+/// The container of one packing section, when it is known before packing (see
+/// [`known_container`]); refusals name `field`.
+pub fn container_of(
+    p: &PackingConfig,
+    field: &str,
+    base_dir: &Path,
+) -> Result<Option<Container>, SceneError> {
+    Ok(match p {
+        PackingConfig::Generate { container, .. } => {
+            Some(self::container(container, &format!("{field}.container"))?)
+        }
+        PackingConfig::File {
+            container: Some(container),
+            ..
+        } => Some(self::container(container, &format!("{field}.container"))?),
+        PackingConfig::File {
+            path,
+            container: None,
+        } => demcon_packing::read_xyzr_container(&base_dir.join(path))
+            .ok()
+            .flatten(),
+        PackingConfig::Tile {
+            packing,
+            repeat,
+            walls,
+        } => {
+            let inner_field = format!("{field}.packing");
+            let inner = container_of(packing, &inner_field, base_dir)?;
+            let repeat = [repeat.0, repeat.1, repeat.2];
+            demcon_packing::tiled_count(1, repeat, &format!("{field}.repeat"))?;
+            match inner {
+                Some(Container::Periodic { size }) => {
+                    let size = [0, 1, 2].map(|k| size[k] * repeat[k] as f64);
+                    Some(if *walls {
+                        Container::Box { size }
+                    } else {
+                        Container::Periodic { size }
+                    })
+                }
+                Some(other) => {
+                    return Err(SceneError::invalid(
+                        &format!("{inner_field}.container"),
+                        other.kind(),
+                        "only a periodic packing can be tiled: copies of a walled packing would meet at its \
+                         walls, with the gaps and layering of a wall between them (pack a Periodic box, and \
+                         carve it to shape with `carve` if walls are wanted)",
+                    ));
+                }
+                None => None,
+            }
+        }
     })
 }

@@ -38,6 +38,7 @@ pub mod checkpoint;
 pub mod config;
 pub mod convert;
 mod error;
+pub mod image;
 pub mod output;
 pub mod plots;
 pub mod run;

@@ -45,7 +45,7 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<convert::Problem, Sc
     let mut r = Refusals::default();
     // Materials, contacts, carving, phases, selectors, electrodes' select/face: by conversion.
     let problem = r.check(convert::problem(c, base_dir));
-    let container = r.check(known_container(c, base_dir)).flatten();
+    let container = r.check(convert::known_container(c, base_dir)).flatten();
     if let Some(Some(n)) = r.check(known_count(&c.packing, "packing")) {
         let field = match c.packing {
             PackingConfig::Tile { .. } => "packing.repeat",
@@ -123,7 +123,7 @@ pub fn scene_warnings(c: &SceneConfig) -> Vec<String> {
         }
     };
     for ph in &c.phases {
-        mark(ph.material());
+        ph.materials().into_iter().for_each(&mut mark);
     }
     for (k, m) in c.materials.iter().enumerate() {
         if !used[k] {
@@ -208,61 +208,6 @@ fn check_thermal_conflicts(t: &ThermalConfig, r: &mut Refusals) {
             ));
         }
     }
-}
-
-/// The container, when it is known before packing: a generated packing's, the one the scene
-/// gives a file, or the one in the file's header (read alone; a file that cannot be read is
-/// reported by the build, as the first thing it does); a tiling's is its packing's, copied.
-fn known_container(c: &SceneConfig, base_dir: &Path) -> Result<Option<Container>, SceneError> {
-    container_of(&c.packing, "packing", base_dir)
-}
-
-fn container_of(p: &PackingConfig, field: &str, base_dir: &Path) -> Result<Option<Container>, SceneError> {
-    Ok(match p {
-        PackingConfig::Generate { container, .. } => {
-            Some(convert::container(container, &format!("{field}.container"))?)
-        }
-        PackingConfig::File {
-            container: Some(container),
-            ..
-        } => Some(convert::container(container, &format!("{field}.container"))?),
-        PackingConfig::File {
-            path,
-            container: None,
-        } => demcon_packing::read_xyzr_container(&base_dir.join(path))
-            .ok()
-            .flatten(),
-        PackingConfig::Tile {
-            packing,
-            repeat,
-            walls,
-        } => {
-            let inner_field = format!("{field}.packing");
-            let inner = container_of(packing, &inner_field, base_dir)?;
-            let repeat = [repeat.0, repeat.1, repeat.2];
-            demcon_packing::tiled_count(1, repeat, &format!("{field}.repeat"))?;
-            match inner {
-                Some(Container::Periodic { size }) => {
-                    let size = [0, 1, 2].map(|k| size[k] * repeat[k] as f64);
-                    Some(if *walls {
-                        Container::Box { size }
-                    } else {
-                        Container::Periodic { size }
-                    })
-                }
-                Some(other) => {
-                    return Err(SceneError::invalid(
-                        &format!("{inner_field}.container"),
-                        other.kind(),
-                        "only a periodic packing can be tiled: copies of a walled packing would meet at its \
-                         walls, with the gaps and layering of a wall between them (pack a Periodic box, and \
-                         carve it to shape with `carve` if walls are wanted)",
-                    ));
-                }
-                None => None,
-            }
-        }
-    })
 }
 
 /// A tiling cut to walls leaves spheres across the faces: only Laguerre cells (clipped at the
@@ -359,7 +304,7 @@ pub fn conforming_extra_sites(n: usize, c: &SceneConfig, container: &Container) 
             } => 3.0 * fraction * volume / (0.5 * e.x.min(e.y).min(e.z) / size_ratio),
             PhaseConfig::Region { region, .. } => region_area(region),
             // Not followed by conforming seeds (refused under that rule).
-            PhaseConfig::Shapes { .. } | PhaseConfig::RandomShapes { .. } => 0.0,
+            PhaseConfig::Shapes { .. } | PhaseConfig::RandomShapes { .. } | PhaseConfig::Image { .. } => 0.0,
         })
         .sum();
     area += c
@@ -634,7 +579,9 @@ fn check_shapes(
         let field = format!("phases[{i}]");
         let shaped = matches!(
             ph,
-            demcon_model::PhaseSpec::Shapes { .. } | demcon_model::PhaseSpec::RandomShapes { .. }
+            demcon_model::PhaseSpec::Shapes { .. }
+                | demcon_model::PhaseSpec::RandomShapes { .. }
+                | demcon_model::PhaseSpec::Image { .. }
         );
         if shaped && c.phase_rule == Some(PhaseRuleConfig::Conforming) {
             errors.push(SceneError::invalid(
@@ -659,6 +606,13 @@ fn check_shapes(
                         "`disjoint: true` asks that no two shapes touch or overlap (shapes from `file` count after \
                          the listed ones)",
                     ));
+                }
+            }
+            (demcon_model::PhaseSpec::Image { labels }, Some(k)) => {
+                if let Some((_, v)) = labels.first()
+                    && let Err(e) = crate::image::check_covers(&v.image_box(), k, &field)
+                {
+                    errors.push(e);
                 }
             }
             (demcon_model::PhaseSpec::RandomShapes { .. }, Some(k))
