@@ -180,3 +180,24 @@ fn bad_images_are_refused_by_name_before_packing() {
     }
     std::fs::remove_dir_all(&d).ok();
 }
+
+#[test]
+fn a_region_cut_by_a_periodic_face_is_warned_of_under_the_cut_rules() {
+    let d = dir("warn");
+    let touching = r#"Region(material: "g", region: Box(min: (0.0, -1.0, -1.0), max: (0.35, 2.0, 2.0)))"#;
+    let inside = r#"Region(material: "g", region: Box(min: (0.25, -1.0, -1.0), max: (0.65, 2.0, 2.0)))"#;
+    let warned = |phases: &str, rule: &str| {
+        let s = Scene::parse(
+            &scene(phases, &format!("phase_rule: Some({rule}),")),
+            Path::new("w.ron"),
+            d.clone(),
+        )
+        .unwrap();
+        s.warnings().iter().any(|w| w.contains("reaches a face of the periodic box"))
+    };
+    assert!(warned(touching, "Segment"));
+    assert!(warned(touching, "Laminate"));
+    assert!(!warned(touching, "Centre"));
+    assert!(!warned(inside, "Segment"));
+    std::fs::remove_dir_all(&d).ok();
+}
