@@ -193,7 +193,9 @@ fn a_region_cut_by_a_periodic_face_is_warned_of_under_the_cut_rules() {
             d.clone(),
         )
         .unwrap();
-        s.warnings().iter().any(|w| w.contains("reaches a face of the periodic box"))
+        s.warnings()
+            .iter()
+            .any(|w| w.contains("reaches a face of the periodic box"))
     };
     assert!(warned(touching, "Segment"));
     assert!(warned(touching, "Laminate"));
