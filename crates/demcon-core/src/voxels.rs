@@ -231,6 +231,55 @@ impl Voxels {
         self.inner.count as f64 * self.inner.voxel.powi(3)
     }
 
+    /// Voxels along x, y, z.
+    pub fn dims(&self) -> [usize; 3] {
+        self.inner.dims
+    }
+
+    /// Edge of a voxel (m).
+    pub fn voxel(&self) -> f64 {
+        self.inner.voxel
+    }
+
+    /// The image's lower corner (m).
+    pub fn origin(&self) -> Vec3 {
+        self.inner.origin
+    }
+
+    /// Whether the image is one period of a periodic microstructure.
+    pub fn is_periodic(&self) -> bool {
+        self.inner.periodic
+    }
+
+    /// Whether voxel `(i, j, k)` (each below its dimension) is in the phase.
+    pub fn holds(&self, [i, j, k]: [usize; 3]) -> bool {
+        let s = &self.inner;
+        s.sd[(k * s.dims[1] + j) * s.dims[0] + i] < 0.0
+    }
+
+    /// The voxel holding `p` (m): `p` wrapped into a periodic image; `None` outside a walled
+    /// one. A point on a face between two voxels belongs to the upper one.
+    pub fn voxel_at(&self, p: &Vec3) -> Option<[usize; 3]> {
+        let s = &self.inner;
+        let mut ijk = [0usize; 3];
+        for k in 0..3 {
+            let n = s.dims[k];
+            let u = (p[k] - s.origin[k]) / s.voxel;
+            let u = if s.periodic { u.rem_euclid(n as f64) } else { u };
+            if !(u >= 0.0 && u < n as f64) {
+                return None;
+            }
+            ijk[k] = (u.floor() as usize).min(n - 1);
+        }
+        Some(ijk)
+    }
+
+    /// Whether the voxel holding `p` is in the phase: the staircase of voxel faces itself,
+    /// where [`Self::signed_distance`] smooths its edges and corners.
+    pub fn holds_point(&self, p: &Vec3) -> bool {
+        self.voxel_at(p).is_some_and(|v| self.holds(v))
+    }
+
     /// Signed distance (m) at `p`: the trilinear interpolation of the centres' values. A
     /// walled image: half a voxel beyond its outer centres the nearest centres' values, and
     /// outside it the distance to its box (a point there is outside the phase). A periodic
@@ -297,6 +346,13 @@ mod tests {
         assert_eq!(v.bounds().max.x, 2.5);
         // Outside the image: outside the phase, by the distance to the image.
         assert!((v.signed_distance(&Vec3::new(-1.0, 1.0, 1.0)) - 1.0).abs() < 1e-12);
+        // The staircase itself: voxel lookup, upper voxel on a face, nothing outside.
+        assert!(v.holds_point(&Vec3::new(1.0, 1.0, 1.0)));
+        assert!(!v.holds_point(&Vec3::new(2.5, 1.0, 1.0)));
+        assert!(!v.holds_point(&Vec3::new(-0.1, 1.0, 1.0)));
+        assert_eq!(v.voxel_at(&Vec3::new(1.2, 0.3, 1.9)), Some([2, 0, 3]));
+        let p = Voxels::from_mask(dims, 0.5, Vec3::zeros(), &mask, true, "image").unwrap();
+        assert_eq!(p.voxel_at(&Vec3::new(4.0 + 1.2, -0.2, 1.9)), Some([2, 3, 3]));
     }
 
     #[test]

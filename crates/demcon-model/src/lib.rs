@@ -44,6 +44,7 @@ mod error;
 pub mod etc;
 pub mod flux;
 pub mod homogenize;
+mod image;
 pub mod model;
 pub mod shapes;
 pub mod thermal;

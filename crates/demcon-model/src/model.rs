@@ -496,12 +496,13 @@ fn conform(
     let spheres = sphere_surfaces(params, container)?;
     let mut planes = Vec::new();
     for ph in &params.phases {
-        if let PhaseSpec::Region {
-            region: Region::Box { min, max },
-            ..
-        } = ph
-        {
-            planes.extend(box_faces(min, max, container));
+        match ph {
+            PhaseSpec::Region {
+                region: Region::Box { min, max },
+                ..
+            } => planes.extend(box_faces(min, max, container)),
+            PhaseSpec::Image { labels } => planes.extend(crate::image::voxel_faces(labels, container)),
+            _ => {}
         }
     }
     // The cracks' surfaces: their law (open, filled) sits on the facets that lie on them.
@@ -1081,16 +1082,16 @@ fn claims_nobody(fields: &FieldNames, i: usize, what: &str) -> ModelError {
     )
 }
 
-/// Refuses the `Conforming` rule for phase entry `entry`, whose surfaces (shapes, an image's
-/// labels) are cut by their level set.
+/// Refuses the `Conforming` rule for phase entry `entry`, whose surfaces (shapes) are cut by
+/// their level set.
 fn level_set_only(params: &ModelParams, entry: usize) -> Result<(), ModelError> {
     if params.phase_rule == PhaseRule::Conforming {
         return Err(ModelError::invalid(
             params.fields.phase_rule,
             "Conforming",
             format!(
-                "conforming seeds follow spheres, box faces and cracks; the surfaces of {}[{entry}] are cut by \
-                 their level set: use the Segment or Laminate rule",
+                "conforming seeds follow spheres, box faces, image voxel faces and cracks; the surfaces of \
+                 {}[{entry}] are cut by their level set: use the Segment or Laminate rule",
                 params.fields.phases
             ),
         ));
@@ -1172,8 +1173,10 @@ fn apply_phases(
                     return Err(claims_nobody(&params.fields, i, "Region"));
                 }
             }
+            PhaseSpec::Image { labels } if params.phase_rule == PhaseRule::Conforming => {
+                crate::image::assign_voxels(particles, labels);
+            }
             PhaseSpec::Image { labels } => {
-                level_set_only(params, i)?;
                 for (phase, voxels) in labels {
                     assign(
                         particles,

@@ -602,7 +602,7 @@ fn check_thermal(
     Ok(())
 }
 
-/// Shaped-inclusion phases: not under the `Conforming` rule; listed shapes where they may lie
+/// Shaped-inclusion phases: not under the `Conforming` rule (images are: their voxel faces); listed shapes where they may lie
 /// and random ones in a `Box` or `Periodic` container (when the container is known before
 /// packing).
 fn check_shapes(
@@ -615,17 +615,15 @@ fn check_shapes(
         let field = format!("phases[{i}]");
         let shaped = matches!(
             ph,
-            demcon_model::PhaseSpec::Shapes { .. }
-                | demcon_model::PhaseSpec::RandomShapes { .. }
-                | demcon_model::PhaseSpec::Image { .. }
+            demcon_model::PhaseSpec::Shapes { .. } | demcon_model::PhaseSpec::RandomShapes { .. }
         );
         if shaped && c.phase_rule == Some(PhaseRuleConfig::Conforming) {
             errors.push(SceneError::invalid(
                 "phase_rule",
                 "Conforming",
                 format!(
-                    "conforming seeds follow spheres, box faces and cracks; the shapes of {field} are cut by \
-                     their level set: use `Segment` (the default with shapes) or `Laminate`"
+                    "conforming seeds follow spheres, box faces, image voxel faces and cracks; the shapes of \
+                     {field} are cut by their level set: use `Segment` (the default with shapes) or `Laminate`"
                 ),
             ));
         }
