@@ -64,6 +64,7 @@ pub use error::{FieldNames, ModelError};
 pub use etc::{EtcValue, effective_conductivity};
 pub use flux::{flux_density, flux_dipoles};
 pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogenize_thermal};
+pub use image::check_conformable as check_image_conformable;
 pub use model::{
     CarveRule, ConformSummary, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed,
     PhaseRule, PhaseSpec, TessellationSummary, build_model, build_model_staged, place_inclusions,

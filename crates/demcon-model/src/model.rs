@@ -505,6 +505,13 @@ fn conform(
             _ => {}
         }
     }
+    let h = (domain_volume / particles.len().max(1) as f64).cbrt();
+    for (i, ph) in params.phases.iter().enumerate() {
+        if let PhaseSpec::Image { labels } = ph {
+            let entry = format!("{}[{i}]", params.fields.phases);
+            crate::image::check_conformable(labels, container, h, (params.fields.phase_rule, &entry))?;
+        }
+    }
     // The cracks' surfaces: their law (open, filled) sits on the facets that lie on them.
     planes.extend(
         params
@@ -513,7 +520,6 @@ fn conform(
             .iter()
             .map(|c| PlanePatch::Crack(c.shape.clone())),
     );
-    let h = (domain_volume / particles.len().max(1) as f64).cbrt();
     let body = demcon_graph::Body {
         container,
         carve: params.carve.as_ref().map(|(r, _)| r),

@@ -237,8 +237,9 @@ pub fn phase_rule_of(cfg: &SceneConfig) -> PhaseRuleConfig {
     })
 }
 
-/// Whether a phase entry is made of shaped inclusions (`Shapes`, `RandomShapes`): their
-/// surfaces are cut by their level set, so the default phase rule is then `Segment`.
+/// Whether a phase entry is made of shaped inclusions (`Shapes`, `RandomShapes`) or read from
+/// an image: their surfaces are cut by their level set, so the default phase rule is then
+/// `Segment`.
 pub fn has_shapes(cfg: &SceneConfig) -> bool {
     cfg.phases.iter().any(|p| {
         matches!(

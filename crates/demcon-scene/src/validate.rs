@@ -648,6 +648,19 @@ fn check_shapes(
                 {
                     errors.push(e);
                 }
+                // Conforming cells on the voxel faces: their steps must not be finer than the
+                // site spacing (known here for a generated count; the model checks again).
+                if convert::phase_rule_of(c) == PhaseRuleConfig::Conforming
+                    && let Ok(Some(n)) = known_count(&c.packing, "packing")
+                    && n > 0
+                {
+                    let h = (k.volume() / n as f64).cbrt();
+                    if let Err(e) =
+                        demcon_model::check_image_conformable(labels, k, h, ("phase_rule", &field))
+                    {
+                        errors.push(e.into());
+                    }
+                }
             }
             (demcon_model::PhaseSpec::RandomShapes { .. }, Some(k))
                 if !matches!(k, Container::Box { .. } | Container::Periodic { .. }) =>

@@ -28,11 +28,11 @@ fn raw_bytes() -> Vec<u8> {
 
 /// numpy `.npy` v1.0, C order, axes (x, y, z): z fastest.
 fn npy_bytes() -> Vec<u8> {
-    npy_layers(label)
+    npy_of(|x, _| label(x))
 }
 
-/// The `.npy` of an image whose label depends on x alone.
-fn npy_layers(label: impl Fn(usize) -> u8) -> Vec<u8> {
+/// The `.npy` of an image whose label depends on x and y alone.
+fn npy_of(label: impl Fn(usize, usize) -> u8) -> Vec<u8> {
     let mut header = format!("{{'descr': '|u1', 'fortran_order': False, 'shape': ({N}, {N}, {N}), }}");
     while (10 + header.len() + 1) % 64 != 0 {
         header.push(' ');
@@ -42,9 +42,9 @@ fn npy_layers(label: impl Fn(usize) -> u8) -> Vec<u8> {
     b.extend((header.len() as u16).to_le_bytes());
     b.extend(header.as_bytes());
     for x in 0..N {
-        for _y in 0..N {
+        for y in 0..N {
             for _z in 0..N {
-                b.push(label(x));
+                b.push(label(x, y));
             }
         }
     }
@@ -134,7 +134,7 @@ fn laminate_images_under_conforming_cells_are_exact_in_series_and_in_parallel() 
     std::fs::write(d.join("slab.npy"), npy_bytes()).unwrap();
     std::fs::write(
         d.join("wrap.npy"),
-        npy_layers(|x| if (3..15).contains(&x) { 2 } else { 7 }),
+        npy_of(|x, _| if (3..15).contains(&x) { 2 } else { 7 }),
     )
     .unwrap();
     for (file, t) in [("slab.npy", 0.4), ("wrap.npy", 0.4)] {
@@ -156,6 +156,11 @@ fn laminate_images_under_conforming_cells_are_exact_in_series_and_in_parallel() 
 #[test]
 fn bad_images_are_refused_by_name_before_packing() {
     let d = dir("bad");
+    std::fs::write(
+        d.join("post.npy"),
+        npy_of(|x, y| if x == 4 && y == 4 { 7 } else { 2 }),
+    )
+    .unwrap();
     std::fs::write(d.join("slab.raw"), raw_bytes()).unwrap();
     std::fs::write(d.join("short.raw"), &raw_bytes()[..N * N * N - 3]).unwrap();
     std::fs::write(d.join("slab.npy"), npy_bytes()).unwrap();
@@ -196,6 +201,14 @@ fn bad_images_are_refused_by_name_before_packing() {
                 "",
             ),
             "phases[0].labels[1]",
+        ),
+        (
+            // A post one voxel (0.05 m) wide under conforming cells at h = 0.063 m.
+            scene(
+                r#"Image(path: "post.npy", voxel: 0.05, labels: [(2, "m"), (7, "g")])"#,
+                "phase_rule: Some(Conforming),",
+            ),
+            "narrower than the mean site spacing",
         ),
     ];
     for (text, want) in cases {
