@@ -89,6 +89,67 @@ impl Region {
         }
     }
 
+    /// The region moved by `d` (m). An image's voxels stay where they are: an image is
+    /// either the period of a periodic box (and wraps round it itself) or walled.
+    pub fn translated(&self, d: &Vec3) -> Region {
+        match self {
+            Region::Box { min, max } => Region::Box {
+                min: min + d,
+                max: max + d,
+            },
+            Region::Cylinder {
+                base,
+                axis,
+                radius,
+                length,
+            } => Region::Cylinder {
+                base: base + d,
+                axis: *axis,
+                radius: *radius,
+                length: *length,
+            },
+            Region::Sphere { centre, radius } => Region::Sphere {
+                centre: centre + d,
+                radius: *radius,
+            },
+            Region::Inclusion(s) => Region::Inclusion(s.translated(*d)),
+            Region::Voxels(v) => Region::Voxels(v.clone()),
+            Region::Difference(a, b) => {
+                Region::Difference(Box::new(a.translated(d)), Box::new(b.translated(d)))
+            }
+            Region::Union(rs) => Region::Union(rs.iter().map(|r| r.translated(d)).collect()),
+            Region::Intersection(rs) => Region::Intersection(rs.iter().map(|r| r.translated(d)).collect()),
+        }
+    }
+
+    /// The region repeated round a periodic box of periods `l` (m): the union of its images
+    /// (shifts of −1, 0, +1 period along each axis) that come within `reach` (m) of the box
+    /// `[0, l]`; the region itself when no other image does.
+    pub fn periodic(&self, l: [f64; 3], reach: f64) -> Region {
+        let b = self.bounds();
+        let steps = [0.0, -1.0, 1.0];
+        let mut images = Vec::new();
+        for i in steps {
+            for j in steps {
+                for k in steps {
+                    let d = Vec3::new(i * l[0], j * l[1], k * l[2]);
+                    let near = (0..3).all(|a| b.min[a] + d[a] <= l[a] + reach && b.max[a] + d[a] >= -reach);
+                    if near {
+                        images.push(if d == Vec3::zeros() {
+                            self.clone()
+                        } else {
+                            self.translated(&d)
+                        });
+                    }
+                }
+            }
+        }
+        if images.len() == 1 && images[0] == *self {
+            return self.clone();
+        }
+        Region::Union(images)
+    }
+
     /// Whether the point lies inside (boundary included).
     pub fn contains_point(&self, p: &Vec3) -> bool {
         self.signed_distance(p) <= 0.0
@@ -225,6 +286,22 @@ fn sphere_points(n: usize) -> impl Iterator<Item = Vec3> {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn a_region_across_a_periodic_face_is_repeated_round_it() {
+        let ball = Region::Sphere {
+            centre: Vec3::new(0.95, 0.5, 0.5),
+            radius: 0.1,
+        };
+        let wrapped = ball.periodic([1.0; 3], 0.0);
+        // The image at x − 1 holds the points just past x = 0.
+        assert!(wrapped.contains_point(&Vec3::new(0.02, 0.5, 0.5)));
+        assert!(!ball.contains_point(&Vec3::new(0.02, 0.5, 0.5)));
+        assert!(matches!(&wrapped, Region::Union(parts) if parts.len() == 2));
+        // Clear of the faces: itself.
+        let inside = ball.translated(&Vec3::new(-0.45, 0.0, 0.0));
+        assert_eq!(inside.periodic([1.0; 3], 0.0), inside);
+    }
 
     fn grooved() -> Region {
         // Cylinder r = 1, length 5 along x, with a groove 2 ≤ x ≤ 3 down to r = 0.5.

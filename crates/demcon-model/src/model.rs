@@ -569,13 +569,17 @@ fn sphere_surfaces(params: &ModelParams, container: &Container) -> Result<Vec<Sp
 }
 
 /// The phase entries of `params` that are not spheres (the regions a gap between two spheres
-/// may lie in), in order.
-fn other_regions(params: &ModelParams) -> Vec<(&Region, u16)> {
+/// may lie in), in order; in a periodic box repeated round it ([`Region::periodic`]).
+fn other_regions(params: &ModelParams, container: &Container) -> Vec<(Region, u16)> {
     params
         .phases
         .iter()
         .filter_map(|ph| match ph {
             PhaseSpec::Region { phase, region } if !matches!(region, Region::Sphere { .. }) => {
+                let region = match container.period() {
+                    Some(l) => region.periodic(l, 0.0),
+                    None => region.clone(),
+                };
                 Some((region, *phase))
             }
             _ => None,
@@ -588,7 +592,7 @@ fn other_regions(params: &ModelParams) -> Vec<(&Region, u16)> {
 /// gap at their middle is that of the last of `regions` (the non-sphere phase entries, in
 /// order) holding it, else phase 0.
 fn phase_bridges(
-    regions: &[(&Region, u16)],
+    regions: &[(Region, u16)],
     graph: &ContactGraph,
     particles: &ParticleSet,
     container: &Container,
@@ -894,7 +898,7 @@ fn bridges(
     container: &Container,
     stages: &mut Stages,
 ) -> Result<Vec<PhaseBridge>, ModelError> {
-    let regions = other_regions(params);
+    let regions = other_regions(params, container);
     Ok(match (spheres, params.phase_rule) {
         (Some(spheres), _) => stages.time("bridges", || {
             phase_bridges(&regions, graph, particles, container, spheres)
@@ -1175,7 +1179,12 @@ fn apply_phases(
                 });
             }
             PhaseSpec::Region { phase, region } => {
-                if assign(particles, region, *phase, params.phase_rule, mixes) == 0 {
+                // A region in a periodic box is periodic: its images across the faces count.
+                let region = match container.period() {
+                    Some(l) => std::borrow::Cow::Owned(region.periodic(l, reach)),
+                    None => std::borrow::Cow::Borrowed(region),
+                };
+                if assign(particles, &region, *phase, params.phase_rule, mixes) == 0 {
                     return Err(claims_nobody(&params.fields, i, "Region"));
                 }
             }
@@ -1298,7 +1307,7 @@ pub fn set_region_phases(
                             _ => None,
                         }))
                     }
-                    _ => others.push((region, *phase)),
+                    _ => others.push((region.clone(), *phase)),
                 }
             }
             phase_bridges(

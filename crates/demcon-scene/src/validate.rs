@@ -134,42 +134,6 @@ pub fn scene_warnings(c: &SceneConfig) -> Vec<String> {
             ));
         }
     }
-    let cuts_by_level_set = matches!(
-        convert::phase_rule_of(c),
-        PhaseRuleConfig::Segment | PhaseRuleConfig::Laminate
-    );
-    if let (
-        true,
-        PackingConfig::Generate {
-            container: ContainerConfig::Periodic { size },
-            ..
-        },
-    ) = (cuts_by_level_set, &c.packing)
-    {
-        let l = [size.0, size.1, size.2];
-        for (i, ph) in c.phases.iter().enumerate() {
-            let PhaseConfig::Region { region, .. } = ph else {
-                continue;
-            };
-            let Ok(r) = convert::region(region, "phase") else {
-                continue;
-            };
-            let b = r.bounds();
-            // Reaching a face plane without covering the whole period along that axis.
-            let cut_at_face = |k: usize| {
-                let meets = (b.min[k] <= 0.0 && 0.0 <= b.max[k]) || (b.min[k] <= l[k] && l[k] <= b.max[k]);
-                meets && !(b.min[k] <= 0.0 && b.max[k] >= l[k])
-            };
-            if (0..3).any(cut_at_face) {
-                w.push(format!(
-                    "phases[{i}]: the region reaches a face of the periodic box, and a region is not repeated round \
-                     the period: under the segment and laminate rules the half-bonds across that face see the \
-                     matrix there, not the region. Keep the region inside the box, list its periodic images in a \
-                     Union, or use the Centre or Conforming rule"
-                ));
-            }
-        }
-    }
     for (i, it) in c.interfaces.iter().enumerate() {
         for name in [&it.between.0, &it.between.1] {
             if let Some(k) = c.materials.iter().position(|m| &m.name == name)

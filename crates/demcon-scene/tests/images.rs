@@ -222,24 +222,27 @@ fn bad_images_are_refused_by_name_before_packing() {
 }
 
 #[test]
-fn a_region_cut_by_a_periodic_face_is_warned_of_under_the_cut_rules() {
-    let d = dir("warn");
-    let touching = r#"Region(material: "g", region: Box(min: (0.0, -1.0, -1.0), max: (0.35, 2.0, 2.0)))"#;
-    let inside = r#"Region(material: "g", region: Box(min: (0.25, -1.0, -1.0), max: (0.65, 2.0, 2.0)))"#;
-    let warned = |phases: &str, rule: &str| {
-        let s = Scene::parse(
-            &scene(phases, &format!("phase_rule: Some({rule}),")),
-            Path::new("w.ron"),
-            d.clone(),
-        )
-        .unwrap();
-        s.warnings()
-            .iter()
-            .any(|w| w.contains("reaches a face of the periodic box"))
-    };
-    assert!(warned(touching, "Segment"));
-    assert!(warned(touching, "Laminate"));
-    assert!(!warned(touching, "Centre"));
-    assert!(!warned(inside, "Segment"));
+fn a_region_across_a_periodic_face_is_repeated_round_the_period() {
+    // The box x ∈ [0.75, 1.15] of the periodic unit cell is the layer x ∈ [0, 0.15) ∪ [0.75, 1)
+    // of the `wrap` image: the same conductivity under each rule that reads a level set.
+    let d = dir("wrap");
+    std::fs::write(
+        d.join("wrap.npy"),
+        npy_of(|x, _| if (3..15).contains(&x) { 2 } else { 7 }),
+    )
+    .unwrap();
+    let across = r#"Region(material: "g", region: Box(min: (0.75, -1.0, -1.0), max: (1.15, 2.0, 2.0)))"#;
+    let wrap = r#"Image(path: "wrap.npy", voxel: 0.05, labels: [(2, "m"), (7, "g")])"#;
+    for rule in ["Segment", "Laminate"] {
+        let extra = format!("phase_rule: Some({rule}),");
+        let (a, b) = (
+            tensor(&scene(across, &extra), &d),
+            tensor(&scene(wrap, &extra), &d),
+        );
+        for i in 0..3 {
+            let (a, b) = (a[i][i].as_f64().unwrap(), b[i][i].as_f64().unwrap());
+            assert!((a - b).abs() < 1e-6 * b, "{rule} axis {i}: box {a}, image {b}");
+        }
+    }
     std::fs::remove_dir_all(&d).ok();
 }
