@@ -283,6 +283,20 @@ fn write_files(
         write_cells(r, cells, &dir.join("cells.vtu"))?;
         written.push("cells.vtu".into());
     }
+    // The shapes a random placement drew, as a shapes file (`Shapes(file: ..)` reads it back).
+    for rep in r.model.report.shapes.iter().filter(|s| s.placement.is_some()) {
+        let name = format!("shapes-{}.txt", rep.entry);
+        let about = format!(
+            "phases[{}]: {} shapes placed at random (fraction {}), m; `Shapes(file: \"{name}\")` reads them back",
+            rep.entry, rep.count, rep.fraction
+        );
+        let path = dir.join(&name);
+        write_atomic(
+            &path,
+            crate::shapes::format_shapes(&rep.shapes, &about).as_bytes(),
+        )?;
+        written.push(name);
+    }
     if outputs.vtk && !r.model.report.shapes.is_empty() {
         write_inclusions(r, &dir.join("inclusions.vtp"))?;
         written.push("inclusions.vtp".into());

@@ -64,6 +64,35 @@ pub fn shape_list(
     Ok(out)
 }
 
+/// `shapes` as a shapes file [`read_shapes`] reads back bit for bit (shortest round-trip
+/// decimals), under a `#` header line `about`.
+pub fn format_shapes(shapes: &[Inclusion], about: &str) -> String {
+    let mut out = format!("# {about}\n");
+    for s in shapes {
+        let (c, u) = (s.centre(), s.axis());
+        let line = match s {
+            Inclusion::Spheroid { a, b, .. } => {
+                format!("spheroid {} {} {} {} {} {} {a} {b}", c.x, c.y, c.z, u.x, u.y, u.z)
+            }
+            Inclusion::Cylinder {
+                radius, length, ends, ..
+            } => format!(
+                "cylinder {} {} {} {} {} {} {radius} {length} {}",
+                c.x,
+                c.y,
+                c.z,
+                u.x,
+                u.y,
+                u.z,
+                if *ends == Ends::Round { "round" } else { "flat" }
+            ),
+        };
+        out.push_str(&line);
+        out.push('\n');
+    }
+    out
+}
+
 /// Reads a shapes file: one shape per line, whitespace- or comma-separated, `#` comments:
 /// `spheroid x y z ux uy uz a b` or `cylinder x y z ux uy uz radius length flat|round` (m).
 /// Refusals name `field`, the file and the line.
