@@ -27,6 +27,7 @@ pub mod homogeneous_exactness;
 pub mod hubert2017_cylinder_resistance;
 pub mod hubert2017_notch_joule;
 pub mod hubert2017_solver_timing;
+pub mod images;
 pub mod inclusion_interface;
 pub mod joule_transient;
 pub mod layered_interface;
@@ -125,6 +126,11 @@ const CASES: &[Case] = &[
         id: "shapes-aligned",
         about: "issue 34: aligned prolate (a/b = 3) and oblate (1/3) spheroids, f ≈ 0.15, contrasts 10 and 0.1, periodic, tensor diagonal vs a voxel FFT on the identical microstructure",
         run: shapes_aligned::run,
+    },
+    Case {
+        id: "images",
+        about: "issue 34: phases from labelled voxel images: a laminate image exact in series and parallel; 60 spheres as a list and as 32³–256³ images against a voxel FFT on the identical images (error and time)",
+        run: images::run,
     },
     Case {
         id: "layered-interface",
