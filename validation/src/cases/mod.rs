@@ -35,6 +35,7 @@ pub mod ligament_holm;
 pub mod multi_inclusion_interface;
 pub mod packing_stress;
 pub mod shapes_aligned;
+pub mod shapes_dilute;
 pub mod shapes_generator;
 pub mod sphere_arrays;
 
@@ -131,6 +132,11 @@ const CASES: &[Case] = &[
         id: "images",
         about: "issue 34: phases from labelled voxel images: a laminate image exact in series and parallel; 60 spheres as a list and as 32³–256³ images against a voxel FFT on the identical images (error and time)",
         run: images::run,
+    },
+    Case {
+        id: "shapes-dilute",
+        about: "issue 34: one aligned spheroid (a/b = 3, 1/3; full: also 5, 1/10) in periodic cells at f = 0.01 and 0.005, contrasts 10 and 0.1: the increment per fraction extrapolated to f → 0 vs the exact dilute (depolarisation-factor) result",
+        run: shapes_dilute::run,
     },
     Case {
         id: "layered-interface",
