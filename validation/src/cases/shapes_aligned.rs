@@ -1,11 +1,13 @@
-//! `shapes-aligned` — ours (issue 34): periodic cells of aligned spheroids, prolate (a/b = 3,
-//! fibres) and oblate (a/b = 1/3, platelets), f ≈ 0.15, contrasts 10 and 0.1, the diagonal of
-//! the effective tensor against a voxel FFT reference on the identical microstructure.
+//! `shapes-aligned` — ours (issue 34): periodic cells of aligned spheroids, prolate (fibres,
+//! a/b = 3, 5, 20) and oblate (platelets, a/b = 1/3, 1/10), f = 0.10–0.20, contrasts 10 and
+//! 0.1, the diagonal of the effective tensor against a voxel FFT reference on the identical
+//! microstructure. `--quick` runs a/b = 3 and 1/3; `--full` all five.
 //!
-//! Microstructures: three per shape, ten spheroids each along z with a gap ≥ 0.02 L, placed
-//! once by `demcon_packing::place_shapes` (random sequential addition, seeds 1–3) and stored in
-//! `validation/data/shapes-fft.json`, so the case reads them and does not depend on the
-//! generator. Each microstructure gets its own packing (seed `ctx.seed + k`).
+//! Microstructures: three per shape, spheroids along z with a gap ≥ 0.02 L (ten of a/b = 3 and
+//! 1/3 at f = 0.15; 30 of a/b = 5 at f = 0.20 and of 1/10 at f = 0.10; 354 of a/b = 20 at
+//! f = 0.10), placed once by `demcon_packing::place_shapes` (random sequential addition, seeds
+//! 1–3) and stored in `validation/data/shapes-fft.json`, so the case reads them and does not
+//! depend on the generator. Each microstructure gets its own packing (seed `ctx.seed + k`).
 //!
 //! Reference: `scripts/voxel_fft/voxel_fft.py` (ours, independent of the network code:
 //! Fourier–Galerkin CG on laminate composite voxels at 65³, 99³ and 125³, extrapolated to zero
@@ -16,7 +18,10 @@
 //! Tolerances, chosen before any run of this case: at 2·10⁴ (quick) the headline's largest
 //! error ≤ 5 % (the segment rule's error on spheres is −0.3 … −2.2 %, and a spheroid here is 3
 //! to 6 particles thick); at the largest N of `--full` ≤ 2.5 %, and its mean error below the
-//! mean at 2·10⁴. The issue's target, ≤ 0.5 % at 2·10⁵, is reported beside. Figures and notes:
+//! mean at 2·10⁴. The issue's target, ≤ 0.5 % at 2·10⁵, is reported beside. The three later
+//! shapes (tolerances also chosen before their first run): every shape's mean error must fall
+//! from 2·10⁴ to 2·10⁵; a/b = 5 (8 site spacings across at 2·10⁵) and 1/10 (2.3 across) ≤ 5 %;
+//! a/b = 20 (1.75 across: under-resolved at 2·10⁵) is reported. Figures and notes:
 //! `validation/notes/shapes-aligned.md`.
 
 use demcon_scene::config::*;
@@ -33,8 +38,15 @@ const CELL: f64 = 1.0;
 const LAMBDA_M: f64 = 1.0;
 /// Contrasts λ_i/λ_m.
 const CONTRASTS: [f64; 2] = [10.0, 0.1];
-/// Shapes: the data file's microstructure prefix.
-const SHAPES: [&str; 2] = ["prolate", "oblate"];
+/// Shapes: the data file's microstructure prefix, its label, and whether `--quick` runs it
+/// (the others run in `--full`).
+const SHAPES: [(&str, &str, bool); 5] = [
+    ("prolate", "prolate a/b = 3, f = 0.15", true),
+    ("oblate", "oblate a/b = 1/3, f = 0.15", true),
+    ("prolate5", "prolate a/b = 5, f = 0.20", false),
+    ("oblate01", "oblate a/b = 1/10, f = 0.10", false),
+    ("prolate20", "prolate a/b = 20, f = 0.10", false),
+];
 /// Microstructures (and packings) per shape.
 const PACKINGS: u64 = 3;
 /// Phase rules: the headline first.
@@ -47,6 +59,8 @@ const RULES: [(&str, PhaseRuleConfig); 3] = [
 const BOUNDS: [f64; 2] = [0.05, 0.025];
 /// The issue's target at 2·10⁵.
 const TARGET: f64 = 0.005;
+/// The largest error at the largest N of `--full` for a/b = 5 and 1/10.
+const LATER_BOUND: f64 = 0.05;
 
 /// One microstructure of the data file.
 struct Micro {
@@ -133,9 +147,9 @@ struct Row {
     particles: usize,
 }
 
-fn measure(data: &Value, n: usize, seed: u64, k: u64) -> anyhow::Result<Vec<Row>> {
+fn measure(data: &Value, shapes: &[&'static str], n: usize, seed: u64, k: u64) -> anyhow::Result<Vec<Row>> {
     let mut rows = Vec::new();
-    for shape in SHAPES {
+    for &shape in shapes {
         let m = micro(data, &format!("{shape}-{}", k + 1))?;
         for contrast in CONTRASTS {
             let (_, diag, err) = m
@@ -172,26 +186,46 @@ fn measure(data: &Value, n: usize, seed: u64, k: u64) -> anyhow::Result<Vec<Row>
     Ok(rows)
 }
 
-/// |error| over the packings and axes of one (size, rule), optionally one (shape, contrast).
-fn spread(study: &Study<Vec<Row>>, n: usize, rule: usize, only: Option<(&str, f64)>) -> Spread {
+/// |error| over the packings and axes of one (size, rule) and the shapes `pick` keeps,
+/// optionally one contrast.
+fn spread_of(
+    study: &Study<Vec<Row>>,
+    n: usize,
+    rule: usize,
+    pick: impl Fn(&str) -> bool,
+    contrast: Option<f64>,
+) -> Spread {
     Spread::of(
         study
             .at(n)
             .flatten()
-            .filter(|r| r.rule == rule && only.is_none_or(|(s, c)| r.shape == s && r.contrast == c))
+            .filter(|r| r.rule == rule && pick(r.shape) && contrast.is_none_or(|c| r.contrast == c))
             .flat_map(|r| r.errors.map(f64::abs)),
     )
+}
+
+/// |error| over the packings and axes of one (size, rule), optionally one (shape, contrast).
+fn spread(study: &Study<Vec<Row>>, n: usize, rule: usize, only: Option<(&str, f64)>) -> Spread {
+    match only {
+        Some((shape, c)) => spread_of(study, n, rule, |s| s == shape, Some(c)),
+        None => spread_of(study, n, rule, |_| true, None),
+    }
 }
 
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let data: Value = serde_json::from_str(include_str!("../../data/shapes-fft.json"))?;
     let sizes = ctx.pick(vec![20_000], vec![20_000, 60_000, 200_000]);
+    let shapes: Vec<&str> = SHAPES
+        .iter()
+        .filter(|s| s.2 || ctx.mode == crate::Mode::Full)
+        .map(|s| s.0)
+        .collect();
     let study = Study::run(
         &sizes,
         |_| PACKINGS,
         ctx.seed,
-        |n, seed, k| measure(&data, n, seed, k),
+        |n, seed, k| measure(&data, &shapes, n, seed, k),
     )?;
     let mut out = CaseOutcome::new("shapes-aligned", ctx.mode);
     out.n_particles = study
@@ -208,19 +242,32 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             out.metric(&format!("{name}_{n}_max_abs_rel_error"), s.max);
         }
     }
-    let head = spread(&study, large, 0, None);
+    // The first two shapes (a/b = 3, 1/3): gated since their first run.
+    let first = |s: &str| SHAPES.iter().any(|x| x.0 == s && x.2);
+    let head = spread_of(&study, large, 0, first, None);
     out.compare(Comparison::at_most(
-        &format!("segment rule, N = {large}: max |λ_ii/λ_ref − 1| (2 shapes × 2 contrasts × 3 packings × 3 axes)"),
+        &format!("segment rule, N = {large}: max |λ_ii/λ_ref − 1| (a/b = 3, 1/3 × 2 contrasts × 3 packings × 3 axes)"),
         head.max,
         ctx.pick(BOUNDS[0], BOUNDS[1]),
         "voxel FFT, composite voxels extrapolated (validation/data/shapes-fft.json); tolerance in the module notes",
     ));
     if large != small {
+        for &shape in &shapes {
+            let one = |s: &str| s == shape;
+            out.compare(Comparison::at_most(
+                &format!("segment rule, {shape}: mean error at N = {large} over the mean at N = {small}"),
+                spread_of(&study, large, 0, one, None).mean / spread_of(&study, small, 0, one, None).mean,
+                1.0,
+                "convergence: more particles must buy accuracy",
+            ));
+        }
+        // a/b = 5 and 1/10: thickness 8 and 2.3 site spacings at 2·10⁵.
+        let later = |s: &str| s == "prolate5" || s == "oblate01";
         out.compare(Comparison::at_most(
-            &format!("segment rule: mean error at N = {large} over the mean at N = {small}"),
-            head.mean / spread(&study, small, 0, None).mean,
-            1.0,
-            "convergence: more particles must buy accuracy",
+            &format!("segment rule, N = {large}: max |λ_ii/λ_ref − 1| (a/b = 5, 1/10)"),
+            spread_of(&study, large, 0, later, None).max,
+            LATER_BOUND,
+            "voxel FFT, composite voxels extrapolated; tolerance in the module notes",
         ));
     }
     out.metric("issue_target_at_2e5", TARGET);
@@ -228,15 +275,15 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         "fft",
         "scripts/voxel_fft/voxel_fft.py, laminate composite voxels at 65³, 99³, 125³, extrapolated",
     );
-    report(ctx, &study, &mut out);
+    report(ctx, &study, &shapes, &mut out);
     Ok(out)
 }
 
-fn report(ctx: &Ctx, study: &Study<Vec<Row>>, out: &mut CaseOutcome) {
+fn report(ctx: &Ctx, study: &Study<Vec<Row>>, shapes: &[&'static str], out: &mut CaseOutcome) {
     type Line = (usize, &'static str, f64);
     let mut lines: Vec<Line> = Vec::new();
     for &n in study.sizes() {
-        for shape in SHAPES {
+        for &shape in shapes {
             for c in CONTRASTS {
                 lines.push((n, shape, c));
             }
@@ -245,12 +292,11 @@ fn report(ctx: &Ctx, study: &Study<Vec<Row>>, out: &mut CaseOutcome) {
     let mut cols = Columns::new()
         .column("N", |l: &Line| l.0.to_string())
         .column("spheroids", |l: &Line| {
-            if l.1 == "prolate" {
-                "prolate a/b = 3"
-            } else {
-                "oblate a/b = 1/3"
-            }
-            .to_string()
+            SHAPES
+                .iter()
+                .find(|s| s.0 == l.1)
+                .map_or(l.1, |s| s.1)
+                .to_string()
         })
         .column("contrast", |l: &Line| format!("{}", l.2))
         .column("reference error", |l: &Line| {
@@ -277,11 +323,11 @@ fn report(ctx: &Ctx, study: &Study<Vec<Row>>, out: &mut CaseOutcome) {
         });
     }
     out.tables.push(cols.table(
-        "Aligned spheroids, f ≈ 0.15: mean signed error / largest |error| of λ_xx, λ_yy, λ_zz over 3 packings",
+        "Aligned spheroids: mean signed error / largest |error| of λ_xx, λ_yy, λ_zz over 3 packings",
         &lines,
     ));
     out.note(format!(
-        "{} mode: per shape three microstructures of ten spheroids along z (validation/data/shapes-fft.json), one \
+        "{} mode: per shape three microstructures of spheroids along z (validation/data/shapes-fft.json), one \
          periodic packing each (φ = 0.6, Gaussian radii CoV 0.3, seeds {}…{}), Laguerre cells, `Homogenize`. The \
          segment rule is gated ({:.1} % at 2·10⁴, {:.1} % at the largest N of --full, and the mean must fall with \
          N); the issue's target, {:.1} % at 2·10⁵, is reported.",
