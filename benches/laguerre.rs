@@ -20,7 +20,9 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use demcon_benches::jittered_fcc;
 use demcon_core::Container;
 use demcon_core::Vec3;
-use demcon_graph::{Body, ConformParams, LaguerreParams, SphereSurface, conforming_sites, tessellate};
+use demcon_graph::{
+    Body, ConformParams, Followed, LaguerreParams, SphereSurface, conforming_sites, tessellate,
+};
 use demcon_network::{Method, Network, SolveParams, homogenize};
 
 fn laguerre(c: &mut Criterion) {
@@ -96,11 +98,35 @@ fn conforming(c: &mut Criterion) {
         carve: None,
     };
     group.bench_function(BenchmarkId::new("sites", p.len()), |b| {
-        b.iter(|| black_box(conforming_sites(&p, body, &spheres, &[], h, &params).unwrap()))
+        b.iter(|| {
+            black_box(
+                conforming_sites(
+                    &p,
+                    body,
+                    Followed {
+                        spheres: &spheres,
+                        ..Followed::default()
+                    },
+                    h,
+                    &params,
+                )
+                .unwrap(),
+            )
+        })
     });
     group.bench_function(BenchmarkId::new("sites+tessellation", p.len()), |b| {
         b.iter(|| {
-            let c = conforming_sites(&p, body, &spheres, &[], h, &params).unwrap();
+            let c = conforming_sites(
+                &p,
+                body,
+                Followed {
+                    spheres: &spheres,
+                    ..Followed::default()
+                },
+                h,
+                &params,
+            )
+            .unwrap();
             black_box(tessellate(&c.particles, &periodic, None, &LaguerreParams::default()).unwrap())
         })
     });

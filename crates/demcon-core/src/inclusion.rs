@@ -153,6 +153,29 @@ impl Inclusion {
         s
     }
 
+    /// Surface area (m²), exact.
+    pub fn area(&self) -> f64 {
+        use std::f64::consts::PI;
+        match *self {
+            Self::Spheroid { a, b, .. } if (a - b).abs() <= 1e-9 * b => 4.0 * PI * b * b,
+            Self::Spheroid { a, b, .. } if a > b => {
+                let e = (1.0 - (b / a).powi(2)).sqrt();
+                2.0 * PI * b * b * (1.0 + a / (b * e) * e.asin())
+            }
+            Self::Spheroid { a, b, .. } => {
+                let e = (1.0 - (a / b).powi(2)).sqrt();
+                2.0 * PI * b * b + PI * a * a / e * ((1.0 + e) / (1.0 - e)).ln()
+            }
+            Self::Cylinder {
+                radius,
+                length,
+                ends: Ends::Flat,
+                ..
+            } => 2.0 * PI * radius * (radius + length),
+            Self::Cylinder { radius, length, .. } => 2.0 * PI * radius * length,
+        }
+    }
+
     /// Volume (m³), exact.
     pub fn volume(&self) -> f64 {
         use std::f64::consts::PI;

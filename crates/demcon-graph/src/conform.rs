@@ -201,8 +201,10 @@ impl PlanePatch {
 pub struct ConformReport {
     /// Spheres followed.
     pub spheres: usize,
-    /// Plane patches followed (box faces, cracks).
+    /// Plane patches followed (box faces, voxel faces, cracks).
     pub planes: usize,
+    /// Shaped inclusions followed.
+    pub shapes: usize,
     /// The mean site spacing h (m) the sampling was scaled by.
     pub spacing_m: f64,
     /// Seeds placed.
@@ -303,14 +305,18 @@ fn check_inputs(
 pub fn conforming_sites(
     particles: &ParticleSet,
     body: Body,
-    spheres: &[SphereSurface],
-    planes: &[PlanePatch],
+    surfaces: Followed,
     h: f64,
     params: &ConformParams,
 ) -> Result<Conformed, GraphError> {
+    let Followed {
+        spheres,
+        planes,
+        shapes,
+    } = surfaces;
     check_inputs(spheres, planes, h, params)?;
     let container = body.container;
-    if spheres.is_empty() && planes.is_empty() {
+    if spheres.is_empty() && planes.is_empty() && shapes.is_empty() {
         // Nothing to follow: every site stays.
         return Ok(Conformed {
             particles: particles.clone(),
@@ -331,6 +337,7 @@ pub fn conforming_sites(
     let mut report = ConformReport {
         spheres: spheres.len(),
         planes: planes.len(),
+        shapes: shapes.len(),
         spacing_m: h,
         ..ConformReport::default()
     };
@@ -349,6 +356,17 @@ pub fn conforming_sites(
         container,
         (r_max + 2.0 * delta).max(delta / NARROW),
     );
+    // The shapes indexed by their circumscribed balls, with the same reach.
+    let shape_index = SphereIndex::new(
+        shapes.iter().map(|s| (s.centre(), s.circumradius())),
+        container,
+        (r_max + 2.0 * delta).max(delta / NARROW),
+    );
+    // Signed distance from x to shape k's surface (minimum image).
+    let shape_distance = |x: &Vec3, k: usize| {
+        let c = shapes[k].centre();
+        shapes[k].signed_distance(&(c + offset(&c, x)))
+    };
     let mut seeder = Seeder {
         seeds: Vec::new(),
         seed_radii: Vec::new(),
@@ -357,7 +375,26 @@ pub fn conforming_sites(
         period,
         body: &body,
     };
-    let kept = seeder.kept_sites(particles, &index, spheres, &sampled, planes, &mut report);
+    let mut kept = seeder.kept_sites(particles, &index, spheres, &sampled, planes, &mut report);
+    // … and farther than 2δ from every shape.
+    kept.retain(|&p| {
+        let (x, reach) = (
+            &particles.centres[p as usize],
+            particles.radii[p as usize] + 2.0 * delta,
+        );
+        let near = shape_index
+            .near(&wrap(*x))
+            .any(|k| shape_distance(x, k).abs() < reach);
+        report.removed_sites += usize::from(near);
+        !near
+    });
+    let shapes_gap = |at: &Vec3, skip: Option<usize>| {
+        shape_index
+            .near(&wrap(*at))
+            .filter(|&k| skip != Some(k))
+            .map(|k| shape_distance(at, k))
+            .fold(f64::INFINITY, f64::min)
+    };
     // The unsigned distance from `at` to the plane patches other than `skip` and those in the
     // same plane as `skip` (the pieces of one crack, two boxes sharing a face: one surface,
     // whose samples meet only through the seed-overlap check).
@@ -380,7 +417,9 @@ pub fn conforming_sites(
             .map(|(_, pl)| pl.distance(at, &offset))
             .fold(f64::INFINITY, f64::min)
     };
-    seeder.seed_spheres(spheres, &sampled, &index, &plane_gap, &mut report);
+    // Spheres and planes meet the shapes as other surfaces.
+    let others_gap = |at: &Vec3, skip: Option<usize>| plane_gap(at, skip).min(shapes_gap(at, None));
+    seeder.seed_spheres(spheres, &sampled, &index, &others_gap, &mut report);
     // The planes: a square lattice of samples at the spheres' spacing.
     for (pi, pl) in planes.iter().enumerate() {
         let (n, points) = pl.samples(sample);
@@ -393,8 +432,33 @@ pub fn conforming_sites(
                 .near(&wrap(at))
                 .map(|o| surface_distance(&at, &spheres[o]).abs())
                 .fold(f64::INFINITY, f64::min);
-            let gap = spheres_gap.min(plane_gap(&at, Some(pi)));
+            let gap = spheres_gap.min(others_gap(&at, Some(pi)));
             seeder.place(at, n, gap, k, &mut report);
+        }
+    }
+    // The shapes: samples about `sample` apart, each tangent plane moved in by the polyhedron's
+    // excess volume for its area and curvature.
+    let shrink = tangent_shrink();
+    for (k, shape) in shapes.iter().enumerate() {
+        for (j, smp) in crate::shape_samples::surface_samples(shape, sample)
+            .into_iter()
+            .enumerate()
+        {
+            let inward = (shrink * smp.area * smp.curvature).max(0.0);
+            report.max_radius_correction = report.max_radius_correction.max(inward / shape.circumradius());
+            let at = smp.at - smp.normal * inward;
+            if body.depth(&at) < 0.0 {
+                report.dropped_seeds += 2;
+                continue;
+            }
+            let spheres_gap = index
+                .near(&wrap(at))
+                .map(|o| surface_distance(&at, &spheres[o]))
+                .fold(f64::INFINITY, f64::min);
+            let gap = spheres_gap
+                .min(plane_gap(&at, None).min(shapes_gap(&at, Some(k))))
+                .min(self_gap(shape, &at, period));
+            seeder.place(wrap(at), smp.normal, gap, j, &mut report);
         }
     }
     let Seeder {
@@ -427,6 +491,46 @@ fn wrap_into(period: Option<[f64; 3]>, x: Vec3) -> Vec3 {
         Some(l) => Vec3::new(x.x.rem_euclid(l[0]), x.y.rem_euclid(l[1]), x.z.rem_euclid(l[2])),
         None => x,
     }
+}
+
+/// The inward move Δ of a tangent plane per unit (sample area × mean curvature): the one that
+/// gives a sphere's tangent polyhedron the sphere's volume (r − r' of [`sample_spheres`], for
+/// 1 000 samples of the unit sphere: Δ = 1 − (4π/3 / V₁)^{1/3} over an area of 4π/1000 each).
+fn tangent_shrink() -> f64 {
+    let n = 1000;
+    let v1 = crate::laguerre::tangent_polyhedron_volume(&fibonacci_sphere(n));
+    let delta = 1.0 - (4.0 / 3.0 * std::f64::consts::PI / v1).cbrt();
+    delta / (4.0 * std::f64::consts::PI / n as f64)
+}
+
+/// The distance (m) from `at` to the surfaces of `shape`'s periodic images (+∞ without a
+/// period): a long shape meets its own images.
+fn self_gap(shape: &demcon_core::Inclusion, at: &Vec3, period: Option<[f64; 3]>) -> f64 {
+    let Some(l) = period else {
+        return f64::INFINITY;
+    };
+    (0..27)
+        .filter(|&k| k != 13)
+        .map(|k| {
+            let shift = Vec3::new(
+                ((k % 3) as f64 - 1.0) * l[0],
+                (((k / 3) % 3) as f64 - 1.0) * l[1],
+                ((k / 9) as f64 - 1.0) * l[2],
+            );
+            shape.signed_distance(&(at - shift))
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The surfaces the conforming seeds follow.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Followed<'a> {
+    /// Spheres.
+    pub spheres: &'a [SphereSurface],
+    /// Plane patches (box faces, voxel faces, cracks).
+    pub planes: &'a [PlanePatch],
+    /// Shaped inclusions (spheroids, cylinders).
+    pub shapes: &'a [demcon_core::Inclusion],
 }
 
 /// The seeds placed so far, on a grid that finds their neighbours.
@@ -918,7 +1022,17 @@ mod tests {
             radius: 0.3,
         };
         let h = 1.0 / n as f64;
-        let c = conforming_sites(&p, walled(&cell), &[sphere], &[], h, &ConformParams::default()).unwrap();
+        let c = conforming_sites(
+            &p,
+            walled(&cell),
+            Followed {
+                spheres: &[sphere],
+                ..Followed::default()
+            },
+            h,
+            &ConformParams::default(),
+        )
+        .unwrap();
         let delta = 0.25 * h;
         let image = |x: &Vec3| {
             let mut d = x - sphere.centre;
@@ -960,7 +1074,17 @@ mod tests {
             },
         ];
         let h = 1.0 / n as f64;
-        let c = conforming_sites(&p, walled(&cell), &spheres, &[], h, &ConformParams::default()).unwrap();
+        let c = conforming_sites(
+            &p,
+            walled(&cell),
+            Followed {
+                spheres: &spheres,
+                ..Followed::default()
+            },
+            h,
+            &ConformParams::default(),
+        )
+        .unwrap();
         assert_eq!(c.report.dropped_seeds, 0, "{:?}", c.report);
         assert!(c.report.narrowed_pairs > 0, "{:?}", c.report);
         let seeds = &c.particles.centres[c.kept.len()..];
@@ -1007,8 +1131,10 @@ mod tests {
         let c = conforming_sites(
             &p,
             walled(&cell),
-            &[],
-            &[square(0.2), square(0.5)],
+            Followed {
+                planes: &[square(0.2), square(0.5)],
+                ..Followed::default()
+            },
             h,
             &ConformParams::default(),
         )

@@ -70,6 +70,7 @@ mod laguerre;
 mod laminate;
 mod phase;
 mod search;
+mod shape_samples;
 mod surface;
 mod terreros;
 mod wall;
@@ -77,7 +78,7 @@ mod wall;
 pub use bridge::{Bridge, NO_SPHERE, bridges, sphere_membership};
 pub use calibrated::surface_calibrated;
 pub use conform::{
-    Body, ConformParams, ConformReport, Conformed, PlanePatch, SphereSurface, conforming_sites,
+    Body, ConformParams, ConformReport, Conformed, Followed, PlanePatch, SphereSurface, conforming_sites,
     fibonacci_sphere,
 };
 pub use contact::{

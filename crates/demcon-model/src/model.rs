@@ -485,6 +485,7 @@ fn conform(
     particles: &ParticleSet,
     container: &Container,
     domain_volume: f64,
+    shapes: &[Inclusion],
 ) -> Result<(demcon_graph::Conformed, Vec<SphereSurface>), ModelError> {
     if params.laguerre.is_none() {
         return Err(ModelError::invalid(
@@ -524,7 +525,12 @@ fn conform(
         container,
         carve: params.carve.as_ref().map(|(r, _)| r),
     };
-    let conformed = conforming_sites(particles, body, &spheres, &planes, h, &ConformParams::default())?;
+    let surfaces = demcon_graph::Followed {
+        spheres: &spheres,
+        planes: &planes,
+        shapes,
+    };
+    let conformed = conforming_sites(particles, body, surfaces, h, &ConformParams::default())?;
     Ok((conformed, spheres))
 }
 
@@ -825,8 +831,14 @@ fn phases(
     }
     let mut conformed = None;
     let packing_solid = particles.solid_volume();
+    let placed = place_shapes(params, container)?;
     if params.phase_rule == PhaseRule::Conforming {
-        let (c, spheres) = conform(params, &particles, container, domain_volume)?;
+        let all: Vec<Inclusion> = placed
+            .iter()
+            .flatten()
+            .flat_map(|(s, _)| s.iter().cloned())
+            .collect();
+        let (c, spheres) = conform(params, &particles, container, domain_volume, &all)?;
         kept_ids = Some(match kept_ids.take() {
             Some(ids) => c.kept.iter().map(|&k| ids[k as usize]).collect(),
             None => c.kept.clone(),
@@ -835,7 +847,8 @@ fn phases(
         conformed = Some((c.n_seeds, c.report, spheres));
     }
     let mut mixes = Vec::new();
-    let (inclusions, shapes) = apply_phases(params, &mut particles, container, materials, &mut mixes)?;
+    let (inclusions, shapes) =
+        apply_phases(params, &mut particles, container, materials, &mut mixes, placed)?;
     let phase_fractions =
         Laminates::new(particles.len(), &mixes).phase_fractions(&particles, materials.materials.len());
     Ok(Phased {
@@ -1092,23 +1105,6 @@ fn claims_nobody(fields: &FieldNames, i: usize, what: &str) -> ModelError {
     )
 }
 
-/// Refuses the `Conforming` rule for phase entry `entry`, whose surfaces (shapes) are cut by
-/// their level set.
-fn level_set_only(params: &ModelParams, entry: usize) -> Result<(), ModelError> {
-    if params.phase_rule == PhaseRule::Conforming {
-        return Err(ModelError::invalid(
-            params.fields.phase_rule,
-            "Conforming",
-            format!(
-                "conforming seeds follow spheres, box faces, image voxel faces and cracks; the surfaces of \
-                 {}[{entry}] are cut by their level set: use the Segment or Laminate rule",
-                params.fields.phases
-            ),
-        ));
-    }
-    Ok(())
-}
-
 /// Gives the particles inside phase entry `entry`'s `shapes` its phase (under the model's rule)
 /// and reports them.
 fn apply_shapes(
@@ -1121,7 +1117,6 @@ fn apply_shapes(
     placement: Option<ShapeReport>,
 ) -> Result<ShapesReport, ModelError> {
     let field = format!("{}[{entry}]", params.fields.phases);
-    level_set_only(params, entry)?;
     check_placement(container, shapes, &field)?;
     let region = shapes_region(container, shapes);
     if assign(particles, &region, phase, params.phase_rule, mixes) == 0 {
@@ -1138,6 +1133,32 @@ fn apply_shapes(
     })
 }
 
+/// The shapes of a shape entry and, for a random one, how their placement went.
+type PlacedShapes = (Vec<Inclusion>, Option<ShapeReport>);
+
+/// Each phase entry's shapes (`None` for the other entries): listed ones as given, random ones
+/// placed in the container (seeded by the model's seed). Placed once, before the conforming
+/// seeds that follow them and the phases they give.
+fn place_shapes(
+    params: &ModelParams,
+    container: &Container,
+) -> Result<Vec<Option<PlacedShapes>>, ModelError> {
+    params
+        .phases
+        .iter()
+        .enumerate()
+        .map(|(i, ph)| match ph {
+            PhaseSpec::Shapes { shapes, .. } => Ok(Some((shapes.clone(), None))),
+            PhaseSpec::RandomShapes { placement, .. } => {
+                let field = format!("{}[{i}]", params.fields.phases);
+                let (s, r) = random_shapes(container, placement, params.seed, &field)?;
+                Ok(Some((s, Some(r))))
+            }
+            _ => Ok(None),
+        })
+        .collect()
+}
+
 /// Applies the phase assignments in order.
 fn apply_phases(
     params: &ModelParams,
@@ -1145,6 +1166,7 @@ fn apply_phases(
     container: &Container,
     materials: &MaterialTable,
     mixes: &mut Vec<Mix>,
+    mut placed: Vec<Option<PlacedShapes>>,
 ) -> Result<(Option<InclusionReport>, Vec<ShapesReport>), ModelError> {
     let mut inclusions = None;
     let mut shape_reports = Vec::new();
@@ -1203,15 +1225,7 @@ fn apply_phases(
                 }
             }
             PhaseSpec::Shapes { phase, .. } | PhaseSpec::RandomShapes { phase, .. } => {
-                let (shapes, placement) = match ph {
-                    PhaseSpec::RandomShapes { placement, .. } => {
-                        let field = format!("{}[{i}]", params.fields.phases);
-                        let (s, r) = random_shapes(container, placement, params.seed, &field)?;
-                        (std::borrow::Cow::Owned(s), Some(r))
-                    }
-                    PhaseSpec::Shapes { shapes, .. } => (std::borrow::Cow::Borrowed(shapes), None),
-                    _ => unreachable!("matched as a shape entry"),
-                };
+                let (shapes, placement) = placed[i].take().unwrap_or_default();
                 let entry = (i, *phase);
                 shape_reports.push(apply_shapes(
                     params, particles, container, mixes, entry, &shapes, placement,

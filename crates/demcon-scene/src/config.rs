@@ -35,9 +35,9 @@ pub struct SceneConfig {
     /// Phase assignments applied in order on top of phase 0.
     #[serde(default)]
     pub phases: Vec<PhaseConfig>,
-    /// How `phases` treat the particles their interfaces cut. `None` (the default):
-    /// `Conforming` when every network of the scene is the Laguerre cells' (the cells then
-    /// follow the surfaces), `Centre` with the contact models.
+    /// How `phases` treat the particles their interfaces cut. `None` (the default): `Segment`
+    /// with an `Image` phase, else `Conforming` when every network of the scene is the Laguerre
+    /// cells' (the cells then follow the surfaces), `Centre` with the contact models.
     #[serde(default)]
     pub phase_rule: Option<PhaseRuleConfig>,
     /// Conductivity of contacts between two phases.
@@ -402,8 +402,9 @@ pub enum PhaseConfig {
     /// `Shapes(material: "fibre", shapes: [Spheroid(centre: (x, y, z), axis: (0, 0, 1), a: 5e-4,
     /// b: 1e-4), Cylinder(centre: (…), axis: (…), radius: 1e-4, length: 2e-3, ends: Round)])`, in
     /// metres. Centres inside the container's bounding box; in a walled container each shape
-    /// wholly inside it; in a periodic container their periodic images count. Cut by their
-    /// level set under the `Segment` (default with shapes), `Laminate` or `Centre` rule.
+    /// wholly inside it; in a periodic container their periodic images count. Followed by
+    /// conforming cells (`Conforming`, the default with the Laguerre cells), or cut by their
+    /// level set under the `Segment`, `Laminate` or `Centre` rule.
     Shapes {
         /// Material name.
         material: String,

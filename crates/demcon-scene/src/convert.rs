@@ -225,10 +225,11 @@ pub fn floating(f: FloatingConfig) -> FloatingPolicy {
     }
 }
 
-/// The scene's phase rule: its own, or by default `Conforming` when every network is the
-/// Laguerre cells' and `Centre` otherwise.
+/// The scene's phase rule: its own, or by default `Segment` with an image (conforming cells
+/// follow only coarse voxel faces), `Conforming` when every network is the Laguerre cells'
+/// and `Centre` otherwise.
 pub fn phase_rule_of(cfg: &SceneConfig) -> PhaseRuleConfig {
-    cfg.phase_rule.unwrap_or(if has_shapes(cfg) {
+    cfg.phase_rule.unwrap_or(if has_image(cfg) {
         PhaseRuleConfig::Segment
     } else if only_laguerre(cfg) {
         PhaseRuleConfig::Conforming
@@ -237,16 +238,10 @@ pub fn phase_rule_of(cfg: &SceneConfig) -> PhaseRuleConfig {
     })
 }
 
-/// Whether a phase entry is made of shaped inclusions (`Shapes`, `RandomShapes`) or read from
-/// an image: their surfaces are cut by their level set, so the default phase rule is then
-/// `Segment`.
-pub fn has_shapes(cfg: &SceneConfig) -> bool {
-    cfg.phases.iter().any(|p| {
-        matches!(
-            p,
-            PhaseConfig::Shapes { .. } | PhaseConfig::RandomShapes { .. } | PhaseConfig::Image { .. }
-        )
-    })
+/// Whether a phase entry is read from an image: its surfaces are a level set through the voxel
+/// faces, so the default phase rule is then `Segment`.
+pub fn has_image(cfg: &SceneConfig) -> bool {
+    cfg.phases.iter().any(|p| matches!(p, PhaseConfig::Image { .. }))
 }
 
 /// The phase rule.

@@ -22,8 +22,20 @@ fn ends(e: EndsConfig) -> Ends {
     }
 }
 
+/// One shape of a `RandomShapes` entry's kind, `aspect` (length over diameter) and `radius`
+/// (m), at the origin along z; `None` for sizes a shape cannot have.
+pub(crate) fn one_shape(kind: ShapeKindConfig, aspect: f64, radius: f64) -> Option<Inclusion> {
+    let (c, z) = (demcon_core::Vec3::zeros(), demcon_core::Vec3::z());
+    match kind {
+        ShapeKindConfig::Spheroid => Inclusion::spheroid(c, z, aspect * radius, radius, "shape").ok(),
+        ShapeKindConfig::Cylinder { ends: e } => {
+            Inclusion::cylinder(c, z, radius, 2.0 * aspect * radius, ends(e), "shape").ok()
+        }
+    }
+}
+
 /// One listed shape, checked (refusals name `field`).
-fn shape(s: &ShapeConfig, field: &str) -> Result<Inclusion, SceneError> {
+pub(crate) fn shape(s: &ShapeConfig, field: &str) -> Result<Inclusion, SceneError> {
     Ok(match *s {
         ShapeConfig::Spheroid { centre, axis, a, b } => {
             Inclusion::spheroid(v3(centre), v3(axis), a, b, field)?

@@ -273,7 +273,7 @@ pub const RUN_BYTES_PER_PARTICLE_CONTACTS: u64 = 1300;
 /// spacing h = (V/n)^{1/3} — 2 seeds per sample of area 0.55 h², less the particles they
 /// replace within ~1 h of the surface (measured 1.12·10⁵ for 1.10·10⁵ estimated on the f = 0.5
 /// composite at 2·10⁵, docs/performance.md §6). Surfaces: listed and placed spheres, sphere
-/// regions, box regions' faces, cracks.
+/// regions, box regions' faces, cracks, listed and random shapes (not those of a shapes file).
 pub fn conforming_extra_sites(n: usize, c: &SceneConfig, container: &Container) -> usize {
     if convert::phase_rule_of(c) != PhaseRuleConfig::Conforming || n == 0 {
         return 0;
@@ -303,8 +303,22 @@ pub fn conforming_extra_sites(n: usize, c: &SceneConfig, container: &Container) 
                 fraction, size_ratio, ..
             } => 3.0 * fraction * volume / (0.5 * e.x.min(e.y).min(e.z) / size_ratio),
             PhaseConfig::Region { region, .. } => region_area(region),
-            // Not followed by conforming seeds (refused under that rule).
-            PhaseConfig::Shapes { .. } | PhaseConfig::RandomShapes { .. } | PhaseConfig::Image { .. } => 0.0,
+            PhaseConfig::Shapes { shapes, .. } => shapes
+                .iter()
+                .filter_map(|s| crate::shapes::shape(s, "phase").ok())
+                .map(|s| s.area())
+                .sum(),
+            // f V of shapes of one size: f V times one shape's area over its volume.
+            PhaseConfig::RandomShapes {
+                shape,
+                aspect,
+                radius,
+                fraction,
+                ..
+            } => crate::shapes::one_shape(*shape, *aspect, *radius)
+                .map_or(0.0, |s| fraction * volume * s.area() / s.volume()),
+            // Followed only where its faces are coarser than the sites.
+            PhaseConfig::Image { .. } => 0.0,
         })
         .sum();
     area += c
@@ -566,7 +580,7 @@ fn check_thermal(
     Ok(())
 }
 
-/// Shaped-inclusion phases: not under the `Conforming` rule (images are: their voxel faces); listed shapes where they may lie
+/// Shaped-inclusion and image phases: listed shapes where they may lie
 /// and random ones in a `Box` or `Periodic` container (when the container is known before
 /// packing).
 fn check_shapes(
@@ -577,20 +591,6 @@ fn check_shapes(
     let mut errors = Vec::new();
     for (i, ph) in model.phases.iter().enumerate() {
         let field = format!("phases[{i}]");
-        let shaped = matches!(
-            ph,
-            demcon_model::PhaseSpec::Shapes { .. } | demcon_model::PhaseSpec::RandomShapes { .. }
-        );
-        if shaped && c.phase_rule == Some(PhaseRuleConfig::Conforming) {
-            errors.push(SceneError::invalid(
-                "phase_rule",
-                "Conforming",
-                format!(
-                    "conforming seeds follow spheres, box faces, image voxel faces and cracks; the shapes of \
-                     {field} are cut by their level set: use `Segment` (the default with shapes) or `Laminate`"
-                ),
-            ));
-        }
         match (ph, container) {
             (demcon_model::PhaseSpec::Shapes { shapes, .. }, Some(k)) => {
                 if let Err(e) = demcon_model::shapes::check_placement(k, shapes, &field) {
