@@ -13,9 +13,14 @@
 //! Fourier–Galerkin CG on laminate composite voxels at 65³, 99³ and 125³, extrapolated to zero
 //! voxel size; its `recommended` value and error, stored per entry in the data file).
 //!
-//! Models: the Laguerre cells cut by the spheroids' level set, under the `Segment` rule (the
-//! default with shapes, the headline), the `Laminate` rule and the `Centre` rule.
-//! Tolerances, chosen before any run of this case: at 2·10⁴ (quick) the headline's largest
+//! Models: the Laguerre cells following the spheroids (conforming cells, the default with
+//! shapes and the headline), and cut by their level set under the `Segment`, `Laminate` and
+//! `Centre` rules.
+//! Conforming cells (added later; bounds set just before their first run in this case, after
+//! `shapes-dilute` had shown them within 2 % of the exact dilute increment at 2·10⁴): largest
+//! error ≤ 2 % at 2·10⁴, ≤ 0.5 % (the issue's target) at the largest N of `--full`, over
+//! every shape but a/b = 20 (reported).
+//! Segment-rule tolerances, chosen before any run of this case: at 2·10⁴ (quick) its largest
 //! error ≤ 5 % (the segment rule's error on spheres is −0.3 … −2.2 %, and a spheroid here is 3
 //! to 6 particles thick); at the largest N of `--full` ≤ 2.5 %, and its mean error below the
 //! mean at 2·10⁴. The issue's target, ≤ 0.5 % at 2·10⁵, is reported beside. The three later
@@ -50,15 +55,18 @@ const SHAPES: [(&str, &str, bool); 5] = [
 /// Microstructures (and packings) per shape.
 const PACKINGS: u64 = 3;
 /// Phase rules: the headline first.
-const RULES: [(&str, PhaseRuleConfig); 3] = [
+const RULES: [(&str, PhaseRuleConfig); 4] = [
     ("segment", PhaseRuleConfig::Segment),
     ("laminate", PhaseRuleConfig::Laminate),
     ("centre", PhaseRuleConfig::Centre),
+    ("conforming", PhaseRuleConfig::Conforming),
 ];
 /// The headline's largest error at 2·10⁴ (`--quick`) and at the largest N of `--full`.
 const BOUNDS: [f64; 2] = [0.05, 0.025];
 /// The issue's target at 2·10⁵.
 const TARGET: f64 = 0.005;
+/// Conforming cells' largest error at 2·10⁴ (`--quick`) and at the largest N of `--full`.
+const CONFORMING_BOUNDS: [f64; 2] = [0.02, 0.005];
 /// The largest error at the largest N of `--full` for a/b = 5 and 1/10.
 const LATER_BOUND: f64 = 0.05;
 
@@ -242,7 +250,21 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             out.metric(&format!("{name}_{n}_max_abs_rel_error"), s.max);
         }
     }
-    // The first two shapes (a/b = 3, 1/3): gated since their first run.
+    // Conforming cells, the default with shapes: ≤ 2 % at 2·10⁴, the issue's 0.5 % at the
+    // largest N of --full, every shape.
+    // a/b = 20 (fibres under two site spacings across at 2·10⁵) is reported only.
+    let resolved = |s: &str| s != "prolate20";
+    let conforming = spread_of(&study, large, 3, resolved, None);
+    out.compare(Comparison::at_most(
+        &format!(
+            "conforming cells, N = {large}: max |λ_ii/λ_ref − 1| ({} shapes × 2 contrasts × 3 packings × 3 axes)",
+            shapes.iter().filter(|s| resolved(s)).count()
+        ),
+        conforming.max,
+        ctx.pick(CONFORMING_BOUNDS[0], CONFORMING_BOUNDS[1]),
+        "voxel FFT, composite voxels extrapolated (validation/data/shapes-fft.json); tolerance in the module notes",
+    ));
+    // The segment rule on the first two shapes (a/b = 3, 1/3): gated since their first run.
     let first = |s: &str| SHAPES.iter().any(|x| x.0 == s && x.2);
     let head = spread_of(&study, large, 0, first, None);
     out.compare(Comparison::at_most(
@@ -328,14 +350,16 @@ fn report(ctx: &Ctx, study: &Study<Vec<Row>>, shapes: &[&'static str], out: &mut
     ));
     out.note(format!(
         "{} mode: per shape three microstructures of spheroids along z (validation/data/shapes-fft.json), one \
-         periodic packing each (φ = 0.6, Gaussian radii CoV 0.3, seeds {}…{}), Laguerre cells, `Homogenize`. The \
-         segment rule is gated ({:.1} % at 2·10⁴, {:.1} % at the largest N of --full, and the mean must fall with \
-         N); the issue's target, {:.1} % at 2·10⁵, is reported.",
+         periodic packing each (φ = 0.6, Gaussian radii CoV 0.3, seeds {}…{}), Laguerre cells, `Homogenize`. \
+         Conforming cells (the default) are gated at {:.1} % (2·10⁴) and the issue's {:.1} % (largest N of \
+         --full; a/b = 20 reported); the segment rule at {:.1} % (2·10⁴) and {:.1} % (largest N of --full), its \
+         mean falling with N.",
         ctx.mode.name(),
         ctx.seed,
         ctx.seed + PACKINGS - 1,
+        100.0 * CONFORMING_BOUNDS[0],
+        100.0 * CONFORMING_BOUNDS[1],
         100.0 * BOUNDS[0],
         100.0 * BOUNDS[1],
-        100.0 * TARGET,
     ));
 }
