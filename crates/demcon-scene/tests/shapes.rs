@@ -146,6 +146,27 @@ fn random_fibres_reach_their_fraction_and_report_the_tensor_they_drew() {
 }
 
 #[test]
+fn shapes_thinner_than_two_site_spacings_are_warned_of() {
+    // 3000 sites in the unit cell: h = 0.069 m.
+    let one = |b: f64| {
+        format!(
+            r#"Shapes(material: "f", shapes: [Spheroid(centre: (0.5, 0.5, 0.5), axis: (0.0, 0.0, 1.0), a: 0.3, b: {b})])"#
+        )
+    };
+    let warned = |phases: &str| {
+        parse(&text(PERIODIC, phases, ""), Path::new(""))
+            .unwrap()
+            .warnings()
+            .iter()
+            .any(|w| w.contains("phases[0]: the thinnest shape"))
+    };
+    assert!(warned(&one(0.05)));
+    assert!(!warned(&one(0.1)));
+    let fibres = r#"RandomShapes(material: "f", shape: Cylinder(ends: Round), aspect: 10.0, radius: 0.02, fraction: 0.1)"#;
+    assert!(warned(fibres));
+}
+
+#[test]
 fn bad_shapes_are_refused_by_name() {
     let dir = std::env::temp_dir().join(format!("demcon-bad-shapes-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
