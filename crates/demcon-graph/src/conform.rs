@@ -375,8 +375,36 @@ pub fn conforming_sites(
         period,
         body: &body,
     };
+    // The shapes' samples, each tangent plane moved in by the polyhedron's excess volume for its
+    // area and curvature, and each shape's largest move.
+    let shrink = tangent_shrink();
+    let shape_samples: Vec<Vec<(Vec3, Vec3)>> = shapes
+        .iter()
+        .map(|shape| {
+            crate::shape_samples::surface_samples(shape, sample)
+                .into_iter()
+                .map(|smp| {
+                    // At most 0.1 of the radius of curvature (a sphere sampled at only 12
+                    // points moves by 0.09 r): where the samples are coarser than the
+                    // curvature (a platelet's rim) the linear estimate would overshoot.
+                    let inward =
+                        (shrink * smp.area * smp.curvature).clamp(0.0, 0.1 / smp.curvature.max(1e-300));
+                    (smp.at - smp.normal * inward, smp.normal)
+                })
+                .collect()
+        })
+        .collect();
+    let moved: Vec<f64> = shapes
+        .iter()
+        .zip(&shape_samples)
+        .map(|(shape, smp)| {
+            smp.iter()
+                .map(|(at, _)| -shape.signed_distance(at))
+                .fold(0.0, f64::max)
+        })
+        .collect();
     let mut kept = seeder.kept_sites(particles, &index, spheres, &sampled, planes, &mut report);
-    // … and farther than 2δ from every shape.
+    // … and farther than 2δ from every shape's moved surface.
     kept.retain(|&p| {
         let (x, reach) = (
             &particles.centres[p as usize],
@@ -384,7 +412,7 @@ pub fn conforming_sites(
         );
         let near = shape_index
             .near(&wrap(*x))
-            .any(|k| shape_distance(x, k).abs() < reach);
+            .any(|k| shape_distance(x, k).abs() < reach + moved[k]);
         report.removed_sites += usize::from(near);
         !near
     });
@@ -436,17 +464,10 @@ pub fn conforming_sites(
             seeder.place(at, n, gap, k, &mut report);
         }
     }
-    // The shapes: samples about `sample` apart, each tangent plane moved in by the polyhedron's
-    // excess volume for its area and curvature.
-    let shrink = tangent_shrink();
+    // The shapes: a pair at each sample.
     for (k, shape) in shapes.iter().enumerate() {
-        for (j, smp) in crate::shape_samples::surface_samples(shape, sample)
-            .into_iter()
-            .enumerate()
-        {
-            let inward = (shrink * smp.area * smp.curvature).max(0.0);
-            report.max_radius_correction = report.max_radius_correction.max(inward / shape.circumradius());
-            let at = smp.at - smp.normal * inward;
+        report.max_radius_correction = report.max_radius_correction.max(moved[k] / shape.circumradius());
+        for (j, &(at, normal)) in shape_samples[k].iter().enumerate() {
             if body.depth(&at) < 0.0 {
                 report.dropped_seeds += 2;
                 continue;
@@ -458,7 +479,7 @@ pub fn conforming_sites(
             let gap = spheres_gap
                 .min(plane_gap(&at, None).min(shapes_gap(&at, Some(k))))
                 .min(self_gap(shape, &at, period));
-            seeder.place(wrap(at), smp.normal, gap, j, &mut report);
+            seeder.place(wrap(at), normal, gap, j, &mut report);
         }
     }
     let Seeder {
@@ -958,6 +979,7 @@ impl SeedGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use demcon_core::Ends;
 
     #[test]
     fn the_tangent_polyhedron_closes_on_the_sphere_from_above() {
@@ -1004,6 +1026,52 @@ mod tests {
         (0..n * n * n)
             .map(|m| at(m / (n * n), (m / n) % n, m % n))
             .collect()
+    }
+
+    #[test]
+    fn shapes_get_pairs_across_their_surfaces_that_overlap_no_site() {
+        // Sites of radius 0.03 on a 20³ lattice of the unit periodic cell; a prolate spheroid
+        // across a periodic face, an oblate one and a round and a flat cylinder.
+        let n = 20;
+        let centres = lattice(n, |i, j, k| {
+            let jitter = ((i * 7 + j * 13 + k * 29) % 10) as f64 * 1e-3;
+            Vec3::new(i as f64, j as f64, k as f64) * (1.0 / n as f64) + Vec3::repeat(jitter)
+        });
+        let p = ParticleSet::new(centres, vec![0.03; n * n * n]).unwrap();
+        let cell = Container::Periodic { size: [1.0; 3] };
+        let z = Vec3::z();
+        let shapes = [
+            demcon_core::Inclusion::spheroid(Vec3::new(0.95, 0.3, 0.3), Vec3::x(), 0.25, 0.08, "s").unwrap(),
+            demcon_core::Inclusion::spheroid(Vec3::new(0.5, 0.7, 0.3), z, 0.05, 0.15, "s").unwrap(),
+            demcon_core::Inclusion::cylinder(Vec3::new(0.3, 0.3, 0.75), z, 0.08, 0.3, Ends::Round, "s")
+                .unwrap(),
+            demcon_core::Inclusion::cylinder(Vec3::new(0.7, 0.7, 0.75), z, 0.08, 0.3, Ends::Flat, "s")
+                .unwrap(),
+        ];
+        let h = 1.0 / n as f64;
+        let surfaces = Followed {
+            shapes: &shapes,
+            ..Followed::default()
+        };
+        let c = conforming_sites(&p, walled(&cell), surfaces, h, &ConformParams::default()).unwrap();
+        assert_eq!(c.report.shapes, 4);
+        let image = |d: Vec3| d.map(|v| v - v.round());
+        let (kept, seeds) = c.particles.centres.split_at(c.kept.len());
+        let seed_radii = &c.particles.radii[c.kept.len()..];
+        assert!(seeds.len() > 500, "{:?}", c.report);
+        for (x, r) in seeds.iter().zip(seed_radii) {
+            // Within δ (+ the small inward move) of a surface, and clear of every kept site.
+            let depth = shapes
+                .iter()
+                .map(|s| s.signed_distance(&(s.centre() + image(x - s.centre()))).abs())
+                .fold(f64::INFINITY, f64::min);
+            assert!(depth < 0.35 * h, "{depth}");
+            for (y, ry) in kept.iter().zip(&c.particles.radii) {
+                assert!(image(x - y).norm() >= r + ry - 1e-12);
+            }
+        }
+        // The pairs: each seed's partner is its mirror across the (moved) tangent plane.
+        assert_eq!(seeds.len() % 2, 0);
     }
 
     #[test]
