@@ -599,6 +599,18 @@ pub fn with_scene_defects_rule(
     Ok(demcon_model::with_defects(model, &spec)?)
 }
 
+/// Runs `cfg` (a `Homogenize` scene) on `model` and returns the thermal effective tensor
+/// (W/(m·K), row-major).
+pub fn thermal_tensor(cfg: &SceneConfig, model: &Model) -> anyhow::Result<[[f64; 3]; 3]> {
+    let r = run_with(cfg, model)?;
+    Ok(r.homogenization
+        .as_ref()
+        .and_then(|h| h.thermal.as_ref())
+        .ok_or_else(|| anyhow::anyhow!("the homogenisation produced no thermal tensor"))?
+        .report
+        .tensor)
+}
+
 /// Runs the physics of `cfg` on a clone of `model`.
 pub fn run_with(cfg: &SceneConfig, model: &Model) -> anyhow::Result<RunResult> {
     let scene = Scene::from_config(cfg.clone(), PathBuf::new())?;

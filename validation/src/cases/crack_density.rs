@@ -109,17 +109,6 @@ fn scene(n: usize, seed: u64) -> SceneConfig {
     )
 }
 
-/// The homogenised tensor (W/(m·K)).
-fn tensor(cfg: &SceneConfig, model: &Model) -> anyhow::Result<[[f64; 3]; 3]> {
-    let r = run_with(cfg, model)?;
-    Ok(r.homogenization
-        .as_ref()
-        .and_then(|h| h.thermal.as_ref())
-        .ok_or_else(|| anyhow::anyhow!("the homogenisation produced no tensor"))?
-        .report
-        .tensor)
-}
-
 /// One model, one packing, one crack set.
 struct Measure {
     model: CrackVariant,
@@ -194,7 +183,7 @@ fn measure_packing(n: usize, seed: u64) -> anyhow::Result<PackingRun> {
         let s = model.surface();
         let base = if s.needs_cells() { &cells } else { &contacts };
         let cfg_s = with_surface_model(&cfg, s, None);
-        let t0 = tensor(&cfg_s, base)?;
+        let t0 = thermal_tensor(&cfg_s, base)?;
         let lambda_hom = (t0[0][0] + t0[1][1] + t0[2][2]) / 3.0;
         for m in GRIDS {
             let with = |aligned: bool| -> anyhow::Result<([[f64; 3]; 3], usize)> {
@@ -207,7 +196,7 @@ fn measure_packing(n: usize, seed: u64) -> anyhow::Result<PackingRun> {
                 } else {
                     with_scene_defects(base, &c)?
                 };
-                Ok((tensor(&cfg_s, &cracked)?, cracked.cut_contacts().len()))
+                Ok((thermal_tensor(&cfg_s, &cracked)?, cracked.cut_contacts().len()))
             };
             let (ta, cut_aligned) = with(true)?;
             let (tr, cut_random) = with(false)?;

@@ -205,14 +205,7 @@ fn scene(
 fn diagonal(cfg: &SceneConfig) -> anyhow::Result<([f64; 3], usize, f64)> {
     let (model, build_s) = model_of_timed(cfg)?;
     let t0 = std::time::Instant::now();
-    let r = run_with(cfg, &model)?;
-    let t = r
-        .homogenization
-        .as_ref()
-        .and_then(|h| h.thermal.as_ref())
-        .ok_or_else(|| anyhow::anyhow!("no thermal homogenisation"))?
-        .report
-        .tensor;
+    let t = thermal_tensor(cfg, &model)?;
     Ok((
         [0, 1, 2].map(|i| t[i][i]),
         model.particles.len(),

@@ -173,13 +173,7 @@ fn measure(data: &Value, shapes: &[&'static str], n: usize, seed: u64, k: u64) -
             for (rule, (_, phase_rule)) in RULES.iter().enumerate() {
                 let cfg = scene(n, seed, &m.shapes, contrast, *phase_rule);
                 let model = model_of(&cfg)?;
-                let r = run_with(&cfg, &model)?;
-                let h = r
-                    .homogenization
-                    .as_ref()
-                    .and_then(|h| h.thermal.as_ref())
-                    .ok_or_else(|| anyhow::anyhow!("no thermal homogenisation"))?;
-                let t = h.report.tensor;
+                let t = thermal_tensor(&cfg, &model)?;
                 rows.push(Row {
                     shape,
                     contrast,

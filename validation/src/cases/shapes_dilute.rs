@@ -141,14 +141,7 @@ fn measure_rule(
                 }];
                 s.phase_rule = Some(rule);
                 let model = model_of(&s)?;
-                let r = run_with(&s, &model)?;
-                let t = r
-                    .homogenization
-                    .as_ref()
-                    .and_then(|h| h.thermal.as_ref())
-                    .ok_or_else(|| anyhow::anyhow!("no thermal homogenisation"))?
-                    .report
-                    .tensor;
+                let t = thermal_tensor(&s, &model)?;
                 let f = VOLUME / edge.powi(3);
                 rows.push(Row {
                     rule: ri,
