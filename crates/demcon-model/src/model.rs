@@ -204,8 +204,11 @@ pub struct ModelReport {
 pub struct ConformSummary {
     /// Spheres whose surfaces the cells follow.
     pub spheres: usize,
-    /// Plane patches the cells follow: faces of box regions inside the body, and cracks.
+    /// Plane patches the cells follow: faces of box regions inside the body, an image's voxel
+    /// faces (merged into rectangles), and cracks.
     pub planes: usize,
+    /// Shaped inclusions (spheroids, cylinders) whose surfaces the cells follow.
+    pub shapes: usize,
     /// The mean site spacing h the sampling was scaled by (m).
     pub spacing_m: f64,
     /// Seeds placed (pairs across the surfaces, less those dropped).
@@ -216,7 +219,8 @@ pub struct ConformSummary {
     pub removed_particles: usize,
     /// Seed pairs closed in on their surface where another sphere came near.
     pub narrowed_pairs: usize,
-    /// Largest 1 − r'/r of the tangent-plane radius correction.
+    /// Largest 1 − r'/r of the tangent-plane radius correction (a shape: its largest inward
+    /// move over its circumradius).
     pub max_radius_correction: f64,
     /// Facets between the cells of two spheres that nearly touch (their branch leaves one
     /// sphere and enters the other across a gap the seed pairs could not follow): a surface
@@ -232,6 +236,7 @@ impl From<&ConformReport> for ConformSummary {
             seeds: r.seeds,
             dropped_seeds: r.dropped_seeds,
             planes: r.planes,
+            shapes: r.shapes,
             removed_particles: r.removed_sites,
             narrowed_pairs: r.narrowed_pairs,
             max_radius_correction: r.max_radius_correction,
