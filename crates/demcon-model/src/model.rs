@@ -410,6 +410,10 @@ pub enum PhaseSpec {
         phase: u16,
         /// What to place.
         placement: ShapeParams,
+        /// The shapes already placed by the caller for a container (e.g. while checking the
+        /// input, before packing); used when the model's container is that one, placed again
+        /// otherwise.
+        placed: Option<Box<(Container, Vec<Inclusion>, ShapeReport)>>,
     },
     /// The labels of a voxel image, each its phase's voxels (in order; a later label wins
     /// where they meet), cut by their smoothed level set as [`PhaseSpec::Shapes`].
@@ -1154,6 +1158,9 @@ fn place_shapes(
         .enumerate()
         .map(|(i, ph)| match ph {
             PhaseSpec::Shapes { shapes, .. } => Ok(Some((shapes.clone(), None))),
+            PhaseSpec::RandomShapes { placed: Some(p), .. } if p.0 == *container => {
+                Ok(Some((p.1.clone(), Some(p.2.clone()))))
+            }
             PhaseSpec::RandomShapes { placement, .. } => {
                 let field = format!("{}[{i}]", params.fields.phases);
                 let (s, r) = random_shapes(container, placement, params.seed, &field)?;

@@ -349,6 +349,7 @@ pub fn model_params(cfg: &SceneConfig, base_dir: &Path) -> Result<ModelParams, S
                 phase,
                 placement: crate::shapes::random_shape_params(&field, ph)?
                     .expect("a RandomShapes entry has a placement"),
+                placed: None,
             },
         });
     }

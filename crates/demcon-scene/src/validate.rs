@@ -44,7 +44,7 @@ impl Refusals {
 pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<convert::Problem, SceneError> {
     let mut r = Refusals::default();
     // Materials, contacts, carving, phases, selectors, electrodes' select/face: by conversion.
-    let problem = r.check(convert::problem(c, base_dir));
+    let mut problem = r.check(convert::problem(c, base_dir));
     let container = r.check(convert::known_container(c, base_dir)).flatten();
     if let Some(Some(n)) = r.check(known_count(&c.packing, "packing")) {
         let field = match c.packing {
@@ -78,8 +78,8 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<convert::Problem, Sc
     if let Some(k) = container.as_ref() {
         r.check(check_sphere_centres(c, k));
     }
-    if let Some(p) = problem.as_ref() {
-        r.check(check_shapes(c, &p.model, container.as_ref()));
+    if let Some(p) = problem.as_mut() {
+        r.check(check_shapes(c, &mut p.model, container.as_ref()));
     }
     if convert::is_homogenization(c) {
         check_homogenization(c, container.as_ref(), &mut r);
@@ -632,11 +632,11 @@ fn check_thermal(
 /// packing).
 fn check_shapes(
     c: &SceneConfig,
-    model: &demcon_model::ModelParams,
+    model: &mut demcon_model::ModelParams,
     container: Option<&Container>,
 ) -> Result<(), SceneError> {
     let mut errors = Vec::new();
-    for (i, ph) in model.phases.iter().enumerate() {
+    for (i, ph) in model.phases.iter_mut().enumerate() {
         let field = format!("phases[{i}]");
         match (ph, container) {
             (demcon_model::PhaseSpec::Shapes { shapes, .. }, Some(k)) => {
@@ -682,6 +682,17 @@ fn check_shapes(
                     "random shapes are placed in a Box or a Periodic container",
                 ));
             }
+            // Placed now, before packing: an unreachable fraction is refused before the heavy
+            // work, and the model reuses the shapes.
+            (
+                demcon_model::PhaseSpec::RandomShapes {
+                    placement, placed, ..
+                },
+                Some(k),
+            ) => match demcon_model::shapes::random_shapes(k, placement, c.seed, &field) {
+                Ok((shapes, report)) => *placed = Some(Box::new((*k, shapes, report))),
+                Err(e) => errors.push(e.into()),
+            },
             _ => {}
         }
     }

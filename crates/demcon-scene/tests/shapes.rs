@@ -268,13 +268,17 @@ fn bad_shapes_are_refused_by_name() {
     .replace("bcs: [], solver: Homogenize", "bcs: [WallTemperature(face: ZMin, value: 0.0), WallTemperature(face: ZMax, value: 1.0)], solver: Steady");
     let e = before(&cylinder);
     assert!(e.contains("phases[0]") && e.contains("Box or a Periodic"), "{e}");
-    // A fraction random addition cannot reach: refused with the fraction reached (when placing).
+    // A fraction random addition cannot reach: refused with the fraction reached, when the
+    // scene is read (the shapes are placed then, before packing).
     let dense = text(
         PERIODIC,
         r#"RandomShapes(material: "f", shape: Cylinder(ends: Round), aspect: 10.0, radius: 0.02, fraction: 0.6)"#,
         "",
     );
-    let e = error_of(&dense, &dir);
+    let e = parse(&dense, &dir)
+        .err()
+        .map(|e| e.to_string())
+        .expect("refused at parse");
     assert!(e.contains("phases[0]") && e.contains("attainable"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
