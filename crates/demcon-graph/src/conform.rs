@@ -378,7 +378,7 @@ pub fn conforming_sites(
     // The shapes' samples, each tangent plane moved in by the polyhedron's excess volume for its
     // area and curvature, and each shape's largest move.
     let shrink = tangent_shrink();
-    let shape_samples: Vec<Vec<(Vec3, Vec3)>> = shapes
+    let shape_samples: Vec<Vec<(Vec3, Vec3, f64)>> = shapes
         .iter()
         .map(|shape| {
             crate::shape_samples::surface_samples(shape, sample)
@@ -389,7 +389,7 @@ pub fn conforming_sites(
                     // curvature (a platelet's rim) the linear estimate would overshoot.
                     let inward =
                         (shrink * smp.area * smp.curvature).clamp(0.0, 0.1 / smp.curvature.max(1e-300));
-                    (smp.at - smp.normal * inward, smp.normal)
+                    (smp.at - smp.normal * inward, smp.normal, smp.step)
                 })
                 .collect()
         })
@@ -399,7 +399,7 @@ pub fn conforming_sites(
         .zip(&shape_samples)
         .map(|(shape, smp)| {
             smp.iter()
-                .map(|(at, _)| -shape.signed_distance(at))
+                .map(|(at, _, _)| -shape.signed_distance(at))
                 .fold(0.0, f64::max)
         })
         .collect();
@@ -467,7 +467,7 @@ pub fn conforming_sites(
     // The shapes: a pair at each sample.
     for (k, shape) in shapes.iter().enumerate() {
         report.max_radius_correction = report.max_radius_correction.max(moved[k] / shape.circumradius());
-        for (j, &(at, normal)) in shape_samples[k].iter().enumerate() {
+        for (j, &(at, normal, step)) in shape_samples[k].iter().enumerate() {
             if body.depth(&at) < 0.0 {
                 report.dropped_seeds += 2;
                 continue;
@@ -478,7 +478,9 @@ pub fn conforming_sites(
                 .fold(f64::INFINITY, f64::min);
             let gap = spheres_gap
                 .min(plane_gap(&at, None).min(shapes_gap(&at, Some(k))))
-                .min(self_gap(shape, &at, period));
+                .min(self_gap(shape, &at, period))
+                // Rings closer than the spacing (a sharp rim): pairs within half a step.
+                .min(0.5 * step / NARROW);
             seeder.place(wrap(at), normal, gap, j, &mut report);
         }
     }

@@ -21,6 +21,9 @@ pub(crate) struct Sample {
     pub area: f64,
     /// The mean curvature there (1/m; (κ₁ + κ₂)/2, positive where convex).
     pub curvature: f64,
+    /// The arc length along the meridian between its ring and the next (m): a pair's seeds
+    /// must stay within half of it of the surface not to meet the next ring's.
+    pub step: f64,
 }
 
 /// A point of a meridian: radius ρ and height z along the axis (m), the outward normal's
@@ -74,17 +77,31 @@ fn meridian(shape: &Inclusion) -> Vec<MeridianPoint> {
     out
 }
 
-/// The samples of `shape`'s surface, about `spacing` (m) apart (see the module doc).
+/// The samples of `shape`'s surface, about `spacing` (m) apart (see the module doc); along the
+/// meridian closer where it turns faster, at most half its radius of curvature apart, so that a
+/// rim much sharper than `spacing` (a thin platelet's) still gets rings round it.
 pub(crate) fn surface_samples(shape: &Inclusion, spacing: f64) -> Vec<Sample> {
     let dense = meridian(shape);
+    // The warped arc length w: ds / min(spacing, ρ_c / 2), ρ_c the meridian's radius of
+    // curvature from the normal's turn between dense points (a corner, where two pieces meet
+    // at one point, adds nothing).
     let mut s = vec![0.0; dense.len()];
+    let mut w = vec![0.0; dense.len()];
     for i in 1..dense.len() {
         let (a, b) = (dense[i - 1], dense[i]);
-        s[i] = s[i - 1] + ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
+        let ds = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
+        let turn = (a.2 * b.2 + a.3 * b.3).clamp(-1.0, 1.0).acos();
+        s[i] = s[i - 1] + ds;
+        w[i] = w[i - 1]
+            + if ds > 0.0 {
+                (ds / spacing).max(2.0 * turn)
+            } else {
+                0.0
+            };
     }
-    let total = s[s.len() - 1];
-    let rings = ((total / spacing).round() as usize).max(1);
-    let step = total / rings as f64;
+    let total = w[w.len() - 1];
+    let rings = (total.round() as usize).max(1);
+    let dw = total / rings as f64;
     let u = shape.axis();
     let helper = if u.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
     let e1 = u.cross(&helper).normalize();
@@ -93,9 +110,16 @@ pub(crate) fn surface_samples(shape: &Inclusion, spacing: f64) -> Vec<Sample> {
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     let mut out = Vec::new();
     for k in 0..rings {
-        let target = (k as f64 + 0.5) * step;
-        let i = s.partition_point(|&v| v < target).min(dense.len() - 1);
+        let target = (k as f64 + 0.5) * dw;
+        let i = w.partition_point(|&v| v < target).clamp(1, dense.len() - 1);
         let (rho, z, nr, nz, curvature) = dense[i];
+        // The arc length this ring stands for along the meridian (m).
+        let step = dw * (s[i] - s[i - 1]) / (w[i] - w[i - 1]).max(1e-300);
+        let step = if step.is_finite() && step > 0.0 {
+            step.min(dw * spacing)
+        } else {
+            dw * spacing
+        };
         let count = ((2.0 * std::f64::consts::PI * rho / spacing).round() as usize).max(1);
         let area = step * 2.0 * std::f64::consts::PI * rho.max(0.25 * step) / count as f64;
         for j in 0..count {
@@ -106,6 +130,7 @@ pub(crate) fn surface_samples(shape: &Inclusion, spacing: f64) -> Vec<Sample> {
                 normal: (radial * nr + u * nz).normalize(),
                 area,
                 curvature,
+                step,
             });
         }
     }
