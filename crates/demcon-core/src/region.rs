@@ -124,8 +124,12 @@ impl Region {
 
     /// The region repeated round a periodic box of periods `l` (m): the union of its images
     /// (shifts of −1, 0, +1 period along each axis) that come within `reach` (m) of the box
-    /// `[0, l]`; the region itself when no other image does.
+    /// `[0, l]`; the region itself when no other image does, or when it is an image, whose
+    /// voxels already wrap round the period (its copies would all be identical).
     pub fn periodic(&self, l: [f64; 3], reach: f64) -> Region {
+        if matches!(self, Region::Voxels(_)) {
+            return self.clone();
+        }
         let b = self.bounds();
         let steps = [0.0, -1.0, 1.0];
         let mut images = Vec::new();
@@ -301,6 +305,11 @@ mod tests {
         // Clear of the faces: itself.
         let inside = ball.translated(&Vec3::new(-0.45, 0.0, 0.0));
         assert_eq!(inside.periodic([1.0; 3], 0.0), inside);
+        // An image wraps round the period itself: no copies.
+        let mask: Vec<bool> = (0..40).map(|i| i % 10 < 3).collect();
+        let slab =
+            Region::Voxels(Voxels::from_mask([10, 2, 2], 0.1, Vec3::zeros(), &mask, true, "image").unwrap());
+        assert_eq!(slab.periodic([1.0, 0.2, 0.2], 0.05), slab);
     }
 
     fn grooved() -> Region {
