@@ -599,6 +599,41 @@ pub fn with_scene_defects_rule(
     Ok(demcon_model::with_defects(model, &spec)?)
 }
 
+/// A periodic homogenisation scene of `count` sites in a cube of edge `edge` (m), Laguerre
+/// cells: a matrix of λ = `lambda_m` with `shapes` of λ = `contrast` × `lambda_m` (disjoint),
+/// the phases under `rule`.
+#[allow(clippy::too_many_arguments)]
+pub fn shapes_scene(
+    name: &str,
+    seed: u64,
+    edge: f64,
+    count: usize,
+    lambda_m: f64,
+    contrast: f64,
+    shapes: Vec<ShapeConfig>,
+    rule: PhaseRuleConfig,
+) -> SceneConfig {
+    let mut s = thermal_scene(
+        name,
+        seed,
+        periodic_packing(edge, count),
+        vec![
+            material("matrix", lambda_m, 1000.0, 1000.0),
+            material("shapes", lambda_m * contrast, 1000.0, 1000.0),
+        ],
+        homogenize_thermal(),
+    );
+    s.surface = SurfaceConfig::Laguerre;
+    s.phases = vec![PhaseConfig::Shapes {
+        material: "shapes".into(),
+        shapes,
+        file: None,
+        disjoint: true,
+    }];
+    s.phase_rule = Some(rule);
+    s
+}
+
 /// Runs `cfg` (a `Homogenize` scene) on `model` and returns the thermal effective tensor
 /// (W/(m·K), row-major).
 pub fn thermal_tensor(cfg: &SceneConfig, model: &Model) -> anyhow::Result<[[f64; 3]; 3]> {

@@ -123,25 +123,7 @@ fn micro(data: &Value, id: &str) -> anyhow::Result<Micro> {
 }
 
 fn scene(n: usize, seed: u64, shapes: &[ShapeConfig], contrast: f64, rule: PhaseRuleConfig) -> SceneConfig {
-    let mut s = thermal_scene(
-        "shapes-aligned",
-        seed,
-        periodic_packing(CELL, n),
-        vec![
-            material("matrix", LAMBDA_M, 1000.0, 1000.0),
-            material("spheroids", LAMBDA_M * contrast, 1000.0, 1000.0),
-        ],
-        homogenize_thermal(),
-    );
-    s.surface = SurfaceConfig::Laguerre;
-    s.phases = vec![PhaseConfig::Shapes {
-        material: "spheroids".into(),
-        shapes: shapes.to_vec(),
-        file: None,
-        disjoint: true,
-    }];
-    s.phase_rule = Some(rule);
-    s
+    shapes_scene("shapes-aligned", seed, CELL, n, LAMBDA_M, contrast, shapes.to_vec(), rule)
 }
 
 /// One (shape, contrast, rule) on one packing: the signed relative error of each diagonal

@@ -116,30 +116,14 @@ fn measure_rule(
             for cell in 0..2 {
                 let edge = if cell == 0 { 1.0 } else { 2f64.cbrt() };
                 let count = n << cell;
-                let mut s = thermal_scene(
-                    "shapes-dilute",
-                    seed,
-                    periodic_packing(edge, count),
-                    vec![
-                        material("matrix", LAMBDA_M, 1000.0, 1000.0),
-                        material("spheroid", LAMBDA_M * contrast, 1000.0, 1000.0),
-                    ],
-                    homogenize_thermal(),
-                );
-                s.surface = SurfaceConfig::Laguerre;
                 let c = 0.5 * edge;
-                s.phases = vec![PhaseConfig::Shapes {
-                    material: "spheroid".into(),
-                    shapes: vec![ShapeConfig::Spheroid {
-                        centre: (c, c, c),
-                        axis: (0.0, 0.0, 1.0),
-                        a,
-                        b,
-                    }],
-                    file: None,
-                    disjoint: true,
-                }];
-                s.phase_rule = Some(rule);
+                let spheroid = ShapeConfig::Spheroid {
+                    centre: (c, c, c),
+                    axis: (0.0, 0.0, 1.0),
+                    a,
+                    b,
+                };
+                let s = shapes_scene("shapes-dilute", seed, edge, count, LAMBDA_M, contrast, vec![spheroid], rule);
                 let model = model_of(&s)?;
                 let t = thermal_tensor(&s, &model)?;
                 let f = VOLUME / edge.powi(3);
