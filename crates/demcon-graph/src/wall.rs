@@ -281,13 +281,17 @@ impl WallContacts {
         for (k, w) in self.wall_of_links().enumerate() {
             let p = self.particle[k] as usize;
             let uw = nodes[self.node(w) as usize];
-            let lever = self
-                .lever
-                .get(k)
-                .copied()
-                .unwrap_or_else(|| self.half_length[k] * self.normal[k]);
-            dipoles[p] += 2.0 * g[k] * (uw - nodes[p]) * lever;
+            dipoles[p] += 2.0 * g[k] * (uw - nodes[p]) * self.lever(k);
         }
+    }
+
+    /// Where link `k` acts, from its particle's centre (m): the Laguerre facet's centroid, or
+    /// h_p n_p without cells.
+    pub fn lever(&self, k: usize) -> Vec3 {
+        self.lever
+            .get(k)
+            .copied()
+            .unwrap_or_else(|| self.half_length[k] * self.normal[k])
     }
 }
 

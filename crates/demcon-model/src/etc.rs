@@ -102,6 +102,14 @@ pub fn effective_conductivity(
                 .into(),
         ));
     }
+    if let Some(x) = setup.surroundings.faces.first() {
+        return Err(refuse(format!(
+            "face {} exchanges heat with its surroundings (Convection or Radiation): heat leaves elsewhere than \
+             through the two held sets and no single λ_e describes the body; an ETC run holds two faces and \
+             nothing else",
+            x.face.name()
+        )));
+    }
     let [first, second] = bcs.fixed_sets.as_slice() else {
         return Err(refuse(format!(
             "the effective conductivity needs exactly two held sets (FixedTemperature or WallTemperature); \

@@ -47,6 +47,7 @@ pub mod homogenize;
 mod image;
 pub mod model;
 pub mod shapes;
+pub mod surroundings;
 pub mod thermal;
 
 pub use calibrate::{CalibrationBc, CtCalibration, calibrate_ct, calibrate_ct_with};

@@ -24,6 +24,7 @@ use crate::checkpoint::{Checkpointing, RunCheckpoint, not_resumable};
 use crate::defects::{Physics, apply_to_contacts, apply_to_walls};
 use crate::error::ModelError;
 use crate::model::Model;
+use crate::surroundings::{Exchange, ExchangeReport, NEWTON_MAX_ITERATIONS, NEWTON_TOLERANCE, Surroundings};
 
 /// A thermal boundary condition, resolved on the model by [`thermal_bcs`].
 #[derive(Debug, Clone, PartialEq)]
@@ -49,6 +50,24 @@ pub enum ThermalBc {
         face: Face,
         /// Flux density (W/m²), positive into the body.
         flux: f64,
+    },
+    /// Convection to a fluid: h (T_f − T∞) (W/m²) leaves through the face ([`crate::surroundings`]).
+    Convection {
+        /// The face.
+        face: Face,
+        /// Film coefficient h (W/(m²·K)), ≥ 0.
+        h: f64,
+        /// Fluid temperature T∞ (°C).
+        t_inf: f64,
+    },
+    /// Radiation to surroundings: ε σ (T_f⁴ − T_s⁴) (W/m², kelvin) leaves through the face.
+    Radiation {
+        /// The face.
+        face: Face,
+        /// Emissivity ε in [0, 1].
+        emissivity: f64,
+        /// Surroundings' temperature T_s (°C).
+        t_surroundings: f64,
     },
 }
 
@@ -147,16 +166,66 @@ pub struct ThermalProblem {
 }
 
 impl ThermalProblem {
-    /// The faces held at a temperature (`WallTemperature`), in order.
-    pub fn wall_faces(&self) -> Vec<Face> {
-        self.bcs
-            .iter()
-            .filter_map(|bc| match bc {
-                ThermalBc::WallTemperature { face, .. } => Some(*face),
-                _ => None,
-            })
-            .collect()
+    /// The walls of the thermal network: the faces held at a temperature (`WallTemperature`)
+    /// and the faces exchanging heat with their surroundings (one wall per face, however many
+    /// of `Convection` and `Radiation` it has), in the order of the conditions; the wall of
+    /// each condition (none for `FixedTemperature` and `HeatFlux`); and the exchanges with
+    /// the conditions on each.
+    pub fn walls(&self) -> WallPlan {
+        let mut plan = WallPlan::default();
+        for (i, bc) in self.bcs.iter().enumerate() {
+            let (face, convection, radiation) = match *bc {
+                ThermalBc::WallTemperature { face, .. } => {
+                    plan.of_bc.push(Some(plan.faces.len()));
+                    plan.faces.push(face);
+                    continue;
+                }
+                ThermalBc::Convection { face, h, t_inf } => (face, Some((h, t_inf)), None),
+                ThermalBc::Radiation {
+                    face,
+                    emissivity,
+                    t_surroundings,
+                } => (face, None, Some((emissivity, t_surroundings))),
+                ThermalBc::FixedTemperature { .. } | ThermalBc::HeatFlux { .. } => {
+                    plan.of_bc.push(None);
+                    continue;
+                }
+            };
+            let x = match plan.exchanges.iter().position(|x| x.face == face) {
+                Some(x) => x,
+                None => {
+                    plan.exchanges.push(Exchange {
+                        face,
+                        wall: plan.faces.len(),
+                        convection: None,
+                        radiation: None,
+                    });
+                    plan.exchange_bcs.push(Vec::new());
+                    plan.faces.push(face);
+                    plan.exchanges.len() - 1
+                }
+            };
+            let e = &mut plan.exchanges[x];
+            e.convection = convection.or(e.convection);
+            e.radiation = radiation.or(e.radiation);
+            plan.exchange_bcs[x].push(i);
+            plan.of_bc.push(Some(e.wall));
+        }
+        plan
     }
+}
+
+/// The walls of a thermal problem ([`ThermalProblem::walls`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct WallPlan {
+    /// The face of each wall.
+    pub faces: Vec<Face>,
+    /// Per boundary condition: its wall.
+    pub of_bc: Vec<Option<usize>>,
+    /// The faces exchanging heat with their surroundings.
+    pub exchanges: Vec<Exchange>,
+    /// Per exchange: its boundary conditions (indices into `bcs`).
+    pub exchange_bcs: Vec<Vec<usize>>,
 }
 
 /// Conductances, capacities and volumes of the thermal network.
@@ -173,8 +242,11 @@ pub struct ThermalSetup {
     pub contact_lambda: Vec<f64>,
     /// Conductances (W/K): H = λ S / d per contact, then the wall links.
     pub conductances: Vec<f64>,
-    /// The faces held at a temperature and their links to the particles.
+    /// The faces held at a temperature or exchanging heat with their surroundings, and their
+    /// links to the particles.
     pub walls: WallContacts,
+    /// The faces exchanging heat with their surroundings (convection, radiation).
+    pub surroundings: Surroundings,
     /// The network with the wall nodes, when there are walls (else the model's is used).
     network: Option<Network>,
     /// Representative volume per particle (m³).
@@ -211,13 +283,24 @@ impl ThermalSetup {
     pub fn wall_conductances(&self) -> &[f64] {
         &self.conductances[self.conductances.len() - self.walls.len()..]
     }
+
+    /// The heat-flux dipoles (W·m) of every particle at the node temperatures `nodes` (°C,
+    /// particles then walls): the network's ([`crate::flux_dipoles`]) and, on faces exchanging
+    /// heat with their surroundings, the part of each link's heat its source carries.
+    pub fn heat_dipoles(&self, model: &Model, nodes: &[f64]) -> Vec<demcon_core::Vec3> {
+        let mut d = crate::flux_dipoles(model, &self.walls, &self.conductances, nodes);
+        self.surroundings
+            .add_dipoles(&self.walls, self.wall_conductances(), nodes, &mut d);
+        d
+    }
 }
 
 /// Builds the thermal network values (calibrating C_t when asked): surfaces, conductances
 /// with the interface rule, wall links of the `WallTemperature` faces, heat capacities
 /// (laminate particles mix ρ and ρc arithmetically) and the paper's step estimate.
 pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalSetup, ModelError> {
-    let faces = problem.wall_faces();
+    let plan = problem.walls();
+    let faces = plan.faces;
     let calibration = match problem.surface {
         SurfaceSpec::Calibrated(CtSpec::Auto) => {
             let bc = if faces.is_empty() {
@@ -268,6 +351,16 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
         &mut wall_g,
         Physics::Thermal,
     );
+    let surroundings = Surroundings::new(
+        plan.exchanges,
+        plan.exchange_bcs,
+        &walls,
+        &wall_g,
+        &model.particles,
+        |f| model.container.face_area(f),
+        problem.initial_temperature,
+    )?;
+    surroundings.set_conductances(&mut wall_g);
     let (network, g) = network_with_walls(model, &walls, g, wall_g)?;
     caps.resize(caps.len() + walls.n_walls(), 1.0);
     let paper_dt = match sm {
@@ -288,6 +381,7 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
         contact_lambda,
         conductances: g,
         walls,
+        surroundings,
         network,
         rep_volumes: rep,
         capacities: caps,
@@ -429,16 +523,24 @@ pub fn thermal_bcs(
         ));
     }
     let transient = problem.solver.is_transient();
-    if fixed_sets.is_empty() && !transient {
+    let exchanges = &setup.surroundings.faces;
+    if fixed_sets.is_empty() && exchanges.is_empty() && !transient {
         return Err(ModelError::invalid(
             model.fields.bcs,
-            "no FixedTemperature or WallTemperature",
-            "a steady thermal solve needs at least one fixed temperature",
+            "no FixedTemperature, WallTemperature, Convection or Radiation",
+            "a steady thermal solve needs at least one fixed temperature or a face exchanging heat with its \
+             surroundings",
         ));
     }
+    // The faces exchanging heat are wall nodes held at their reference temperature.
     let sets: Vec<(Vec<u32>, f64)> = fixed_sets
         .iter()
         .map(|s| (s.nodes(&setup.walls), s.value))
+        .chain(
+            exchanges
+                .iter()
+                .map(|x| (vec![setup.walls.node(x.wall)], x.reference())),
+        )
         .collect();
     // A transient is well posed on every cluster, fixed values or not: its heat capacity holds
     // it, and its sources heat it, so floating clusters are kept when one of them has a
@@ -450,7 +552,7 @@ pub fn thermal_bcs(
         .floating_kept()
         .iter()
         .any(|&p| sources[p as usize] != 0.0);
-    if !(transient && (heated || fixed_sets.is_empty())) {
+    if !(transient && (heated || sets.is_empty())) {
         constraints = resolve_fixed(net, &sets, problem.floating)?;
     }
     // Heat imposed on particles left out of the solve never enters the body: say how much.
@@ -486,7 +588,7 @@ fn boundary_conditions(
     problem: &ThermalProblem,
     sources: &mut [f64],
 ) -> Result<Vec<FixedSet>, ModelError> {
-    let mut next_wall = 0..setup.walls.n_walls();
+    let wall_of = problem.walls().of_bc;
     let mut fixed_sets = Vec::new();
     for (i, bc) in problem.bcs.iter().enumerate() {
         let field = format!("{}[{i}]", model.fields.bcs);
@@ -535,15 +637,16 @@ fn boundary_conditions(
                 sources.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
             }
             ThermalBc::WallTemperature { face, value } => {
-                let w = next_wall
-                    .next()
-                    .expect("one wall per WallTemperature, built by thermal_setup");
+                let w = wall_of[i].expect("one wall per WallTemperature, built by thermal_setup");
                 debug_assert_eq!(setup.walls.faces[w], *face);
                 fixed_sets.push(FixedSet {
                     target: FixedTarget::Wall(w),
                     value: *value,
                 });
             }
+            // Walls held at their reference, with the sources of the run's state
+            // ([`Surroundings`]).
+            ThermalBc::Convection { .. } | ThermalBc::Radiation { .. } => {}
         }
     }
     Ok(fixed_sets)
@@ -594,6 +697,11 @@ pub struct ThermalSolveReport {
     pub energy_balance_error: f64,
     /// Particles excluded from the solve (floating clusters).
     pub excluded: usize,
+    /// Solves of a steady state with radiation (re-linearised each time); 1 without.
+    pub nonlinear_iterations: u64,
+    /// What each face exchanging heat with its surroundings gives off at the end.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub surroundings: Vec<ExchangeReport>,
 }
 
 /// Temperatures of a thermal solve.
@@ -703,24 +811,55 @@ pub fn solve_thermal_checkpointed(
 ) -> Result<ThermalRun, ModelError> {
     let n = model.particles.len();
     let initial = problem.initial_temperature;
-    let mut sources = bcs.sources.clone();
-    if let Some(x) = extra.initial {
-        sources.iter_mut().zip(x).for_each(|(a, b)| *a += b);
-    }
-    let update = extra.update;
-    let mut hook = |t: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, ModelError> {
-        Ok(update(t, temps)?.map(|extra| {
-            let mut s = bcs.sources.clone();
-            s.iter_mut().zip(&extra).for_each(|(a, b)| *a += b);
-            s
-        }))
-    };
-    let net = setup.network(model);
+    let (walls, around) = (&setup.walls, &setup.surroundings);
     let t_init = initial_node_temperatures(model, setup, bcs, initial);
     let (every, resume, mut sink) = match checkpointing {
         Some(c) => (c.every, c.resume, Some(c.sink)),
         None => (CheckpointEvery::default(), None, None),
     };
+    let mut sources = bcs.sources.clone();
+    if let Some(x) = extra.initial {
+        sources.iter_mut().zip(x).for_each(|(a, b)| *a += b);
+    }
+    // The sources of the faces exchanging heat follow the state ([`Surroundings`]): with
+    // radiation they change every step, on top of the extra sources last handed out.
+    around.add_sources(walls, &t_init, &mut sources);
+    let radiates = around.radiates();
+    let mut extra_now: Option<Vec<f64>> = match resume {
+        // The extra sources in force at the checkpoint: what its sources hold beyond the
+        // boundary's and the faces' (to round-off).
+        Some(c) if radiates && extra.initial.is_some() => {
+            let mut x: Vec<f64> = c
+                .transient
+                .sources
+                .iter()
+                .zip(&bcs.sources)
+                .map(|(a, b)| a - b)
+                .collect();
+            let mut faces = vec![0.0; x.len()];
+            around.add_sources(walls, &c.transient.temperatures, &mut faces);
+            x.iter_mut().zip(&faces).for_each(|(a, b)| *a -= b);
+            Some(x)
+        }
+        _ => extra.initial.map(<[f64]>::to_vec),
+    };
+    let update = extra.update;
+    let mut hook = |t: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, ModelError> {
+        let fresh = update(t, temps)?;
+        if fresh.is_none() && !radiates {
+            return Ok(None);
+        }
+        if fresh.is_some() {
+            extra_now = fresh;
+        }
+        let mut s = bcs.sources.clone();
+        if let Some(x) = &extra_now {
+            s.iter_mut().zip(x).for_each(|(a, b)| *a += b);
+        }
+        around.add_sources(walls, temps, &mut s);
+        Ok(Some(s))
+    };
+    let net = setup.network(model);
     let snapshots = RefCell::new(resume.map(|c| c.snapshots.clone()).unwrap_or_default());
     let system = ThermalSystem::new(net, &setup.conductances, &setup.capacities, &bcs.constraints)?;
     let input = TransientInput {
@@ -793,17 +932,34 @@ pub fn solve_thermal_checkpointed(
             if resume.is_some() {
                 return Err(not_resumable(&model.fields, "Steady"));
             }
-            return steady_run(setup, bcs, problem, &system, &sources);
+            return steady_run(
+                setup,
+                bcs,
+                problem,
+                &system,
+                &bcs_sources_with(extra.initial, bcs),
+                model.fields.bcs,
+            );
         }
     };
     let tr = tr?;
-    let report = transient_report(&tr.report, setup.paper_dt, bcs.constraints.excluded().len());
+    let mut report = transient_report(&tr.report, setup.paper_dt, bcs.constraints.excluded().len());
+    report.surroundings = around.report(walls, &tr.temperatures);
     Ok(ThermalRun::from_nodes(
         &setup.walls,
         tr.temperatures,
         snapshots.into_inner(),
         report,
     ))
+}
+
+/// The boundary's sources (W per node) with `extra` (W per particle) added.
+fn bcs_sources_with(extra: Option<&[f64]>, bcs: &ThermalBcs) -> Vec<f64> {
+    let mut s = bcs.sources.clone();
+    if let Some(x) = extra {
+        s.iter_mut().zip(x).for_each(|(a, b)| *a += b);
+    }
+    s
 }
 
 /// The model's report of a transient run (`paper_dt`: the paper's step estimate, s;
@@ -825,6 +981,8 @@ fn transient_report(
         contacts_per_s: r.contacts_per_s,
         energy_balance_error: r.energy_balance_error,
         excluded,
+        nonlinear_iterations: 0,
+        surroundings: Vec::new(),
     }
 }
 
@@ -847,18 +1005,56 @@ fn explicit_step(spec: TimeStepSpec, paper_dt: Option<f64>, solver: &str) -> Res
     })
 }
 
-/// The steady temperatures under `sources` (W per node), excluded particles at the initial
-/// temperature, with the solve's report.
+/// The steady temperatures under `sources` (W per node, without the faces exchanging heat),
+/// excluded particles at the initial temperature, with the solve's report. With radiation the
+/// solve is repeated, re-linearised at each solution, until the surface temperatures move by
+/// less than [`NEWTON_TOLERANCE`] ([`Surroundings`]).
 fn steady_run(
     setup: &ThermalSetup,
     bcs: &ThermalBcs,
     problem: &ThermalProblem,
     system: &ThermalSystem<'_>,
     sources: &[f64],
+    bcs_field: &str,
 ) -> Result<ThermalRun, ModelError> {
-    let (net, g) = (system.network(), system.conductances());
-    let st = solve_steady_temperature(net, g, &bcs.constraints, sources, &problem.solve)?;
-    let mut temps = st.solution.values;
+    let net = system.network();
+    let walls = &setup.walls;
+    let mut around = setup.surroundings.clone();
+    let mut g = system.conductances().to_vec();
+    let first_link = g.len() - walls.len();
+    let mut temps = vec![problem.initial_temperature; net.n_nodes()];
+    bcs.constraints.impose(&mut temps);
+    let (mut iterations, mut linear_iterations, mut wall_s) = (0u64, 0u64, 0.0);
+    let st = loop {
+        iterations += 1;
+        around.set_conductances(&mut g[first_link..]);
+        let mut s = sources.to_vec();
+        around.add_sources(walls, &temps, &mut s);
+        let st = solve_steady_temperature(net, &g, &bcs.constraints, &s, &problem.solve)?;
+        let r = &st.solution.report;
+        linear_iterations += r.iterations as u64;
+        wall_s += r.wall_s + r.setup_s;
+        temps.clone_from(&st.solution.values);
+        if !around.radiates() {
+            break st;
+        }
+        let change = around.relinearise(walls, &temps);
+        if change <= NEWTON_TOLERANCE {
+            break st;
+        }
+        if iterations as usize >= NEWTON_MAX_ITERATIONS {
+            return Err(ModelError::invalid(
+                bcs_field,
+                format!(
+                    "surface temperatures still moving by {change:.3e} (relative, kelvin) after {iterations} solves"
+                ),
+                format!(
+                    "a radiating steady state converging to {NEWTON_TOLERANCE:e} within {NEWTON_MAX_ITERATIONS} \
+                         solves (check the radiating faces' temperatures and emissivities)"
+                ),
+            ));
+        }
+    };
     for &p in bcs.constraints.excluded() {
         temps[p as usize] = problem.initial_temperature;
     }
@@ -869,12 +1065,14 @@ fn steady_run(
         dt: 0.0,
         dt_bound: system.stable_dt_bound().dt_max,
         dt_paper: setup.paper_dt,
-        iterations: r.iterations as u64,
+        iterations: linear_iterations,
         residual: r.relative_residual,
-        wall_s: r.wall_s + r.setup_s,
+        wall_s,
         contacts_per_s: 0.0,
         energy_balance_error: st.balance_error,
         excluded: bcs.constraints.excluded().len(),
+        nonlinear_iterations: iterations,
+        surroundings: around.report(walls, &temps),
     };
-    Ok(ThermalRun::from_nodes(&setup.walls, temps, Vec::new(), report))
+    Ok(ThermalRun::from_nodes(walls, temps, Vec::new(), report))
 }

@@ -722,6 +722,31 @@ pub enum ThermalBcConfig {
         /// Flux density (W/m²).
         flux: f64,
     },
+    /// Convection to a fluid at `t_inf` (°C): h (T_f − T∞) (W/m²) leaves through the face, T_f
+    /// the face's own temperature. Each cell on the face (particle touching it, without
+    /// cells) is linked to the fluid through its half-contact and the film h A in series —
+    /// the finite-volume Robin condition, exact for a linear field. May share its face with a
+    /// `Radiation`.
+    Convection {
+        /// The face.
+        face: FaceConfig,
+        /// Film coefficient h (W/(m²·K)), ≥ 0.
+        h: f64,
+        /// Fluid temperature T∞ (°C).
+        t_inf: f64,
+    },
+    /// Radiation to surroundings at `t_surroundings` (°C): ε σ (T_f⁴ − T_s⁴) (W/m², in
+    /// kelvin) leaves through the face (a grey face seeing only the surroundings). A steady
+    /// solve iterates to the exact law (Newton, `nonlinear_iterations` in `summary.json`); a
+    /// transient lags the nonlinear part by one step. May share its face with a `Convection`.
+    Radiation {
+        /// The face.
+        face: FaceConfig,
+        /// Emissivity ε, in [0, 1].
+        emissivity: f64,
+        /// Surroundings' temperature T_s (°C).
+        t_surroundings: f64,
+    },
 }
 
 /// A volumetric heat source.

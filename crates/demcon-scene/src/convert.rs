@@ -520,6 +520,20 @@ pub fn thermal_problem(
                 face: face(*f),
                 flux: *flux,
             },
+            ThermalBcConfig::Convection { face: f, h, t_inf } => ThermalBc::Convection {
+                face: face(*f),
+                h: *h,
+                t_inf: *t_inf,
+            },
+            ThermalBcConfig::Radiation {
+                face: f,
+                emissivity,
+                t_surroundings,
+            } => ThermalBc::Radiation {
+                face: face(*f),
+                emissivity: *emissivity,
+                t_surroundings: *t_surroundings,
+            },
         });
     }
     let sources = t

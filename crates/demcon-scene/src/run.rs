@@ -576,9 +576,7 @@ fn post_process(stages: &mut Stages, inp: &PostInputs<'_>) -> Result<Post, Scene
     };
     let (mut flux, mut halo) = (None, None);
     if let (true, Some(th), Some(s)) = (plan.flux, th, setup) {
-        let d = stages.time("flux", || {
-            demcon_model::flux_dipoles(model, &s.walls, &s.conductances, &th.node_temperatures())
-        });
+        let d = stages.time("flux", || s.heat_dipoles(model, &th.node_temperatures()));
         flux = Some(demcon_model::flux_density(&d, &s.rep_volumes));
         if let Some(params) = &plan.halo {
             halo = Some(stages.time("halo", || halo_of(model, &d, s, &domain, params))?);
@@ -655,7 +653,7 @@ fn flux_and_halo(
     halo: Option<&demcon_post::HaloParams>,
     domain: &Domain,
 ) -> Result<(Vec<Vec3>, Option<Halo>), SceneError> {
-    let d = demcon_model::flux_dipoles(model, &s.walls, &s.conductances, nodes);
+    let d = s.heat_dipoles(model, nodes);
     let halo = halo
         .map(|params| halo_of(model, &d, s, domain, params))
         .transpose()?;

@@ -223,12 +223,14 @@ fn check_names(c: &SceneConfig, r: &mut Refusals) {
 
 /// Boundary conditions that contradict each other: two conditions on one face (two held
 /// temperatures, a flux and a temperature, two fluxes — counting `FixedTemperature` on the
-/// particles of a face as a condition on that face).
+/// particles of a face as a condition on that face), except a `Convection` and a `Radiation`,
+/// which together are one face's exchange with its surroundings.
 fn check_thermal_conflicts(t: &ThermalConfig, r: &mut Refusals) {
     let face_of = |bc: &ThermalBcConfig| match bc {
-        ThermalBcConfig::WallTemperature { face, .. } | ThermalBcConfig::HeatFlux { face, .. } => {
-            Some(convert::face(*face))
-        }
+        ThermalBcConfig::WallTemperature { face, .. }
+        | ThermalBcConfig::HeatFlux { face, .. }
+        | ThermalBcConfig::Convection { face, .. }
+        | ThermalBcConfig::Radiation { face, .. } => Some(convert::face(*face)),
         ThermalBcConfig::FixedTemperature {
             select: SelectorConfig::Face(face),
             ..
@@ -239,16 +241,27 @@ fn check_thermal_conflicts(t: &ThermalConfig, r: &mut Refusals) {
         ThermalBcConfig::WallTemperature { .. } => "WallTemperature",
         ThermalBcConfig::HeatFlux { .. } => "HeatFlux",
         ThermalBcConfig::FixedTemperature { .. } => "FixedTemperature",
+        ThermalBcConfig::Convection { .. } => "Convection",
+        ThermalBcConfig::Radiation { .. } => "Radiation",
+    };
+    let exchange = |bc: &ThermalBcConfig| {
+        matches!(
+            bc,
+            ThermalBcConfig::Convection { .. } | ThermalBcConfig::Radiation { .. }
+        )
     };
     for (i, bc) in t.bcs.iter().enumerate() {
         let Some(f) = face_of(bc) else { continue };
-        if let Some(j) = t.bcs[..i].iter().position(|o| face_of(o) == Some(f)) {
+        let clash = |o: &ThermalBcConfig| {
+            face_of(o) == Some(f) && !(exchange(bc) && exchange(o) && kind(bc) != kind(o))
+        };
+        if let Some(j) = t.bcs[..i].iter().position(clash) {
             r.push(SceneError::invalid(
                 &format!("thermal.bcs[{i}]"),
                 format!("{} on {}", kind(bc), f.name()),
                 format!(
                     "thermal.bcs[{j}] ({}) is already on face {}: one face takes one condition (merge them, or \
-                     move one to another face)",
+                     move one to another face; a Convection and a Radiation may share a face)",
                     kind(&t.bcs[j]),
                     f.name()
                 ),
@@ -519,6 +532,19 @@ fn finite(field: &str, v: f64, what: &str) -> Result<(), SceneError> {
     }
 }
 
+/// A temperature (°C) of surroundings: finite and not below absolute zero.
+fn absolute(field: &str, v: f64) -> Result<(), SceneError> {
+    if v.is_finite() && v >= -demcon_model::surroundings::KELVIN {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            field,
+            v,
+            "a temperature (°C) at or above absolute zero, −273.15 °C",
+        ))
+    }
+}
+
 fn positive_time(field: &str, v: f64) -> Result<(), SceneError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
@@ -575,6 +601,34 @@ fn check_thermal(
                 finite(&format!("{field}.flux"), *flux, "a flux density (W/m²)")?;
                 check_face(&format!("{field}.face"), *face, container)?;
             }
+            ThermalBcConfig::Convection { face, h, t_inf } => {
+                fixed += 1;
+                if !(h.is_finite() && *h >= 0.0) {
+                    return Err(SceneError::invalid(
+                        &format!("{field}.h"),
+                        h,
+                        "a film coefficient ≥ 0 (W/(m²·K))",
+                    ));
+                }
+                absolute(&format!("{field}.t_inf"), *t_inf)?;
+                check_face(&format!("{field}.face"), *face, container)?;
+            }
+            ThermalBcConfig::Radiation {
+                face,
+                emissivity,
+                t_surroundings,
+            } => {
+                fixed += 1;
+                if !(0.0..=1.0).contains(emissivity) {
+                    return Err(SceneError::invalid(
+                        &format!("{field}.emissivity"),
+                        emissivity,
+                        "an emissivity in [0, 1]",
+                    ));
+                }
+                absolute(&format!("{field}.t_surroundings"), *t_surroundings)?;
+                check_face(&format!("{field}.face"), *face, container)?;
+            }
         }
     }
     for (i, s) in t.sources.iter().enumerate() {
@@ -615,8 +669,9 @@ fn check_thermal(
             if fixed == 0 {
                 return Err(SceneError::invalid(
                     "thermal.bcs",
-                    "no FixedTemperature or WallTemperature",
-                    "a steady thermal solve needs at least one fixed temperature",
+                    "no FixedTemperature, WallTemperature, Convection or Radiation",
+                    "a steady thermal solve needs at least one fixed temperature or a face exchanging heat with \
+                     its surroundings",
                 ));
             }
         }
@@ -1027,6 +1082,17 @@ fn check_etc(
                 .into(),
         );
     }
+    if let Some((i, _)) = t.bcs.iter().enumerate().find(|(_, b)| {
+        matches!(
+            b,
+            ThermalBcConfig::Convection { .. } | ThermalBcConfig::Radiation { .. }
+        )
+    }) {
+        return refuse(format!(
+            "thermal.bcs[{i}] exchanges heat with the surroundings: heat then leaves elsewhere than through the two \
+             held sets and no single λ_e describes the body; an ETC run holds two faces and nothing else"
+        ));
+    }
     if let Some((i, _)) = t
         .bcs
         .iter()
@@ -1061,7 +1127,9 @@ fn check_etc(
         .filter_map(|(i, b)| match b {
             ThermalBcConfig::FixedTemperature { value, .. }
             | ThermalBcConfig::WallTemperature { value, .. } => Some((i, *value)),
-            ThermalBcConfig::HeatFlux { .. } => None,
+            ThermalBcConfig::HeatFlux { .. }
+            | ThermalBcConfig::Convection { .. }
+            | ThermalBcConfig::Radiation { .. } => None,
         })
         .collect();
     let [(i, a), (j, b)] = held[..] else {

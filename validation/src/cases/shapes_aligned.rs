@@ -123,7 +123,16 @@ fn micro(data: &Value, id: &str) -> anyhow::Result<Micro> {
 }
 
 fn scene(n: usize, seed: u64, shapes: &[ShapeConfig], contrast: f64, rule: PhaseRuleConfig) -> SceneConfig {
-    shapes_scene("shapes-aligned", seed, CELL, n, LAMBDA_M, contrast, shapes.to_vec(), rule)
+    shapes_scene(
+        "shapes-aligned",
+        seed,
+        CELL,
+        n,
+        LAMBDA_M,
+        contrast,
+        shapes.to_vec(),
+        rule,
+    )
 }
 
 /// One (shape, contrast, rule) on one packing: the signed relative error of each diagonal

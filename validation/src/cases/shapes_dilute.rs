@@ -123,7 +123,16 @@ fn measure_rule(
                     a,
                     b,
                 };
-                let s = shapes_scene("shapes-dilute", seed, edge, count, LAMBDA_M, contrast, vec![spheroid], rule);
+                let s = shapes_scene(
+                    "shapes-dilute",
+                    seed,
+                    edge,
+                    count,
+                    LAMBDA_M,
+                    contrast,
+                    vec![spheroid],
+                    rule,
+                );
                 let model = model_of(&s)?;
                 let t = thermal_tensor(&s, &model)?;
                 let f = VOLUME / edge.powi(3);
