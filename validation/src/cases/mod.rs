@@ -38,6 +38,7 @@ pub mod shapes_aligned;
 pub mod shapes_dilute;
 pub mod shapes_generator;
 pub mod sphere_arrays;
+pub mod surroundings;
 
 use crate::Case;
 
@@ -137,6 +138,11 @@ const CASES: &[Case] = &[
         id: "shapes-dilute",
         about: "issue 34: one aligned spheroid (a/b = 3, 1/3; full: also 5, 1/10) in periodic cells at f = 0.01 and 0.005, contrasts 10 and 0.1: the increment per fraction extrapolated to f → 0 vs the exact dilute (depolarisation-factor) result",
         run: shapes_dilute::run,
+    },
+    Case {
+        id: "surroundings",
+        about: "issue 35: a bar held at one end, convecting and/or radiating at the other: steady (exact, linear) and transient convection (Biot-eigenvalue series), 3 packings; the Robin face's cost beside a held face",
+        run: surroundings::run,
     },
     Case {
         id: "layered-interface",
