@@ -34,6 +34,7 @@ mod region;
 mod selector;
 mod shape;
 mod stages;
+mod time_value;
 mod voxels;
 
 pub use available::{AvailableMemory, MemoryBound, available_memory, available_memory_bound};
@@ -50,6 +51,7 @@ pub use shape::{Aabb, Axis, Container};
 pub use stages::{
     StageObserver, StageRecord, Stages, release_free_memory, reset_peak_resident, resident_bytes,
 };
+pub use time_value::TimeValue;
 pub use voxels::Voxels;
 
 /// A point or vector in 3-D space (m).

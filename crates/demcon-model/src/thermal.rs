@@ -4,7 +4,7 @@
 
 use std::cell::RefCell;
 
-use demcon_core::{Face, Selector};
+use demcon_core::{Face, Selector, TimeValue};
 use demcon_graph::{
     CellWall, InterfaceRule, SurfaceModel, Surfaces, WallContacts, conductances, contact_property_laminate,
     contact_surfaces, representative_volumes,
@@ -13,7 +13,8 @@ use demcon_network::{Constraints, FloatingPolicy, Network, SolveParams, resolve_
 use demcon_thermal::{
     CheckpointEvery, Checkpoints, ExplicitParams, ImplicitParams, ProgressFn, RepresentativeVolume, Scheme,
     ThermalSystem, TimeStep, TransientInput, TransientStart, TransientState, capacities, face_flux_sources,
-    paper_dt_estimate, run_explicit_from, run_implicit_from, solve_steady_temperature, source_update_fn,
+    implicit_step_after, paper_dt_estimate, run_explicit_from, run_implicit_from, solve_steady_temperature,
+    source_update_fn,
 };
 use serde::Serialize;
 
@@ -40,16 +41,16 @@ pub enum ThermalBc {
     WallTemperature {
         /// The face.
         face: Face,
-        /// Temperature (°C).
-        value: f64,
+        /// Temperature (°C), constant or a table in time.
+        value: TimeValue,
     },
     /// A heat flux density into the face (W/m²), shared among the particles touching it by
     /// their projected areas.
     HeatFlux {
         /// The face.
         face: Face,
-        /// Flux density (W/m²), positive into the body.
-        flux: f64,
+        /// Flux density (W/m²), positive into the body; constant or a table in time.
+        flux: TimeValue,
     },
     /// Convection to a fluid: h (T_f − T∞) (W/m²) leaves through the face ([`crate::surroundings`]).
     Convection {
@@ -57,8 +58,8 @@ pub enum ThermalBc {
         face: Face,
         /// Film coefficient h (W/(m²·K)), ≥ 0.
         h: f64,
-        /// Fluid temperature T∞ (°C).
-        t_inf: f64,
+        /// Fluid temperature T∞ (°C), constant or a table in time.
+        t_inf: TimeValue,
     },
     /// Radiation to surroundings: ε σ (T_f⁴ − T_s⁴) (W/m², kelvin) leaves through the face.
     Radiation {
@@ -66,8 +67,8 @@ pub enum ThermalBc {
         face: Face,
         /// Emissivity ε in [0, 1].
         emissivity: f64,
-        /// Surroundings' temperature T_s (°C).
-        t_surroundings: f64,
+        /// Surroundings' temperature T_s (°C), constant or a table in time.
+        t_surroundings: TimeValue,
     },
 }
 
@@ -77,7 +78,7 @@ pub struct VolumeSource {
     /// Which particles.
     pub select: Selector,
     /// Power per unit volume of solid (W/m³).
-    pub power_density: f64,
+    pub power_density: TimeValue,
 }
 
 /// How the explicit step is chosen.
@@ -166,26 +167,28 @@ pub struct ThermalProblem {
 }
 
 impl ThermalProblem {
-    /// The walls of the thermal network: the faces held at a temperature (`WallTemperature`)
-    /// and the faces exchanging heat with their surroundings (one wall per face, however many
-    /// of `Convection` and `Radiation` it has), in the order of the conditions; the wall of
+    /// The walls of the thermal network: the faces held at a constant temperature
+    /// (`WallTemperature`), and the faces held at a tabled one or exchanging heat with their
+    /// surroundings (one wall per face, however many of `Convection` and `Radiation` it has),
+    /// in the order of the conditions; the wall of
     /// each condition (none for `FixedTemperature` and `HeatFlux`); and the exchanges with
     /// the conditions on each.
     pub fn walls(&self) -> WallPlan {
         let mut plan = WallPlan::default();
         for (i, bc) in self.bcs.iter().enumerate() {
-            let (face, convection, radiation) = match *bc {
-                ThermalBc::WallTemperature { face, .. } => {
+            let (face, held, convection, radiation) = match bc {
+                ThermalBc::WallTemperature { face, value } if value.is_constant() => {
                     plan.of_bc.push(Some(plan.faces.len()));
-                    plan.faces.push(face);
+                    plan.faces.push(*face);
                     continue;
                 }
-                ThermalBc::Convection { face, h, t_inf } => (face, Some((h, t_inf)), None),
+                ThermalBc::WallTemperature { face, value } => (*face, Some(value.clone()), None, None),
+                ThermalBc::Convection { face, h, t_inf } => (*face, None, Some((*h, t_inf.clone())), None),
                 ThermalBc::Radiation {
                     face,
                     emissivity,
                     t_surroundings,
-                } => (face, None, Some((emissivity, t_surroundings))),
+                } => (*face, None, None, Some((*emissivity, t_surroundings.clone()))),
                 ThermalBc::FixedTemperature { .. } | ThermalBc::HeatFlux { .. } => {
                     plan.of_bc.push(None);
                     continue;
@@ -197,6 +200,7 @@ impl ThermalProblem {
                     plan.exchanges.push(Exchange {
                         face,
                         wall: plan.faces.len(),
+                        held: None,
                         convection: None,
                         radiation: None,
                     });
@@ -206,8 +210,9 @@ impl ThermalProblem {
                 }
             };
             let e = &mut plan.exchanges[x];
-            e.convection = convection.or(e.convection);
-            e.radiation = radiation.or(e.radiation);
+            e.held = held.or(e.held.take());
+            e.convection = convection.or(e.convection.take());
+            e.radiation = radiation.or(e.radiation.take());
             plan.exchange_bcs[x].push(i);
             plan.of_bc.push(Some(e.wall));
         }
@@ -284,13 +289,14 @@ impl ThermalSetup {
         &self.conductances[self.conductances.len() - self.walls.len()..]
     }
 
-    /// The heat-flux dipoles (W·m) of every particle at the node temperatures `nodes` (°C,
-    /// particles then walls): the network's ([`crate::flux_dipoles`]) and, on faces exchanging
-    /// heat with their surroundings, the part of each link's heat its source carries.
-    pub fn heat_dipoles(&self, model: &Model, nodes: &[f64]) -> Vec<demcon_core::Vec3> {
+    /// The heat-flux dipoles (W·m) of every particle at time `t` (s) and the node
+    /// temperatures `nodes` (°C, particles then walls): the network's
+    /// ([`crate::flux_dipoles`]) and, on faces exchanging heat with their surroundings or
+    /// held at a tabled temperature, the part of each link's heat its source carries.
+    pub fn heat_dipoles(&self, model: &Model, t: f64, nodes: &[f64]) -> Vec<demcon_core::Vec3> {
         let mut d = crate::flux_dipoles(model, &self.walls, &self.conductances, nodes);
         self.surroundings
-            .add_dipoles(&self.walls, self.wall_conductances(), nodes, &mut d);
+            .add_dipoles(&self.walls, t, self.wall_conductances(), nodes, &mut d);
         d
     }
 }
@@ -465,6 +471,20 @@ pub struct FixedSet {
     pub value: f64,
 }
 
+impl ThermalBcs {
+    /// The sources per node (W) at time `t` (s): the constant ones and the tables' values.
+    pub fn sources_at(&self, t: f64) -> Vec<f64> {
+        let mut s = self.sources.clone();
+        for (table, nodes) in &self.timed {
+            let v = table.at(t);
+            for &(p, w) in nodes {
+                s[p as usize] += v * w;
+            }
+        }
+        s
+    }
+}
+
 impl FixedSet {
     /// The network nodes held.
     pub fn nodes(&self, walls: &WallContacts) -> Vec<u32> {
@@ -488,8 +508,12 @@ impl FixedSet {
 pub struct ThermalBcs {
     /// Fixed temperatures and excluded floating clusters.
     pub constraints: Constraints,
-    /// Heat sources per node (W): imposed fluxes and volumetric sources (0 on wall nodes).
+    /// Heat sources per node (W): imposed fluxes and volumetric sources (0 on wall nodes),
+    /// those constant in time.
     pub sources: Vec<f64>,
+    /// Imposed fluxes and volumetric sources that follow a time table: the table (W/m² or
+    /// W/m³) and the nodes it heats with their weights (m² or m³).
+    pub timed: Vec<(TimeValue, Vec<(u32, f64)>)>,
     /// The fixed sets in the order of the boundary conditions.
     pub fixed_sets: Vec<FixedSet>,
     /// What the conditions do that is allowed but probably not meant (a source on a held
@@ -508,13 +532,27 @@ pub fn thermal_bcs(
 ) -> Result<ThermalBcs, ModelError> {
     let net = setup.network(model);
     let mut sources = vec![0.0; net.n_nodes()];
-    let fixed_sets = boundary_conditions(model, setup, problem, &mut sources)?;
-    add_volume_sources(model, problem, &mut sources)?;
+    let mut timed = Vec::new();
+    let fixed_sets = boundary_conditions(model, setup, problem, &mut sources, &mut timed)?;
+    add_volume_sources(model, problem, &mut sources, &mut timed)?;
+    if !problem.solver.is_transient() {
+        refuse_tables(model, problem)?;
+    }
+    // The checks below read where heat is put, whenever it is.
+    let all_sources = {
+        let mut s = sources.clone();
+        for (_, nodes) in &timed {
+            for &(p, w) in nodes {
+                s[p as usize] += w;
+            }
+        }
+        s
+    };
     let mut warnings = Vec::new();
     let held_sourced = fixed_sets
         .iter()
         .flat_map(FixedSet::particles)
-        .filter(|&&p| sources[p as usize] != 0.0)
+        .filter(|&&p| all_sources[p as usize] != 0.0)
         .count();
     if held_sourced > 0 {
         warnings.push(format!(
@@ -551,7 +589,7 @@ pub fn thermal_bcs(
     let heated = constraints
         .floating_kept()
         .iter()
-        .any(|&p| sources[p as usize] != 0.0);
+        .any(|&p| all_sources[p as usize] != 0.0);
     if !(transient && (heated || sets.is_empty())) {
         constraints = resolve_fixed(net, &sets, problem.floating)?;
     }
@@ -560,11 +598,11 @@ pub fn thermal_bcs(
         .excluded()
         .iter()
         .copied()
-        .filter(|&p| sources[p as usize] != 0.0)
+        .filter(|&p| all_sources[p as usize] != 0.0)
         .collect();
     if !excluded.is_empty() {
-        let lost: f64 = excluded.iter().map(|&p| sources[p as usize]).sum();
-        let total: f64 = sources.iter().map(|q| q.abs()).sum();
+        let lost: f64 = excluded.iter().map(|&p| all_sources[p as usize]).sum();
+        let total: f64 = all_sources.iter().map(|q| q.abs()).sum();
         warnings.push(format!(
             "thermal: {lost:.6e} W of imposed flux and sources ({:.3} % of {total:.6e} W) falls on {} particle(s) \
              excluded from the solve (floating clusters, rattlers) and does not enter the body",
@@ -575,6 +613,7 @@ pub fn thermal_bcs(
     Ok(ThermalBcs {
         constraints,
         sources,
+        timed,
         fixed_sets,
         warnings,
     })
@@ -587,6 +626,7 @@ fn boundary_conditions(
     setup: &ThermalSetup,
     problem: &ThermalProblem,
     sources: &mut [f64],
+    timed: &mut Vec<(TimeValue, Vec<(u32, f64)>)>,
 ) -> Result<Vec<FixedSet>, ModelError> {
     let wall_of = problem.walls().of_bc;
     let mut fixed_sets = Vec::new();
@@ -609,18 +649,18 @@ fn boundary_conditions(
             ThermalBc::HeatFlux { face, flux } if model.graph.cells.is_some() => {
                 // Laguerre cells: each facet on the face receives the flux through its area.
                 let cells = model.graph.cells.as_deref().expect("checked by the guard");
-                let mut any = false;
-                for f in cells.on_wall(CellWall::Face(*face)) {
-                    sources[f.particle as usize] += flux * f.area;
-                    any = true;
-                }
-                if !any {
+                let areas: Vec<(u32, f64)> = cells
+                    .on_wall(CellWall::Face(*face))
+                    .map(|f| (f.particle, f.area))
+                    .collect();
+                if areas.is_empty() {
                     return Err(ModelError::invalid(
                         &format!("{field}.face"),
                         face.name(),
                         "a face of the container some Laguerre cell reaches",
                     ));
                 }
+                add_source(flux, areas, sources, timed);
             }
             ThermalBc::HeatFlux { face, flux } => {
                 let ids = Selector::Face(*face)
@@ -633,20 +673,23 @@ fn boundary_conditions(
                         "this container has no such face",
                     )
                 })?;
-                let s = face_flux_sources(&model.particles, &ids, flux * area)?;
-                sources.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+                let s = face_flux_sources(&model.particles, &ids, area)?;
+                let areas = ids.iter().map(|&p| (p, s[p as usize])).collect();
+                add_source(flux, areas, sources, timed);
             }
-            ThermalBc::WallTemperature { face, value } => {
+            ThermalBc::WallTemperature { face, value } if value.is_constant() => {
                 let w = wall_of[i].expect("one wall per WallTemperature, built by thermal_setup");
                 debug_assert_eq!(setup.walls.faces[w], *face);
                 fixed_sets.push(FixedSet {
                     target: FixedTarget::Wall(w),
-                    value: *value,
+                    value: value.at(0.0),
                 });
             }
-            // Walls held at their reference, with the sources of the run's state
+            // Walls held at their reference, with the sources of the run's state and time
             // ([`Surroundings`]).
-            ThermalBc::Convection { .. } | ThermalBc::Radiation { .. } => {}
+            ThermalBc::WallTemperature { .. }
+            | ThermalBc::Convection { .. }
+            | ThermalBc::Radiation { .. } => {}
         }
     }
     Ok(fixed_sets)
@@ -658,6 +701,7 @@ fn add_volume_sources(
     model: &Model,
     problem: &ThermalProblem,
     sources: &mut [f64],
+    timed: &mut Vec<(TimeValue, Vec<(u32, f64)>)>,
 ) -> Result<(), ModelError> {
     for (i, src) in problem.sources.iter().enumerate() {
         let field = format!("{}[{i}]", model.fields.sources);
@@ -665,8 +709,59 @@ fn add_volume_sources(
             .select
             .select_nonempty(&model.particles, &model.container, &field)
             .map_err(|e| ModelError::at(&format!("{field}.select"), e))?;
-        for &p in &ids {
-            sources[p as usize] += src.power_density * model.solid_volume_of(p as usize);
+        let volumes = ids
+            .iter()
+            .map(|&p| (p, model.solid_volume_of(p as usize)))
+            .collect();
+        add_source(&src.power_density, volumes, sources, timed);
+    }
+    Ok(())
+}
+
+/// A density `value` (W/m² or W/m³) over `weights` (node, m² or m³): added to `sources` (W per
+/// node) when constant, else kept with its table in `timed`.
+fn add_source(
+    value: &TimeValue,
+    weights: Vec<(u32, f64)>,
+    sources: &mut [f64],
+    timed: &mut Vec<(TimeValue, Vec<(u32, f64)>)>,
+) {
+    if value.is_constant() {
+        let v = value.at(0.0);
+        for (p, w) in weights {
+            sources[p as usize] += v * w;
+        }
+    } else {
+        timed.push((value.clone(), weights));
+    }
+}
+
+/// Refuses a value that follows a time table in a steady solve, naming its field.
+fn refuse_tables(model: &Model, problem: &ThermalProblem) -> Result<(), ModelError> {
+    let tabled = |v: &TimeValue| !v.is_constant();
+    for (i, bc) in problem.bcs.iter().enumerate() {
+        let (what, v) = match bc {
+            ThermalBc::WallTemperature { value, .. } => ("value", value),
+            ThermalBc::HeatFlux { flux, .. } => ("flux", flux),
+            ThermalBc::Convection { t_inf, .. } => ("t_inf", t_inf),
+            ThermalBc::Radiation { t_surroundings, .. } => ("t_surroundings", t_surroundings),
+            ThermalBc::FixedTemperature { .. } => continue,
+        };
+        if tabled(v) {
+            return Err(ModelError::invalid(
+                &format!("{}[{i}].{what}", model.fields.bcs),
+                "a time table",
+                "a constant in a steady solve (a table needs a transient solver)",
+            ));
+        }
+    }
+    for (i, src) in problem.sources.iter().enumerate() {
+        if tabled(&src.power_density) {
+            return Err(ModelError::invalid(
+                &format!("{}[{i}].power_density", model.fields.sources),
+                "a time table",
+                "a constant in a steady solve (a table needs a transient solver)",
+            ));
         }
     }
     Ok(())
@@ -699,9 +794,10 @@ pub struct ThermalSolveReport {
     pub excluded: usize,
     /// Solves of a steady state with radiation (re-linearised each time); 1 without.
     pub nonlinear_iterations: u64,
-    /// What each face exchanging heat with its surroundings gives off at the end.
+    /// What each face exchanging heat with its surroundings (or held at a tabled temperature)
+    /// gives off at the end.
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub surroundings: Vec<ExchangeReport>,
+    pub faces: Vec<ExchangeReport>,
 }
 
 /// Temperatures of a thermal solve.
@@ -817,47 +913,49 @@ pub fn solve_thermal_checkpointed(
         Some(c) => (c.every, c.resume, Some(c.sink)),
         None => (CheckpointEvery::default(), None, None),
     };
-    let mut sources = bcs.sources.clone();
-    if let Some(x) = extra.initial {
-        sources.iter_mut().zip(x).for_each(|(a, b)| *a += b);
-    }
-    // The sources of the faces exchanging heat follow the state ([`Surroundings`]): with
-    // radiation they change every step, on top of the extra sources last handed out.
-    around.add_sources(walls, &t_init, &mut sources);
-    let radiates = around.radiates();
+    // Sources that follow the state or the time — the faces exchanging heat
+    // ([`Surroundings`]: radiation, tabled temperatures), tabled fluxes and power densities —
+    // are re-evaluated after every step for the next one, on top of the extra sources last
+    // handed out. The tables are read at the step's own time: its start for forward Euler
+    // (whose sources act from there), its middle for the implicit schemes.
+    let when = |t: f64| -> Result<f64, ModelError> {
+        Ok(match problem.solver {
+            ThermalSolver::Implicit { t_end, dt, .. } => {
+                t + 0.5 * implicit_step_after(t_end, dt, &problem.output_times, t)?
+            }
+            _ => t,
+        })
+    };
+    let sources_at = |t: f64, temps: &[f64], extra: Option<&[f64]>| -> Result<Vec<f64>, ModelError> {
+        let tau = when(t)?;
+        let mut s = bcs.sources_at(tau);
+        if let Some(x) = extra {
+            s.iter_mut().zip(x).for_each(|(a, b)| *a += b);
+        }
+        around.add_sources(walls, tau, temps, &mut s);
+        Ok(s)
+    };
+    let varies = around.varies() || !bcs.timed.is_empty();
+    let sources = sources_at(0.0, &t_init, extra.initial)?;
     let mut extra_now: Option<Vec<f64>> = match resume {
         // The extra sources in force at the checkpoint: what its sources hold beyond the
         // boundary's and the faces' (to round-off).
-        Some(c) if radiates && extra.initial.is_some() => {
-            let mut x: Vec<f64> = c
-                .transient
-                .sources
-                .iter()
-                .zip(&bcs.sources)
-                .map(|(a, b)| a - b)
-                .collect();
-            let mut faces = vec![0.0; x.len()];
-            around.add_sources(walls, &c.transient.temperatures, &mut faces);
-            x.iter_mut().zip(&faces).for_each(|(a, b)| *a -= b);
-            Some(x)
+        Some(c) if varies && extra.initial.is_some() => {
+            let own = sources_at(c.transient.t, &c.transient.temperatures, None)?;
+            Some(c.transient.sources.iter().zip(&own).map(|(a, b)| a - b).collect())
         }
         _ => extra.initial.map(<[f64]>::to_vec),
     };
     let update = extra.update;
     let mut hook = |t: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, ModelError> {
         let fresh = update(t, temps)?;
-        if fresh.is_none() && !radiates {
+        if fresh.is_none() && !varies {
             return Ok(None);
         }
         if fresh.is_some() {
             extra_now = fresh;
         }
-        let mut s = bcs.sources.clone();
-        if let Some(x) = &extra_now {
-            s.iter_mut().zip(x).for_each(|(a, b)| *a += b);
-        }
-        around.add_sources(walls, temps, &mut s);
-        Ok(Some(s))
+        sources_at(t, temps, extra_now.as_deref()).map(Some)
     };
     let net = setup.network(model);
     let snapshots = RefCell::new(resume.map(|c| c.snapshots.clone()).unwrap_or_default());
@@ -944,7 +1042,7 @@ pub fn solve_thermal_checkpointed(
     };
     let tr = tr?;
     let mut report = transient_report(&tr.report, setup.paper_dt, bcs.constraints.excluded().len());
-    report.surroundings = around.report(walls, &tr.temperatures);
+    report.faces = around.report(walls, problem.solver.final_time(), &tr.temperatures);
     Ok(ThermalRun::from_nodes(
         &setup.walls,
         tr.temperatures,
@@ -982,7 +1080,7 @@ fn transient_report(
         energy_balance_error: r.energy_balance_error,
         excluded,
         nonlinear_iterations: 0,
-        surroundings: Vec::new(),
+        faces: Vec::new(),
     }
 }
 
@@ -1029,7 +1127,7 @@ fn steady_run(
         iterations += 1;
         around.set_conductances(&mut g[first_link..]);
         let mut s = sources.to_vec();
-        around.add_sources(walls, &temps, &mut s);
+        around.add_sources(walls, 0.0, &temps, &mut s);
         let st = solve_steady_temperature(net, &g, &bcs.constraints, &s, &problem.solve)?;
         let r = &st.solution.report;
         linear_iterations += r.iterations as u64;
@@ -1038,7 +1136,7 @@ fn steady_run(
         if !around.radiates() {
             break st;
         }
-        let change = around.relinearise(walls, &temps);
+        let change = around.relinearise(walls, 0.0, &temps);
         if change <= NEWTON_TOLERANCE {
             break st;
         }
@@ -1072,7 +1170,7 @@ fn steady_run(
         energy_balance_error: st.balance_error,
         excluded: bcs.constraints.excluded().len(),
         nonlinear_iterations: iterations,
-        surroundings: around.report(walls, &temps),
+        faces: around.report(walls, 0.0, &temps),
     };
     Ok(ThermalRun::from_nodes(walls, temps, Vec::new(), report))
 }

@@ -31,7 +31,7 @@ fn problems(solver: ThermalSolver, recouple: Option<f64>) -> (ThermalProblem, El
         interface: InterfaceRule::HarmonicMean,
         bcs: vec![ThermalBc::WallTemperature {
             face: Face::ZMin,
-            value: 20.0,
+            value: 20.0.into(),
         }],
         sources: Vec::new(),
         solver,

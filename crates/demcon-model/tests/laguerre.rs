@@ -118,7 +118,7 @@ fn an_imposed_flux_enters_through_the_wall_facets() {
         ..problem(
             vec![ThermalBc::HeatFlux {
                 face: Face::XMin,
-                flux: 1e4,
+                flux: 1e4.into(),
             }],
             ThermalSolver::Implicit {
                 t_end: 0.05,

@@ -170,7 +170,7 @@ fn bad_selections_name_the_field() {
         },
         ThermalBc::WallTemperature {
             face: Face::ZMax,
-            value: 1.0,
+            value: 1.0.into(),
         },
     ]);
     let setup = thermal_setup(&model, &problem).unwrap();
@@ -179,7 +179,7 @@ fn bad_selections_name_the_field() {
     // A wall on a face the container lacks.
     let bad = steady(vec![ThermalBc::WallTemperature {
         face: Face::Outer,
-        value: 1.0,
+        value: 1.0.into(),
     }]);
     let err = thermal_setup(&model, &bad).unwrap_err().to_string();
     assert!(err.contains("bcs"), "{err}");

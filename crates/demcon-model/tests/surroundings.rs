@@ -90,7 +90,7 @@ fn check(m: &Model, bcs: Vec<ThermalBc>, t_hot: f64, law: (f64, f64, f64, f64)) 
         );
     }
     let q = flux_density(
-        &setup.heat_dipoles(m, &run.node_temperatures()),
+        &setup.heat_dipoles(m, 0.0, &run.node_temperatures()),
         &setup.rep_volumes,
     );
     for (i, f) in q.iter().enumerate() {
@@ -99,7 +99,7 @@ fn check(m: &Model, bcs: Vec<ThermalBc>, t_hot: f64, law: (f64, f64, f64, f64)) 
             "flux of particle {i}: {f}"
         );
     }
-    let r = &run.report.surroundings[0];
+    let r = &run.report.faces[0];
     let area = 4e-6;
     assert!((r.area_m2 / area - 1.0).abs() < 1e-12, "{r:?}");
     let out = r.convection_w + r.radiation_w;
@@ -116,17 +116,17 @@ fn convection_radiation_and_both_at_one_face_are_exact_in_a_homogeneous_bar() {
     let m = bar(1200, 3);
     let hot = ThermalBc::WallTemperature {
         face: Face::XMin,
-        value: 400.0,
+        value: 400.0.into(),
     };
     let conv = ThermalBc::Convection {
         face: Face::XMax,
         h: 5e3,
-        t_inf: 20.0,
+        t_inf: 20.0.into(),
     };
     let rad = ThermalBc::Radiation {
         face: Face::XMax,
         emissivity: 0.8,
-        t_surroundings: -20.0,
+        t_surroundings: (-20.0).into(),
     };
     let run = check(&m, vec![hot.clone(), conv.clone()], 400.0, (5e3, 20.0, 0.0, 0.0));
     assert_eq!(run.report.nonlinear_iterations, 1);
@@ -141,16 +141,16 @@ fn an_etc_is_refused_when_a_face_exchanges_heat() {
     let bcs = vec![
         ThermalBc::WallTemperature {
             face: Face::XMin,
-            value: 100.0,
+            value: 100.0.into(),
         },
         ThermalBc::WallTemperature {
             face: Face::XMax,
-            value: 0.0,
+            value: 0.0.into(),
         },
         ThermalBc::Convection {
             face: Face::YMin,
             h: 10.0,
-            t_inf: 20.0,
+            t_inf: 20.0.into(),
         },
     ];
     let p = problem(bcs, ThermalSolver::Steady);

@@ -711,16 +711,16 @@ pub enum ThermalBcConfig {
     WallTemperature {
         /// The face.
         face: FaceConfig,
-        /// Temperature (°C).
-        value: f64,
+        /// Temperature (°C): a number, or a time table `[(t, value), …]` (transients).
+        value: TimedConfig,
     },
     /// Heat flux density (W/m², positive into the body) through a face, shared among the
     /// face's particles in proportion to their projected area.
     HeatFlux {
         /// The face.
         face: FaceConfig,
-        /// Flux density (W/m²).
-        flux: f64,
+        /// Flux density (W/m²): a number, or a time table `[(t, value), …]` (transients).
+        flux: TimedConfig,
     },
     /// Convection to a fluid at `t_inf` (°C): h (T_f − T∞) (W/m²) leaves through the face, T_f
     /// the face's own temperature. Each cell on the face (particle touching it, without
@@ -732,8 +732,8 @@ pub enum ThermalBcConfig {
         face: FaceConfig,
         /// Film coefficient h (W/(m²·K)), ≥ 0.
         h: f64,
-        /// Fluid temperature T∞ (°C).
-        t_inf: f64,
+        /// Fluid temperature T∞ (°C): a number, or a time table `[(t, value), …]` (transients).
+        t_inf: TimedConfig,
     },
     /// Radiation to surroundings at `t_surroundings` (°C): ε σ (T_f⁴ − T_s⁴) (W/m², in
     /// kelvin) leaves through the face (a grey face seeing only the surroundings). A steady
@@ -744,8 +744,9 @@ pub enum ThermalBcConfig {
         face: FaceConfig,
         /// Emissivity ε, in [0, 1].
         emissivity: f64,
-        /// Surroundings' temperature T_s (°C).
-        t_surroundings: f64,
+        /// Surroundings' temperature T_s (°C): a number, or a time table `[(t, value), …]`
+        /// (transients).
+        t_surroundings: TimedConfig,
     },
 }
 
@@ -755,8 +756,27 @@ pub enum ThermalBcConfig {
 pub struct SourceConfig {
     /// Which particles.
     pub select: SelectorConfig,
-    /// Power density (W/m³ of material).
-    pub power_density: f64,
+    /// Power density (W/m³ of material): a number, or a time table `[(t, value), …]`
+    /// (transients).
+    pub power_density: TimedConfig,
+}
+
+/// A value constant in time (`25.0`) or a time table (`[(0.0, 20.0), (60.0, 80.0)]`: points
+/// (t (s), value), linear between them, a jump where two points share a time, held before the
+/// first and after the last; in a transient the table must cover [0, t_end]).
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum TimedConfig {
+    /// The same value at every time.
+    Constant(f64),
+    /// Points (t (s), value).
+    Table(Vec<(f64, f64)>),
+}
+
+impl From<f64> for TimedConfig {
+    fn from(v: f64) -> Self {
+        TimedConfig::Constant(v)
+    }
 }
 
 /// Time step of the explicit solver.
@@ -937,6 +957,10 @@ pub struct OutputsConfig {
     /// Times (s) at which transient fields are recorded (probes, profiles, files).
     #[serde(default)]
     pub times: Vec<f64>,
+    /// Also record at every breakpoint of the thermal time tables inside (0, t_end): the steps
+    /// then land on them, so a jump or a kink of a table falls between two steps.
+    #[serde(default)]
+    pub times_at_breakpoints: bool,
     /// Probe points.
     #[serde(default)]
     pub probes: Vec<ProbeConfig>,
@@ -986,6 +1010,7 @@ impl Default for OutputsConfig {
     fn default() -> Self {
         Self {
             times: Vec::new(),
+            times_at_breakpoints: false,
             probes: Vec::new(),
             profiles: Vec::new(),
             particles_csv: false,

@@ -5,7 +5,9 @@
 
 use std::path::Path;
 
-use demcon_core::{Axis, Container, CoreError, Face, Material, MaterialTable, Region, Selector, Vec3};
+use demcon_core::{
+    Axis, Container, CoreError, Face, Material, MaterialTable, Region, Selector, TimeValue, Vec3,
+};
 use demcon_graph::{ContactParams, CrackShape, InterfaceRule, LaguerreParams};
 use demcon_model::{
     CarveRule, Crack, CtSpec, Damage, DefectSpec, ElectricProblem, Electrode, ElectrodeAt, FieldNames,
@@ -499,6 +501,34 @@ pub fn electric_surface(cfg: &SceneConfig, e: &ElectricConfig) -> SurfaceConfig 
     e.surface.unwrap_or(cfg.surface)
 }
 
+/// A value of the scene that may follow a time table, checked ([`TimeValue::table`]).
+pub fn timed(v: &TimedConfig, field: &str) -> Result<TimeValue, SceneError> {
+    Ok(match v {
+        TimedConfig::Constant(c) => TimeValue::Constant(*c),
+        TimedConfig::Table(points) => TimeValue::table(points.clone(), field)?,
+    })
+}
+
+/// The thermal values of the scene that follow a time table, with their fields.
+pub fn thermal_tables(t: &ThermalConfig) -> Vec<(String, &TimedConfig)> {
+    let mut out = Vec::new();
+    for (i, bc) in t.bcs.iter().enumerate() {
+        let (what, v) = match bc {
+            ThermalBcConfig::WallTemperature { value, .. } => ("value", value),
+            ThermalBcConfig::HeatFlux { flux, .. } => ("flux", flux),
+            ThermalBcConfig::Convection { t_inf, .. } => ("t_inf", t_inf),
+            ThermalBcConfig::Radiation { t_surroundings, .. } => ("t_surroundings", t_surroundings),
+            ThermalBcConfig::FixedTemperature { .. } => continue,
+        };
+        out.push((format!("thermal.bcs[{i}].{what}"), v));
+    }
+    for (i, s) in t.sources.iter().enumerate() {
+        out.push((format!("thermal.sources[{i}].power_density"), &s.power_density));
+    }
+    out.retain(|(_, v)| matches!(v, TimedConfig::Table(_)));
+    out
+}
+
 /// The thermal problem of the scene.
 pub fn thermal_problem(
     cfg: &SceneConfig,
@@ -514,16 +544,16 @@ pub fn thermal_problem(
             },
             ThermalBcConfig::WallTemperature { face: f, value } => ThermalBc::WallTemperature {
                 face: face(*f),
-                value: *value,
+                value: timed(value, &format!("thermal.bcs[{i}].value"))?,
             },
             ThermalBcConfig::HeatFlux { face: f, flux } => ThermalBc::HeatFlux {
                 face: face(*f),
-                flux: *flux,
+                flux: timed(flux, &format!("thermal.bcs[{i}].flux"))?,
             },
             ThermalBcConfig::Convection { face: f, h, t_inf } => ThermalBc::Convection {
                 face: face(*f),
                 h: *h,
-                t_inf: *t_inf,
+                t_inf: timed(t_inf, &format!("thermal.bcs[{i}].t_inf"))?,
             },
             ThermalBcConfig::Radiation {
                 face: f,
@@ -532,18 +562,18 @@ pub fn thermal_problem(
             } => ThermalBc::Radiation {
                 face: face(*f),
                 emissivity: *emissivity,
-                t_surroundings: *t_surroundings,
+                t_surroundings: timed(t_surroundings, &format!("thermal.bcs[{i}].t_surroundings"))?,
             },
         });
     }
-    let sources = t
+    let sources: Vec<VolumeSource> = t
         .sources
         .iter()
         .enumerate()
         .map(|(i, s)| {
             Ok(VolumeSource {
                 select: selector(&s.select, materials, &format!("thermal.sources[{i}].select"))?,
-                power_density: s.power_density,
+                power_density: timed(&s.power_density, &format!("thermal.sources[{i}].power_density"))?,
             })
         })
         .collect::<Result<_, SceneError>>()?;
@@ -573,6 +603,7 @@ pub fn thermal_problem(
             ));
         }
     };
+    let output_times = output_times(cfg, t, &bcs_and_sources_breakpoints(&bcs, &sources));
     Ok(ThermalProblem {
         surface: surface(&cfg.surface),
         interface: interface(cfg.interface),
@@ -580,11 +611,47 @@ pub fn thermal_problem(
         sources,
         solver,
         initial_temperature: t.initial_temperature,
-        output_times: cfg.outputs.times.clone(),
+        output_times,
         floating: floating(cfg.floating),
         solve: solve_params(&cfg.linear_solver),
         progress: None,
     })
+}
+
+/// The breakpoints (s) of the time tables among `bcs` and `sources`.
+fn bcs_and_sources_breakpoints(bcs: &[ThermalBc], sources: &[VolumeSource]) -> Vec<f64> {
+    let mut t = Vec::new();
+    for bc in bcs {
+        match bc {
+            ThermalBc::WallTemperature { value: v, .. }
+            | ThermalBc::HeatFlux { flux: v, .. }
+            | ThermalBc::Convection { t_inf: v, .. }
+            | ThermalBc::Radiation {
+                t_surroundings: v, ..
+            } => t.extend(v.breakpoints()),
+            ThermalBc::FixedTemperature { .. } => {}
+        }
+    }
+    for s in sources {
+        t.extend(s.power_density.breakpoints());
+    }
+    t
+}
+
+/// The output times of a transient: `outputs.times`, with the tables' `breakpoints` inside
+/// (0, t_end) when `outputs.times_at_breakpoints` asks, in order, each once.
+fn output_times(cfg: &SceneConfig, t: &ThermalConfig, breakpoints: &[f64]) -> Vec<f64> {
+    let mut times = cfg.outputs.times.clone();
+    let t_end = match t.solver {
+        ThermalSolverConfig::Explicit { t_end, .. } | ThermalSolverConfig::Implicit { t_end, .. } => t_end,
+        _ => return times,
+    };
+    if cfg.outputs.times_at_breakpoints {
+        times.extend(breakpoints.iter().filter(|&&b| b > 0.0 && b < t_end));
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+    }
+    times
 }
 
 /// The checkpoint schedule of a transient scene (`thermal.checkpoint`), if any.

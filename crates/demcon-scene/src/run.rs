@@ -576,7 +576,8 @@ fn post_process(stages: &mut Stages, inp: &PostInputs<'_>) -> Result<Post, Scene
     };
     let (mut flux, mut halo) = (None, None);
     if let (true, Some(th), Some(s)) = (plan.flux, th, setup) {
-        let d = stages.time("flux", || s.heat_dipoles(model, &th.node_temperatures()));
+        let end = problem.thermal.as_ref().map_or(0.0, |t| t.solver.final_time());
+        let d = stages.time("flux", || s.heat_dipoles(model, end, &th.node_temperatures()));
         flux = Some(demcon_model::flux_density(&d, &s.rep_volumes));
         if let Some(params) = &plan.halo {
             halo = Some(stages.time("halo", || halo_of(model, &d, s, &domain, params))?);
@@ -596,7 +597,7 @@ fn post_process(stages: &mut Stages, inp: &PostInputs<'_>) -> Result<Post, Scene
                     let (flux, halo) = match plan.flux {
                         true => {
                             let nodes = WallContacts::join_nodes(temps, &th.wall_temperatures);
-                            let (f, h) = flux_and_halo(model, s, &nodes, plan.halo.as_ref(), &domain)?;
+                            let (f, h) = flux_and_halo(model, s, *t, &nodes, plan.halo.as_ref(), &domain)?;
                             (Some(f), h.map(|(h, cut, _)| (h, cut)))
                         }
                         false => (None, None),
@@ -649,11 +650,12 @@ pub type Halo = (Vec<Vec3>, Vec<bool>, HaloReport);
 fn flux_and_halo(
     model: &Model,
     s: &ThermalSetup,
+    t: f64,
     nodes: &[f64],
     halo: Option<&demcon_post::HaloParams>,
     domain: &Domain,
 ) -> Result<(Vec<Vec3>, Option<Halo>), SceneError> {
-    let d = s.heat_dipoles(model, nodes);
+    let d = s.heat_dipoles(model, t, nodes);
     let halo = halo
         .map(|params| halo_of(model, &d, s, domain, params))
         .transpose()?;

@@ -10,6 +10,7 @@ use demcon_core::{Container, Face, Vec3};
 use crate::config::*;
 use crate::convert;
 use crate::error::SceneError;
+use demcon_model::surroundings::KELVIN;
 
 /// The refusals of a scene, gathered so that one run reports them all.
 #[derive(Default)]
@@ -532,16 +533,43 @@ fn finite(field: &str, v: f64, what: &str) -> Result<(), SceneError> {
     }
 }
 
-/// A temperature (°C) of surroundings: finite and not below absolute zero.
-fn absolute(field: &str, v: f64) -> Result<(), SceneError> {
-    if v.is_finite() && v >= -demcon_model::surroundings::KELVIN {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
+/// A value that may follow a time table: finite (`what` it is), at least `min` when given
+/// (−273.15 °C: a temperature in kelvin ≥ 0); a table well formed ([`TimeValue::table`]),
+/// refused in a steady solve, and covering [0, t_end] in a transient.
+fn check_timed(
+    field: &str,
+    v: &TimedConfig,
+    what: &str,
+    min: Option<f64>,
+    solver: &ThermalSolverConfig,
+) -> Result<(), SceneError> {
+    let value = convert::timed(v, field)?;
+    let (lo, hi) = value.range();
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Err(SceneError::invalid(field, lo, format!("must be finite ({what})")));
+    }
+    if let Some(m) = min
+        && lo < m
+    {
+        return Err(SceneError::invalid(
             field,
-            v,
-            "a temperature (°C) at or above absolute zero, −273.15 °C",
-        ))
+            lo,
+            format!("{what} at or above absolute zero, −273.15 °C"),
+        ));
+    }
+    if value.is_constant() {
+        return Ok(());
+    }
+    match *solver {
+        ThermalSolverConfig::Explicit { t_end, .. } | ThermalSolverConfig::Implicit { t_end, .. } => {
+            value.check_covers(t_end, field)?;
+            Ok(())
+        }
+        _ => Err(SceneError::invalid(
+            field,
+            "a time table",
+            "a constant in a steady solve or a homogenisation (a table needs a transient solver)",
+        )),
     }
 }
 
@@ -594,11 +622,23 @@ fn check_thermal(
             }
             ThermalBcConfig::WallTemperature { face, value } => {
                 fixed += 1;
-                finite(&format!("{field}.value"), *value, "a temperature (°C)")?;
+                check_timed(
+                    &format!("{field}.value"),
+                    value,
+                    "a temperature (°C)",
+                    None,
+                    &t.solver,
+                )?;
                 check_face(&format!("{field}.face"), *face, container)?;
             }
             ThermalBcConfig::HeatFlux { face, flux } => {
-                finite(&format!("{field}.flux"), *flux, "a flux density (W/m²)")?;
+                check_timed(
+                    &format!("{field}.flux"),
+                    flux,
+                    "a flux density (W/m²)",
+                    None,
+                    &t.solver,
+                )?;
                 check_face(&format!("{field}.face"), *face, container)?;
             }
             ThermalBcConfig::Convection { face, h, t_inf } => {
@@ -610,7 +650,13 @@ fn check_thermal(
                         "a film coefficient ≥ 0 (W/(m²·K))",
                     ));
                 }
-                absolute(&format!("{field}.t_inf"), *t_inf)?;
+                check_timed(
+                    &format!("{field}.t_inf"),
+                    t_inf,
+                    "a temperature (°C)",
+                    Some(-KELVIN),
+                    &t.solver,
+                )?;
                 check_face(&format!("{field}.face"), *face, container)?;
             }
             ThermalBcConfig::Radiation {
@@ -626,16 +672,24 @@ fn check_thermal(
                         "an emissivity in [0, 1]",
                     ));
                 }
-                absolute(&format!("{field}.t_surroundings"), *t_surroundings)?;
+                check_timed(
+                    &format!("{field}.t_surroundings"),
+                    t_surroundings,
+                    "a temperature (°C)",
+                    Some(-KELVIN),
+                    &t.solver,
+                )?;
                 check_face(&format!("{field}.face"), *face, container)?;
             }
         }
     }
     for (i, s) in t.sources.iter().enumerate() {
-        finite(
+        check_timed(
             &format!("thermal.sources[{i}].power_density"),
-            s.power_density,
-            "W/m³",
+            &s.power_density,
+            "a power density (W/m³)",
+            None,
+            &t.solver,
         )?;
     }
     match t.solver {
@@ -1125,8 +1179,10 @@ fn check_etc(
         .iter()
         .enumerate()
         .filter_map(|(i, b)| match b {
-            ThermalBcConfig::FixedTemperature { value, .. }
-            | ThermalBcConfig::WallTemperature { value, .. } => Some((i, *value)),
+            ThermalBcConfig::FixedTemperature { value, .. } => Some((i, *value)),
+            ThermalBcConfig::WallTemperature { value, .. } => {
+                Some((i, convert::timed(value, "").ok()?.at(0.0)))
+            }
             ThermalBcConfig::HeatFlux { .. }
             | ThermalBcConfig::Convection { .. }
             | ThermalBcConfig::Radiation { .. } => None,

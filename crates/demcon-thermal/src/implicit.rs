@@ -117,18 +117,7 @@ pub fn run_implicit_from<U: SourceUpdate>(
     if let TransientStart::Initial(input) = &start {
         system.check_input(input)?;
     }
-    let stops = stops(params.t_end, &params.output_times)?;
-    if !(params.dt.is_finite() && params.dt > 0.0) {
-        return Err(ThermalError::invalid("dt", params.dt, "must be a finite time > 0 (s)").into());
-    }
-    // Steps of each segment between stops (output times), counted before the first step.
-    let mut seg_steps = Vec::with_capacity(stops.len());
-    let mut t_prev = 0.0;
-    for &stop in &stops {
-        // `as` saturates: an absurd count stays huge and is refused below.
-        seg_steps.push(((stop - t_prev) / params.dt * (1.0 - 1e-12)).ceil().max(1.0) as u64);
-        t_prev = stop;
-    }
+    let (stops, seg_steps) = implicit_segments(params.t_end, params.dt, &params.output_times)?;
     let total = seg_steps.iter().fold(0u64, |a, &b| a.saturating_add(b));
     check_max_steps(
         params.dt,
@@ -182,6 +171,46 @@ pub fn run_implicit_from<U: SourceUpdate>(
         })
     };
     march(system, start, m, make, observer, update, checkpoints)
+}
+
+/// The stops of an implicit run (output times in (0, t_end], then t_end, s) and the number
+/// of equal steps in each segment before it: ⌈span/dt⌉ (less 10⁻¹² for rounding), at least 1.
+fn implicit_segments(
+    t_end: f64,
+    dt: f64,
+    output_times: &[f64],
+) -> Result<(Vec<f64>, Vec<u64>), ThermalError> {
+    let stops = stops(t_end, output_times)?;
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(ThermalError::invalid("dt", dt, "must be a finite time > 0 (s)"));
+    }
+    let mut seg_steps = Vec::with_capacity(stops.len());
+    let mut t_prev = 0.0;
+    for &stop in &stops {
+        // `as` saturates: an absurd count stays huge and is refused by the caller.
+        seg_steps.push(((stop - t_prev) / dt * (1.0 - 1e-12)).ceil().max(1.0) as u64);
+        t_prev = stop;
+    }
+    Ok((stops, seg_steps))
+}
+
+/// The length (s) of the implicit step that starts at `t` (s; 0 or a time a step ended at)
+/// in a run of `t_end`, `dt` and `output_times` ([`ImplicitParams`]); `dt` past `t_end`.
+///
+/// # Errors
+/// The parameters' own ([`run_implicit`]).
+pub fn implicit_step_after(t_end: f64, dt: f64, output_times: &[f64], t: f64) -> Result<f64, ThermalError> {
+    let (stops, seg_steps) = implicit_segments(t_end, dt, output_times)?;
+    let mut t_prev = 0.0;
+    for (&stop, &n) in stops.iter().zip(&seg_steps) {
+        let h = (stop - t_prev) / n as f64;
+        // The step ending within rounding of the stop belongs to the next segment.
+        if t < stop - 0.5 * h {
+            return Ok(h);
+        }
+        t_prev = stop;
+    }
+    Ok(dt)
 }
 
 /// Backward Euler or Crank–Nicolson: one solve of (f C/Δt + K) T' = b per step (f = 1 or 2),

@@ -54,7 +54,8 @@ pub use explicit::{
     ExplicitParams, ExplicitStepper, TimeStep, WeightPrecision, run_explicit, run_explicit_from,
 };
 pub use implicit::{
-    ImplicitParams, Scheme, SteadyTemperature, run_implicit, run_implicit_from, solve_steady_temperature,
+    ImplicitParams, Scheme, SteadyTemperature, implicit_step_after, run_implicit, run_implicit_from,
+    solve_steady_temperature,
 };
 pub use sources::{add_sources, face_flux_sources};
 pub use system::{NoUpdate, SourceUpdate, SourceUpdateFn, ThermalSystem, TransientInput, source_update_fn};

@@ -711,7 +711,10 @@ pub fn unsolved_mask(model: &Model, bcs: &ThermalBcs) -> Vec<bool> {
 
 /// A fixed temperature held on a face itself (wall half-contacts), demcon's default boundary.
 pub fn wall(face: FaceConfig, value: f64) -> ThermalBcConfig {
-    ThermalBcConfig::WallTemperature { face, value }
+    ThermalBcConfig::WallTemperature {
+        face,
+        value: value.into(),
+    }
 }
 
 /// The JSON key of a metric keyed by particle count: the count in decimal, unrounded

@@ -2,6 +2,7 @@
 //! cases import the shared modules below, never each other.
 
 // Shared machinery (not cases).
+pub mod bar;
 pub mod common;
 pub mod composite;
 pub mod cylinder;
@@ -39,6 +40,7 @@ pub mod shapes_dilute;
 pub mod shapes_generator;
 pub mod sphere_arrays;
 pub mod surroundings;
+pub mod time_tables;
 
 use crate::Case;
 
@@ -143,6 +145,11 @@ const CASES: &[Case] = &[
         id: "surroundings",
         about: "issue 35: a bar held at one end, convecting and/or radiating at the other: steady (exact, linear) and transient convection (Biot-eigenvalue series), 3 packings; the Robin face's cost beside a held face",
         run: surroundings::run,
+    },
+    Case {
+        id: "time-tables",
+        about: "issue 35: a bar whose end is held at a step then a ramp (a time table) vs Duhamel's superposition, forward and backward Euler, 3 packings",
+        run: time_tables::run,
     },
     Case {
         id: "layered-interface",

@@ -28,17 +28,12 @@ use demcon_model::Model;
 use demcon_model::surroundings::{KELVIN, STEFAN_BOLTZMANN};
 use demcon_scene::config::*;
 
+use super::bar::{DIFFUSIVITY, L, LAMBDA, bar_scene};
 use super::common::*;
 use super::study::Study;
 use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
 
-const L: f64 = 0.1;
-const LAMBDA: f64 = 10.0;
-/// ρ (kg/m³) and c (J/(kg·K)): ρc = 10⁶ J/(m³·K), a = 10⁻⁵ m²/s.
-const RHO: f64 = 1000.0;
-const C: f64 = 1000.0;
-const DIFFUSIVITY: f64 = LAMBDA / (RHO * C);
 /// Biot number hL/λ of the convecting faces.
 const BI: f64 = 1.0;
 const H: f64 = BI * LAMBDA / L;
@@ -49,41 +44,11 @@ const D_FOURIER: f64 = 1e-3;
 const STEADY_TOL: f64 = 1e-7;
 const TRANSIENT_TOL: f64 = 1e-3;
 
-/// The bar's scene with `bcs` and `solver`.
-fn scene(n: usize, seed: u64, bcs: Vec<ThermalBcConfig>, solver: ThermalSolverConfig) -> SceneConfig {
-    let mut s = thermal_scene(
-        "surroundings",
-        seed,
-        PackingConfig::Generate {
-            // A long thin box jams below the cube's density: φ = 0.55 packs fast, and the
-            // Laguerre network needs no particular density.
-            container: ContainerConfig::Box {
-                size: (L, 0.1 * L, 0.1 * L),
-            },
-            count: n,
-            phi: 0.55,
-            radius_cov: 0.3,
-            radius_range: None,
-            allow_short: false,
-        },
-        vec![material("bar", LAMBDA, RHO, C)],
-        ThermalConfig {
-            initial_temperature: 0.0,
-            bcs,
-            sources: Vec::new(),
-            solver,
-            checkpoint: None,
-        },
-    );
-    s.surface = SurfaceConfig::Laguerre;
-    s
-}
-
 fn convection(t_inf: f64) -> ThermalBcConfig {
     ThermalBcConfig::Convection {
         face: FaceConfig::XMax,
         h: H,
-        t_inf,
+        t_inf: t_inf.into(),
     }
 }
 
@@ -91,7 +56,7 @@ fn radiation(t_s: f64) -> ThermalBcConfig {
     ThermalBcConfig::Radiation {
         face: FaceConfig::XMax,
         emissivity: EMISSIVITY,
-        t_surroundings: t_s,
+        t_surroundings: t_s.into(),
     }
 }
 
@@ -187,28 +152,28 @@ fn steady_error(
 fn measure(n: usize, seed: u64) -> anyhow::Result<Row> {
     let hot = |v| wall(FaceConfig::XMin, v);
     let steady = ThermalSolverConfig::Steady;
-    let model = model_of(&scene(n, seed, vec![hot(100.0), convection(20.0)], steady))?;
+    let model = model_of(&bar_scene(n, seed, vec![hot(100.0), convection(20.0)], steady))?;
     let (convection_err, _, robin_s) = steady_error(
         &model,
-        &scene(n, seed, vec![hot(100.0), convection(20.0)], steady),
+        &bar_scene(n, seed, vec![hot(100.0), convection(20.0)], steady),
         100.0,
         (H, 20.0, 0.0, 0.0),
     )?;
     let (_, _, held_s) = steady_error(
         &model,
-        &scene(n, seed, vec![hot(100.0), wall(FaceConfig::XMax, 20.0)], steady),
+        &bar_scene(n, seed, vec![hot(100.0), wall(FaceConfig::XMax, 20.0)], steady),
         100.0,
         (1e300, 20.0, 0.0, 0.0),
     )?;
     let (radiation_err, newton, _) = steady_error(
         &model,
-        &scene(n, seed, vec![hot(500.0), radiation(20.0)], steady),
+        &bar_scene(n, seed, vec![hot(500.0), radiation(20.0)], steady),
         500.0,
         (0.0, 20.0, EMISSIVITY, 20.0),
     )?;
     let (both, _, _) = steady_error(
         &model,
-        &scene(
+        &bar_scene(
             n,
             seed,
             vec![hot(500.0), convection(20.0), radiation(20.0)],
@@ -219,7 +184,7 @@ fn measure(n: usize, seed: u64) -> anyhow::Result<Row> {
     )?;
     // The transient: θ₀ = 100 K above the fluid.
     let t_ref = L * L / DIFFUSIVITY;
-    let mut cfg = scene(
+    let mut cfg = bar_scene(
         n,
         seed,
         vec![convection(0.0)],

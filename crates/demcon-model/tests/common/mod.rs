@@ -83,11 +83,11 @@ pub fn two_walls(lo: Face, t_lo: f64, hi: Face, t_hi: f64) -> Vec<ThermalBc> {
     vec![
         ThermalBc::WallTemperature {
             face: lo,
-            value: t_lo,
+            value: t_lo.into(),
         },
         ThermalBc::WallTemperature {
             face: hi,
-            value: t_hi,
+            value: t_hi.into(),
         },
     ]
 }

@@ -1,17 +1,21 @@
-//! Faces exchanging heat with their surroundings through the scene: what is refused when the
-//! scene is read, and the heat balance of a run under each surface model.
+//! Face conditions through the scene — convection, radiation, time tables: what is refused
+//! when the scene is read, and the heat balance of a run under each surface model.
 
 use std::path::PathBuf;
 
 use demcon_scene::{RunOptions, Scene, SceneError, run};
 
 fn scene(surface: &str, bcs: &str, outputs: &str) -> String {
+    scene_with(surface, bcs, "Steady", outputs)
+}
+
+fn scene_with(surface: &str, bcs: &str, solver: &str, outputs: &str) -> String {
     format!(
         r#"(
     packing: Generate(container: Box(size: (0.02, 0.01, 0.01)), count: 1500, phi: 0.55, radius_cov: 0.3),
     surface: {surface},
     materials: [(name: "steel", conductivity: 33.0, density: 7800.0, specific_heat: 500.0)],
-    thermal: (bcs: [{bcs}], solver: Steady),
+    thermal: (bcs: [{bcs}], solver: {solver}),
     outputs: (vtk: false, {outputs}),
 )"#
     )
@@ -96,7 +100,7 @@ fn the_heat_held_in_leaves_by_the_exchanging_faces_under_every_surface_model() {
         );
         let r = run(&parse(&scene(surface, &bcs, "")).unwrap(), &RunOptions::default()).unwrap();
         let th = r.thermal.as_ref().unwrap();
-        let faces = &th.report.surroundings;
+        let faces = &th.report.faces;
         assert_eq!(faces.len(), 2, "{faces:?}");
         assert_eq!(faces[0].bcs, ["thermal.bcs[1]", "thermal.bcs[2]"]);
         // The exposed areas are the faces' (cells' facets, or the particles' shares).
@@ -126,4 +130,94 @@ fn the_heat_held_in_leaves_by_the_exchanging_faces_under_every_surface_model() {
             th.report
         );
     }
+}
+
+const IMPLICIT: &str = "Implicit(t_end: 10.0, dt: 0.5)";
+
+#[test]
+fn bad_time_tables_are_refused_by_field_and_point() {
+    let cases = [
+        // A table in a steady solve.
+        (
+            "Steady",
+            "WallTemperature(face: XMin, value: [(0.0, 20.0), (10.0, 30.0)])",
+            vec!["thermal.bcs[0].value", "steady"],
+        ),
+        // Not covering [0, t_end].
+        (
+            IMPLICIT,
+            "WallTemperature(face: XMin, value: [(0.0, 20.0), (5.0, 30.0)])",
+            vec!["thermal.bcs[0].value", "[0, 10]"],
+        ),
+        (
+            IMPLICIT,
+            "HeatFlux(face: XMin, flux: [(1.0, 20.0), (10.0, 30.0)])",
+            vec!["thermal.bcs[0].flux", "[0, 10]"],
+        ),
+        // Times out of order, three points at one time, empty.
+        (
+            IMPLICIT,
+            "WallTemperature(face: XMin, value: [(0.0, 1.0), (8.0, 2.0), (4.0, 3.0), (10.0, 1.0)])",
+            vec!["thermal.bcs[0].value[2]", "increasing"],
+        ),
+        (
+            IMPLICIT,
+            "Convection(face: XMin, h: 5.0, t_inf: [(0.0, 1.0), (0.0, 2.0), (0.0, 3.0), (10.0, 1.0)])",
+            vec!["thermal.bcs[0].t_inf[2]", "at most two"],
+        ),
+        (
+            IMPLICIT,
+            "WallTemperature(face: XMin, value: [])",
+            vec!["thermal.bcs[0].value", "at least one"],
+        ),
+        // A fluid colder than absolute zero at some time.
+        (
+            IMPLICIT,
+            "Convection(face: XMin, h: 5.0, t_inf: [(0.0, 20.0), (10.0, -300.0)])",
+            vec!["thermal.bcs[0].t_inf", "absolute zero"],
+        ),
+    ];
+    for (solver, bc, parts) in cases {
+        let m = refused(&scene_with("Laguerre", bc, solver, ""));
+        for p in parts {
+            assert!(m.contains(p), "`{p}` missing from: {m}");
+        }
+    }
+    // A source table in a steady solve.
+    let text = scene("Laguerre", "WallTemperature(face: XMin, value: 0.0)", "").replace(
+        "solver: Steady)",
+        "sources: [(select: All, power_density: [(0.0, 1.0), (1.0, 2.0)])], solver: Steady)",
+    );
+    let m = refused(&text);
+    assert!(m.contains("thermal.sources[0].power_density"), "{m}");
+}
+
+#[test]
+fn a_held_face_following_a_table_drives_the_body_and_its_heat_balances() {
+    // The face steps from 0 to 100 °C at t = 1 s; the run lands a step on it
+    // (`times_at_breakpoints`), the body heats, and the stored heat is what the face gave.
+    let bc = "WallTemperature(face: XMin, value: [(0.0, 0.0), (1.0, 0.0), (1.0, 100.0), (10.0, 100.0)])";
+    let text = scene_with("Laguerre", bc, IMPLICIT, "times_at_breakpoints: true");
+    let r = run(&parse(&text).unwrap(), &RunOptions::default()).unwrap();
+    let th = r.thermal.as_ref().unwrap();
+    assert_eq!(
+        th.snapshots.len(),
+        1,
+        "{:?}",
+        th.snapshots.iter().map(|s| s.0).collect::<Vec<_>>()
+    );
+    assert_eq!(th.snapshots[0].0, 1.0);
+    // Before the step nothing moved; after it the body warmed, never above the held value.
+    assert!(th.snapshots[0].1.iter().all(|&t| t == 0.0));
+    let (lo, hi) = th
+        .temperatures
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| {
+            (a.min(t), b.max(t))
+        });
+    assert!(lo >= 0.0 && hi > 1.0 && hi < 100.0, "{lo} … {hi}");
+    assert!(th.report.energy_balance_error < 1e-9, "{:?}", th.report);
+    let face = &th.report.faces[0];
+    assert!(face.held_w < 0.0, "heat enters through the held face: {face:?}");
+    assert_eq!(face.surface_temperature, [100.0, 100.0]);
 }
