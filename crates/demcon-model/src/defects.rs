@@ -82,6 +82,45 @@ pub struct InterfaceResistance {
     pub electric_resistance: Option<f64>,
 }
 
+/// A boundary resistance on every facet (contact) between two particles of one material —
+/// each particle a grain — in series like an interface's: 1/(h S) thermal, r/S electric.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GrainBoundary {
+    /// The material (index into the material table).
+    pub phase: u16,
+    /// Thermal boundary (Kapitza) conductance h (W/(m²·K)), > 0.
+    pub conductance: f64,
+    /// Electric boundary resistance r (Ω·m²), ≥ 0; `None`: electrically perfect.
+    pub electric_resistance: Option<f64>,
+    /// Spread of h over the facets: the coefficient of variation of a log-normal factor of
+    /// mean 1 drawn per facet (from `seed` and the facet's two particles, so the same for any
+    /// thread count); the electric resistance takes the inverse factor. `None` or 0: none.
+    pub spread: Option<f64>,
+    /// Seed of the spread.
+    pub seed: u64,
+}
+
+impl GrainBoundary {
+    /// The factor on h of the facet between particles `p` < `q`: log-normal of mean 1 and
+    /// coefficient of variation `spread`, or 1.
+    fn factor(&self, p: u32, q: u32) -> f64 {
+        let cv = self.spread.unwrap_or(0.0);
+        if cv <= 0.0 {
+            return 1.0;
+        }
+        use rand::SeedableRng;
+        use rand_distr::Distribution;
+        // One stream per facet: the seed mixed with the pair (SplitMix64's finaliser).
+        let mut z = self.seed ^ ((p as u64) << 32 | q as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(z ^ (z >> 31));
+        rand_distr::LogNormal::from_mean_cv(1.0, cv)
+            .map(|d| d.sample(&mut rng))
+            .unwrap_or(1.0)
+    }
+}
+
 /// A crack surface.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Crack {
@@ -109,6 +148,8 @@ pub struct Damage {
 pub struct DefectSpec {
     /// Interface resistances between phase pairs.
     pub interfaces: Vec<InterfaceResistance>,
+    /// Boundary resistances between the grains (particles) of one material.
+    pub grain_boundaries: Vec<GrainBoundary>,
     /// Crack surfaces.
     pub cracks: Vec<Crack>,
     /// Damage regions.
@@ -126,6 +167,7 @@ impl DefectSpec {
     /// Nothing to apply.
     pub fn is_empty(&self) -> bool {
         self.interfaces.is_empty()
+            && self.grain_boundaries.is_empty()
             && self.cracks.is_empty()
             && self.damage.is_empty()
             && self.cut_pairs.is_empty()
@@ -136,10 +178,45 @@ impl DefectSpec {
     pub fn validate(&self, n_phases: usize, fields: &FieldNames) -> Result<(), ModelError> {
         let FieldNames {
             interfaces,
+            grain_boundaries,
             cracks,
             damage,
             ..
         } = fields;
+        for (i, gb) in self.grain_boundaries.iter().enumerate() {
+            if gb.phase as usize >= n_phases {
+                return Err(ModelError::invalid(
+                    &format!("{grain_boundaries}[{i}].material"),
+                    gb.phase,
+                    format!("a phase of the material table (0..{n_phases})"),
+                ));
+            }
+            if let Some(j) = self.grain_boundaries[..i]
+                .iter()
+                .position(|o| o.phase == gb.phase)
+            {
+                return Err(ModelError::invalid(
+                    &format!("{grain_boundaries}[{i}].material"),
+                    gb.phase,
+                    format!("each material once (already listed as {grain_boundaries}[{j}])"),
+                ));
+            }
+            positive(
+                &format!("{grain_boundaries}[{i}].conductance"),
+                gb.conductance,
+                "W/(m²·K)",
+            )?;
+            if let Some(r) = gb.electric_resistance {
+                non_negative(&format!("{grain_boundaries}[{i}].electric_resistance"), r, "Ω·m²")?;
+            }
+            if let Some(c) = gb.spread {
+                non_negative(
+                    &format!("{grain_boundaries}[{i}].spread"),
+                    c,
+                    "a coefficient of variation",
+                )?;
+            }
+        }
         for (i, it) in self.interfaces.iter().enumerate() {
             for (j, &ph) in it.phases.iter().enumerate() {
                 if ph as usize >= n_phases {
@@ -955,9 +1032,14 @@ pub(crate) fn apply_to_contacts(view: &DefectView<'_>, areas: &[f64], g: &mut [f
         view.mixes,
         view.n_phases,
     );
-    if defects.spec.interfaces.is_empty() && defects.gap_thermal.is_empty() && defects.damage.is_empty() {
+    if defects.spec.interfaces.is_empty()
+        && defects.spec.grain_boundaries.is_empty()
+        && defects.gap_thermal.is_empty()
+        && defects.damage.is_empty()
+    {
         return;
     }
+    let grains = grain_table(&defects.spec.grain_boundaries, n_phases);
     let table = defects.spec.table(n_phases);
     let lam = Laminates::new(phases.len(), mixes);
     let gap = match physics {
@@ -983,6 +1065,14 @@ pub(crate) fn apply_to_contacts(view: &DefectView<'_>, areas: &[f64], g: &mut [f
                 Physics::Electric => e,
             };
         }
+        if let Some(gb) = grain_boundary(&grains, graph, phases, &lam, k, bridge) {
+            let [p, q] = graph.pairs[k];
+            let f = gb.factor(p, q);
+            r += match physics {
+                Physics::Thermal => 1.0 / (gb.conductance * f),
+                Physics::Electric => gb.electric_resistance.unwrap_or(0.0) / f,
+            };
+        }
         let r_gap = gap.get(k).copied().unwrap_or(0.0);
         let cover = defects.gap_cover.get(k).copied().unwrap_or(1.0);
         g[k] = if cover >= 1.0 {
@@ -994,6 +1084,37 @@ pub(crate) fn apply_to_contacts(view: &DefectView<'_>, areas: &[f64], g: &mut [f
             g[k] *= f;
         }
     }
+}
+
+/// The grain boundary of each phase, if any (indexed by phase).
+fn grain_table(gbs: &[GrainBoundary], n_phases: usize) -> Vec<Option<&GrainBoundary>> {
+    let mut t = vec![None; n_phases];
+    for gb in gbs {
+        if let Some(slot) = t.get_mut(gb.phase as usize) {
+            *slot = Some(gb);
+        }
+    }
+    t
+}
+
+/// The grain boundary on contact `k`: both particles wholly of one phase that has one (no
+/// cut particle, no bridge across a gap of another phase).
+fn grain_boundary<'g>(
+    grains: &[Option<&'g GrainBoundary>],
+    graph: &ContactGraph,
+    phases: &[u16],
+    lam: &Laminates<'_>,
+    k: usize,
+    bridge: Option<&PhaseBridge>,
+) -> Option<&'g GrainBoundary> {
+    if grains.iter().all(Option::is_none) || bridge.is_some() {
+        return None;
+    }
+    let [p, q] = graph.pairs[k].map(|x| x as usize);
+    if phases[p] != phases[q] || lam.get(p).is_some() || lam.get(q).is_some() {
+        return None;
+    }
+    grains.get(phases[p] as usize).copied().flatten()
 }
 
 /// Drops the wall links an open crack cuts (segment from the centre to the face).

@@ -97,6 +97,8 @@ pub struct FieldNames {
     pub defects: &'static str,
     /// [`crate::DefectSpec::interfaces`].
     pub interfaces: &'static str,
+    /// [`crate::DefectSpec::grain_boundaries`].
+    pub grain_boundaries: &'static str,
     /// [`crate::DefectSpec::cracks`].
     pub cracks: &'static str,
     /// [`crate::DefectSpec::damage`].
@@ -125,6 +127,7 @@ impl FieldNames {
         contacts: "contacts",
         defects: "defects",
         interfaces: "interfaces",
+        grain_boundaries: "grain_boundaries",
         cracks: "cracks",
         damage: "damage",
         cut_contacts: "cut_pairs",

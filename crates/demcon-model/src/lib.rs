@@ -54,8 +54,8 @@ pub use calibrate::{CalibrationBc, CtCalibration, calibrate_ct, calibrate_ct_wit
 pub use checkpoint::{CheckpointSink, Checkpointing, CouplingState, RunCheckpoint};
 pub use couple::{Coupled, couple, couple_checkpointed};
 pub use defects::{
-    Crack, CutCause, CutContact, Damage, DefectReport, DefectSpec, Defects, InterfaceResistance,
-    MARK_DAMAGED, MARK_FILLED_CRACK, MARK_INTERFACE, MARK_PARTLY_CUT,
+    Crack, CutCause, CutContact, Damage, DefectReport, DefectSpec, Defects, GrainBoundary,
+    InterfaceResistance, MARK_DAMAGED, MARK_FILLED_CRACK, MARK_INTERFACE, MARK_PARTLY_CUT,
 };
 pub use electric::{
     ElectricProblem, ElectricReport, ElectricRun, Electrode, ElectrodeAt, electric_conductances,

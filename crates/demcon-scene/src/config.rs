@@ -46,6 +46,11 @@ pub struct SceneConfig {
     /// Interface resistances between pairs of materials (Kapitza): unlisted pairs stay perfect.
     #[serde(default)]
     pub interfaces: Vec<InterfaceResistanceConfig>,
+    /// Boundary resistances between the grains of one material: every contact (Laguerre
+    /// facet) between two particles wholly of that material — each particle a grain — carries
+    /// the series resistance 1/(h S) (and r/S electric), as an interface does.
+    #[serde(default)]
+    pub grain_boundaries: Vec<GrainBoundaryConfig>,
     /// Crack surfaces cutting the contacts their segment crosses (open or filled).
     #[serde(default)]
     pub cracks: Vec<CrackConfig>,
@@ -568,6 +573,24 @@ pub struct InterfaceResistanceConfig {
     /// electrically perfect.
     #[serde(default)]
     pub electric_resistance: Option<f64>,
+}
+
+/// The boundary between two grains (particles) of one material.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct GrainBoundaryConfig {
+    /// The material.
+    pub material: String,
+    /// Thermal boundary (Kapitza) conductance h (W/(m²·K)), > 0.
+    pub conductance: f64,
+    /// Electric boundary resistance r (Ω·m²), ≥ 0; `None`: electrically perfect.
+    #[serde(default)]
+    pub electric_resistance: Option<f64>,
+    /// Spread of h over the facets: the coefficient of variation (≥ 0) of a log-normal factor
+    /// of mean 1, drawn per facet from the scene's `seed` (the electric resistance takes the
+    /// inverse factor); `None`: the same h everywhere.
+    #[serde(default)]
+    pub spread: Option<f64>,
 }
 
 /// A crack surface: `Disc(centre, normal, radius)` or `Polygon(points)`; open (insulating) by

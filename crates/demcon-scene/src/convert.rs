@@ -11,8 +11,8 @@ use demcon_core::{
 use demcon_graph::{ContactParams, CrackShape, InterfaceRule, LaguerreParams};
 use demcon_model::{
     CarveRule, Crack, CtSpec, Damage, DefectSpec, ElectricProblem, Electrode, ElectrodeAt, FieldNames,
-    InterfaceResistance, ModelParams, PhaseRule, PhaseSpec, SurfaceSpec, ThermalBc, ThermalProblem,
-    ThermalSolver, TimeStepSpec, VolumeSource,
+    GrainBoundary, InterfaceResistance, ModelParams, PhaseRule, PhaseSpec, SurfaceSpec, ThermalBc,
+    ThermalProblem, ThermalSolver, TimeStepSpec, VolumeSource,
 };
 use demcon_network::{FloatingPolicy, Method, SolveParams};
 use demcon_post::{HaloParams, HaloPhases, Line, ProbeMethod};
@@ -39,6 +39,7 @@ pub const SCENE_FIELDS: FieldNames = FieldNames {
     contacts: "contacts",
     defects: "defects",
     interfaces: "interfaces",
+    grain_boundaries: "grain_boundaries",
     cracks: "cracks",
     damage: "damage",
     cut_contacts: "cut_contacts",
@@ -396,6 +397,24 @@ pub fn defect_spec(cfg: &SceneConfig, materials: &MaterialTable) -> Result<Defec
             electric_resistance: it.electric_resistance,
         });
     }
+    let grain_boundaries = cfg
+        .grain_boundaries
+        .iter()
+        .enumerate()
+        .map(|(i, gb)| {
+            Ok(GrainBoundary {
+                phase: named_phase(
+                    materials,
+                    &gb.material,
+                    &format!("grain_boundaries[{i}].material"),
+                )?,
+                conductance: gb.conductance,
+                electric_resistance: gb.electric_resistance,
+                spread: gb.spread,
+                seed: cfg.seed,
+            })
+        })
+        .collect::<Result<Vec<_>, SceneError>>()?;
     let cracks = cfg
         .cracks
         .iter()
@@ -437,6 +456,7 @@ pub fn defect_spec(cfg: &SceneConfig, materials: &MaterialTable) -> Result<Defec
     }
     Ok(DefectSpec {
         interfaces,
+        grain_boundaries,
         cracks,
         damage,
         cut_pairs: Vec::new(),

@@ -193,6 +193,16 @@ pub fn scene_warnings(c: &SceneConfig) -> Vec<String> {
             }
         }
     }
+    for (i, gb) in c.grain_boundaries.iter().enumerate() {
+        if let Some(k) = c.materials.iter().position(|m| m.name == gb.material)
+            && !used[k]
+        {
+            w.push(format!(
+                "grain_boundaries[{i}]: material `{}` is used by no phase, so these boundaries are never met",
+                gb.material
+            ));
+        }
+    }
     w
 }
 

@@ -337,6 +337,38 @@ pub fn fixed(face: FaceConfig, value: f64) -> ThermalBcConfig {
     }
 }
 
+/// Writes a simple-cubic lattice of `dims` touching spheres of diameter `d` (m), in a box of
+/// the same size, to `dir/<name>-lattice-<nx>x<ny>x<nz>.xyzr` and returns the path.
+pub fn write_cubic_lattice(
+    dir: &std::path::Path,
+    name: &str,
+    dims: [usize; 3],
+    d: f64,
+) -> anyhow::Result<PathBuf> {
+    let [nx, ny, nz] = dims;
+    let mut centres = Vec::with_capacity(nx * ny * nz);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                centres.push(demcon_core::Vec3::new(
+                    (i as f64 + 0.5) * d,
+                    (j as f64 + 0.5) * d,
+                    (k as f64 + 0.5) * d,
+                ));
+            }
+        }
+    }
+    let n = centres.len();
+    let p = demcon_core::ParticleSet::new(centres, vec![0.5 * d; n])?;
+    let c = demcon_core::Container::Box {
+        size: [nx as f64 * d, ny as f64 * d, nz as f64 * d],
+    };
+    std::fs::create_dir_all(dir)?;
+    let path = dir.join(format!("{name}-lattice-{nx}x{ny}x{nz}.xyzr"));
+    demcon_packing::write_xyzr(&path, &p, &c)?;
+    Ok(path)
+}
+
 /// A scene skeleton: packing, Z = 7.5 contacts, calibrated surfaces (C_t from our own
 /// calibration), materials, thermal physics, no files.
 pub fn thermal_scene(
@@ -362,6 +394,7 @@ pub fn thermal_scene(
         phase_rule: Some(PhaseRuleConfig::Centre),
         interface: InterfaceConfig::Harmonic,
         interfaces: Vec::new(),
+        grain_boundaries: Vec::new(),
         cracks: Vec::new(),
         damage: Vec::new(),
         cut_contacts: None,

@@ -166,6 +166,7 @@ pub fn electric_scene(
         phase_rule: Some(PhaseRuleConfig::Centre),
         interface: InterfaceConfig::Harmonic,
         interfaces: Vec::new(),
+        grain_boundaries: Vec::new(),
         cracks: Vec::new(),
         damage: Vec::new(),
         cut_contacts: None,

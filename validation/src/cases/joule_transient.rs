@@ -34,7 +34,6 @@
 
 use std::time::Instant;
 
-use demcon_core::{Container, ParticleSet, Vec3};
 use demcon_scene::config::*;
 
 use super::common::*;
@@ -62,31 +61,6 @@ fn steel_beta() -> MaterialConfig {
         resistivity_ref_temp: T0,
         ..steel_304l()
     }
-}
-
-/// Writes the NX × NX × 4NX lattice into `dir` and returns its path.
-fn write_lattice(dir: &std::path::Path, nx: usize) -> anyhow::Result<std::path::PathBuf> {
-    let nz = 4 * nx;
-    let mut centres = Vec::with_capacity(nx * nx * nz);
-    for k in 0..nz {
-        for j in 0..nx {
-            for i in 0..nx {
-                centres.push(Vec3::new(
-                    (i as f64 + 0.5) * D,
-                    (j as f64 + 0.5) * D,
-                    (k as f64 + 0.5) * D,
-                ));
-            }
-        }
-    }
-    let p = ParticleSet::new(centres.clone(), vec![0.5 * D; centres.len()])?;
-    let c = Container::Box {
-        size: [nx as f64 * D, nx as f64 * D, nz as f64 * D],
-    };
-    std::fs::create_dir_all(dir)?;
-    let path = dir.join(format!("joule-transient-lattice-{nx}.xyzr"));
-    demcon_packing::write_xyzr(&path, &p, &c)?;
-    Ok(path)
 }
 
 /// The lattice scene: adiabatic, face electrodes, S = d² (C_t = 4/π) for heat and current.
@@ -118,6 +92,7 @@ fn lattice_scene(
         phases: Vec::new(),
         interface: InterfaceConfig::Harmonic,
         interfaces: Vec::new(),
+        grain_boundaries: Vec::new(),
         cracks: Vec::new(),
         damage: Vec::new(),
         cut_contacts: None,
@@ -332,7 +307,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
 fn measure(ctx: &Ctx) -> anyhow::Result<Measured> {
     let t_start = Instant::now();
     let nx = ctx.pick(8, 16);
-    let path = write_lattice(&ctx.out, nx)?;
+    let path = write_cubic_lattice(&ctx.out, "joule-transient", [nx, nx, 4 * nx], D)?;
     // R0 and C from a one-way run over a short time (any t_end: only the first solve matters).
     let probe_cfg = lattice_scene(
         &path,

@@ -14,6 +14,7 @@ pub mod transient;
 // The cases.
 pub mod crack_density;
 pub mod crack_penny;
+pub mod grain_boundaries;
 pub mod haddad2021_cost_accuracy;
 pub mod haddad2021_ct_calibration;
 pub mod haddad2021_halo_cov;
@@ -150,6 +151,11 @@ const CASES: &[Case] = &[
         id: "time-tables",
         about: "issue 35: a bar whose end is held at a step then a ramp (a time table) vs Duhamel's superposition, forward and backward Euler, 3 packings",
         run: time_tables::run,
+    },
+    Case {
+        id: "grain-boundaries",
+        about: "issue 35: a boundary conductance on every facet between grains of one material: a cubic lattice vs its exact series value; a random Laguerre polycrystal's λ_e against h D/λ (3 packings, no exact reference)",
+        run: grain_boundaries::run,
     },
     Case {
         id: "layered-interface",

@@ -191,6 +191,7 @@ pub(super) fn scene(r: &Realisation, n: usize, seed: u64, m: &PeriodicModel) -> 
         phase_rule: Some(m.rule),
         interface: InterfaceConfig::Harmonic,
         interfaces: Vec::new(),
+        grain_boundaries: Vec::new(),
         cracks: Vec::new(),
         damage: Vec::new(),
         cut_contacts: None,
