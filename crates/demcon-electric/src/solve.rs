@@ -44,6 +44,26 @@ pub struct ElectricSolution {
     pub report: SolveReport,
 }
 
+impl ElectricSolution {
+    /// The solution with the potential differences from `ground` (V) scaled by `factor`:
+    /// Kirchhoff's laws are linear, so this is the solution with every electrode's potential
+    /// moved that way (a current-controlled pair: solve at a unit difference, then scale to
+    /// the current asked). Currents scale by `factor`; the resistance is unchanged; excluded
+    /// particles keep 0.
+    pub fn rescaled(mut self, ground: f64, factor: f64) -> Self {
+        for (p, u) in self.potentials.iter_mut().enumerate() {
+            if self.excluded.binary_search(&(p as u32)).is_err() {
+                *u = ground + factor * (*u - ground);
+            }
+        }
+        self.branch_currents.iter_mut().for_each(|i| *i *= factor);
+        self.electrode_currents.iter_mut().for_each(|i| *i *= factor);
+        self.current_in = self.electrode_currents.iter().filter(|&&i| i > 0.0).sum();
+        self.current_out = -self.electrode_currents.iter().filter(|&&i| i < 0.0).sum::<f64>();
+        self
+    }
+}
+
 /// Solves Kirchhoff's laws with fixed potentials on the electrodes.
 ///
 /// `conductances`: 1/R_pq per edge (S), finite and > 0; `electrodes[k] = (particles,

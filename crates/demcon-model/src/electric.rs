@@ -44,6 +44,10 @@ pub struct ElectricProblem {
     pub interface: InterfaceRule,
     /// Electrodes (errors name `electric.electrodes[i]`).
     pub electrodes: Vec<Electrode>,
+    /// A current (A) imposed from the first electrode into the body and out through the
+    /// second (exactly two): the second keeps its potential, the first's is found (the value
+    /// it gives is not used). `None`: the electrodes hold their potentials.
+    pub current: Option<f64>,
     /// Share of each branch's Joule power given to its particles, in [0, 1].
     pub eta: f64,
     /// Floating clusters: excluded or refused.
@@ -130,6 +134,9 @@ impl ElectricRun {
 pub struct ElectricReport {
     /// Equivalent resistance ΔV/I (Ω), two electrodes only.
     pub resistance_ohm: Option<f64>,
+    /// The potential of each electrode (V), in the order given; under an imposed current the
+    /// first one's is the solve's.
+    pub electrode_potentials: Vec<f64>,
     /// Current entering (A).
     pub current_in: f64,
     /// Current leaving (A).
@@ -254,7 +261,7 @@ pub fn solve_electric(
     let (ext, g) = network_with_walls(model, &walls, g, wall_g)?;
     let net = ext.as_ref().unwrap_or_else(|| model.network());
     let mut next_wall = 0..walls.n_walls();
-    let mut electrodes = Vec::new();
+    let mut electrodes: Vec<(Vec<u32>, f64)> = Vec::new();
     for (i, e) in problem.electrodes.iter().enumerate() {
         match &e.at {
             ElectrodeAt::Particles(sel) => {
@@ -274,7 +281,35 @@ pub fn solve_electric(
         floating: problem.floating,
         solve: problem.solve,
     };
-    let sol = solve_potential(net, &g, &electrodes, &params)?;
+    let (sol, held) = match problem.current {
+        None => (
+            solve_potential(net, &g, &electrodes, &params)?,
+            electrodes.iter().map(|e| e.1).collect::<Vec<f64>>(),
+        ),
+        Some(current) => {
+            // A unit difference, then scaled to the current (Kirchhoff is linear).
+            let [(_, first), (_, ground)] = &mut electrodes[..] else {
+                return Err(ModelError::invalid(
+                    model.fields.electrodes,
+                    format!("{} electrode(s)", problem.electrodes.len()),
+                    "exactly two electrodes with an imposed current (it enters by the first, leaves by the second)",
+                ));
+            };
+            *first = *ground + 1.0;
+            let ground = *ground;
+            let unit = solve_potential(net, &g, &electrodes, &params)?;
+            let i_unit = unit.electrode_currents[0];
+            if !(i_unit.is_finite() && i_unit > 0.0) {
+                return Err(ModelError::invalid(
+                    model.fields.electrodes,
+                    format!("{i_unit:e} A at a 1 V difference"),
+                    "two electrodes a current can flow between (the body joins them)",
+                ));
+            }
+            let factor = current / i_unit;
+            (unit.rescaled(ground, factor), vec![ground + factor, ground])
+        }
+    };
     let mut joule = joule_power(net, &g, &sol.potentials, problem.eta)?;
     // The power dissipated, Σ G Δu² over every branch (electrode links included), whatever η.
     let dissipated: f64 = net
@@ -300,6 +335,7 @@ pub fn solve_electric(
     Ok(ElectricRun {
         report: ElectricReport {
             resistance_ohm: sol.resistance_ohm,
+            electrode_potentials: held,
             current_in: sol.current_in,
             current_out: sol.current_out,
             current_mismatch: sol.current_mismatch,

@@ -57,6 +57,7 @@ fn problems(solver: ThermalSolver, recouple: Option<f64>) -> (ThermalProblem, El
         eta: 1.0,
         floating: FloatingPolicy::Fail,
         recouple_tolerance: recouple,
+        current: None,
         solve: default_solve_params(),
     };
     (thermal, electric)

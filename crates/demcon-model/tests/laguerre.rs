@@ -101,6 +101,25 @@ fn face_electrodes_give_rho_l_over_a() {
         2.0e-7 * 4e-3 / 4e-6,
         max_relative = 1e-9
     );
+    // An imposed current of 3 A, entering by the first electrode (ZMin) and leaving by the
+    // second (ZMax), which keeps its 1 mV: the found drop is I R exactly, the power I² R.
+    let driven = ElectricProblem {
+        current: Some(3.0),
+        ..e.clone()
+    };
+    let run = solve_electric(&m, &driven, None).unwrap();
+    let r = 2.0e-7 * 4e-3 / 4e-6;
+    let [v_in, v_out] = run.report.electrode_potentials[..] else {
+        panic!("{:?}", run.report.electrode_potentials)
+    };
+    assert_eq!(v_out, 1e-3);
+    assert_relative_eq!(v_in - v_out, 3.0 * r, max_relative = 1e-9);
+    assert_relative_eq!(run.report.current_in, 3.0, max_relative = 1e-9);
+    assert_relative_eq!(run.report.joule_w, 9.0 * r, max_relative = 1e-9);
+    // Three electrodes cannot share one current.
+    let mut three = driven.clone();
+    three.electrodes.push(three.electrodes[0].clone());
+    assert!(solve_electric(&m, &three, None).is_err());
 }
 
 #[test]

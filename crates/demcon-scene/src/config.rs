@@ -894,6 +894,13 @@ pub struct ElectricConfig {
     /// Re-solve the potential when temperatures moved by more than this (K), for ρ_e(T).
     #[serde(default)]
     pub recouple_tolerance: Option<f64>,
+    /// A current (A) imposed instead of a potential difference: it enters the body by
+    /// `electrodes[0]` and leaves by `electrodes[1]` (exactly two); `electrodes[1]` keeps its
+    /// potential, `electrodes[0]`'s is found by the solve (the one it gives is not used) and
+    /// reported in `summary.json` (`electric.electrode_potentials`). With ρ_e(T) every re-solve
+    /// keeps the current.
+    #[serde(default)]
+    pub current: Option<f64>,
     /// Periodic homogenisation instead of electrodes (`electrodes: []`, a `Periodic`
     /// container): the effective electric conductivity tensor, `conductivity_tensor` in
     /// `summary.json` (S/m, row-major).

@@ -722,6 +722,7 @@ pub fn electric_problem(
         eta: e.eta,
         floating: floating(cfg.floating),
         recouple_tolerance: e.recouple_tolerance,
+        current: e.current,
         solve: solve_params(&cfg.linear_solver),
     })
 }

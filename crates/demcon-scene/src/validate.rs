@@ -1002,6 +1002,23 @@ fn check_electric(
             ));
         }
     }
+    if let Some(i) = e.current {
+        if !i.is_finite() {
+            return Err(SceneError::invalid("electric.current", i, "a finite current (A)"));
+        }
+        if e.homogenize || e.electrodes.len() != 2 {
+            return Err(SceneError::invalid(
+                "electric.current",
+                i,
+                format!(
+                    "exactly two electrodes to drive it between (it enters by electrodes[0], leaves by \
+                     electrodes[1]); this scene has {}{}",
+                    e.electrodes.len(),
+                    if e.homogenize { " and homogenises" } else { "" }
+                ),
+            ));
+        }
+    }
     if e.homogenize {
         // Checked with the homogenisation.
     } else if e.electrodes.len() < 2 {

@@ -178,6 +178,7 @@ pub fn electric_scene(
             eta: 1.0,
             surface: Some(surface),
             recouple_tolerance: None,
+            current: None,
             homogenize: false,
         }),
         outputs: OutputsConfig {

@@ -110,6 +110,7 @@ fn lattice_scene(
             eta: 1.0,
             surface: Some(surface),
             recouple_tolerance: tol,
+            current: None,
             homogenize: false,
         }),
         outputs: OutputsConfig {

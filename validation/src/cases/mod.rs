@@ -14,6 +14,7 @@ pub mod transient;
 // The cases.
 pub mod crack_density;
 pub mod crack_penny;
+pub mod current_control;
 pub mod grain_boundaries;
 pub mod haddad2021_cost_accuracy;
 pub mod haddad2021_ct_calibration;
@@ -156,6 +157,11 @@ const CASES: &[Case] = &[
         id: "grain-boundaries",
         about: "issue 35: a boundary conductance on every facet between grains of one material: a cubic lattice vs its exact series value; a random Laguerre polycrystal's λ_e against h D/λ (3 packings, no exact reference)",
         run: grain_boundaries::run,
+    },
+    Case {
+        id: "current-control",
+        about: "issue 35: a current imposed between two face electrodes: the potential found vs I ρ_e L/A, and a ρ_e(T) bar heated at constant current vs its exact θ(t), 3 packings",
+        run: current_control::run,
     },
     Case {
         id: "layered-interface",

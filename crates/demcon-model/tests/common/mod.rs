@@ -74,6 +74,7 @@ pub fn z_face_electrodes(surface: SurfaceSpec, volts: f64) -> ElectricProblem {
         eta: 1.0,
         floating: FloatingPolicy::Fail,
         recouple_tolerance: None,
+        current: None,
         solve: default_solve_params(),
     }
 }
