@@ -8,8 +8,13 @@ use crate::error::positive;
 pub struct Material {
     /// Name used in scene files and messages.
     pub name: String,
-    /// Thermal conductivity λ (W/(m·K)).
+    /// Thermal conductivity λ (W/(m·K)) at the reference temperature.
     pub conductivity: f64,
+    /// Temperature coefficient β_λ of the conductivity (1/K): λ(T) = λ0 (1 + β_λ (T − T_λ));
+    /// 0: constant.
+    pub conductivity_temp_coeff: f64,
+    /// Reference temperature T_λ of the conductivity (°C).
+    pub conductivity_ref_temp: f64,
     /// Density of the continuous material ρ_c (kg/m³).
     pub density: f64,
     /// Specific heat c (J/(kg·K)).
@@ -28,6 +33,8 @@ impl Material {
         Self {
             name: name.to_string(),
             conductivity,
+            conductivity_temp_coeff: 0.0,
+            conductivity_ref_temp: 0.0,
             density,
             specific_heat,
             resistivity: None,
@@ -39,6 +46,12 @@ impl Material {
     /// Thermal diffusivity a = λ / (ρ_c c) (m²/s).
     pub fn diffusivity(&self) -> f64 {
         self.conductivity / (self.density * self.specific_heat)
+    }
+
+    /// Thermal conductivity λ(T) (W/(m·K)) at temperature `t` (°C), possibly ≤ 0 outside the
+    /// range the law holds in (the caller refuses it).
+    pub fn conductivity_at(&self, t: f64) -> f64 {
+        self.conductivity * (1.0 + self.conductivity_temp_coeff * (t - self.conductivity_ref_temp))
     }
 
     /// Resistivity (Ω·m) at temperature `t`; `None` when the material has none.
@@ -55,6 +68,14 @@ impl Material {
         positive(&f("specific_heat"), self.specific_heat)?;
         if let Some(r) = self.resistivity {
             positive(&f("resistivity"), r)?;
+        }
+        for (field, v) in [
+            ("conductivity_temp_coeff", self.conductivity_temp_coeff),
+            ("conductivity_ref_temp", self.conductivity_ref_temp),
+        ] {
+            if !v.is_finite() {
+                return Err(CoreError::invalid(f(field), v, "must be finite"));
+            }
         }
         if !self.resistivity_temp_coeff.is_finite() {
             return Err(CoreError::invalid(

@@ -151,6 +151,14 @@ impl Model {
         &self.defects.crack_face
     }
 
+    /// Whether some material's conductivity depends on temperature (λ(T)).
+    pub fn conductivity_varies(&self) -> bool {
+        self.materials
+            .materials
+            .iter()
+            .any(|m| m.conductivity_temp_coeff != 0.0)
+    }
+
     /// The laminate mixes indexed by particle.
     pub fn laminates(&self) -> Laminates<'_> {
         Laminates::new(self.particles.len(), &self.mixes)

@@ -317,6 +317,14 @@ impl Surroundings {
         })
     }
 
+    /// New half-bond conductances of the links (W/K, per wall link in link order: λ(T) moved
+    /// them).
+    pub fn set_half(&mut self, half: &[f64]) {
+        for (k, l) in &mut self.links {
+            l.half = half[*k];
+        }
+    }
+
     /// The face walls' link conductances (W/K) written into `g`, the wall links' conductances
     /// in link order.
     pub fn set_conductances(&self, g: &mut [f64]) {

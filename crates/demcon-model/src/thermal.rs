@@ -319,7 +319,7 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
         _ => None,
     };
     let sm = problem.surface.model(calibration.as_ref().map(|c| c.c_t));
-    let (s, contact_lambda, g) = contact_values(model, &sm, problem.interface)?;
+    let (s, contact_lambda, mut g) = contact_values(model, &sm, problem.interface)?;
     let lam_phase: Vec<f64> = model.materials.materials.iter().map(|m| m.conductivity).collect();
     let rep = representative_volumes(&model.graph, &model.particles, &sm, model.phi)?;
     let vols: Vec<f64> = (0..model.particles.len())
@@ -357,6 +357,11 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
         &mut wall_g,
         Physics::Thermal,
     );
+    if model.conductivity_varies() {
+        // λ(T): the conductances of the initial state (a steady solve iterates from them).
+        let t0 = vec![problem.initial_temperature; model.particles.len()];
+        (g, wall_g) = conductances_at(model, &sm, problem.interface, &walls, &t0)?;
+    }
     let surroundings = Surroundings::new(
         plan.exchanges,
         plan.exchange_bcs,
@@ -416,6 +421,62 @@ fn contact_values(
     let mut g = conductances(&model.graph, &s.area, &lambda)?;
     apply_to_contacts(&model.defect_view(), &s.area, &mut g, Physics::Thermal);
     Ok((s, lambda, g))
+}
+
+/// The contact conductances (W/K) and the wall links' half-bond conductances (W/K, in link
+/// order, before the films of faces exchanging heat) with λ(T) of every particle at its
+/// temperature in `temps` (°C, per particle; more entries are ignored), defects applied.
+///
+/// Errors: λ(T) ≤ 0 (or not finite) at a particle, naming the material's coefficient, the
+/// particle and its temperature.
+pub fn conductances_at(
+    model: &Model,
+    sm: &SurfaceModel,
+    rule: InterfaceRule,
+    walls: &WallContacts,
+    temps: &[f64],
+) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
+    let materials = &model.materials.materials;
+    let lam = model.laminates();
+    let at = |phase: u16, p: usize| -> Result<f64, ModelError> {
+        let m = &materials[phase as usize];
+        let v = m.conductivity_at(temps[p]);
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(ModelError::invalid(
+                &format!("materials[{}].conductivity_temp_coeff", m.name),
+                m.conductivity_temp_coeff,
+                format!(
+                    "λ(T) > 0 over the temperatures met: particle {p} at {:.6} °C gives λ = {v:.6e} W/(m·K)",
+                    temps[p]
+                ),
+            ))
+        }
+    };
+    let mut own = Vec::with_capacity(model.particles.len());
+    let mut other = Vec::with_capacity(model.particles.len());
+    for (p, &phase) in model.particles.phases.iter().enumerate() {
+        own.push(at(phase, p)?);
+        other.push(match lam.get(p) {
+            Some(m) => Some((*m, at(m.other_phase, p)?)),
+            None => None,
+        });
+    }
+    let lambda = demcon_electric::ParticleConductivities { own, other };
+    let s = contact_surfaces(&model.graph, &model.particles, sm)?;
+    let mut g = demcon_electric::contact_conductances(&model.graph, &s.area, &lambda, rule);
+    apply_to_contacts(&model.defect_view(), &s.area, &mut g, Physics::Thermal);
+    let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), sm);
+    let mut wall_g = walls.conductances(&wall_s, |p, e, h| lambda.half_bond(p, e, h));
+    apply_to_walls(
+        &model.defect_view(),
+        walls,
+        &wall_s,
+        &mut wall_g,
+        Physics::Thermal,
+    );
+    Ok((g, wall_g))
 }
 
 /// The contact conductances H = λ S / d (W/K) under `surface` and `interface`, with C_t
@@ -792,8 +853,12 @@ pub struct ThermalSolveReport {
     pub energy_balance_error: f64,
     /// Particles excluded from the solve (floating clusters).
     pub excluded: usize,
-    /// Solves of a steady state with radiation (re-linearised each time); 1 without.
+    /// Solves of a steady state: 1 when linear; with radiation (re-linearised each time) or
+    /// λ(T) (conductances re-evaluated, Anderson-mixed), as many as it took.
     pub nonlinear_iterations: u64,
+    /// The last solve's change: of the temperatures relative to their span (λ(T)), or of the
+    /// radiating surfaces' temperatures relative to their value in kelvin; 0 when linear.
+    pub nonlinear_change: f64,
     /// What each face exchanging heat with its surroundings (or held at a tabled temperature)
     /// gives off at the end.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -926,16 +991,37 @@ pub fn solve_thermal_checkpointed(
             _ => t,
         })
     };
+    // λ(T): the matrix keeps the conductances of the initial state; what they became at the
+    // step's temperatures goes into the sources, (K₀ − K(T)) T — forward Euler exactly, the
+    // implicit schemes with the change lagged by one step.
+    let conductivity_varies = model.conductivity_varies();
+    let net = setup.network(model);
     let sources_at = |t: f64, temps: &[f64], extra: Option<&[f64]>| -> Result<Vec<f64>, ModelError> {
         let tau = when(t)?;
         let mut s = bcs.sources_at(tau);
         if let Some(x) = extra {
             s.iter_mut().zip(x).for_each(|(a, b)| *a += b);
         }
-        around.add_sources(walls, tau, temps, &mut s);
+        if conductivity_varies {
+            let (contacts, half) =
+                conductances_at(model, &setup.surface, problem.interface, walls, &temps[..n])?;
+            let mut now = around.clone();
+            now.set_half(&half);
+            let mut g = [contacts, half].concat();
+            let first_link = g.len() - walls.len();
+            now.set_conductances(&mut g[first_link..]);
+            let was = net.apply_laplacian(&setup.conductances, temps)?;
+            let is = net.apply_laplacian(&g, temps)?;
+            for (p, si) in s.iter_mut().enumerate().take(n) {
+                *si += was[p] - is[p];
+            }
+            now.add_sources(walls, tau, temps, &mut s);
+        } else {
+            around.add_sources(walls, tau, temps, &mut s);
+        }
         Ok(s)
     };
-    let varies = around.varies() || !bcs.timed.is_empty();
+    let varies = around.varies() || !bcs.timed.is_empty() || conductivity_varies;
     let sources = sources_at(0.0, &t_init, extra.initial)?;
     let mut extra_now: Option<Vec<f64>> = match resume {
         // The extra sources in force at the checkpoint: what its sources hold beyond the
@@ -957,7 +1043,6 @@ pub fn solve_thermal_checkpointed(
         }
         sources_at(t, temps, extra_now.as_deref()).map(Some)
     };
-    let net = setup.network(model);
     let snapshots = RefCell::new(resume.map(|c| c.snapshots.clone()).unwrap_or_default());
     let system = ThermalSystem::new(net, &setup.conductances, &setup.capacities, &bcs.constraints)?;
     let input = TransientInput {
@@ -1031,12 +1116,12 @@ pub fn solve_thermal_checkpointed(
                 return Err(not_resumable(&model.fields, "Steady"));
             }
             return steady_run(
+                model,
                 setup,
                 bcs,
                 problem,
                 &system,
                 &bcs_sources_with(extra.initial, bcs),
-                model.fields.bcs,
             );
         }
     };
@@ -1080,6 +1165,7 @@ fn transient_report(
         energy_balance_error: r.energy_balance_error,
         excluded,
         nonlinear_iterations: 0,
+        nonlinear_change: 0.0,
         faces: Vec::new(),
     }
 }
@@ -1104,27 +1190,42 @@ fn explicit_step(spec: TimeStepSpec, paper_dt: Option<f64>, solver: &str) -> Res
 }
 
 /// The steady temperatures under `sources` (W per node, without the faces exchanging heat),
-/// excluded particles at the initial temperature, with the solve's report. With radiation the
-/// solve is repeated, re-linearised at each solution, until the surface temperatures move by
-/// less than [`NEWTON_TOLERANCE`] ([`Surroundings`]).
+/// excluded particles at the initial temperature, with the solve's report. The solve is
+/// repeated while the problem is nonlinear:
+/// - radiation: re-linearised at each solution (Newton on the reduced system) until the
+///   surface temperatures move by less than [`NEWTON_TOLERANCE`] ([`Surroundings`]);
+/// - λ(T): the conductances re-evaluated at each iterate (Picard), the iterates mixed by
+///   Anderson acceleration ([`Anderson`]), until a solve moves no temperature by more than
+///   [`PICARD_TOLERANCE`] of the temperature span.
 fn steady_run(
+    model: &Model,
     setup: &ThermalSetup,
     bcs: &ThermalBcs,
     problem: &ThermalProblem,
     system: &ThermalSystem<'_>,
     sources: &[f64],
-    bcs_field: &str,
 ) -> Result<ThermalRun, ModelError> {
     let net = system.network();
     let walls = &setup.walls;
     let mut around = setup.surroundings.clone();
     let mut g = system.conductances().to_vec();
     let first_link = g.len() - walls.len();
+    let varies = model.conductivity_varies();
     let mut temps = vec![problem.initial_temperature; net.n_nodes()];
     bcs.constraints.impose(&mut temps);
+    let mut mix = Anderson::new(ANDERSON_DEPTH);
     let (mut iterations, mut linear_iterations, mut wall_s) = (0u64, 0u64, 0.0);
+    let mut last_change = 0.0f64;
     let st = loop {
         iterations += 1;
+        if varies {
+            let n = model.particles.len();
+            let (contacts, half) =
+                conductances_at(model, &setup.surface, problem.interface, walls, &temps[..n])?;
+            g[..first_link].copy_from_slice(&contacts);
+            g[first_link..].copy_from_slice(&half);
+            around.set_half(&half);
+        }
         around.set_conductances(&mut g[first_link..]);
         let mut s = sources.to_vec();
         around.add_sources(walls, 0.0, &temps, &mut s);
@@ -1132,30 +1233,49 @@ fn steady_run(
         let r = &st.solution.report;
         linear_iterations += r.iterations as u64;
         wall_s += r.wall_s + r.setup_s;
-        temps.clone_from(&st.solution.values);
-        if !around.radiates() {
+        let mut out = st.solution.values.clone();
+        for &p in bcs.constraints.excluded() {
+            out[p as usize] = problem.initial_temperature;
+        }
+        if !varies && !around.radiates() {
+            temps = out;
             break st;
         }
-        let change = around.relinearise(walls, 0.0, &temps);
-        if change <= NEWTON_TOLERANCE {
+        // How far this solve moved the temperatures (λ(T)) and the radiating surfaces.
+        let (lo, hi) = out.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+        let moved = out
+            .iter()
+            .zip(&temps)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+            / (hi - lo).max(1.0);
+        let next = if varies { mix.next(&temps, &out) } else { out };
+        let turned = around.relinearise(walls, 0.0, &next);
+        temps = next;
+        last_change = if varies { moved.max(turned) } else { turned };
+        let (lambda_done, radiation_done) =
+            (!varies || moved <= PICARD_TOLERANCE, turned <= NEWTON_TOLERANCE);
+        if lambda_done && radiation_done {
             break st;
         }
         if iterations as usize >= NEWTON_MAX_ITERATIONS {
+            let (what, change, tol) = if lambda_done {
+                ("surface temperatures (radiation)", turned, NEWTON_TOLERANCE)
+            } else {
+                ("temperatures (λ(T))", moved, PICARD_TOLERANCE)
+            };
             return Err(ModelError::invalid(
-                bcs_field,
+                model.fields.bcs,
+                format!("{what} still moving by {change:.3e} (relative) after {iterations} solves"),
                 format!(
-                    "surface temperatures still moving by {change:.3e} (relative, kelvin) after {iterations} solves"
-                ),
-                format!(
-                    "a radiating steady state converging to {NEWTON_TOLERANCE:e} within {NEWTON_MAX_ITERATIONS} \
-                         solves (check the radiating faces' temperatures and emissivities)"
+                    "a nonlinear steady state converging to {tol:e} within {NEWTON_MAX_ITERATIONS} solves (check the \
+                     radiating faces, or the conductivities' temperature coefficients)"
                 ),
             ));
         }
     };
-    for &p in bcs.constraints.excluded() {
-        temps[p as usize] = problem.initial_temperature;
-    }
     let r = &st.solution.report;
     let report = ThermalSolveReport {
         scheme: "steady".into(),
@@ -1170,7 +1290,72 @@ fn steady_run(
         energy_balance_error: st.balance_error,
         excluded: bcs.constraints.excluded().len(),
         nonlinear_iterations: iterations,
+        nonlinear_change: last_change,
         faces: around.report(walls, 0.0, &temps),
     };
     Ok(ThermalRun::from_nodes(walls, temps, Vec::new(), report))
+}
+
+/// Largest change of a temperature between two λ(T) iterates, relative to the temperature
+/// span (at least 1 K), at which the steady iteration stops: a millionth, two orders below the
+/// network's own error on the validation bars (`lambda-t`), where the iterates shrink ~50× per
+/// solve (so the next would move them by ~2·10⁻⁸).
+pub const PICARD_TOLERANCE: f64 = 1e-6;
+
+/// Iterates the steady λ(T) iteration's Anderson acceleration mixes.
+const ANDERSON_DEPTH: usize = 3;
+
+/// Anderson acceleration of a fixed-point iteration x ← G(x) (type II, Walker & Ni 2011): the
+/// next iterate G(x_k) − ΔG γ, γ minimising |f_k − ΔF γ| over the last few residuals
+/// f = G(x) − x (ΔF, ΔG their differences), by the normal equations.
+struct Anderson {
+    depth: usize,
+    /// The last G(x) and f = G(x) − x, oldest first.
+    history: std::collections::VecDeque<(Vec<f64>, Vec<f64>)>,
+}
+
+impl Anderson {
+    fn new(depth: usize) -> Self {
+        Self {
+            depth,
+            history: std::collections::VecDeque::new(),
+        }
+    }
+
+    /// The next iterate from `x` and its image `gx`.
+    fn next(&mut self, x: &[f64], gx: &[f64]) -> Vec<f64> {
+        let f: Vec<f64> = gx.iter().zip(x).map(|(g, x)| g - x).collect();
+        self.history.push_back((gx.to_vec(), f));
+        if self.history.len() > self.depth + 1 {
+            self.history.pop_front();
+        }
+        let m = self.history.len() - 1;
+        if m == 0 {
+            return gx.to_vec();
+        }
+        // Differences of successive images (`image`) or residuals (not `image`).
+        let diff = |i: usize, image: bool| -> Vec<f64> {
+            let pick = |h: &(Vec<f64>, Vec<f64>)| if image { h.0.clone() } else { h.1.clone() };
+            let (a, b) = (pick(&self.history[i + 1]), pick(&self.history[i]));
+            a.iter().zip(&b).map(|(a, b)| a - b).collect()
+        };
+        let df: Vec<Vec<f64>> = (0..m).map(|i| diff(i, false)).collect();
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
+        let fk = &self.history[m].1;
+        let a = nalgebra::DMatrix::from_fn(m, m, |i, j| dot(&df[i], &df[j]));
+        let b = nalgebra::DVector::from_fn(m, |i, _| dot(&df[i], fk));
+        // A tiny ridge keeps nearly collinear residuals solvable.
+        let ridge = 1e-12 * a.diagonal().max().max(f64::MIN_POSITIVE);
+        let a = a + nalgebra::DMatrix::identity(m, m) * ridge;
+        let Some(gamma) = a.cholesky().map(|c| c.solve(&b)) else {
+            self.history.clear();
+            return gx.to_vec();
+        };
+        let mut next = gx.to_vec();
+        for (i, &gi) in gamma.iter().enumerate() {
+            let dg = diff(i, true);
+            next.iter_mut().zip(&dg).for_each(|(v, d)| *v -= gi * d);
+        }
+        next
+    }
 }

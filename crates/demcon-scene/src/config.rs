@@ -351,8 +351,16 @@ impl Default for SurfaceConfig {
 pub struct MaterialConfig {
     /// Name used by phases and messages.
     pub name: String,
-    /// λ (W/(m·K)).
+    /// λ (W/(m·K)) at `conductivity_ref_temp`.
     pub conductivity: f64,
+    /// β_λ (1/K) in λ(T) = λ0 (1 + β_λ (T − T_λ)); 0 (the default): constant. A steady solve
+    /// iterates to it (`thermal.nonlinear_iterations`), a transient keeps the conductances of
+    /// the initial state in its matrix and the rest as sources at each step's temperatures.
+    #[serde(default)]
+    pub conductivity_temp_coeff: f64,
+    /// T_λ (°C) of the conductivity.
+    #[serde(default = "default_ref_temp")]
+    pub conductivity_ref_temp: f64,
     /// ρ_c (kg/m³).
     pub density: f64,
     /// c (J/(kg·K)).

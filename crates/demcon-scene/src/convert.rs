@@ -188,6 +188,8 @@ pub fn materials(ms: &[MaterialConfig]) -> Result<MaterialTable, SceneError> {
             .map(|m| Material {
                 name: m.name.clone(),
                 conductivity: m.conductivity,
+                conductivity_temp_coeff: m.conductivity_temp_coeff,
+                conductivity_ref_temp: m.conductivity_ref_temp,
                 density: m.density,
                 specific_heat: m.specific_heat,
                 resistivity: m.resistivity,

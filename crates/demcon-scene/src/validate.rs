@@ -193,6 +193,20 @@ pub fn scene_warnings(c: &SceneConfig) -> Vec<String> {
             }
         }
     }
+    if c.thermal
+        .as_ref()
+        .is_some_and(|t| matches!(t.solver, ThermalSolverConfig::Homogenize))
+    {
+        for (k, m) in c.materials.iter().enumerate() {
+            if m.conductivity_temp_coeff != 0.0 {
+                w.push(format!(
+                    "materials[{k}].conductivity_temp_coeff: a homogenisation has no temperature field; its tensor \
+                     uses `{}`'s λ at conductivity_ref_temp = {} °C",
+                    m.name, m.conductivity_ref_temp
+                ));
+            }
+        }
+    }
     for (i, gb) in c.grain_boundaries.iter().enumerate() {
         if let Some(k) = c.materials.iter().position(|m| m.name == gb.material)
             && !used[k]
@@ -653,11 +667,11 @@ fn check_thermal(
             }
             ThermalBcConfig::Convection { face, h, t_inf } => {
                 fixed += 1;
-                if !(h.is_finite() && *h >= 0.0) {
+                if !(h.is_finite() && *h > 0.0) {
                     return Err(SceneError::invalid(
                         &format!("{field}.h"),
                         h,
-                        "a film coefficient ≥ 0 (W/(m²·K))",
+                        "a film coefficient > 0 (W/(m²·K)); an adiabatic face needs no condition",
                     ));
                 }
                 check_timed(
@@ -675,11 +689,11 @@ fn check_thermal(
                 t_surroundings,
             } => {
                 fixed += 1;
-                if !(0.0..=1.0).contains(emissivity) {
+                if !(*emissivity > 0.0 && *emissivity <= 1.0) {
                     return Err(SceneError::invalid(
                         &format!("{field}.emissivity"),
                         emissivity,
-                        "an emissivity in [0, 1]",
+                        "an emissivity in (0, 1]; a face that does not radiate needs no condition",
                     ));
                 }
                 check_timed(

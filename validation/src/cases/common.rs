@@ -280,6 +280,8 @@ pub fn material(name: &str, conductivity: f64, density: f64, specific_heat: f64)
     MaterialConfig {
         name: name.into(),
         conductivity,
+        conductivity_temp_coeff: 0.0,
+        conductivity_ref_temp: 20.0,
         density,
         specific_heat,
         resistivity: None,

@@ -38,6 +38,8 @@ fn steel() -> MaterialConfig {
     MaterialConfig {
         name: "AISI 304L".into(),
         conductivity: 15.0,
+        conductivity_temp_coeff: 0.0,
+        conductivity_ref_temp: 20.0,
         density: 7900.0,
         specific_heat: 500.0,
         resistivity: Some(RHO_E),

@@ -34,6 +34,8 @@ pub fn steel_304l() -> MaterialConfig {
     MaterialConfig {
         name: "AISI 304L".into(),
         conductivity: LAMBDA,
+        conductivity_temp_coeff: 0.0,
+        conductivity_ref_temp: 20.0,
         density: DENSITY,
         specific_heat: SPECIFIC_HEAT,
         resistivity: Some(RHO_E),

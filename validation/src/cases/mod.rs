@@ -33,6 +33,7 @@ pub mod hubert2017_solver_timing;
 pub mod images;
 pub mod inclusion_interface;
 pub mod joule_transient;
+pub mod lambda_t;
 pub mod layered_interface;
 pub mod ligament_holm;
 pub mod multi_inclusion_interface;
@@ -162,6 +163,11 @@ const CASES: &[Case] = &[
         id: "current-control",
         about: "issue 35: a current imposed between two face electrodes: the potential found vs I ρ_e L/A, and a ρ_e(T) bar heated at constant current vs its exact θ(t), 3 packings",
         run: current_control::run,
+    },
+    Case {
+        id: "lambda-t",
+        about: "issue 35: λ(T) = λ0 (1 + β T) bar: steady vs the Kirchhoff-transform profile (with the solve count), transient vs our fine 1-D reference, 3 packings",
+        run: lambda_t::run,
     },
     Case {
         id: "layered-interface",

@@ -1,0 +1,103 @@
+//! λ(T) = λ0 (1 + β (T − T_ref)) on the Laguerre network: a bar held at its two ends against
+//! the Kirchhoff-transform profile (u = ∫ λ dT linear in x), steady in a few Anderson-mixed
+//! Picard solves; a λ(T) that reaches 0 in the range met is refused by particle and temperature.
+
+mod common;
+
+use common::two_walls;
+use demcon_core::{Container, Face, Material, MaterialTable};
+use demcon_graph::{ContactParams, InterfaceRule, LaguerreParams};
+use demcon_model::thermal::PICARD_TOLERANCE;
+use demcon_model::*;
+use demcon_network::FloatingPolicy;
+use demcon_packing::{PackingParams, RadiusDistribution, pack};
+
+const L: f64 = 4e-3;
+
+fn bar(beta: f64) -> Model {
+    let container = Container::Box {
+        size: [L, 2e-3, 2e-3],
+    };
+    let params = PackingParams::new(container, 2000, 0.55, RadiusDistribution::gaussian(0.3));
+    let (particles, report) = pack(&params, 5, None).unwrap();
+    let packed = Packed {
+        particles,
+        container,
+        report: Some(report),
+        imported_from: None,
+        pack_s: 0.0,
+    };
+    let material = Material {
+        conductivity_temp_coeff: beta,
+        conductivity_ref_temp: 0.0,
+        ..Material::thermal("polymer", 0.3, 1200.0, 1500.0)
+    };
+    let params = ModelParams {
+        materials: MaterialTable::new(vec![material]).unwrap(),
+        carve: None,
+        phases: Vec::new(),
+        phase_rule: PhaseRule::Centre,
+        contacts: ContactParams::default(),
+        laguerre: Some(LaguerreParams::default()),
+        defects: Default::default(),
+        seed: 5,
+        fields: FieldNames::default(),
+    };
+    build_model(packed, &params).unwrap()
+}
+
+fn steady(m: &Model, t_hot: f64) -> Result<ThermalRun, ModelError> {
+    let p = ThermalProblem {
+        surface: SurfaceSpec::Laguerre,
+        interface: InterfaceRule::HarmonicMean,
+        bcs: two_walls(Face::XMin, t_hot, Face::XMax, 0.0),
+        sources: Vec::new(),
+        solver: ThermalSolver::Steady,
+        initial_temperature: 0.0,
+        output_times: Vec::new(),
+        floating: FloatingPolicy::Fail,
+        solve: demcon_network::SolveParams::new(demcon_network::Method::Auto, 1e-12, 100_000),
+        progress: None,
+    };
+    let setup = thermal_setup(m, &p)?;
+    let bcs = thermal_bcs(m, &setup, &p)?;
+    solve_thermal(m, &setup, &bcs, &p)
+}
+
+#[test]
+fn a_bar_with_linear_conductivity_follows_the_kirchhoff_profile() {
+    // λ falls 20 % from 0 to 100 °C.
+    let beta = -2e-3;
+    let m = bar(beta);
+    let run = steady(&m, 100.0).unwrap();
+    // u(T) = T + β T²/2 (per λ0) is linear in x: u(x) = u_h (1 − x/L).
+    let u_h = 100.0 + 0.5 * beta * 100.0 * 100.0;
+    let worst = run
+        .temperatures
+        .iter()
+        .zip(&m.particles.centres)
+        .map(|(t, c)| {
+            let u = u_h * (1.0 - c.x / L);
+            let exact = ((1.0 + 2.0 * beta * u).sqrt() - 1.0) / beta;
+            (t - exact).abs() / 100.0
+        })
+        .fold(0.0, f64::max);
+    eprintln!(
+        "λ(T) bar: max error {worst:.3e} of the span, {} solves",
+        run.report.nonlinear_iterations
+    );
+    assert!(worst < 1e-3, "{worst}");
+    assert!(run.report.nonlinear_iterations <= 5, "{:?}", run.report);
+    assert!(run.report.nonlinear_change <= PICARD_TOLERANCE);
+}
+
+#[test]
+fn a_conductivity_reaching_zero_is_refused_with_the_particle_and_its_temperature() {
+    // λ = 0 at 50 °C: the bar held at 100 °C crosses it.
+    let m = bar(-2e-2);
+    let e = steady(&m, 100.0).unwrap_err().to_string();
+    assert!(
+        e.contains("conductivity_temp_coeff") && e.contains("particle") && e.contains("°C"),
+        "{e}"
+    );
+}
