@@ -15,6 +15,10 @@ pub struct Material {
     pub conductivity_temp_coeff: f64,
     /// Reference temperature T_λ of the conductivity (°C).
     pub conductivity_ref_temp: f64,
+    /// An anisotropic conductivity: the tensor K (W/(m·K), symmetric positive definite, in the
+    /// scene's axes) that replaces λ in conduction, scaled by λ(T)/λ0 with a temperature
+    /// coefficient; `None`: isotropic λ.
+    pub conductivity_tensor: Option<[[f64; 3]; 3]>,
     /// Density of the continuous material ρ_c (kg/m³).
     pub density: f64,
     /// Specific heat c (J/(kg·K)).
@@ -35,6 +39,7 @@ impl Material {
             conductivity,
             conductivity_temp_coeff: 0.0,
             conductivity_ref_temp: 0.0,
+            conductivity_tensor: None,
             density,
             specific_heat,
             resistivity: None,
@@ -54,6 +59,17 @@ impl Material {
         self.conductivity * (1.0 + self.conductivity_temp_coeff * (t - self.conductivity_ref_temp))
     }
 
+    /// The conductivity along the unit vector `e` (W/(m·K)) at the reference temperature:
+    /// eᵀ K e, or λ when isotropic.
+    pub fn conductivity_along(&self, e: &crate::Vec3) -> f64 {
+        match &self.conductivity_tensor {
+            None => self.conductivity,
+            Some(k) => (0..3)
+                .map(|i| (0..3).map(|j| e[i] * k[i][j] * e[j]).sum::<f64>())
+                .sum(),
+        }
+    }
+
     /// Resistivity (Ω·m) at temperature `t`; `None` when the material has none.
     pub fn resistivity_at(&self, t: f64) -> Option<f64> {
         self.resistivity
@@ -68,6 +84,9 @@ impl Material {
         positive(&f("specific_heat"), self.specific_heat)?;
         if let Some(r) = self.resistivity {
             positive(&f("resistivity"), r)?;
+        }
+        if let Some(k) = &self.conductivity_tensor {
+            check_tensor(&f("conductivity_tensor"), k)?;
         }
         for (field, v) in [
             ("conductivity_temp_coeff", self.conductivity_temp_coeff),
@@ -86,6 +105,47 @@ impl Material {
         }
         Ok(())
     }
+}
+
+/// Refuses a conductivity tensor that is not finite, symmetric (to 10⁻¹² of its largest entry)
+/// and positive definite (Sylvester's criterion on its leading minors).
+fn check_tensor(field: &str, k: &[[f64; 3]; 3]) -> Result<(), CoreError> {
+    let big = k.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+    let show = || format!("{k:?}");
+    if !k.iter().flatten().all(|v| v.is_finite()) || big == 0.0 {
+        return Err(CoreError::invalid(
+            field,
+            show(),
+            "a finite, non-zero tensor (W/(m·K))",
+        ));
+    }
+    for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+        if (k[i][j] - k[j][i]).abs() > 1e-12 * big {
+            return Err(CoreError::invalid(
+                field,
+                show(),
+                format!(
+                    "a symmetric tensor: K[{i}][{j}] = {} but K[{j}][{i}] = {}",
+                    k[i][j], k[j][i]
+                ),
+            ));
+        }
+    }
+    let m1 = k[0][0];
+    let m2 = k[0][0] * k[1][1] - k[0][1] * k[1][0];
+    let m3 = k[0][0] * (k[1][1] * k[2][2] - k[1][2] * k[2][1])
+        - k[0][1] * (k[1][0] * k[2][2] - k[1][2] * k[2][0])
+        + k[0][2] * (k[1][0] * k[2][1] - k[1][1] * k[2][0]);
+    if !(m1 > 0.0 && m2 > 0.0 && m3 > 0.0) {
+        return Err(CoreError::invalid(
+            field,
+            show(),
+            format!(
+                "a positive definite tensor (its leading minors {m1:.3e}, {m2:.3e}, {m3:.3e} must all be > 0)"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Materials indexed by phase id (phase 0 = the first material).

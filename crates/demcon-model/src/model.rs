@@ -151,6 +151,57 @@ impl Model {
         &self.defects.crack_face
     }
 
+    /// How far the two-point flux of each anisotropic material is from its tensor on this
+    /// model's bonds: for material m, the tensor its network conducts as in a uniform gradient,
+    /// K_net = 3 Σ S d (eᵀ K e) e eᵀ / Σ S d over the contacts between two particles of m (S
+    /// the transmission surface, d the branch length, e its direction) — K itself where the
+    /// bonds are K-orthogonal (a lattice along K's axes), about (tr K I + 2 K)/5 on random
+    /// cells — and max |K_net,ij − K_ij| / |K| (Frobenius). `areas` are the contacts'
+    /// surfaces (m²). Materials without a tensor or without such contacts are left out.
+    pub fn anisotropy_consistency(&self, areas: &[f64]) -> Vec<(String, f64)> {
+        let mut out = Vec::new();
+        for (phase, m) in self.materials.materials.iter().enumerate() {
+            let Some(k) = &m.conductivity_tensor else {
+                continue;
+            };
+            let (mut net, mut weight) = ([[0.0f64; 3]; 3], 0.0);
+            for (c, &[p, q]) in self.graph.pairs.iter().enumerate() {
+                let (p, q) = (p as usize, q as usize);
+                let ph = &self.particles.phases;
+                if ph[p] as usize != phase || ph[q] as usize != phase {
+                    continue;
+                }
+                let geo = &self.graph.geometry[c];
+                let w = areas[c] * geo.distance;
+                let ke = m.conductivity_along(&geo.normal);
+                for (i, row) in net.iter_mut().enumerate() {
+                    for (j, v) in row.iter_mut().enumerate() {
+                        *v += w * ke * geo.normal[i] * geo.normal[j];
+                    }
+                }
+                weight += w;
+            }
+            if weight == 0.0 {
+                continue;
+            }
+            let norm = k.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
+            let err = (0..3)
+                .flat_map(|i| (0..3).map(move |j| (i, j)))
+                .map(|(i, j)| (3.0 * net[i][j] / weight - k[i][j]).abs() / norm)
+                .fold(0.0, f64::max);
+            out.push((m.name.clone(), err));
+        }
+        out
+    }
+
+    /// Whether some material conducts anisotropically (a conductivity tensor).
+    pub fn anisotropic(&self) -> bool {
+        self.materials
+            .materials
+            .iter()
+            .any(|m| m.conductivity_tensor.is_some())
+    }
+
     /// Whether some material's conductivity depends on temperature (λ(T)).
     pub fn conductivity_varies(&self) -> bool {
         self.materials

@@ -4,10 +4,10 @@
 
 use std::cell::RefCell;
 
-use demcon_core::{Face, Selector, TimeValue};
+use demcon_core::{Face, Selector, TimeValue, Vec3};
 use demcon_graph::{
     CellWall, InterfaceRule, SurfaceModel, Surfaces, WallContacts, conductances, contact_property_laminate,
-    contact_surfaces, representative_volumes,
+    contact_surfaces, interface_value_split, representative_volumes,
 };
 use demcon_network::{Constraints, FloatingPolicy, Network, SolveParams, resolve_fixed};
 use demcon_thermal::{
@@ -360,7 +360,9 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
     if model.conductivity_varies() {
         // λ(T): the conductances of the initial state (a steady solve iterates from them).
         let t0 = vec![problem.initial_temperature; model.particles.len()];
-        (g, wall_g) = conductances_at(model, &sm, problem.interface, &walls, &t0)?;
+        (g, wall_g) = conductances_at(model, &sm, problem.interface, &walls, Some(&t0))?;
+    } else if model.anisotropic() {
+        (g, wall_g) = conductances_at(model, &sm, problem.interface, &walls, None)?;
     }
     let surroundings = Surroundings::new(
         plan.exchanges,
@@ -424,8 +426,11 @@ fn contact_values(
 }
 
 /// The contact conductances (W/K) and the wall links' half-bond conductances (W/K, in link
-/// order, before the films of faces exchanging heat) with λ(T) of every particle at its
-/// temperature in `temps` (°C, per particle; more entries are ignored), defects applied.
+/// order, before the films of faces exchanging heat) with every particle's conductivity along
+/// each bond — eᵀ K e of an anisotropic material, λ of an isotropic one — scaled by λ(T)/λ0 at
+/// its temperature in `temps` (°C, per particle; more entries are ignored; `None`: at the
+/// reference temperatures), defects applied. A cut particle mixes its two phases' values
+/// along the bond by its mix's rule.
 ///
 /// Errors: λ(T) ≤ 0 (or not finite) at a particle, naming the material's coefficient, the
 /// particle and its temperature.
@@ -434,41 +439,63 @@ pub fn conductances_at(
     sm: &SurfaceModel,
     rule: InterfaceRule,
     walls: &WallContacts,
-    temps: &[f64],
+    temps: Option<&[f64]>,
 ) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
     let materials = &model.materials.materials;
     let lam = model.laminates();
-    let at = |phase: u16, p: usize| -> Result<f64, ModelError> {
+    let phases = &model.particles.phases;
+    // λ(T)/λ0 of each particle's phase (and its other phase when cut), checked > 0.
+    let factor = |phase: u16, p: usize| -> Result<f64, ModelError> {
         let m = &materials[phase as usize];
-        let v = m.conductivity_at(temps[p]);
+        let Some(t) = temps.map(|t| t[p]) else {
+            return Ok(1.0);
+        };
+        let v = m.conductivity_at(t);
         if v.is_finite() && v > 0.0 {
-            Ok(v)
+            Ok(v / m.conductivity)
         } else {
             Err(ModelError::invalid(
                 &format!("materials[{}].conductivity_temp_coeff", m.name),
                 m.conductivity_temp_coeff,
                 format!(
-                    "λ(T) > 0 over the temperatures met: particle {p} at {:.6} °C gives λ = {v:.6e} W/(m·K)",
-                    temps[p]
+                    "λ(T) > 0 over the temperatures met: particle {p} at {t:.6} °C gives λ = {v:.6e} W/(m·K)"
                 ),
             ))
         }
     };
-    let mut own = Vec::with_capacity(model.particles.len());
-    let mut other = Vec::with_capacity(model.particles.len());
-    for (p, &phase) in model.particles.phases.iter().enumerate() {
-        own.push(at(phase, p)?);
+    let mut own = Vec::with_capacity(phases.len());
+    let mut other = Vec::with_capacity(phases.len());
+    for (p, &phase) in phases.iter().enumerate() {
+        own.push(factor(phase, p)?);
         other.push(match lam.get(p) {
-            Some(m) => Some((*m, at(m.other_phase, p)?)),
+            Some(m) => Some(factor(m.other_phase, p)?),
             None => None,
         });
     }
-    let lambda = demcon_electric::ParticleConductivities { own, other };
+    let half_bond = |p: usize, e: &Vec3, half: f64| -> f64 {
+        let along = |phase: u16| materials[phase as usize].conductivity_along(e);
+        let mine = own[p] * along(phases[p]);
+        match (lam.get(p), other[p]) {
+            (Some(m), Some(f)) => m.half_bond_value(mine, f * along(m.other_phase), e, half),
+            _ => mine,
+        }
+    };
     let s = contact_surfaces(&model.graph, &model.particles, sm)?;
-    let mut g = demcon_electric::contact_conductances(&model.graph, &s.area, &lambda, rule);
+    let mut g: Vec<f64> = (0..model.graph.len())
+        .map(|k| {
+            let [p, q] = model.graph.pairs[k].map(|x| x as usize);
+            let geo = &model.graph.geometry[k];
+            let w = model.graph.split(k);
+            let (kp, kq) = (
+                half_bond(p, &geo.normal, w * geo.distance),
+                half_bond(q, &(-geo.normal), (1.0 - w) * geo.distance),
+            );
+            interface_value_split(kp, kq, w, rule) * s.area[k] / geo.distance
+        })
+        .collect();
     apply_to_contacts(&model.defect_view(), &s.area, &mut g, Physics::Thermal);
     let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), sm);
-    let mut wall_g = walls.conductances(&wall_s, |p, e, h| lambda.half_bond(p, e, h));
+    let mut wall_g = walls.conductances(&wall_s, half_bond);
     apply_to_walls(
         &model.defect_view(),
         walls,
@@ -491,7 +518,11 @@ pub fn thermal_conductances(
         _ => None,
     };
     let sm = surface.model(calibration.as_ref().map(|c| c.c_t));
-    let (_, _, g) = contact_values(model, &sm, interface)?;
+    let g = if model.anisotropic() {
+        conductances_at(model, &sm, interface, &WallContacts::default(), None)?.0
+    } else {
+        contact_values(model, &sm, interface)?.2
+    };
     Ok((g, calibration))
 }
 
@@ -1004,7 +1035,7 @@ pub fn solve_thermal_checkpointed(
         }
         if conductivity_varies {
             let (contacts, half) =
-                conductances_at(model, &setup.surface, problem.interface, walls, &temps[..n])?;
+                conductances_at(model, &setup.surface, problem.interface, walls, Some(&temps[..n]))?;
             let mut now = around.clone();
             now.set_half(&half);
             let mut g = [contacts, half].concat();
@@ -1221,7 +1252,7 @@ fn steady_run(
         if varies {
             let n = model.particles.len();
             let (contacts, half) =
-                conductances_at(model, &setup.surface, problem.interface, walls, &temps[..n])?;
+                conductances_at(model, &setup.surface, problem.interface, walls, Some(&temps[..n]))?;
             g[..first_link].copy_from_slice(&contacts);
             g[first_link..].copy_from_slice(&half);
             around.set_half(&half);

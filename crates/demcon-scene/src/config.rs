@@ -361,6 +361,13 @@ pub struct MaterialConfig {
     /// T_λ (°C) of the conductivity.
     #[serde(default = "default_ref_temp")]
     pub conductivity_ref_temp: f64,
+    /// An anisotropic conductivity replacing `conductivity` in conduction (λ(T) scales it):
+    /// `Transverse(axis: (0.0, 0.0, 1.0), along: 10.0, across: 1.0)` or `Full(((kxx, kxy, kxz),
+    /// (kyx, kyy, kyz), (kzx, kzy, kzz)))` (W/(m·K), symmetric positive definite). Each bond
+    /// takes eᵀ K e along its direction e: exact where the cells are K-orthogonal (a lattice
+    /// along the tensor's axes), an error otherwise (docs/heterogeneous.md).
+    #[serde(default)]
+    pub conductivity_tensor: Option<ConductivityTensorConfig>,
     /// ρ_c (kg/m³).
     pub density: f64,
     /// c (J/(kg·K)).
@@ -375,6 +382,26 @@ pub struct MaterialConfig {
     #[serde(default = "default_ref_temp")]
     pub resistivity_ref_temp: f64,
 }
+
+/// An anisotropic conductivity tensor.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+pub enum ConductivityTensorConfig {
+    /// Transversely isotropic: `along` (W/(m·K)) along `axis` (any length ≠ 0), `across`
+    /// normal to it.
+    Transverse {
+        /// The axis.
+        axis: (f64, f64, f64),
+        /// λ∥ (W/(m·K)), > 0.
+        along: f64,
+        /// λ⊥ (W/(m·K)), > 0.
+        across: f64,
+    },
+    /// A full tensor, by rows (W/(m·K)).
+    Full((Row3, Row3, Row3)),
+}
+
+/// A row of three numbers.
+pub type Row3 = (f64, f64, f64);
 
 fn default_ref_temp() -> f64 {
     20.0

@@ -190,6 +190,7 @@ pub fn materials(ms: &[MaterialConfig]) -> Result<MaterialTable, SceneError> {
                 conductivity: m.conductivity,
                 conductivity_temp_coeff: m.conductivity_temp_coeff,
                 conductivity_ref_temp: m.conductivity_ref_temp,
+                conductivity_tensor: m.conductivity_tensor.map(tensor),
                 density: m.density,
                 specific_heat: m.specific_heat,
                 resistivity: m.resistivity,
@@ -521,6 +522,24 @@ pub fn only_laguerre(cfg: &SceneConfig) -> bool {
 /// sets none.
 pub fn electric_surface(cfg: &SceneConfig, e: &ElectricConfig) -> SurfaceConfig {
     e.surface.unwrap_or(cfg.surface)
+}
+
+/// The tensor (W/(m·K), rows) of a conductivity tensor: λ⊥ I + (λ∥ − λ⊥) a aᵀ for a
+/// transversely isotropic one (a the unit axis; a zero axis gives NaN, refused by the
+/// material's check).
+pub fn tensor(t: ConductivityTensorConfig) -> [[f64; 3]; 3] {
+    match t {
+        ConductivityTensorConfig::Transverse { axis, along, across } => {
+            let a = v3(axis);
+            let a = a / a.norm();
+            std::array::from_fn(|i| {
+                std::array::from_fn(|j| if i == j { across } else { 0.0 } + (along - across) * a[i] * a[j])
+            })
+        }
+        ConductivityTensorConfig::Full((r0, r1, r2)) => {
+            [[r0.0, r0.1, r0.2], [r1.0, r1.1, r1.2], [r2.0, r2.1, r2.2]]
+        }
+    }
 }
 
 /// A value of the scene that may follow a time table, checked ([`TimeValue::table`]).

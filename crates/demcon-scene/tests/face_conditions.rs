@@ -229,3 +229,57 @@ fn a_held_face_following_a_table_drives_the_body_and_its_heat_balances() {
     assert!(face.held_w < 0.0, "heat enters through the held face: {face:?}");
     assert_eq!(face.surface_temperature, [100.0, 100.0]);
 }
+
+#[test]
+fn a_tensor_that_is_not_symmetric_positive_definite_and_a_current_without_two_electrodes_are_refused() {
+    let with_tensor = |t: &str| {
+        scene("Laguerre", HOT, "").replace(
+            "specific_heat: 500.0)",
+            &format!("specific_heat: 500.0, conductivity_tensor: Some({t}))"),
+        )
+    };
+    let m = refused(&with_tensor(
+        "Full(((1.0, 0.5, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)))",
+    ));
+    assert!(
+        m.contains("conductivity_tensor") && m.contains("symmetric"),
+        "{m}"
+    );
+    let m = refused(&with_tensor(
+        "Full(((1.0, 2.0, 0.0), (2.0, 1.0, 0.0), (0.0, 0.0, 1.0)))",
+    ));
+    assert!(
+        m.contains("conductivity_tensor") && m.contains("positive definite"),
+        "{m}"
+    );
+    let m = refused(&with_tensor(
+        "Transverse(axis: (0.0, 0.0, 0.0), along: 2.0, across: 1.0)",
+    ));
+    assert!(m.contains("conductivity_tensor"), "{m}");
+    parse(&with_tensor(
+        "Transverse(axis: (0.0, 0.0, 3.0), along: 2.0, across: 1.0)",
+    ))
+    .unwrap();
+    // An imposed current needs exactly two electrodes.
+    let electric = |electrodes: &str| {
+        scene("Laguerre", HOT, "")
+            .replace(
+                "specific_heat: 500.0)",
+                "specific_heat: 500.0, resistivity: Some(1e-6))",
+            )
+            .replace(
+                "    outputs:",
+                &format!(
+                    "    electric: Some((electrodes: [{electrodes}], current: Some(2.0))),\n    outputs:"
+                ),
+            )
+    };
+    let m = refused(&electric(
+        "(face: Some(XMin), potential: 0.0), (face: Some(XMax), potential: 0.0), (face: Some(YMin), potential: 1.0)",
+    ));
+    assert!(m.contains("electric.current") && m.contains("exactly two"), "{m}");
+    parse(&electric(
+        "(face: Some(XMin), potential: 0.0), (face: Some(XMax), potential: 0.0)",
+    ))
+    .unwrap();
+}

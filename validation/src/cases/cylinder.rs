@@ -36,6 +36,7 @@ pub fn steel_304l() -> MaterialConfig {
         conductivity: LAMBDA,
         conductivity_temp_coeff: 0.0,
         conductivity_ref_temp: 20.0,
+        conductivity_tensor: None,
         density: DENSITY,
         specific_heat: SPECIFIC_HEAT,
         resistivity: Some(RHO_E),

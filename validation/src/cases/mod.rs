@@ -12,6 +12,7 @@ pub mod study;
 pub mod transient;
 
 // The cases.
+pub mod anisotropy;
 pub mod crack_density;
 pub mod crack_penny;
 pub mod current_control;
@@ -168,6 +169,11 @@ const CASES: &[Case] = &[
         id: "lambda-t",
         about: "issue 35: λ(T) = λ0 (1 + β T) bar: steady vs the Kirchhoff-transform profile (with the solve count), transient vs our fine 1-D reference, 3 packings",
         run: lambda_t::run,
+    },
+    Case {
+        id: "anisotropy",
+        about: "issue 35: conductivity tensors: a cubic lattice (K-orthogonal cells) exact along and across the axis; random periodic Laguerre cells (K about z, tilted, four anisotropic layers) against the exact tensor, error measured",
+        run: anisotropy::run,
     },
     Case {
         id: "layered-interface",
