@@ -283,3 +283,51 @@ fn a_tensor_that_is_not_symmetric_positive_definite_and_a_current_without_two_el
     ))
     .unwrap();
 }
+
+#[test]
+fn the_face_laws_tables_grain_boundaries_and_lambda_t_give_the_same_bits_on_one_and_two_threads() {
+    // A transient with a convecting and radiating face, a tabled held face, λ(T) and grain
+    // boundaries with a spread: every new source of nonlinearity and randomness at once.
+    let text = scene_with(
+        "Laguerre",
+        "WallTemperature(face: XMin, value: [(0.0, 20.0), (0.0, 300.0), (10.0, 400.0)]), \
+         Convection(face: XMax, h: 500.0, t_inf: 20.0), Radiation(face: XMax, emissivity: 0.8, t_surroundings: 0.0)",
+        "Implicit(t_end: 10.0, dt: 0.5)",
+        "",
+    )
+    .replace(
+        "specific_heat: 500.0)",
+        "specific_heat: 500.0, conductivity_temp_coeff: -5e-4)",
+    )
+    .replace(
+        "    thermal:",
+        "    grain_boundaries: [(material: \"steel\", conductance: 1e6, spread: Some(0.3))],\n    thermal:",
+    );
+    let scene = parse(&text).unwrap();
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| run(&scene, &RunOptions::default()).unwrap())
+    };
+    let (a, b) = (on(1), on(2));
+    let bits = |r: &demcon_scene::RunResult| -> Vec<u64> {
+        r.thermal
+            .as_ref()
+            .unwrap()
+            .temperatures
+            .iter()
+            .map(|t| t.to_bits())
+            .collect()
+    };
+    assert_eq!(bits(&a), bits(&b));
+    assert!(
+        a.thermal
+            .as_ref()
+            .unwrap()
+            .temperatures
+            .iter()
+            .any(|&t| t > 100.0)
+    );
+}
