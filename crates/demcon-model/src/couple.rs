@@ -85,8 +85,18 @@ pub fn couple_checkpointed(
         );
     }
     let (el, th) = match (e.recouple_tolerance, thermal.solver.is_transient()) {
+        (None, true) if e.tabled() => {
+            // Electrode tables, ρ_e frozen: re-solved whenever a potential changes.
+            let (el, th) = coupled_transient(model, setup, bcs, thermal, e, None, checkpointing)?;
+            diagnostics.push(format!(
+                "electric: {} potential solves during the transient (re-solved whenever an electrode's table \
+                 changed its potential), {:.3} s",
+                el.report.solves, el.report.solves_wall_s
+            ));
+            (el, th)
+        }
         (Some(tol), true) => {
-            let (el, th) = coupled_transient(model, setup, bcs, thermal, e, tol, checkpointing)?;
+            let (el, th) = coupled_transient(model, setup, bcs, thermal, e, Some(tol), checkpointing)?;
             let r = &el.report;
             diagnostics.push(format!(
                 "electro-thermal coupling: {} potential solves during the transient (re-solved whenever a \
@@ -201,7 +211,9 @@ fn fixed_point(
 
 /// The time-accurate ρ_e(T) coupling of a transient: the potential is solved at the initial
 /// temperatures, then re-solved (and the Joule sources replaced) after any step that leaves a
-/// particle more than `tol` (K) away from its temperature at the last solve. The check is
+/// particle more than `tol` (K) away from its temperature at the last solve (`tol` `None`:
+/// ρ_e frozen at its reference), or after which an electrode's table gives another potential
+/// (the potentials read at the end of the step, for the next). The check is
 /// O(n) per step, beside the O(n Z) step. Returns the last electric solve (the one in force at
 /// the end, its report counting every solve) and the thermal run. Checkpoints carry the
 /// temperatures of the last solve; resuming redoes that solve (uncounted).
@@ -211,11 +223,15 @@ fn coupled_transient(
     bcs: &ThermalBcs,
     thermal: &ThermalProblem,
     e: &ElectricProblem,
-    tol: f64,
+    tol: Option<f64>,
     checkpointing: Option<Checkpointing<'_, '_>>,
 ) -> Result<(ElectricRun, ThermalRun), ModelError> {
     let n = model.particles.len();
     let resume = checkpointing.as_ref().and_then(|c| c.resume);
+    // The temperatures ρ_e reads (none when frozen), and the potentials at a time.
+    let rho_t = |t: &[f64]| -> Option<Vec<f64>> { tol.map(|_| t.to_vec()) };
+    // A resumed run's last solve was at the checkpoint's potentials: every change re-solves.
+    let t_start = resume.map_or(0.0, |ck| ck.transient.t);
     let last_t = match resume {
         Some(ck) => {
             check_coupling(ck, true, n, &model.fields)?;
@@ -229,7 +245,7 @@ fn coupled_transient(
             WallContacts::particle_part(&nodes, n).to_vec()
         }
     };
-    let el = solve_electric(model, e, Some(&last_t))?;
+    let el = solve_electric(model, &e.at(t_start), rho_t(&last_t).as_deref())?;
     let first_joule = el.joule.clone();
     let (solves, solves_s) = match resume.and_then(|ck| ck.coupling.as_ref()) {
         Some(c) => (c.solves as usize, c.solves_wall_s),
@@ -238,22 +254,25 @@ fn coupled_transient(
     // Shared by the source update and the checkpoints, which the solver calls in turn.
     let state = RefCell::new(Coupling {
         last_t,
+        last_v: e.potentials_at(t_start),
         el,
         solves,
         solves_s,
     });
-    let mut update = |_time: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, ModelError> {
+    let mut update = |time: f64, temps: &[f64]| -> Result<Option<Vec<f64>>, ModelError> {
         let mut c = state.borrow_mut();
         let temps = WallContacts::particle_part(temps, n);
         let moved = temps
             .iter()
             .zip(&c.last_t)
             .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        if moved <= tol {
+        let v = e.potentials_at(time);
+        if tol.is_none_or(|tol| moved <= tol) && v == c.last_v {
             return Ok(None);
         }
         c.last_t.copy_from_slice(temps);
-        c.el = solve_electric(model, e, Some(&c.last_t))?;
+        c.last_v = v;
+        c.el = solve_electric(model, &e.at(time), rho_t(&c.last_t).as_deref())?;
         c.solves += 1;
         c.solves_s += c.el.report.solves_wall_s;
         Ok(Some(c.el.joule.clone()))
@@ -299,6 +318,8 @@ fn coupled_transient(
 struct Coupling {
     /// Particle temperatures of the last potential solve (°C).
     last_t: Vec<f64>,
+    /// The electrodes' potentials of that solve (V).
+    last_v: Vec<f64>,
     /// That solve.
     el: ElectricRun,
     /// Potential solves so far.

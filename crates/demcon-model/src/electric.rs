@@ -2,7 +2,7 @@
 //! contact conductances S/(ρ_e d), electrodes on particles or on container faces, the
 //! potential solve and the Joule power per particle.
 
-use demcon_core::{Face, Selector, Vec3};
+use demcon_core::{Face, Selector, TimeValue, Vec3};
 use demcon_electric::{
     ElectricError, ElectricParams, ParticleConductivities, contact_conductances,
     give_link_joule_to_particles, joule_power, solve_potential,
@@ -31,8 +31,8 @@ pub enum ElectrodeAt {
 pub struct Electrode {
     /// Where.
     pub at: ElectrodeAt,
-    /// Potential (V).
-    pub potential: f64,
+    /// Potential (V), constant or a table in time (a transient's electrodes: [`ElectricProblem::at`]).
+    pub potential: TimeValue,
 }
 
 /// Everything the electric physics of a run needs, on plain types.
@@ -59,15 +59,34 @@ pub struct ElectricProblem {
 }
 
 impl ElectricProblem {
-    /// The faces carrying an electrode, with their potentials, in order.
-    pub fn face_electrodes(&self) -> (Vec<Face>, Vec<f64>) {
+    /// The faces carrying an electrode, in order.
+    pub fn face_electrodes(&self) -> Vec<Face> {
         self.electrodes
             .iter()
             .filter_map(|e| match e.at {
-                ElectrodeAt::Face(f) => Some((f, e.potential)),
+                ElectrodeAt::Face(f) => Some(f),
                 ElectrodeAt::Particles(_) => None,
             })
-            .unzip()
+            .collect()
+    }
+
+    /// Whether an electrode's potential follows a time table.
+    pub fn tabled(&self) -> bool {
+        self.electrodes.iter().any(|e| !e.potential.is_constant())
+    }
+
+    /// The problem at time `t` (s): every electrode's potential its value then.
+    pub fn at(&self, t: f64) -> ElectricProblem {
+        let mut p = self.clone();
+        for e in &mut p.electrodes {
+            e.potential = TimeValue::Constant(e.potential.at(t));
+        }
+        p
+    }
+
+    /// The electrodes' potentials at time `t` (V), in order.
+    pub fn potentials_at(&self, t: f64) -> Vec<f64> {
+        self.electrodes.iter().map(|e| e.potential.at(t)).collect()
     }
 
     /// The problem with an `Auto` C_t of its surfaces replaced by the value calibrated on
@@ -246,7 +265,7 @@ pub fn solve_electric(
     let sm = electric_surface_model(model, &problem.surface)?;
     let sigma = particle_conductivities(model, temperatures)?;
     let g = conductances_with_defects(model, &sm, problem.interface, &sigma)?;
-    let (faces, _) = problem.face_electrodes();
+    let faces = problem.face_electrodes();
     let walls = model.wall_contacts(&faces, model.fields.electrodes)?;
     let wall_s = walls.surfaces(&model.particles, &model.graph.surface_degrees(), &sm);
     let mut wall_g = walls.conductances(&wall_s, |p, e, h| sigma.half_bond(p, e, h));
@@ -269,11 +288,11 @@ pub fn solve_electric(
                 let ids = sel
                     .select_nonempty(&model.particles, &model.container, &format!("electrode {i}"))
                     .map_err(|err| ModelError::at(&field, err))?;
-                electrodes.push((ids, e.potential));
+                electrodes.push((ids, e.potential.at(0.0)));
             }
             ElectrodeAt::Face(_) => {
                 let w = next_wall.next().expect("one wall per face electrode");
-                electrodes.push((vec![walls.node(w)], e.potential));
+                electrodes.push((vec![walls.node(w)], e.potential.at(0.0)));
             }
         }
     }

@@ -47,11 +47,11 @@ fn problems(solver: ThermalSolver, recouple: Option<f64>) -> (ThermalProblem, El
         electrodes: vec![
             Electrode {
                 at: ElectrodeAt::Face(Face::ZMin),
-                potential: 0.0,
+                potential: 0.0.into(),
             },
             Electrode {
                 at: ElectrodeAt::Face(Face::ZMax),
-                potential: 0.02,
+                potential: 0.02.into(),
             },
         ],
         eta: 1.0,

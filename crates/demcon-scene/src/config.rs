@@ -831,6 +831,12 @@ pub enum TimedConfig {
     Table(Vec<(f64, f64)>),
 }
 
+impl Default for TimedConfig {
+    fn default() -> Self {
+        TimedConfig::Constant(0.0)
+    }
+}
+
 impl From<f64> for TimedConfig {
     fn from(v: f64) -> Self {
         TimedConfig::Constant(v)
@@ -960,8 +966,9 @@ pub struct ElectrodeConfig {
     /// Which container face is held at the potential.
     #[serde(default)]
     pub face: Option<FaceConfig>,
-    /// Potential (V).
-    pub potential: f64,
+    /// Potential (V): a number, or a time table `[(t, value), …]` in a transient (the
+    /// potential is re-solved whenever the table changes it).
+    pub potential: TimedConfig,
 }
 
 /// How a probe reads a field.
@@ -1022,8 +1029,9 @@ pub struct OutputsConfig {
     /// Times (s) at which transient fields are recorded (probes, profiles, files).
     #[serde(default)]
     pub times: Vec<f64>,
-    /// Also record at every breakpoint of the thermal time tables inside (0, t_end): the steps
-    /// then land on them, so a jump or a kink of a table falls between two steps.
+    /// Also record at every breakpoint of the time tables (thermal values, electrode
+    /// potentials) inside (0, t_end): the steps then land on them, so a jump or a kink of a
+    /// table falls between two steps.
     #[serde(default)]
     pub times_at_breakpoints: bool,
     /// Probe points.

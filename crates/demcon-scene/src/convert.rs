@@ -644,7 +644,12 @@ pub fn thermal_problem(
             ));
         }
     };
-    let output_times = output_times(cfg, t, &bcs_and_sources_breakpoints(&bcs, &sources));
+    let mut breakpoints = bcs_and_sources_breakpoints(&bcs, &sources);
+    for (i, el) in cfg.electric.iter().flat_map(|e| e.electrodes.iter()).enumerate() {
+        breakpoints
+            .extend(timed(&el.potential, &format!("electric.electrodes[{i}].potential"))?.breakpoints());
+    }
+    let output_times = output_times(cfg, t, &breakpoints);
     Ok(ThermalProblem {
         surface: surface(&cfg.surface),
         interface: interface(cfg.interface),
@@ -733,7 +738,7 @@ pub fn electric_problem(
         };
         electrodes.push(Electrode {
             at,
-            potential: el.potential,
+            potential: timed(&el.potential, &format!("electric.electrodes[{i}].potential"))?,
         });
     }
     Ok(ElectricProblem {

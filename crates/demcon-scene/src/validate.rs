@@ -1077,7 +1077,20 @@ fn check_electric(
                 ),
             ));
         }
-        finite(&format!("electric.electrodes[{i}].potential"), el.potential, "V")?;
+        let field = format!("electric.electrodes[{i}].potential");
+        let tabled = matches!(el.potential, TimedConfig::Table(_));
+        if tabled && e.current.is_some() {
+            return Err(SceneError::invalid(
+                &field,
+                "a time table",
+                "a number under `electric.current` (the current sets the potentials)",
+            ));
+        }
+        let solver = c
+            .thermal
+            .as_ref()
+            .map_or(ThermalSolverConfig::Steady, |t| t.solver);
+        check_timed(&field, &el.potential, "a potential (V)", None, &solver)?;
     }
     Ok(())
 }

@@ -13,6 +13,10 @@
 //!   priori: the power lags the temperature by at most 0.25 K, a relative deficit ≤ β·0.25 =
 //!   10⁻³, amplified by at most 1 + β θ = 2 as the growth feeds on itself: 2·10⁻³; backward
 //!   Euler at t_end/400 adds about (λ Δt/2) λ t ≈ 6·10⁻⁴ (λ = β I² R0 / C): 3·10⁻³ in all.
+//! - **A heater switched off** (an electrode's potential as a time table, ρ_e constant):
+//!   V = 0.1 V until t₁ = t_end/2, then 0 (`outputs.times_at_breakpoints` lands a step on t₁):
+//!   the bar's mean rise is P0 min(t, t₁)/C exactly (P0 = V²/R0, every step's power in force
+//!   for all of it). Tolerance 10⁻⁸ (round-off and the solver).
 
 use demcon_scene::config::*;
 
@@ -32,6 +36,9 @@ const HEATING_CURRENT: f64 = 60.0;
 const RECOUPLE: f64 = 0.25;
 const OUTPUTS: usize = 20;
 const DROP_TOL: f64 = 1e-9;
+const SWITCH_TOL: f64 = 1e-8;
+/// The switched heater's potential (V).
+const V_ON: f64 = 0.1;
 const THETA_TOL: f64 = 3e-3;
 
 fn steel() -> MaterialConfig {
@@ -78,12 +85,12 @@ fn bar(n: usize, seed: u64, current: f64, solver: ThermalSolverConfig, times: Ve
             ElectrodeConfig {
                 select: None,
                 face: Some(FaceConfig::ZMin),
-                potential: 0.0,
+                potential: 0.0.into(),
             },
             ElectrodeConfig {
                 select: None,
                 face: Some(FaceConfig::ZMax),
-                potential: 0.0,
+                potential: 0.0.into(),
             },
         ],
         eta: 1.0,
@@ -99,6 +106,7 @@ fn bar(n: usize, seed: u64, current: f64, solver: ThermalSolverConfig, times: Ve
 struct Row {
     particles: usize,
     drop: f64,
+    switched: f64,
     theta: f64,
     solves: usize,
     spread: f64,
@@ -162,13 +170,66 @@ fn measure(n: usize, seed: u64) -> anyhow::Result<Row> {
             (a.min(v), b.max(v))
         });
     let solves = r.electric.as_ref().map_or(0, |e| e.report.solves);
+    let switched = switched_heater(n, seed, &model, t_end)?;
     Ok(Row {
         particles: np,
         drop,
+        switched,
         theta,
         solves,
         spread: (hi - lo) / (1.0 / BETA),
     })
+}
+
+/// The bar heated at V_ON until t_end/2, then not: max |θ̄/θ − 1| over the output times
+/// after the first.
+fn switched_heater(n: usize, seed: u64, model: &demcon_model::Model, t_end: f64) -> anyhow::Result<f64> {
+    let t1 = 0.5 * t_end;
+    let times: Vec<f64> = (1..=OUTPUTS).map(|k| t_end * k as f64 / OUTPUTS as f64).collect();
+    let mut s = bar(
+        n,
+        seed,
+        0.0,
+        ThermalSolverConfig::Implicit {
+            t_end,
+            dt: t_end / 400.0,
+            scheme: ImplicitSchemeConfig::BackwardEuler,
+        },
+        times,
+    );
+    s.materials[0].resistivity_temp_coeff = 0.0;
+    s.outputs.times_at_breakpoints = true;
+    if let Some(e) = s.electric.as_mut() {
+        e.current = None;
+        e.recouple_tolerance = None;
+        e.electrodes[1].potential =
+            TimedConfig::Table(vec![(0.0, V_ON), (t1, V_ON), (t1, 0.0), (t_end, 0.0)]);
+    }
+    let r = run_with(&s, model)?;
+    let th = r
+        .thermal
+        .as_ref()
+        .ok_or_else(|| anyhow::anyhow!("no thermal run"))?;
+    let caps = &r
+        .thermal_setup
+        .as_ref()
+        .ok_or_else(|| anyhow::anyhow!("no setup"))?
+        .capacities;
+    let np = model.particles.len();
+    let cap: f64 = caps[..np].iter().sum();
+    let p0 = V_ON * V_ON / (RHO_E * LENGTH / (SIDE * SIDE));
+    let mut worst = 0.0f64;
+    for (t, temps) in &th.snapshots {
+        let mean: f64 = temps
+            .iter()
+            .zip(&caps[..np])
+            .map(|(v, c)| c * (v - T0))
+            .sum::<f64>()
+            / cap;
+        let exact = p0 * t.min(t1) / cap;
+        worst = worst.max((mean / exact - 1.0).abs());
+    }
+    Ok(worst)
 }
 
 /// Runs the case.
@@ -185,6 +246,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
             .column("|ΔV/(I ρ_e L/A) − 1|", |(_, r)| format!("{:.1e}", r.drop))
             .column("ρ_e(T) at constant I: max |θ̄/θ − 1|", |(_, r)| format!("{:.2e}", r.theta))
             .column("potential solves", |(_, r)| r.solves.to_string())
+            .column("heater switched off: max |θ̄/θ − 1|", |(_, r)| format!("{:.1e}", r.switched))
             .column("(T_max − T_min) β at the end", |(_, r)| format!("{:.1e}", r.spread))
             .table(
                 "Current-controlled bar: the potential found, and the coupled ρ_e(T) transient at constant current",
@@ -197,6 +259,12 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         worst(&|r| r.drop),
         DROP_TOL,
         "exact (homogeneous bar)",
+    ));
+    out.compare(Comparison::at_most(
+        "heater switched off by an electrode table: max |θ̄/θ − 1|",
+        worst(&|r| r.switched),
+        SWITCH_TOL,
+        "exact: θ = P0 min(t, t₁)/C",
     ));
     out.compare(Comparison::at_most(
         "ρ_e(T) at constant current: max |θ̄/θ − 1| over 20 times",

@@ -115,12 +115,12 @@ pub fn end_electrodes(v0: f64) -> Vec<ElectrodeConfig> {
     vec![
         ElectrodeConfig {
             select: Some(SelectorConfig::Face(FaceConfig::ZMin)),
-            potential: 0.0,
+            potential: 0.0.into(),
             ..Default::default()
         },
         ElectrodeConfig {
             select: Some(SelectorConfig::Face(FaceConfig::ZMax)),
-            potential: v0,
+            potential: v0.into(),
             ..Default::default()
         },
     ]
@@ -132,12 +132,12 @@ pub fn face_electrodes(v0: f64) -> Vec<ElectrodeConfig> {
     vec![
         ElectrodeConfig {
             face: Some(FaceConfig::ZMin),
-            potential: 0.0,
+            potential: 0.0.into(),
             ..Default::default()
         },
         ElectrodeConfig {
             face: Some(FaceConfig::ZMax),
-            potential: v0,
+            potential: v0.into(),
             ..Default::default()
         },
     ]

@@ -64,11 +64,11 @@ pub fn z_face_electrodes(surface: SurfaceSpec, volts: f64) -> ElectricProblem {
         electrodes: vec![
             Electrode {
                 at: ElectrodeAt::Face(Face::ZMin),
-                potential: 0.0,
+                potential: 0.0.into(),
             },
             Electrode {
                 at: ElectrodeAt::Face(Face::ZMax),
-                potential: volts,
+                potential: volts.into(),
             },
         ],
         eta: 1.0,
