@@ -4,13 +4,12 @@
 
 mod common;
 
-use common::two_walls;
-use demcon_core::{Container, Face, Material, MaterialTable};
-use demcon_graph::{ContactParams, InterfaceRule, LaguerreParams};
+use common::{laguerre_model, ls_packed, two_walls};
+use demcon_core::{Container, Face, Material};
+use demcon_graph::InterfaceRule;
 use demcon_model::thermal::PICARD_TOLERANCE;
 use demcon_model::*;
 use demcon_network::FloatingPolicy;
-use demcon_packing::{PackingParams, RadiusDistribution, pack};
 
 const L: f64 = 4e-3;
 
@@ -18,32 +17,17 @@ fn bar(beta: f64) -> Model {
     let container = Container::Box {
         size: [L, 2e-3, 2e-3],
     };
-    let params = PackingParams::new(container, 2000, 0.55, RadiusDistribution::gaussian(0.3));
-    let (particles, report) = pack(&params, 5, None).unwrap();
-    let packed = Packed {
-        particles,
-        container,
-        report: Some(report),
-        imported_from: None,
-        pack_s: 0.0,
-    };
     let material = Material {
         conductivity_temp_coeff: beta,
         conductivity_ref_temp: 0.0,
         ..Material::thermal("polymer", 0.3, 1200.0, 1500.0)
     };
-    let params = ModelParams {
-        materials: MaterialTable::new(vec![material]).unwrap(),
-        carve: None,
-        phases: Vec::new(),
-        phase_rule: PhaseRule::Centre,
-        contacts: ContactParams::default(),
-        laguerre: Some(LaguerreParams::default()),
-        defects: Default::default(),
-        seed: 5,
-        fields: FieldNames::default(),
-    };
-    build_model(packed, &params).unwrap()
+    laguerre_model(
+        ls_packed(container, 2000, 5),
+        vec![material],
+        Default::default(),
+        5,
+    )
 }
 
 fn steady(m: &Model, t_hot: f64) -> Result<ThermalRun, ModelError> {

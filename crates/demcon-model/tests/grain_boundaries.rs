@@ -4,9 +4,9 @@
 
 mod common;
 
-use common::{metal, two_walls};
-use demcon_core::{Axis, Container, Face, MaterialTable, ParticleSet, Vec3};
-use demcon_graph::{ContactParams, InterfaceRule, LaguerreParams};
+use common::{laguerre_model, metal, two_walls};
+use demcon_core::{Axis, Container, Face, ParticleSet, Vec3};
+use demcon_graph::InterfaceRule;
 use demcon_model::*;
 use demcon_network::FloatingPolicy;
 
@@ -29,21 +29,11 @@ fn lattice(n: usize, gb: Option<GrainBoundary>) -> Model {
         imported_from: None,
         pack_s: 0.0,
     };
-    let params = ModelParams {
-        materials: MaterialTable::new(vec![metal()]).unwrap(),
-        carve: None,
-        phases: Vec::new(),
-        phase_rule: PhaseRule::Centre,
-        contacts: ContactParams::default(),
-        laguerre: Some(LaguerreParams::default()),
-        defects: DefectSpec {
-            grain_boundaries: gb.into_iter().collect(),
-            ..Default::default()
-        },
-        seed: 1,
-        fields: FieldNames::default(),
+    let defects = DefectSpec {
+        grain_boundaries: gb.into_iter().collect(),
+        ..Default::default()
     };
-    build_model(packed, &params).unwrap()
+    laguerre_model(packed, vec![metal()], defects, 1)
 }
 
 fn etc(m: &Model) -> f64 {

@@ -5,36 +5,20 @@
 mod common;
 
 use approx::assert_relative_eq;
-use common::{metal, two_walls, z_face_electrodes};
+use common::{laguerre_model, ls_packed, metal, two_walls, z_face_electrodes};
 use demcon_core::{Container, Face, MaterialTable};
-use demcon_graph::{ContactParams, InterfaceRule, LaguerreParams};
+use demcon_graph::{ContactParams, InterfaceRule};
 use demcon_model::*;
 use demcon_network::FloatingPolicy;
-use demcon_packing::{PackingParams, RadiusDistribution, pack};
 
 /// A Gaussian-0.3 LS packing of `n` spheres in `container`, tessellated.
 fn model(container: Container, n: usize, seed: u64) -> Model {
-    let params = PackingParams::new(container, n, 0.55, RadiusDistribution::gaussian(0.3));
-    let (particles, report) = pack(&params, seed, None).unwrap();
-    let packed = Packed {
-        particles,
-        container,
-        report: Some(report),
-        imported_from: None,
-        pack_s: 0.0,
-    };
-    let params = ModelParams {
-        materials: MaterialTable::new(vec![metal()]).unwrap(),
-        carve: None,
-        phases: Vec::new(),
-        phase_rule: PhaseRule::Centre,
-        contacts: ContactParams::default(),
-        laguerre: Some(LaguerreParams::default()),
-        defects: Default::default(),
+    laguerre_model(
+        ls_packed(container, n, seed),
+        vec![metal()],
+        Default::default(),
         seed,
-        fields: FieldNames::default(),
-    };
-    build_model(packed, &params).unwrap()
+    )
 }
 
 fn problem(bcs: Vec<ThermalBc>, solver: ThermalSolver) -> ThermalProblem {

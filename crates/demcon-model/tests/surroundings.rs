@@ -6,13 +6,12 @@
 
 mod common;
 
-use common::metal;
-use demcon_core::{Container, Face, MaterialTable};
-use demcon_graph::{ContactParams, InterfaceRule, LaguerreParams};
+use common::{laguerre_model, ls_packed, metal};
+use demcon_core::{Container, Face};
+use demcon_graph::InterfaceRule;
 use demcon_model::surroundings::{KELVIN, STEFAN_BOLTZMANN};
 use demcon_model::*;
 use demcon_network::FloatingPolicy;
-use demcon_packing::{PackingParams, RadiusDistribution, pack};
 
 const L: f64 = 4e-3;
 const LAMBDA: f64 = 10.0;
@@ -21,27 +20,12 @@ fn bar(n: usize, seed: u64) -> Model {
     let container = Container::Box {
         size: [L, 2e-3, 2e-3],
     };
-    let params = PackingParams::new(container, n, 0.55, RadiusDistribution::gaussian(0.3));
-    let (particles, report) = pack(&params, seed, None).unwrap();
-    let packed = Packed {
-        particles,
-        container,
-        report: Some(report),
-        imported_from: None,
-        pack_s: 0.0,
-    };
-    let params = ModelParams {
-        materials: MaterialTable::new(vec![metal()]).unwrap(),
-        carve: None,
-        phases: Vec::new(),
-        phase_rule: PhaseRule::Centre,
-        contacts: ContactParams::default(),
-        laguerre: Some(LaguerreParams::default()),
-        defects: Default::default(),
+    laguerre_model(
+        ls_packed(container, n, seed),
+        vec![metal()],
+        Default::default(),
         seed,
-        fields: FieldNames::default(),
-    };
-    build_model(packed, &params).unwrap()
+    )
 }
 
 fn problem(bcs: Vec<ThermalBc>, solver: ThermalSolver) -> ThermalProblem {

@@ -11,6 +11,45 @@ use demcon_model::{
 };
 use demcon_network::FloatingPolicy;
 
+/// A Gaussian-0.3 LS packing of `n` spheres at φ = 0.55 in `container`, from `seed`.
+pub fn ls_packed(container: Container, n: usize, seed: u64) -> Packed {
+    let params = demcon_packing::PackingParams::new(
+        container,
+        n,
+        0.55,
+        demcon_packing::RadiusDistribution::gaussian(0.3),
+    );
+    let (particles, report) = demcon_packing::pack(&params, seed, None).unwrap();
+    Packed {
+        particles,
+        container,
+        report: Some(report),
+        imported_from: None,
+        pack_s: 0.0,
+    }
+}
+
+/// The Laguerre model of `packed`: `materials` (the first everywhere), `defects`.
+pub fn laguerre_model(
+    packed: Packed,
+    materials: Vec<Material>,
+    defects: demcon_model::DefectSpec,
+    seed: u64,
+) -> Model {
+    let params = ModelParams {
+        materials: MaterialTable::new(materials).unwrap(),
+        carve: None,
+        phases: Vec::new(),
+        phase_rule: PhaseRule::Centre,
+        contacts: ContactParams::default(),
+        laguerre: Some(demcon_graph::LaguerreParams::default()),
+        defects,
+        seed,
+        fields: FieldNames::default(),
+    };
+    build_model(packed, &params).unwrap()
+}
+
 /// An nx × ny × nz lattice of spheres of radius 0.5 m in a box of the same size (m).
 pub fn lattice(nx: usize, ny: usize, nz: usize, materials: Vec<Material>) -> Model {
     let mut centres = Vec::new();
