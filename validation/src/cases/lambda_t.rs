@@ -169,7 +169,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let study = Study::run(&sizes, |_| 3, ctx.seed, |n, seed, _| measure(n, seed, &fine))?;
     let mut out = CaseOutcome::new("lambda-t", ctx.mode);
     out.n_particles = study.rows().map(|r| r.particles).max().unwrap_or(0);
-    let rows: Vec<(u64, &Row)> = study.packings().iter().map(|p| (p.k, &p.rows)).collect();
+    let rows = study.indexed();
     out.tables.push(
         Columns::new()
             .column("N", |(_, r): &(u64, &Row)| r.particles.to_string())
@@ -185,16 +185,15 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
                 &rows,
             ),
     );
-    let worst = |f: &dyn Fn(&Row) -> f64| study.rows().map(f).fold(0.0, f64::max);
     out.compare(Comparison::at_most(
         "steady λ(T) bar vs the Kirchhoff profile",
-        worst(&|r| r.steady),
+        study.worst(|r| r.steady),
         STEADY_TOL,
         "exact (Kirchhoff transform)",
     ));
     out.compare(Comparison::at_most(
         "steady λ(T): solves to converge (PICARD_TOLERANCE)",
-        worst(&|r| r.solves as f64),
+        study.worst(|r| r.solves as f64),
         MAX_SOLVES as f64,
         "issue 35: ≤ 5 nonlinear iterations",
     ));

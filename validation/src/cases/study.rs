@@ -82,6 +82,16 @@ impl<R> Study<R> {
     pub fn spread(&self, n: usize, value: impl Fn(&R) -> f64) -> Spread {
         Spread::of(self.at(n).map(value))
     }
+
+    /// The largest `value` over every packing of every size.
+    pub fn worst(&self, value: impl Fn(&R) -> f64) -> f64 {
+        self.rows().map(value).fold(0.0, f64::max)
+    }
+
+    /// Every packing's rows with its index at its size (for a table of packings).
+    pub fn indexed(&self) -> Vec<(u64, &R)> {
+        self.packings.iter().map(|p| (p.k, &p.rows)).collect()
+    }
 }
 
 #[cfg(test)]

@@ -294,7 +294,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let study = Study::run(&sizes, |_| 3, ctx.seed, |n, seed, _| measure(n, seed))?;
     let mut out = CaseOutcome::new("surroundings", ctx.mode);
     out.n_particles = study.rows().map(|r| r.particles).max().unwrap_or(0);
-    let rows: Vec<(u64, &Row)> = study.packings().iter().map(|p| (p.k, &p.rows)).collect();
+    let rows = study.indexed();
     out.tables.push(
         Columns::new()
             .column("N", |(_, r): &(u64, &Row)| r.particles.to_string())
@@ -312,29 +312,28 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
                 &rows,
             ),
     );
-    let worst = |f: &dyn Fn(&Row) -> f64| study.rows().map(f).fold(0.0, f64::max);
     let source = "exact 1-D solution";
     out.compare(Comparison::at_most(
         "steady convection, max error",
-        worst(&|r| r.convection),
+        study.worst(|r| r.convection),
         STEADY_TOL,
         source,
     ));
     out.compare(Comparison::at_most(
         "steady radiation, max error",
-        worst(&|r| r.radiation),
+        study.worst(|r| r.radiation),
         STEADY_TOL,
         source,
     ));
     out.compare(Comparison::at_most(
         "curved face: heated cylinder convecting at its wall, max error",
-        worst(&|r| r.curved),
+        study.worst(|r| r.curved),
         CURVED_TOL,
         "exact: T∞ + qR/(2h) + q(R² − r²)/(4λ)",
     ));
     out.compare(Comparison::at_most(
         "steady convection + radiation, max error",
-        worst(&|r| r.both),
+        study.worst(|r| r.both),
         STEADY_TOL,
         source,
     ));
@@ -347,7 +346,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         "Biot-eigenvalue series, 200 terms",
     ));
     out.metric("transient_error_mean", at_largest.mean);
-    out.metric("newton_solves_max", worst(&|r| r.newton as f64));
+    out.metric("newton_solves_max", study.worst(|r| r.newton as f64));
     let ratio = study.rows().map(|r| r.robin_s / r.held_s).fold(0.0, f64::max);
     out.metric("robin_over_held_solve_time_max", ratio);
     Ok(out)

@@ -154,7 +154,7 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let study = Study::run(&sizes, |_| 3, ctx.seed, |n, seed, _| measure(n, seed, fo_end))?;
     let mut out = CaseOutcome::new("time-tables", ctx.mode);
     out.n_particles = study.rows().map(|r| r.particles).max().unwrap_or(0);
-    let rows: Vec<(u64, &Row)> = study.packings().iter().map(|p| (p.k, &p.rows)).collect();
+    let rows = study.indexed();
     out.tables.push(
         Columns::new()
             .column("N", |(_, r): &(u64, &Row)| r.particles.to_string())
