@@ -117,7 +117,7 @@ pub struct SeriesEntry {
     /// Halo-smoothed flux (W/m²) and whether each particle's Halo is cut by the boundary.
     pub halo: Option<(Vec<Vec3>, Vec<bool>)>,
     /// Whether the run's (final) electric solution holds at this time too: true unless the
-    /// potential is re-solved during the transient (`recouple_tolerance`).
+    /// potential is re-solved during the transient (`recouple_tolerance`, electrode tables).
     pub electric: bool,
 }
 
@@ -617,7 +617,7 @@ fn post_process(stages: &mut Stages, inp: &PostInputs<'_>) -> Result<Post, Scene
         let electric_fixed = problem
             .electric
             .as_ref()
-            .is_some_and(|e| e.recouple_tolerance.is_none());
+            .is_some_and(|e| e.recouple_tolerance.is_none() && !e.tabled());
         series = stages.time("series", || {
             before_end
                 .map(|(k, (t, temps))| {
@@ -769,12 +769,13 @@ fn probes_and_fields(
     }
     if let Some(el) = el {
         // The potential in force at the end: solved once at t = 0, unless a transient re-solves
-        // it as ρ_e(T) follows the temperatures (then it is the end state's).
+        // it as ρ_e(T) follows the temperatures or an electrode's table changes (then it is
+        // the end state's).
         let recoupled = problem.thermal.as_ref().is_some_and(|t| t.solver.is_transient())
             && problem
                 .electric
                 .as_ref()
-                .is_some_and(|e| e.recouple_tolerance.is_some());
+                .is_some_and(|e| e.recouple_tolerance.is_some() || e.tabled());
         let t = if recoupled { final_time } else { 0.0 };
         field("potential", t, el.potentials.clone(), &electric_solved);
     }
