@@ -15,6 +15,9 @@ pub struct Material {
     pub conductivity_temp_coeff: f64,
     /// Reference temperature T_λ of the conductivity (°C).
     pub conductivity_ref_temp: f64,
+    /// λ(T) as a table of (T (°C), λ (W/(m·K))) points, linear between them and held beyond
+    /// (a [`crate::TimeValue`] over temperature); overrides the temperature coefficient.
+    pub conductivity_table: Option<crate::TimeValue>,
     /// An anisotropic conductivity: the tensor K (W/(m·K), symmetric positive definite, in the
     /// scene's axes) that replaces λ in conduction, scaled by λ(T)/λ0 with a temperature
     /// coefficient; `None`: isotropic λ.
@@ -40,6 +43,7 @@ impl Material {
             conductivity_temp_coeff: 0.0,
             conductivity_ref_temp: 0.0,
             conductivity_tensor: None,
+            conductivity_table: None,
             density,
             specific_heat,
             resistivity: None,
@@ -56,7 +60,18 @@ impl Material {
     /// Thermal conductivity λ(T) (W/(m·K)) at temperature `t` (°C), possibly ≤ 0 outside the
     /// range the law holds in (the caller refuses it).
     pub fn conductivity_at(&self, t: f64) -> f64 {
-        self.conductivity * (1.0 + self.conductivity_temp_coeff * (t - self.conductivity_ref_temp))
+        match &self.conductivity_table {
+            Some(table) => table.at(t),
+            None => {
+                self.conductivity * (1.0 + self.conductivity_temp_coeff * (t - self.conductivity_ref_temp))
+            }
+        }
+    }
+
+    /// Whether the conductivity depends on temperature.
+    pub fn conductivity_varies(&self) -> bool {
+        self.conductivity_temp_coeff != 0.0
+            || self.conductivity_table.as_ref().is_some_and(|t| !t.is_constant())
     }
 
     /// The conductivity along the unit vector `e` (W/(m·K)) at the reference temperature:
@@ -87,6 +102,24 @@ impl Material {
         }
         if let Some(k) = &self.conductivity_tensor {
             check_tensor(&f("conductivity_tensor"), k)?;
+        }
+        if let Some(crate::TimeValue::Table(points)) = &self.conductivity_table {
+            for (i, &(t, lam)) in points.iter().enumerate() {
+                if !(lam.is_finite() && lam > 0.0) {
+                    return Err(CoreError::invalid(
+                        format!("{}[{i}]", f("conductivity_table")),
+                        format!("({t}, {lam})"),
+                        "a conductivity > 0 (W/(m·K)) at every point",
+                    ));
+                }
+                if i > 0 && t == points[i - 1].0 {
+                    return Err(CoreError::invalid(
+                        format!("{}[{i}]", f("conductivity_table")),
+                        format!("T = {t}"),
+                        "temperatures strictly increasing (λ(T) has no jump)",
+                    ));
+                }
+            }
         }
         for (field, v) in [
             ("conductivity_temp_coeff", self.conductivity_temp_coeff),

@@ -204,10 +204,7 @@ impl Model {
 
     /// Whether some material's conductivity depends on temperature (λ(T)).
     pub fn conductivity_varies(&self) -> bool {
-        self.materials
-            .materials
-            .iter()
-            .any(|m| m.conductivity_temp_coeff != 0.0)
+        self.materials.materials.iter().any(|m| m.conductivity_varies())
     }
 
     /// The laminate mixes indexed by particle.

@@ -85,3 +85,28 @@ fn a_conductivity_reaching_zero_is_refused_with_the_particle_and_its_temperature
         "{e}"
     );
 }
+
+#[test]
+fn a_table_through_the_same_line_gives_the_same_bar() {
+    let beta = -2e-3;
+    let linear = steady(&bar(beta), 100.0).unwrap();
+    let mut m = bar(0.0);
+    m.materials.materials[0].conductivity_table = Some(
+        demcon_core::TimeValue::table(
+            vec![
+                (-10.0, 0.3 * (1.0 - 10.0 * beta)),
+                (110.0, 0.3 * (1.0 + 110.0 * beta)),
+            ],
+            "t",
+        )
+        .unwrap(),
+    );
+    let tabled = steady(&m, 100.0).unwrap();
+    for (a, b) in linear.temperatures.iter().zip(&tabled.temperatures) {
+        assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+    }
+    assert_eq!(
+        linear.report.nonlinear_iterations,
+        tabled.report.nonlinear_iterations
+    );
+}

@@ -361,6 +361,11 @@ pub struct MaterialConfig {
     /// T_λ (°C) of the conductivity.
     #[serde(default = "default_ref_temp")]
     pub conductivity_ref_temp: f64,
+    /// λ(T) as a table `[(T, λ), …]` (°C, W/(m·K)), linear between points, held beyond the
+    /// first and last; replaces `conductivity_temp_coeff` (`conductivity` stays the reference
+    /// a tensor is scaled from, and what a homogenisation uses).
+    #[serde(default)]
+    pub conductivity_table: Option<Vec<(f64, f64)>>,
     /// An anisotropic conductivity replacing `conductivity` in conduction (λ(T) scales it):
     /// `Transverse(axis: (0.0, 0.0, 1.0), along: 10.0, across: 1.0)` or `Full(((kxx, kxy, kxz),
     /// (kyx, kyy, kyz), (kzx, kzy, kzz)))` (W/(m·K), symmetric positive definite). Each bond

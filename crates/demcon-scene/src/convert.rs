@@ -185,19 +185,29 @@ pub fn materials(ms: &[MaterialConfig]) -> Result<MaterialTable, SceneError> {
     }
     let table = MaterialTable::new(
         ms.iter()
-            .map(|m| Material {
-                name: m.name.clone(),
-                conductivity: m.conductivity,
-                conductivity_temp_coeff: m.conductivity_temp_coeff,
-                conductivity_ref_temp: m.conductivity_ref_temp,
-                conductivity_tensor: m.conductivity_tensor.map(tensor),
-                density: m.density,
-                specific_heat: m.specific_heat,
-                resistivity: m.resistivity,
-                resistivity_temp_coeff: m.resistivity_temp_coeff,
-                resistivity_ref_temp: m.resistivity_ref_temp,
+            .map(|m| {
+                Ok(Material {
+                    name: m.name.clone(),
+                    conductivity: m.conductivity,
+                    conductivity_temp_coeff: m.conductivity_temp_coeff,
+                    conductivity_ref_temp: m.conductivity_ref_temp,
+                    conductivity_tensor: m.conductivity_tensor.map(tensor),
+                    conductivity_table: m
+                        .conductivity_table
+                        .clone()
+                        .map(|points| {
+                            TimeValue::table(points, &format!("materials[{}].conductivity_table", m.name))
+                        })
+                        .transpose()?,
+                    density: m.density,
+                    specific_heat: m.specific_heat,
+                    resistivity: m.resistivity,
+                    resistivity_temp_coeff: m.resistivity_temp_coeff,
+                    resistivity_ref_temp: m.resistivity_ref_temp,
+                })
             })
-            .collect(),
+            .collect::<Result<Vec<_>, CoreError>>()
+            .map_err(|e| SceneError::at("materials", e))?,
     )
     .map_err(|e: CoreError| SceneError::at("materials", e))?;
     Ok(table)

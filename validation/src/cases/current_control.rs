@@ -48,6 +48,7 @@ fn steel() -> MaterialConfig {
         conductivity_temp_coeff: 0.0,
         conductivity_ref_temp: 20.0,
         conductivity_tensor: None,
+        conductivity_table: None,
         density: 7900.0,
         specific_heat: 500.0,
         resistivity: Some(RHO_E),
