@@ -289,6 +289,27 @@ impl ThermalSetup {
         &self.conductances[self.conductances.len() - self.walls.len()..]
     }
 
+    /// Sets the conductances (and the exchanging faces' half-bonds) to those in force at the
+    /// particle temperatures `temps` (°C): λ(T) moved them from the initial state's; the end
+    /// state's flows, flux and effective conductivity read these.
+    ///
+    /// Errors: λ(T) ≤ 0 at a particle ([`conductances_at`]).
+    pub fn set_in_force(
+        &mut self,
+        model: &Model,
+        interface: InterfaceRule,
+        temps: &[f64],
+    ) -> Result<(), ModelError> {
+        let (contacts, half) = conductances_at(model, &self.surface, interface, &self.walls, Some(temps))?;
+        self.surroundings.set_half(&half);
+        let first_link = self.conductances.len() - self.walls.len();
+        self.conductances[..first_link].copy_from_slice(&contacts);
+        self.conductances[first_link..].copy_from_slice(&half);
+        self.surroundings
+            .set_conductances(&mut self.conductances[first_link..]);
+        Ok(())
+    }
+
     /// The heat-flux dipoles (W·m) of every particle at time `t` (s) and the node
     /// temperatures `nodes` (°C, particles then walls): the network's
     /// ([`crate::flux_dipoles`]) and, on faces exchanging heat with their surroundings or

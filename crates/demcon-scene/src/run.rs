@@ -332,7 +332,14 @@ fn run_stages(
     let (thermal_run, electric) = stages.time("solve", || {
         solve(&model, &problem, thermal.as_ref(), checkpoints, &mut diagnostics)
     })?;
-    let (thermal_setup, thermal_bcs) = thermal.unzip();
+    let (mut thermal_setup, thermal_bcs) = thermal.unzip();
+    // λ(T): the flows, the flux, the ETC and the files read the conductances of the end state.
+    if let (Some(setup), Some(th), Some(tp)) =
+        (thermal_setup.as_mut(), thermal_run.as_ref(), &problem.thermal)
+        && model.conductivity_varies()
+    {
+        setup.set_in_force(&model, tp.interface, &th.temperatures)?;
+    }
     let t_post = Instant::now();
     let post = post_process(
         &mut stages,

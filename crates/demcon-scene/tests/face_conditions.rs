@@ -331,3 +331,17 @@ fn the_face_laws_tables_grain_boundaries_and_lambda_t_give_the_same_bits_on_one_
             .any(|&t| t > 100.0)
     );
 }
+
+#[test]
+fn the_etc_of_a_body_with_lambda_t_is_read_from_the_end_states_conductances() {
+    // λ = 33 (1 − 0.002 T) between 100 °C and 0 °C: Kirchhoff gives λ_e = λ(50 °C) = 29.7.
+    let bcs = "WallTemperature(face: XMin, value: 100.0), WallTemperature(face: XMax, value: 0.0)";
+    let text = scene("Laguerre", bcs, "etc_axis: Some(X)").replace(
+        "specific_heat: 500.0)",
+        "specific_heat: 500.0, conductivity_temp_coeff: -2e-3, conductivity_ref_temp: 0.0)",
+    );
+    let r = run(&parse(&text).unwrap(), &RunOptions::default()).unwrap();
+    let e = r.etc.as_ref().unwrap();
+    assert!((e.lambda_e / 29.7 - 1.0).abs() < 1e-3, "{e:?}");
+    assert!((e.hot_flow_w / e.cold_flow_w - 1.0).abs() < 1e-6, "{e:?}");
+}
