@@ -317,16 +317,7 @@ pub fn conforming_sites(
     check_inputs(spheres, planes, h, params)?;
     let container = body.container;
     if spheres.is_empty() && planes.is_empty() && shapes.is_empty() {
-        // Nothing to follow: every site stays.
-        return Ok(Conformed {
-            particles: particles.clone(),
-            kept: (0..particles.len() as u32).collect(),
-            n_seeds: 0,
-            report: ConformReport {
-                spacing_m: h,
-                ..ConformReport::default()
-            },
-        });
+        return Ok(Conformed::unchanged(particles, h));
     }
     let delta = params.offset * h;
     let period = container.period();
@@ -356,17 +347,12 @@ pub fn conforming_sites(
         container,
         (r_max + 2.0 * delta).max(delta / NARROW),
     );
-    // The shapes indexed by their circumscribed balls, with the same reach.
-    let shape_index = SphereIndex::new(
-        shapes.iter().map(|s| (s.centre(), s.circumradius())),
+    let shaped = ShapeSurfaces::new(
+        shapes,
         container,
         (r_max + 2.0 * delta).max(delta / NARROW),
+        sample,
     );
-    // Signed distance from x to shape k's surface (minimum image).
-    let shape_distance = |x: &Vec3, k: usize| {
-        let c = shapes[k].centre();
-        shapes[k].signed_distance(&(c + offset(&c, x)))
-    };
     let mut seeder = Seeder {
         seeds: Vec::new(),
         seed_radii: Vec::new(),
@@ -375,10 +361,83 @@ pub fn conforming_sites(
         period,
         body: &body,
     };
-    // The shapes' samples, each tangent plane moved in by the polyhedron's excess volume for its
-    // area and curvature, and each shape's largest move.
+    let mut kept = seeder.kept_sites(particles, &index, spheres, &sampled, planes, &mut report);
+    // … and farther than 2δ from every shape's moved surface.
+    kept.retain(|&p| {
+        let reach = particles.radii[p as usize] + 2.0 * delta;
+        let near = shaped.within(&particles.centres[p as usize], reach);
+        report.removed_sites += usize::from(near);
+        !near
+    });
+    let shapes_gap = |at: &Vec3, skip: Option<usize>| shaped.gap(at, skip);
+    let plane_gaps = PlaneGaps::new(planes, period, h);
+    let plane_gap = |at: &Vec3, skip: Option<usize>| plane_gaps.gap(at, skip);
+    // Spheres and planes meet the shapes as other surfaces.
+    let others_gap = |at: &Vec3, skip: Option<usize>| plane_gap(at, skip).min(shapes_gap(at, None));
+    seeder.seed_spheres(spheres, &sampled, &index, &others_gap, &mut report);
+    // The planes: a square lattice of samples at the spheres' spacing.
+    let spheres_gap = |at: &Vec3| {
+        index
+            .near(&wrap(*at))
+            .map(|o| surface_distance(at, &spheres[o]))
+            .fold(f64::INFINITY, f64::min)
+    };
+    for (pi, pl) in planes.iter().enumerate() {
+        let (n, points) = pl.samples(sample);
+        for (k, at) in points.into_iter().enumerate() {
+            // A crack reaching past a wall: its part outside the body is no surface.
+            if body.depth(&at) < 0.0 {
+                continue;
+            }
+            let unsigned = index
+                .near(&wrap(at))
+                .map(|o| surface_distance(&at, &spheres[o]).abs())
+                .fold(f64::INFINITY, f64::min);
+            seeder.place(at, n, unsigned.min(others_gap(&at, Some(pi))), k, &mut report);
+        }
+    }
+    seeder.seed_shapes(
+        &shaped,
+        &|at| spheres_gap(at).min(plane_gap(at, None)),
+        &mut report,
+    );
+    let Seeder {
+        seeds, seed_radii, ..
+    } = seeder;
+    report.seeds = seeds.len();
+    let n_seeds = seeds.len();
+    Ok(Conformed {
+        particles: with_seeds(particles, &kept, seeds, seed_radii)?,
+        kept,
+        n_seeds,
+        report,
+    })
+}
+
+impl Conformed {
+    /// Nothing to follow: every site of `particles` stays (`h`: the site spacing, m).
+    fn unchanged(particles: &ParticleSet, h: f64) -> Self {
+        Self {
+            particles: particles.clone(),
+            kept: (0..particles.len() as u32).collect(),
+            n_seeds: 0,
+            report: ConformReport {
+                spacing_m: h,
+                ..ConformReport::default()
+            },
+        }
+    }
+}
+
+/// A sample of a shape's surface: point, outward normal and ring step (m).
+type ShapeSample = (Vec3, Vec3, f64);
+
+/// The shapes' samples (point, outward normal, ring step; m) at `sample` spacing (m), each
+/// tangent plane moved in by the polyhedron's excess volume for its area and curvature, and
+/// each shape's largest move (m).
+fn moved_shape_samples(shapes: &[demcon_core::Inclusion], sample: f64) -> (Vec<Vec<ShapeSample>>, Vec<f64>) {
     let shrink = tangent_shrink();
-    let shape_samples: Vec<Vec<(Vec3, Vec3, f64)>> = shapes
+    let samples: Vec<Vec<ShapeSample>> = shapes
         .iter()
         .map(|shape| {
             crate::shape_samples::surface_samples(shape, sample)
@@ -394,107 +453,114 @@ pub fn conforming_sites(
                 .collect()
         })
         .collect();
-    let moved: Vec<f64> = shapes
+    let moved = shapes
         .iter()
-        .zip(&shape_samples)
+        .zip(&samples)
         .map(|(shape, smp)| {
             smp.iter()
                 .map(|(at, _, _)| -shape.signed_distance(at))
                 .fold(0.0, f64::max)
         })
         .collect();
-    let mut kept = seeder.kept_sites(particles, &index, spheres, &sampled, planes, &mut report);
-    // … and farther than 2δ from every shape's moved surface.
-    kept.retain(|&p| {
-        let (x, reach) = (
-            &particles.centres[p as usize],
-            particles.radii[p as usize] + 2.0 * delta,
+    (samples, moved)
+}
+
+/// The shaped inclusions, indexed by their circumscribed balls, with their moved samples.
+struct ShapeSurfaces<'a> {
+    shapes: &'a [demcon_core::Inclusion],
+    index: SphereIndex,
+    /// Per shape: its samples (point, outward normal, ring step; m), moved in.
+    samples: Vec<Vec<ShapeSample>>,
+    /// Per shape: its samples' largest inward move (m).
+    moved: Vec<f64>,
+    period: Option<[f64; 3]>,
+}
+
+impl<'a> ShapeSurfaces<'a> {
+    /// `reach`: the farthest a query looks past a ball (m); `sample`: the sample spacing (m).
+    fn new(shapes: &'a [demcon_core::Inclusion], container: &Container, reach: f64, sample: f64) -> Self {
+        let index = SphereIndex::new(
+            shapes.iter().map(|s| (s.centre(), s.circumradius())),
+            container,
+            reach,
         );
-        let near = shape_index
-            .near(&wrap(*x))
-            .any(|k| shape_distance(x, k).abs() < reach + moved[k]);
-        report.removed_sites += usize::from(near);
-        !near
-    });
-    let shapes_gap = |at: &Vec3, skip: Option<usize>| {
-        shape_index
-            .near(&wrap(*at))
+        let (samples, moved) = moved_shape_samples(shapes, sample);
+        Self {
+            shapes,
+            index,
+            samples,
+            moved,
+            period: container.period(),
+        }
+    }
+
+    /// Signed distance (m) from `x` to shape `k`'s surface (minimum image).
+    fn distance(&self, x: &Vec3, k: usize) -> f64 {
+        let c = self.shapes[k].centre();
+        self.shapes[k].signed_distance(&(c + min_image(self.period, &c, x)))
+    }
+
+    /// Whether `x` is within `reach` (m) of a shape's moved surface.
+    fn within(&self, x: &Vec3, reach: f64) -> bool {
+        self.index
+            .near(&wrap_into(self.period, *x))
+            .any(|k| self.distance(x, k).abs() < reach + self.moved[k])
+    }
+
+    /// The signed distance (m) from `at` to the nearest shape other than `skip`.
+    fn gap(&self, at: &Vec3, skip: Option<usize>) -> f64 {
+        self.index
+            .near(&wrap_into(self.period, *at))
             .filter(|&k| skip != Some(k))
-            .map(|k| shape_distance(at, k))
+            .map(|k| self.distance(at, k))
             .fold(f64::INFINITY, f64::min)
-    };
-    // The unsigned distance from `at` to the plane patches other than `skip` and those in the
-    // same plane as `skip` (the pieces of one crack, two boxes sharing a face: one surface,
-    // whose samples meet only through the seed-overlap check).
-    let frames: Vec<(Vec3, Vec3)> = planes
-        .iter()
-        .map(|pl| {
-            let (origin, n, _, _) = pl.frame();
-            (origin, n)
-        })
-        .collect();
-    let coplanar = |a: usize, b: usize| {
-        let ((oa, na), (ob, nb)) = (frames[a], frames[b]);
-        na.dot(&nb).abs() > 1.0 - 1e-9 && na.dot(&offset(&oa, &ob)).abs() <= 1e-9 * h
-    };
-    let plane_gap = |at: &Vec3, skip: Option<usize>| {
-        planes
+    }
+}
+
+/// The unsigned distance from a point to the plane patches other than one (`skip`) and those
+/// in the same plane as it (the pieces of one crack, two boxes sharing a face: one surface,
+/// whose samples meet only through the seed-overlap check).
+struct PlaneGaps<'a> {
+    planes: &'a [PlanePatch],
+    /// Each patch's origin and normal.
+    frames: Vec<(Vec3, Vec3)>,
+    period: Option<[f64; 3]>,
+    /// The site spacing (m): coplanar within 10⁻⁹ of it.
+    h: f64,
+}
+
+impl<'a> PlaneGaps<'a> {
+    fn new(planes: &'a [PlanePatch], period: Option<[f64; 3]>, h: f64) -> Self {
+        let frames = planes
+            .iter()
+            .map(|pl| {
+                let (origin, n, _, _) = pl.frame();
+                (origin, n)
+            })
+            .collect();
+        Self {
+            planes,
+            frames,
+            period,
+            h,
+        }
+    }
+
+    fn coplanar(&self, a: usize, b: usize) -> bool {
+        let ((oa, na), (ob, nb)) = (self.frames[a], self.frames[b]);
+        na.dot(&nb).abs() > 1.0 - 1e-9 && na.dot(&min_image(self.period, &oa, &ob)).abs() <= 1e-9 * self.h
+    }
+
+    /// The distance (m) from `at` to the patches other than `skip` and its plane's.
+    fn gap(&self, at: &Vec3, skip: Option<usize>) -> f64 {
+        let offset = |a: &Vec3, b: &Vec3| min_image(self.period, a, b);
+        self.planes
             .iter()
             .enumerate()
-            .filter(|&(k, _)| skip.is_none_or(|s| s != k && !coplanar(s, k)))
+            .filter(|&(k, _)| skip.is_none_or(|s| s != k && !self.coplanar(s, k)))
             .map(|(_, pl)| pl.distance(at, &offset))
             .fold(f64::INFINITY, f64::min)
-    };
-    // Spheres and planes meet the shapes as other surfaces.
-    let others_gap = |at: &Vec3, skip: Option<usize>| plane_gap(at, skip).min(shapes_gap(at, None));
-    seeder.seed_spheres(spheres, &sampled, &index, &others_gap, &mut report);
-    // The planes: a square lattice of samples at the spheres' spacing.
-    for (pi, pl) in planes.iter().enumerate() {
-        let (n, points) = pl.samples(sample);
-        for (k, at) in points.into_iter().enumerate() {
-            // A crack reaching past a wall: its part outside the body is no surface.
-            if body.depth(&at) < 0.0 {
-                continue;
-            }
-            let spheres_gap = index
-                .near(&wrap(at))
-                .map(|o| surface_distance(&at, &spheres[o]).abs())
-                .fold(f64::INFINITY, f64::min);
-            let gap = spheres_gap.min(others_gap(&at, Some(pi)));
-            seeder.place(at, n, gap, k, &mut report);
-        }
     }
-    // The shapes: a pair at each sample.
-    for (k, shape) in shapes.iter().enumerate() {
-        report.max_radius_correction = report.max_radius_correction.max(moved[k] / shape.circumradius());
-        for (j, &(at, normal, step)) in shape_samples[k].iter().enumerate() {
-            if body.depth(&at) < 0.0 {
-                report.dropped_seeds += 2;
-                continue;
-            }
-            let spheres_gap = index
-                .near(&wrap(at))
-                .map(|o| surface_distance(&at, &spheres[o]))
-                .fold(f64::INFINITY, f64::min);
-            let gap = spheres_gap
-                .min(plane_gap(&at, None).min(shapes_gap(&at, Some(k))))
-                .min(self_gap(shape, &at, period))
-                // Rings closer than the spacing (a sharp rim): pairs within half a step.
-                .min(0.5 * step / NARROW);
-            seeder.place(wrap(at), normal, gap, j, &mut report);
-        }
-    }
-    let Seeder {
-        seeds, seed_radii, ..
-    } = seeder;
-    report.seeds = seeds.len();
-    let n_seeds = seeds.len();
-    Ok(Conformed {
-        particles: with_seeds(particles, &kept, seeds, seed_radii)?,
-        kept,
-        n_seeds,
-        report,
-    })
 }
 
 /// Minimum-image offset from a to b in a box of period `period` (the plain difference without).
@@ -636,6 +702,33 @@ impl Seeder<'_> {
                 });
                 let gap = others.chain(images).fold(plane_gap(&at, None), f64::min);
                 self.place(at, *n, gap, k, report);
+            }
+        }
+    }
+
+    /// A pair at each sample of every shape: δ, or less where another shape, its own periodic
+    /// image, or another surface (`others_gap(at)`, m) comes close, or where the rings are
+    /// closer than the spacing (a sharp rim: pairs within half a step).
+    fn seed_shapes(
+        &mut self,
+        shaped: &ShapeSurfaces,
+        others_gap: &dyn Fn(&Vec3) -> f64,
+        report: &mut ConformReport,
+    ) {
+        for (k, shape) in shaped.shapes.iter().enumerate() {
+            report.max_radius_correction = report
+                .max_radius_correction
+                .max(shaped.moved[k] / shape.circumradius());
+            for (j, &(at, normal, step)) in shaped.samples[k].iter().enumerate() {
+                if self.body.depth(&at) < 0.0 {
+                    report.dropped_seeds += 2;
+                    continue;
+                }
+                let gap = others_gap(&at)
+                    .min(shaped.gap(&at, Some(k)))
+                    .min(self_gap(shape, &at, self.period))
+                    .min(0.5 * step / NARROW);
+                self.place(wrap_into(self.period, at), normal, gap, j, report);
             }
         }
     }

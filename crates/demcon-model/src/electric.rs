@@ -4,7 +4,7 @@
 
 use demcon_core::{Face, Selector, TimeValue, Vec3};
 use demcon_electric::{
-    ElectricError, ElectricParams, ParticleConductivities, contact_conductances,
+    ElectricError, ElectricParams, ElectricSolution, ParticleConductivities, contact_conductances,
     give_link_joule_to_particles, joule_power, solve_potential,
 };
 use demcon_graph::{InterfaceRule, SurfaceModel, WallContacts, contact_surfaces, representative_volumes};
@@ -249,6 +249,65 @@ fn conductances_with_defects(
     Ok(g)
 }
 
+/// The nodes and potential (V, at t = 0) of each electrode: its selected particles, or the wall
+/// node of its face (`walls`, one per face electrode in order).
+fn electrode_nodes(
+    model: &Model,
+    problem: &ElectricProblem,
+    walls: &WallContacts,
+) -> Result<Vec<(Vec<u32>, f64)>, ModelError> {
+    let mut next_wall = 0..walls.n_walls();
+    let mut electrodes: Vec<(Vec<u32>, f64)> = Vec::new();
+    for (i, e) in problem.electrodes.iter().enumerate() {
+        match &e.at {
+            ElectrodeAt::Particles(sel) => {
+                let field = format!("{}[{i}].select", model.fields.electrodes);
+                let ids = sel
+                    .select_nonempty(&model.particles, &model.container, &format!("electrode {i}"))
+                    .map_err(|err| ModelError::at(&field, err))?;
+                electrodes.push((ids, e.potential.at(0.0)));
+            }
+            ElectrodeAt::Face(_) => {
+                let w = next_wall.next().expect("one wall per face electrode");
+                electrodes.push((vec![walls.node(w)], e.potential.at(0.0)));
+            }
+        }
+    }
+    Ok(electrodes)
+}
+
+/// The solution carrying `current` (A) from the first of two `electrodes` to the second: a
+/// unit difference solved by `solve`, then scaled (Kirchhoff is linear); with the electrodes'
+/// potentials (V).
+fn solve_at_current(
+    model: &Model,
+    problem: &ElectricProblem,
+    current: f64,
+    electrodes: &mut [(Vec<u32>, f64)],
+    solve: impl Fn(&[(Vec<u32>, f64)]) -> Result<ElectricSolution, ElectricError>,
+) -> Result<(ElectricSolution, Vec<f64>), ModelError> {
+    let [(_, first), (_, ground)] = &mut electrodes[..] else {
+        return Err(ModelError::invalid(
+            model.fields.electrodes,
+            format!("{} electrode(s)", problem.electrodes.len()),
+            "exactly two electrodes with an imposed current (it enters by the first, leaves by the second)",
+        ));
+    };
+    *first = *ground + 1.0;
+    let ground = *ground;
+    let unit = solve(electrodes)?;
+    let i_unit = unit.electrode_currents[0];
+    if !(i_unit.is_finite() && i_unit > 0.0) {
+        return Err(ModelError::invalid(
+            model.fields.electrodes,
+            format!("{i_unit:e} A at a 1 V difference"),
+            "two electrodes a current can flow between (the body joins them)",
+        ));
+    }
+    let factor = current / i_unit;
+    Ok((unit.rescaled(ground, factor), vec![ground + factor, ground]))
+}
+
 /// Solves the potential with the problem's electrodes; `temperatures` (°C) feed ρ_e(T).
 ///
 /// Face electrodes add one node per face to the network, held at the potential and linked to
@@ -279,23 +338,7 @@ pub fn solve_electric(
     let m = g.len();
     let (ext, g) = network_with_walls(model, &walls, g, wall_g)?;
     let net = ext.as_ref().unwrap_or_else(|| model.network());
-    let mut next_wall = 0..walls.n_walls();
-    let mut electrodes: Vec<(Vec<u32>, f64)> = Vec::new();
-    for (i, e) in problem.electrodes.iter().enumerate() {
-        match &e.at {
-            ElectrodeAt::Particles(sel) => {
-                let field = format!("{}[{i}].select", model.fields.electrodes);
-                let ids = sel
-                    .select_nonempty(&model.particles, &model.container, &format!("electrode {i}"))
-                    .map_err(|err| ModelError::at(&field, err))?;
-                electrodes.push((ids, e.potential.at(0.0)));
-            }
-            ElectrodeAt::Face(_) => {
-                let w = next_wall.next().expect("one wall per face electrode");
-                electrodes.push((vec![walls.node(w)], e.potential.at(0.0)));
-            }
-        }
-    }
+    let mut electrodes = electrode_nodes(model, problem, &walls)?;
     let params = ElectricParams {
         floating: problem.floating,
         solve: problem.solve,
@@ -306,27 +349,8 @@ pub fn solve_electric(
             electrodes.iter().map(|e| e.1).collect::<Vec<f64>>(),
         ),
         Some(current) => {
-            // A unit difference, then scaled to the current (Kirchhoff is linear).
-            let [(_, first), (_, ground)] = &mut electrodes[..] else {
-                return Err(ModelError::invalid(
-                    model.fields.electrodes,
-                    format!("{} electrode(s)", problem.electrodes.len()),
-                    "exactly two electrodes with an imposed current (it enters by the first, leaves by the second)",
-                ));
-            };
-            *first = *ground + 1.0;
-            let ground = *ground;
-            let unit = solve_potential(net, &g, &electrodes, &params)?;
-            let i_unit = unit.electrode_currents[0];
-            if !(i_unit.is_finite() && i_unit > 0.0) {
-                return Err(ModelError::invalid(
-                    model.fields.electrodes,
-                    format!("{i_unit:e} A at a 1 V difference"),
-                    "two electrodes a current can flow between (the body joins them)",
-                ));
-            }
-            let factor = current / i_unit;
-            (unit.rescaled(ground, factor), vec![ground + factor, ground])
+            let solve = |e: &[(Vec<u32>, f64)]| solve_potential(net, &g, e, &params);
+            solve_at_current(model, problem, current, &mut electrodes, solve)?
         }
     };
     let mut joule = joule_power(net, &g, &sol.potentials, problem.eta)?;

@@ -94,52 +94,7 @@ pub fn effective_conductivity(
 ) -> Result<EtcValue, ModelError> {
     let ax = format!("{axis:?}");
     let refuse = |why: String| ModelError::invalid(model.fields.etc_axis, &ax, why);
-    if model.container.period().is_some() {
-        return Err(refuse(
-            "a periodic box conducts round its period as well as between held sets, so no λ_e along one \
-             axis follows from them: use `thermal.solver: Homogenize` (with `bcs: []`) for the effective \
-             tensor"
-                .into(),
-        ));
-    }
-    if let Some(x) = setup.surroundings.faces.first() {
-        return Err(refuse(format!(
-            "face {} exchanges heat with its surroundings (Convection or Radiation): heat leaves elsewhere than \
-             through the two held sets and no single λ_e describes the body; an ETC run holds two faces and \
-             nothing else",
-            x.face.name()
-        )));
-    }
-    let [first, second] = bcs.fixed_sets.as_slice() else {
-        return Err(refuse(format!(
-            "the effective conductivity needs exactly two held sets (FixedTemperature or WallTemperature); \
-             this run holds {}",
-            bcs.fixed_sets.len()
-        )));
-    };
-    if first.value == second.value {
-        return Err(refuse(format!(
-            "the two held sets are both at {} °C: λ_e needs a temperature difference",
-            first.value
-        )));
-    }
-    let sourced = bcs.sources.iter().filter(|&&s| s != 0.0).count();
-    if sourced > 0 || extra_heat {
-        let what = if sourced > 0 {
-            format!("{sourced} particle(s) receive heat from an imposed flux or a source")
-        } else {
-            "Joule heating adds heat inside the body".to_string()
-        };
-        return Err(refuse(format!(
-            "{what}: the heat through the two held sets then differs and no single λ_e describes it; \
-             remove the sources (or HeatFlux, or the electric physics' heating: `eta: 0.0`) for an ETC run"
-        )));
-    }
-    let (hot, cold) = if first.value > second.value {
-        (first, second)
-    } else {
-        (second, first)
-    };
+    let (hot, cold) = held_pair(model, setup, bcs, extra_heat, &refuse)?;
     let [h, c] = [hot, cold].map(|s| span(model, setup, s, axis));
     let (h, c) = (h?, c?);
     let apart = h.range[1] < c.range[0] || c.range[1] < h.range[0];
@@ -205,6 +160,64 @@ pub fn effective_conductivity(
         delta_t,
         lambda_e,
         warnings,
+    })
+}
+
+/// The hot and the cold held set of a run a single λ_e describes: a box that is not periodic,
+/// no face exchanging heat, exactly two held sets at two temperatures, and no heat added
+/// inside (`extra_heat`: by another physics); otherwise the reason, through `refuse`.
+fn held_pair<'a>(
+    model: &Model,
+    setup: &ThermalSetup,
+    bcs: &'a ThermalBcs,
+    extra_heat: bool,
+    refuse: &dyn Fn(String) -> ModelError,
+) -> Result<(&'a FixedSet, &'a FixedSet), ModelError> {
+    if model.container.period().is_some() {
+        return Err(refuse(
+            "a periodic box conducts round its period as well as between held sets, so no λ_e along one \
+             axis follows from them: use `thermal.solver: Homogenize` (with `bcs: []`) for the effective \
+             tensor"
+                .into(),
+        ));
+    }
+    if let Some(x) = setup.surroundings.faces.first() {
+        return Err(refuse(format!(
+            "face {} exchanges heat with its surroundings (Convection or Radiation): heat leaves elsewhere than \
+             through the two held sets and no single λ_e describes the body; an ETC run holds two faces and \
+             nothing else",
+            x.face.name()
+        )));
+    }
+    let [first, second] = bcs.fixed_sets.as_slice() else {
+        return Err(refuse(format!(
+            "the effective conductivity needs exactly two held sets (FixedTemperature or WallTemperature); \
+             this run holds {}",
+            bcs.fixed_sets.len()
+        )));
+    };
+    if first.value == second.value {
+        return Err(refuse(format!(
+            "the two held sets are both at {} °C: λ_e needs a temperature difference",
+            first.value
+        )));
+    }
+    let sourced = bcs.sources.iter().filter(|&&s| s != 0.0).count();
+    if sourced > 0 || extra_heat {
+        let what = if sourced > 0 {
+            format!("{sourced} particle(s) receive heat from an imposed flux or a source")
+        } else {
+            "Joule heating adds heat inside the body".to_string()
+        };
+        return Err(refuse(format!(
+            "{what}: the heat through the two held sets then differs and no single λ_e describes it; \
+             remove the sources (or HeatFlux, or the electric physics' heating: `eta: 0.0`) for an ETC run"
+        )));
+    }
+    Ok(if first.value > second.value {
+        (first, second)
+    } else {
+        (second, first)
     })
 }
 

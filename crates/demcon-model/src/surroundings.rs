@@ -214,8 +214,8 @@ fn face_temperature(l: &Link, t_p: f64) -> f64 {
 pub struct Surroundings {
     /// The faces, in the order of the boundary conditions that name them first.
     pub faces: Vec<Exchange>,
-    /// Per face: the boundary conditions (indices into `thermal.bcs`) on it.
-    pub bcs: Vec<Vec<usize>>,
+    /// Per face: the field paths of the boundary conditions on it (`thermal.bcs[i]`).
+    pub bcs: Vec<Vec<String>>,
     /// Per link of the faces' walls (indices `k` of [`WallContacts`]): its star.
     links: Vec<(usize, Link)>,
     /// Per entry of `links`: the surface temperature the radiation is linearised at (°C).
@@ -249,7 +249,7 @@ impl Surroundings {
     /// (°C) at t = 0.
     pub fn new(
         faces: Vec<Exchange>,
-        bcs: Vec<Vec<usize>>,
+        bcs: Vec<Vec<String>>,
         walls: &WallContacts,
         half: &[f64],
         particles: &ParticleSet,
@@ -262,8 +262,10 @@ impl Surroundings {
             let areas: Vec<f64> = if walls.facet_area.is_empty() {
                 let ids: Vec<u32> = range.clone().map(|k| walls.particle[k]).collect();
                 let total = face_area(x.face).unwrap_or(0.0);
-                let share = demcon_thermal::face_flux_sources(particles, &ids, total)
-                    .map_err(|e| ModelError::invalid("thermal.bcs", x.face.name(), e.to_string()))?;
+                let share = demcon_thermal::face_flux_sources(particles, &ids, total).map_err(|e| {
+                    let field = bcs[xi].first().map_or("bcs", String::as_str);
+                    ModelError::invalid(field, x.face.name(), e.to_string())
+                })?;
                 ids.iter().map(|&p| share[p as usize]).collect()
             } else {
                 range.clone().map(|k| walls.facet_area[k]).collect()
@@ -400,7 +402,7 @@ impl Surroundings {
             .zip(&self.bcs)
             .map(|(x, bcs)| {
                 let mut r = ExchangeReport {
-                    bcs: bcs.iter().map(|i| format!("thermal.bcs[{i}]")).collect(),
+                    bcs: bcs.clone(),
                     face: x.face.name().to_string(),
                     held_w: 0.0,
                     convection_w: 0.0,

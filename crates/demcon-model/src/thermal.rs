@@ -12,9 +12,9 @@ use demcon_graph::{
 use demcon_network::{Constraints, FloatingPolicy, Network, SolveParams, resolve_fixed};
 use demcon_thermal::{
     CheckpointEvery, Checkpoints, ExplicitParams, ImplicitParams, ProgressFn, RepresentativeVolume, Scheme,
-    ThermalSystem, TimeStep, TransientInput, TransientStart, TransientState, capacities, face_flux_sources,
-    implicit_step_after, paper_dt_estimate, run_explicit_from, run_implicit_from, solve_steady_temperature,
-    source_update_fn,
+    SourceUpdate, ThermalSystem, TimeStep, Transient, TransientInput, TransientStart, TransientState,
+    capacities, face_flux_sources, implicit_step_after, paper_dt_estimate, run_explicit_from,
+    run_implicit_from, solve_steady_temperature, source_update_fn,
 };
 use serde::Serialize;
 
@@ -385,9 +385,13 @@ pub fn thermal_setup(model: &Model, problem: &ThermalProblem) -> Result<ThermalS
     } else if model.anisotropic() {
         (g, wall_g) = conductances_at(model, &sm, problem.interface, &walls, None)?;
     }
+    let labels = plan
+        .exchange_bcs
+        .iter()
+        .map(|b| b.iter().map(|i| format!("{}[{i}]", model.fields.bcs)).collect());
     let surroundings = Surroundings::new(
         plan.exchanges,
-        plan.exchange_bcs,
+        labels.collect(),
         &walls,
         &wall_g,
         &model.particles,
@@ -1023,63 +1027,19 @@ pub fn solve_thermal_checkpointed(
     checkpointing: Option<Checkpointing<'_, '_>>,
 ) -> Result<ThermalRun, ModelError> {
     let n = model.particles.len();
-    let initial = problem.initial_temperature;
-    let (walls, around) = (&setup.walls, &setup.surroundings);
-    let t_init = initial_node_temperatures(model, setup, bcs, initial);
+    let t_init = initial_node_temperatures(model, setup, bcs, problem.initial_temperature);
     let (every, resume, mut sink) = match checkpointing {
         Some(c) => (c.every, c.resume, Some(c.sink)),
         None => (CheckpointEvery::default(), None, None),
     };
-    // Sources that follow the state or the time — the faces exchanging heat
-    // ([`Surroundings`]: radiation, tabled temperatures), tabled fluxes and power densities —
-    // are re-evaluated after every step for the next one, on top of the extra sources last
-    // handed out. The tables are read at the step's own time: its start for forward Euler
-    // (whose sources act from there), its middle for the implicit schemes.
-    let when = |t: f64| -> Result<f64, ModelError> {
-        Ok(match problem.solver {
-            ThermalSolver::Implicit { t_end, dt, .. } => {
-                t + 0.5 * implicit_step_after(t_end, dt, &problem.output_times, t)?
-            }
-            _ => t,
-        })
-    };
-    // λ(T): the matrix keeps the conductances of the initial state; what they became at the
-    // step's temperatures goes into the sources, (K₀ − K(T)) T — forward Euler exactly, the
-    // implicit schemes with the change lagged by one step.
-    let conductivity_varies = model.conductivity_varies();
-    let net = setup.network(model);
-    let sources_at = |t: f64, temps: &[f64], extra: Option<&[f64]>| -> Result<Vec<f64>, ModelError> {
-        let tau = when(t)?;
-        let mut s = bcs.sources_at(tau);
-        if let Some(x) = extra {
-            s.iter_mut().zip(x).for_each(|(a, b)| *a += b);
-        }
-        if conductivity_varies {
-            let (contacts, half) =
-                conductances_at(model, &setup.surface, problem.interface, walls, Some(&temps[..n]))?;
-            let mut now = around.clone();
-            now.set_half(&half);
-            let mut g = [contacts, half].concat();
-            let first_link = g.len() - walls.len();
-            now.set_conductances(&mut g[first_link..]);
-            let was = net.apply_laplacian(&setup.conductances, temps)?;
-            let is = net.apply_laplacian(&g, temps)?;
-            for (p, si) in s.iter_mut().enumerate().take(n) {
-                *si += was[p] - is[p];
-            }
-            now.add_sources(walls, tau, temps, &mut s);
-        } else {
-            around.add_sources(walls, tau, temps, &mut s);
-        }
-        Ok(s)
-    };
-    let varies = around.varies() || !bcs.timed.is_empty() || conductivity_varies;
-    let sources = sources_at(0.0, &t_init, extra.initial)?;
+    let step_sources = StepSources::new(model, setup, bcs, problem);
+    let varies = step_sources.varies();
+    let sources = step_sources.at(0.0, &t_init, extra.initial)?;
     let mut extra_now: Option<Vec<f64>> = match resume {
         // The extra sources in force at the checkpoint: what its sources hold beyond the
         // boundary's and the faces' (to round-off).
         Some(c) if varies && extra.initial.is_some() => {
-            let own = sources_at(c.transient.t, &c.transient.temperatures, None)?;
+            let own = step_sources.at(c.transient.t, &c.transient.temperatures, None)?;
             Some(c.transient.sources.iter().zip(&own).map(|(a, b)| a - b).collect())
         }
         _ => extra.initial.map(<[f64]>::to_vec),
@@ -1093,17 +1053,21 @@ pub fn solve_thermal_checkpointed(
         if fresh.is_some() {
             extra_now = fresh;
         }
-        sources_at(t, temps, extra_now.as_deref()).map(Some)
+        step_sources.at(t, temps, extra_now.as_deref()).map(Some)
     };
     let snapshots = RefCell::new(resume.map(|c| c.snapshots.clone()).unwrap_or_default());
-    let system = ThermalSystem::new(net, &setup.conductances, &setup.capacities, &bcs.constraints)?;
-    let input = TransientInput {
-        temperatures: &t_init,
-        sources: &sources,
-    };
+    let system = ThermalSystem::new(
+        setup.network(model),
+        &setup.conductances,
+        &setup.capacities,
+        &bcs.constraints,
+    )?;
     let start = match resume {
         Some(c) => TransientStart::Resume(&c.transient),
-        None => TransientStart::Initial(input),
+        None => TransientStart::Initial(TransientInput {
+            temperatures: &t_init,
+            sources: &sources,
+        }),
     };
     let observer = |t, v: &[f64]| {
         snapshots
@@ -1125,44 +1089,25 @@ pub fn solve_thermal_checkpointed(
         every,
         save: &mut save,
     });
+    let march = Marcher {
+        model,
+        setup,
+        problem,
+        system: &system,
+        start,
+    };
     let tr = match problem.solver {
         ThermalSolver::Explicit { t_end, dt } => {
-            let params = ExplicitParams {
-                t_end,
-                dt: explicit_step(dt, setup.paper_dt, model.fields.solver)?,
-                output_times: problem.output_times.clone(),
-                paper_dt: setup.paper_dt,
-                progress: problem.progress.clone(),
-                ..ExplicitParams::default()
-            };
-            run_explicit_from(
-                &system,
-                start,
-                &params,
-                observer,
-                source_update_fn(&mut hook),
-                checkpoints,
-            )
+            march.explicit(t_end, dt, observer, source_update_fn(&mut hook), checkpoints)?
         }
-        ThermalSolver::Implicit { t_end, dt, scheme } => {
-            let params = ImplicitParams {
-                t_end,
-                dt,
-                scheme,
-                output_times: problem.output_times.clone(),
-                solve: problem.solve,
-                progress: problem.progress.clone(),
-                ..ImplicitParams::default()
-            };
-            run_implicit_from(
-                &system,
-                start,
-                &params,
-                observer,
-                source_update_fn(&mut hook),
-                checkpoints,
-            )
-        }
+        ThermalSolver::Implicit { t_end, dt, scheme } => march.implicit(
+            t_end,
+            dt,
+            scheme,
+            observer,
+            source_update_fn(&mut hook),
+            checkpoints,
+        )?,
         ThermalSolver::Steady => {
             if resume.is_some() {
                 return Err(not_resumable(&model.fields, "Steady"));
@@ -1177,15 +1122,154 @@ pub fn solve_thermal_checkpointed(
             );
         }
     };
-    let tr = tr?;
     let mut report = transient_report(&tr.report, setup.paper_dt, bcs.constraints.excluded().len());
-    report.faces = around.report(walls, problem.solver.final_time(), &tr.temperatures);
+    report.faces = setup
+        .surroundings
+        .report(&setup.walls, problem.solver.final_time(), &tr.temperatures);
     Ok(ThermalRun::from_nodes(
         &setup.walls,
         tr.temperatures,
         snapshots.into_inner(),
         report,
     ))
+}
+
+/// The sources of a transient step that follow the state or the time — the faces exchanging
+/// heat ([`Surroundings`]: radiation, tabled temperatures), tabled fluxes and power densities —
+/// re-evaluated after every step for the next one, on top of the extra sources last handed
+/// out. The tables are read at the step's own time: its start for forward Euler (whose sources
+/// act from there), its middle for the implicit schemes.
+///
+/// λ(T): the matrix keeps the conductances of the initial state; what they became at the
+/// step's temperatures goes into the sources, (K₀ − K(T)) T — forward Euler exactly, the
+/// implicit schemes with the change lagged by one step.
+struct StepSources<'a> {
+    model: &'a Model,
+    setup: &'a ThermalSetup,
+    bcs: &'a ThermalBcs,
+    problem: &'a ThermalProblem,
+    conductivity_varies: bool,
+}
+
+impl<'a> StepSources<'a> {
+    fn new(
+        model: &'a Model,
+        setup: &'a ThermalSetup,
+        bcs: &'a ThermalBcs,
+        problem: &'a ThermalProblem,
+    ) -> Self {
+        Self {
+            model,
+            setup,
+            bcs,
+            problem,
+            conductivity_varies: model.conductivity_varies(),
+        }
+    }
+
+    /// Whether any source follows the state or the time.
+    fn varies(&self) -> bool {
+        self.setup.surroundings.varies() || !self.bcs.timed.is_empty() || self.conductivity_varies
+    }
+
+    /// The time (s) at which the step starting at `t` (s) reads its tables.
+    fn when(&self, t: f64) -> Result<f64, ModelError> {
+        Ok(match self.problem.solver {
+            ThermalSolver::Implicit { t_end, dt, .. } => {
+                t + 0.5 * implicit_step_after(t_end, dt, &self.problem.output_times, t)?
+            }
+            _ => t,
+        })
+    }
+
+    /// The sources (W per node) of the step starting at `t` (s) from the node temperatures
+    /// `temps` (°C), with `extra` (W per particle) added.
+    fn at(&self, t: f64, temps: &[f64], extra: Option<&[f64]>) -> Result<Vec<f64>, ModelError> {
+        let (model, setup) = (self.model, self.setup);
+        let (walls, n) = (&setup.walls, model.particles.len());
+        let tau = self.when(t)?;
+        let mut s = self.bcs.sources_at(tau);
+        if let Some(x) = extra {
+            s.iter_mut().zip(x).for_each(|(a, b)| *a += b);
+        }
+        if !self.conductivity_varies {
+            setup.surroundings.add_sources(walls, tau, temps, &mut s);
+            return Ok(s);
+        }
+        let (contacts, half) = conductances_at(
+            model,
+            &setup.surface,
+            self.problem.interface,
+            walls,
+            Some(&temps[..n]),
+        )?;
+        let mut now = setup.surroundings.clone();
+        now.set_half(&half);
+        let mut g = [contacts, half].concat();
+        let first_link = g.len() - walls.len();
+        now.set_conductances(&mut g[first_link..]);
+        let net = setup.network(model);
+        let was = net.apply_laplacian(&setup.conductances, temps)?;
+        let is = net.apply_laplacian(&g, temps)?;
+        for (p, si) in s.iter_mut().enumerate().take(n) {
+            *si += was[p] - is[p];
+        }
+        now.add_sources(walls, tau, temps, &mut s);
+        Ok(s)
+    }
+}
+
+/// Marches a thermal system with the problem's transient solver.
+struct Marcher<'a> {
+    model: &'a Model,
+    setup: &'a ThermalSetup,
+    problem: &'a ThermalProblem,
+    system: &'a ThermalSystem<'a>,
+    start: TransientStart<'a>,
+}
+
+impl Marcher<'_> {
+    /// Forward Euler to `t_end` (s), its step from `dt` and the paper's estimate.
+    fn explicit<U: SourceUpdate<Error = ModelError>>(
+        self,
+        t_end: f64,
+        dt: TimeStepSpec,
+        observer: impl FnMut(f64, &[f64]),
+        update: U,
+        checkpoints: Option<Checkpoints<'_, ModelError>>,
+    ) -> Result<Transient, ModelError> {
+        let params = ExplicitParams {
+            t_end,
+            dt: explicit_step(dt, self.setup.paper_dt, self.model.fields.solver)?,
+            output_times: self.problem.output_times.clone(),
+            paper_dt: self.setup.paper_dt,
+            progress: self.problem.progress.clone(),
+            ..ExplicitParams::default()
+        };
+        run_explicit_from(self.system, self.start, &params, observer, update, checkpoints)
+    }
+
+    /// Backward Euler or Crank–Nicolson to `t_end` with the step `dt` (s).
+    fn implicit<U: SourceUpdate<Error = ModelError>>(
+        self,
+        t_end: f64,
+        dt: f64,
+        scheme: Scheme,
+        observer: impl FnMut(f64, &[f64]),
+        update: U,
+        checkpoints: Option<Checkpoints<'_, ModelError>>,
+    ) -> Result<Transient, ModelError> {
+        let params = ImplicitParams {
+            t_end,
+            dt,
+            scheme,
+            output_times: self.problem.output_times.clone(),
+            solve: self.problem.solve,
+            progress: self.problem.progress.clone(),
+            ..ImplicitParams::default()
+        };
+        run_implicit_from(self.system, self.start, &params, observer, update, checkpoints)
+    }
 }
 
 /// The boundary's sources (W per node) with `extra` (W per particle) added.

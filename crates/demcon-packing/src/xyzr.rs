@@ -335,35 +335,9 @@ pub fn parse_xyzr(text: &str) -> Result<XyzrFile, (usize, String)> {
             .filter(|s| !s.is_empty())
             .collect();
         let labelled = !radii.is_empty() && !labels.is_empty() || radii.is_empty() && fields.len() == 5;
-        let want = if labelled { 5 } else { 4 };
-        if fields.len() != want {
-            return Err((
-                line,
-                format!(
-                    "expected {} `x y z r{}` (as the first particle line), found {} fields",
-                    if labelled {
-                        "4 numbers and a label"
-                    } else {
-                        "4 numbers"
-                    },
-                    if labelled { " label" } else { "" },
-                    fields.len()
-                ),
-            ));
-        }
+        let v = particle_line(&fields, labelled).map_err(|m| (line, m))?;
         if labelled {
             labels.push((fields[4].to_string(), line));
-        }
-        let mut v = [0.0; 4];
-        for (q, f) in fields.iter().take(4).enumerate() {
-            v[q] = f
-                .parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| (line, format!("`{}` is not a finite number", clip(f))))?;
-        }
-        if v[3] <= 0.0 {
-            return Err((line, format!("radius {} must be > 0", short(v[3]))));
         }
         lines.push(line);
         centres.push(Vec3::new(v[0], v[1], v[2]));
@@ -388,27 +362,7 @@ pub fn parse_xyzr(text: &str) -> Result<XyzrFile, (usize, String)> {
     }
     let particles = ParticleSet::new(centres, radii).map_err(|e| (last_line, e.to_string()))?;
     if let Some(c) = &container {
-        if let Err(e) = check_inside(&particles, c) {
-            let k = match e {
-                PackingError::Outside { particle, .. } => particle,
-                _ => 0,
-            };
-            return Err((lines[k], e.to_string()));
-        }
-        let solid: f64 =
-            particles.radii.iter().map(|r| r.powi(3)).sum::<f64>() * 4.0 / 3.0 * std::f64::consts::PI;
-        let phi = solid / c.volume();
-        if phi.is_nan() || phi > MAX_FILE_PHI {
-            return Err((
-                last_line,
-                format!(
-                    "the spheres would fill a volume fraction {} of `# container {}`, but at most \
-                     {MAX_FILE_PHI} is possible without overlaps: the container is too small for these spheres",
-                    short(phi),
-                    container_header(c),
-                ),
-            ));
-        }
+        check_fits(&particles, c, &lines, last_line)?;
     }
     Ok(XyzrFile {
         particles,
@@ -416,6 +370,69 @@ pub fn parse_xyzr(text: &str) -> Result<XyzrFile, (usize, String)> {
         container,
         notes,
     })
+}
+
+/// The numbers `x y z r` of a particle line split into `fields` (with a fifth, its label, when
+/// `labelled`); the error is the message for the line.
+fn particle_line(fields: &[&str], labelled: bool) -> Result<[f64; 4], String> {
+    let want = if labelled { 5 } else { 4 };
+    if fields.len() != want {
+        return Err(format!(
+            "expected {} `x y z r{}` (as the first particle line), found {} fields",
+            if labelled {
+                "4 numbers and a label"
+            } else {
+                "4 numbers"
+            },
+            if labelled { " label" } else { "" },
+            fields.len()
+        ));
+    }
+    let mut v = [0.0; 4];
+    for (q, f) in fields.iter().take(4).enumerate() {
+        v[q] = f
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("`{}` is not a finite number", clip(f)))?;
+    }
+    if v[3] <= 0.0 {
+        return Err(format!("radius {} must be > 0", short(v[3])));
+    }
+    Ok(v)
+}
+
+/// Every particle inside the `# container` header's container `c`, and the spheres' volume
+/// fraction possible without overlaps; the error names the particle's line (`lines`) or the
+/// file's last line.
+fn check_fits(
+    particles: &ParticleSet,
+    c: &Container,
+    lines: &[usize],
+    last_line: usize,
+) -> Result<(), (usize, String)> {
+    if let Err(e) = check_inside(particles, c) {
+        let k = match e {
+            PackingError::Outside { particle, .. } => particle,
+            _ => 0,
+        };
+        return Err((lines[k], e.to_string()));
+    }
+    let solid: f64 =
+        particles.radii.iter().map(|r| r.powi(3)).sum::<f64>() * 4.0 / 3.0 * std::f64::consts::PI;
+    let phi = solid / c.volume();
+    if phi.is_nan() || phi > MAX_FILE_PHI {
+        return Err((
+            last_line,
+            format!(
+                "the spheres would fill a volume fraction {} of `# container {}`, but at most \
+                 {MAX_FILE_PHI} is possible without overlaps: the container is too small for these spheres",
+                short(phi),
+                container_header(c),
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn parse_container(rest: &str) -> Result<Container, String> {

@@ -233,6 +233,65 @@ fn write_files(
     let t0 = std::time::Instant::now();
     let mut written = Vec::new();
     let fields = ParticleFields::at(r, None);
+    write_particles_and_contacts(outputs, r, &fields, dir, &mut written)?;
+    if let Some(cells) = &r.cells {
+        write_cells(r, cells, &dir.join("cells.vtu"))?;
+        written.push("cells.vtu".into());
+    }
+    // The shapes a random placement drew, as a shapes file (`Shapes(file: ..)` reads it back).
+    for rep in r.model.report.shapes.iter().filter(|s| s.placement.is_some()) {
+        let name = format!("shapes-{}.txt", rep.entry);
+        let about = format!(
+            "phases[{}]: {} shapes placed at random (fraction {}), m; `Shapes(file: \"{name}\")` reads them back",
+            rep.entry, rep.count, rep.fraction
+        );
+        let path = dir.join(&name);
+        write_atomic(
+            &path,
+            crate::shapes::format_shapes(&rep.shapes, &about).as_bytes(),
+        )?;
+        written.push(name);
+    }
+    if outputs.vtk && !r.model.report.shapes.is_empty() {
+        write_inclusions(r, &dir.join("inclusions.vtp"))?;
+        written.push("inclusions.vtp".into());
+    }
+    if outputs.particles_csv {
+        fields.write_csv(r, &dir.join("particles.csv"))?;
+        written.push("particles.csv".into());
+    }
+    write_probe_tables(r, dir, &mut written)?;
+    if outputs.plots {
+        // Plots are a convenience: a failure is reported in the list, not fatal to the run.
+        match crate::plots::write_run_plots(r, outputs, &dir.join("plots")) {
+            Ok(_) => written.push("plots/".into()),
+            Err(e) => written.push(format!("no plots ({e})")),
+        }
+    }
+    let (rss_bytes, peak_rss_bytes) = demcon_core::resident_bytes();
+    let mut stages = r.stages.records().to_vec();
+    stages.push(StageRecord {
+        stage: "outputs",
+        wall_s: t0.elapsed().as_secs_f64(),
+        rss_bytes,
+        peak_rss_bytes,
+        peak_is_stage: reset,
+    });
+    let summary = serde_json::to_vec_pretty(&summary_with(name, r, &stages)).expect("summary serialises");
+    write_atomic(&dir.join("summary.json"), &summary)?;
+    written.push("summary.json".into());
+    Ok(written)
+}
+
+/// `particles` and `contacts` as VTK files: one file of a steady run, or a `.pvd` series of
+/// a transient's output times then its end.
+fn write_particles_and_contacts(
+    outputs: &crate::config::OutputsConfig,
+    r: &RunResult,
+    fields: &ParticleFields<'_>,
+    dir: &Path,
+    written: &mut Vec<String>,
+) -> Result<(), SceneError> {
     match r.t_end {
         // A transient: the series of the output times before the end, then the end.
         Some(t_end) => {
@@ -248,7 +307,7 @@ fn write_files(
                             earlier = ParticleFields::at(r, *e);
                             &earlier
                         }
-                        None => &fields,
+                        None => fields,
                     };
                     write_vtu(dir.join(&file), &r.model.particles, &f.vtk())?;
                     entries.push((time(e), file));
@@ -279,32 +338,11 @@ fn write_files(
             }
         }
     }
-    if let Some(cells) = &r.cells {
-        write_cells(r, cells, &dir.join("cells.vtu"))?;
-        written.push("cells.vtu".into());
-    }
-    // The shapes a random placement drew, as a shapes file (`Shapes(file: ..)` reads it back).
-    for rep in r.model.report.shapes.iter().filter(|s| s.placement.is_some()) {
-        let name = format!("shapes-{}.txt", rep.entry);
-        let about = format!(
-            "phases[{}]: {} shapes placed at random (fraction {}), m; `Shapes(file: \"{name}\")` reads them back",
-            rep.entry, rep.count, rep.fraction
-        );
-        let path = dir.join(&name);
-        write_atomic(
-            &path,
-            crate::shapes::format_shapes(&rep.shapes, &about).as_bytes(),
-        )?;
-        written.push(name);
-    }
-    if outputs.vtk && !r.model.report.shapes.is_empty() {
-        write_inclusions(r, &dir.join("inclusions.vtp"))?;
-        written.push("inclusions.vtp".into());
-    }
-    if outputs.particles_csv {
-        fields.write_csv(r, &dir.join("particles.csv"))?;
-        written.push("particles.csv".into());
-    }
+    Ok(())
+}
+
+/// `probes.csv` and `profiles.csv`, when the scene asks for probes or profiles.
+fn write_probe_tables(r: &RunResult, dir: &Path, written: &mut Vec<String>) -> Result<(), SceneError> {
     if !r.probes.is_empty() {
         let mut s = String::from("probe,field,t_s,value,solved\n");
         for p in &r.probes {
@@ -331,26 +369,7 @@ fn write_files(
         write_atomic(&dir.join("profiles.csv"), s.as_bytes())?;
         written.push("profiles.csv".into());
     }
-    if outputs.plots {
-        // Plots are a convenience: a failure is reported in the list, not fatal to the run.
-        match crate::plots::write_run_plots(r, outputs, &dir.join("plots")) {
-            Ok(_) => written.push("plots/".into()),
-            Err(e) => written.push(format!("no plots ({e})")),
-        }
-    }
-    let (rss_bytes, peak_rss_bytes) = demcon_core::resident_bytes();
-    let mut stages = r.stages.records().to_vec();
-    stages.push(StageRecord {
-        stage: "outputs",
-        wall_s: t0.elapsed().as_secs_f64(),
-        rss_bytes,
-        peak_rss_bytes,
-        peak_is_stage: reset,
-    });
-    let summary = serde_json::to_vec_pretty(&summary_with(name, r, &stages)).expect("summary serialises");
-    write_atomic(&dir.join("summary.json"), &summary)?;
-    written.push("summary.json".into());
-    Ok(written)
+    Ok(())
 }
 
 /// The per-particle fields of a run at one time, as the VTU and the CSV write them.

@@ -638,74 +638,8 @@ fn check_thermal(
     )?;
     let mut fixed = 0;
     for (i, bc) in t.bcs.iter().enumerate() {
-        let field = format!("thermal.bcs[{i}]");
-        match bc {
-            ThermalBcConfig::FixedTemperature { value, .. } => {
-                fixed += 1;
-                finite(&format!("{field}.value"), *value, "a temperature (°C)")?;
-            }
-            ThermalBcConfig::WallTemperature { face, value } => {
-                fixed += 1;
-                check_timed(
-                    &format!("{field}.value"),
-                    value,
-                    "a temperature (°C)",
-                    None,
-                    &t.solver,
-                )?;
-                check_face(&format!("{field}.face"), *face, container)?;
-            }
-            ThermalBcConfig::HeatFlux { face, flux } => {
-                check_timed(
-                    &format!("{field}.flux"),
-                    flux,
-                    "a flux density (W/m²)",
-                    None,
-                    &t.solver,
-                )?;
-                check_face(&format!("{field}.face"), *face, container)?;
-            }
-            ThermalBcConfig::Convection { face, h, t_inf } => {
-                fixed += 1;
-                if !(h.is_finite() && *h > 0.0) {
-                    return Err(SceneError::invalid(
-                        &format!("{field}.h"),
-                        h,
-                        "a film coefficient > 0 (W/(m²·K)); an adiabatic face needs no condition",
-                    ));
-                }
-                check_timed(
-                    &format!("{field}.t_inf"),
-                    t_inf,
-                    "a temperature (°C)",
-                    Some(-KELVIN),
-                    &t.solver,
-                )?;
-                check_face(&format!("{field}.face"), *face, container)?;
-            }
-            ThermalBcConfig::Radiation {
-                face,
-                emissivity,
-                t_surroundings,
-            } => {
-                fixed += 1;
-                if !(*emissivity > 0.0 && *emissivity <= 1.0) {
-                    return Err(SceneError::invalid(
-                        &format!("{field}.emissivity"),
-                        emissivity,
-                        "an emissivity in (0, 1]; a face that does not radiate needs no condition",
-                    ));
-                }
-                check_timed(
-                    &format!("{field}.t_surroundings"),
-                    t_surroundings,
-                    "a temperature (°C)",
-                    Some(-KELVIN),
-                    &t.solver,
-                )?;
-                check_face(&format!("{field}.face"), *face, container)?;
-            }
-        }
+        check_thermal_bc(&format!("thermal.bcs[{i}]"), bc, &t.solver, container)?;
+        fixed += usize::from(!matches!(bc, ThermalBcConfig::HeatFlux { .. }));
     }
     for (i, s) in t.sources.iter().enumerate() {
         check_timed(
@@ -716,7 +650,93 @@ fn check_thermal(
             &t.solver,
         )?;
     }
-    match t.solver {
+    check_thermal_solver(c, &t.solver, fixed)?;
+    if let Some(ck) = &t.checkpoint {
+        check_checkpoint(ck, &t.solver)?;
+    }
+    Ok(())
+}
+
+/// One thermal boundary condition at `field` (`thermal.bcs[i]`).
+fn check_thermal_bc(
+    field: &str,
+    bc: &ThermalBcConfig,
+    solver: &ThermalSolverConfig,
+    container: Option<&Container>,
+) -> Result<(), SceneError> {
+    match bc {
+        ThermalBcConfig::FixedTemperature { value, .. } => {
+            finite(&format!("{field}.value"), *value, "a temperature (°C)")?;
+        }
+        ThermalBcConfig::WallTemperature { face, value } => {
+            check_timed(
+                &format!("{field}.value"),
+                value,
+                "a temperature (°C)",
+                None,
+                solver,
+            )?;
+            check_face(&format!("{field}.face"), *face, container)?;
+        }
+        ThermalBcConfig::HeatFlux { face, flux } => {
+            check_timed(
+                &format!("{field}.flux"),
+                flux,
+                "a flux density (W/m²)",
+                None,
+                solver,
+            )?;
+            check_face(&format!("{field}.face"), *face, container)?;
+        }
+        ThermalBcConfig::Convection { face, h, t_inf } => {
+            if !(h.is_finite() && *h > 0.0) {
+                return Err(SceneError::invalid(
+                    &format!("{field}.h"),
+                    h,
+                    "a film coefficient > 0 (W/(m²·K)); an adiabatic face needs no condition",
+                ));
+            }
+            check_timed(
+                &format!("{field}.t_inf"),
+                t_inf,
+                "a temperature (°C)",
+                Some(-KELVIN),
+                solver,
+            )?;
+            check_face(&format!("{field}.face"), *face, container)?;
+        }
+        ThermalBcConfig::Radiation {
+            face,
+            emissivity,
+            t_surroundings,
+        } => {
+            if !(*emissivity > 0.0 && *emissivity <= 1.0) {
+                return Err(SceneError::invalid(
+                    &format!("{field}.emissivity"),
+                    emissivity,
+                    "an emissivity in (0, 1]; a face that does not radiate needs no condition",
+                ));
+            }
+            check_timed(
+                &format!("{field}.t_surroundings"),
+                t_surroundings,
+                "a temperature (°C)",
+                Some(-KELVIN),
+                solver,
+            )?;
+            check_face(&format!("{field}.face"), *face, container)?;
+        }
+    }
+    Ok(())
+}
+
+/// The thermal solver; `fixed`: the boundary conditions that hold or exchange a temperature.
+fn check_thermal_solver(
+    c: &SceneConfig,
+    solver: &ThermalSolverConfig,
+    fixed: usize,
+) -> Result<(), SceneError> {
+    match *solver {
         ThermalSolverConfig::Explicit { t_end, dt } => {
             positive_time("thermal.solver.t_end", t_end)?;
             match dt {
@@ -753,9 +773,6 @@ fn check_thermal(
                 ));
             }
         }
-    }
-    if let Some(ck) = &t.checkpoint {
-        check_checkpoint(ck, &t.solver)?;
     }
     Ok(())
 }
