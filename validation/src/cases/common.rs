@@ -636,20 +636,35 @@ pub fn with_scene_defects_rule(
     Ok(demcon_model::with_defects(model, &spec)?)
 }
 
-/// A periodic homogenisation scene of `count` sites in a cube of edge `edge` (m), Laguerre
-/// cells: a matrix of λ = `lambda_m` with `shapes` of λ = `contrast` × `lambda_m` (disjoint),
-/// the phases under `rule`.
-#[allow(clippy::too_many_arguments)]
+/// A periodic cube of two materials: its edge (m), its site count, the matrix's λ
+/// (W/(m·K)) and the inclusions' λ over the matrix's.
+#[derive(Debug, Clone, Copy)]
+pub struct TwoPhaseCell {
+    /// Edge of the cube (m).
+    pub edge: f64,
+    /// Packing sites.
+    pub count: usize,
+    /// The matrix's conductivity (W/(m·K)).
+    pub lambda_m: f64,
+    /// The inclusions' conductivity over the matrix's.
+    pub contrast: f64,
+}
+
+/// A periodic homogenisation scene of `cell`, Laguerre cells: a matrix with `shapes`
+/// (disjoint), the phases under `rule`.
 pub fn shapes_scene(
     name: &str,
     seed: u64,
-    edge: f64,
-    count: usize,
-    lambda_m: f64,
-    contrast: f64,
+    cell: TwoPhaseCell,
     shapes: Vec<ShapeConfig>,
     rule: PhaseRuleConfig,
 ) -> SceneConfig {
+    let TwoPhaseCell {
+        edge,
+        count,
+        lambda_m,
+        contrast,
+    } = cell;
     let mut s = thermal_scene(
         name,
         seed,

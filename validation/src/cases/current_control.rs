@@ -22,7 +22,6 @@ use demcon_scene::config::*;
 
 use super::common::*;
 use super::study::Study;
-use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
 
 const SIDE: f64 = 2e-3;
@@ -230,21 +229,25 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let study = Study::run(&sizes, |_| 3, ctx.seed, |n, seed, _| measure(n, seed))?;
     let mut out = CaseOutcome::new("current-control", ctx.mode);
     out.n_particles = study.rows().map(|r| r.particles).max().unwrap_or(0);
-    let rows = study.indexed();
-    out.tables.push(
-        Columns::new()
-            .column("N", |(_, r): &(u64, &Row)| r.particles.to_string())
-            .column("packing", |(k, _)| k.to_string())
-            .column("|ΔV/(I ρ_e L/A) − 1|", |(_, r)| format!("{:.1e}", r.drop))
-            .column("ρ_e(T) at constant I: max |θ̄/θ − 1|", |(_, r)| format!("{:.2e}", r.theta))
+    out.tables.push(study.packings_table(
+        "Current-controlled bar: the potential found, and the coupled ρ_e(T) transient at constant current",
+        |r| r.particles,
+        |c| {
+            c.column("|ΔV/(I ρ_e L/A) − 1|", |(_, r): &(u64, &Row)| {
+                format!("{:.1e}", r.drop)
+            })
+            .column("ρ_e(T) at constant I: max |θ̄/θ − 1|", |(_, r)| {
+                format!("{:.2e}", r.theta)
+            })
             .column("potential solves", |(_, r)| r.solves.to_string())
-            .column("heater switched off: max |θ̄/θ − 1|", |(_, r)| format!("{:.1e}", r.switched))
-            .column("(T_max − T_min) β at the end", |(_, r)| format!("{:.1e}", r.spread))
-            .table(
-                "Current-controlled bar: the potential found, and the coupled ρ_e(T) transient at constant current",
-                &rows,
-            ),
-    );
+            .column("heater switched off: max |θ̄/θ − 1|", |(_, r)| {
+                format!("{:.1e}", r.switched)
+            })
+            .column("(T_max − T_min) β at the end", |(_, r)| {
+                format!("{:.1e}", r.spread)
+            })
+        },
+    ));
     out.compare(Comparison::at_most(
         "potential drop vs I ρ_e L/A",
         study.worst(|r| r.drop),

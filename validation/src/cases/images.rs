@@ -34,7 +34,7 @@ use serde_json::Value;
 use super::common::*;
 use super::study::Study;
 use crate::table::Columns;
-use crate::{CaseOutcome, Comparison, Ctx};
+use crate::{CaseOutcome, Comparison, Ctx, Table};
 
 /// Matrix conductivity (W/(m·K)).
 const LAMBDA_M: f64 = 1.0;
@@ -458,6 +458,24 @@ fn report(
     voxels: &[usize],
     out: &mut CaseOutcome,
 ) -> anyhow::Result<()> {
+    out.tables.push(spheres_table(data, study, voxels));
+    out.tables.push(laminate_table(study));
+    error_time_chart(ctx, data, study, voxels, out)?;
+    out.note(format!(
+        "{} mode: {} packings per N (φ = 0.6, Gaussian radii CoV 0.3, seeds from {}), Laguerre cells, `Homogenize`. \
+         Images: .raw u8 written by the case from the data file's centres (label-1 counts checked). demcon's \
+         wall time is the whole build (packing, tessellation, reading and cutting the image) and the solve; the \
+         FFT's is its solve on the given image (one thread, scripts/images_fft_reference.py, same machine).",
+        ctx.mode.name(),
+        PACKINGS,
+        ctx.seed,
+    ));
+    Ok(())
+}
+
+/// The sphere microstructures: per (N, contrast, input) the error of each rule against the
+/// continuum, and the voxel FFT's on the same image.
+fn spheres_table(data: &Data, study: &Study<Vec<Row>>, voxels: &[usize]) -> Table {
     // The sphere microstructures: per (N, contrast, input) the error of each rule against the
     // continuum, and the voxel FFT's on the same image.
     type Line = (usize, f64, usize);
@@ -469,21 +487,6 @@ fn report(
             }
         }
     }
-    let fft = |c: f64, v: usize| -> Option<(Spread, f64)> {
-        let mut errs = Vec::new();
-        let mut time = Vec::new();
-        for r in data
-            .micros
-            .iter()
-            .flat_map(|m| m.refs.iter().filter(|r| r.contrast == c))
-        {
-            for i in r.images.iter().filter(|i| i.0 == v) {
-                errs.extend([0, 1, 2].map(|a| i.2[a] / r.continuum[a] - 1.0));
-                time.push(i.3);
-            }
-        }
-        (!errs.is_empty()).then(|| (Spread::of(errs), time.iter().sum::<f64>() / time.len() as f64))
-    };
     let signed = |l: &Line, rule: usize| {
         Spread::of(
             study
@@ -512,9 +515,11 @@ fn report(
                 .fold(0.0, f64::max);
             format!("{:.3} %", 100.0 * e)
         })
-        .column("voxel FFT on the image", move |l: &Line| match fft(l.1, l.2) {
-            Some((s, t)) => format!("{:+.2} % ({:.1} s)", 100.0 * s.mean, t),
-            None => "—".into(),
+        .column("voxel FFT on the image", move |l: &Line| {
+            match fft_error(data, l.1, l.2) {
+                Some((s, t)) => format!("{:+.2} % ({:.1} s)", 100.0 * s.mean, t),
+                None => "—".into(),
+            }
         });
     for (rule, (name, _)) in RULES.iter().enumerate() {
         cols = cols.column(*name, move |l: &Line| {
@@ -532,44 +537,57 @@ fn report(
             format!("{:+.2} % ({:.1} s)", 100.0 * s.mean, t.mean)
         });
     }
-    out.tables.push(cols.table(
+    cols.table(
         "60 spheres, f ≈ 0.1: mean signed error of the diagonal against the list's continuum value (wall time: demcon build + solve; FFT solve)",
         &lines,
-    ));
+    )
+}
+
+/// The laminate image against its exact values, per N and rule.
+fn laminate_table(study: &Study<Vec<Row>>) -> Table {
     let lam: Vec<(usize, usize)> = study
         .sizes()
         .iter()
         .flat_map(|&n| (0..RULES.len()).map(move |r| (n, r)))
         .collect();
-    out.tables.push(
-        Columns::new()
-            .column("N", |l: &(usize, usize)| l.0.to_string())
-            .column("rule", |l| RULES[l.1].0.into())
-            .column("max |error| across (series)", |l| {
-                let s = Spread::of(
-                    study
-                        .at(l.0)
-                        .flatten()
-                        .filter(|r| r.laminate && r.rule == l.1)
-                        .map(|r| r.errors()[0].abs()),
-                );
-                format!("{:.2e}", s.max)
-            })
-            .column("max |error| along (parallel)", |l| {
-                let s = Spread::of(
-                    study
-                        .at(l.0)
-                        .flatten()
-                        .filter(|r| r.laminate && r.rule == l.1)
-                        .flat_map(|r| [r.errors()[1].abs(), r.errors()[2].abs()]),
-                );
-                format!("{:.2e}", s.max)
-            })
-            .table(
-                "Laminate image (16³, six layers, λ = 1, 10, 0.1): against the exact values",
-                &lam,
-            ),
-    );
+    Columns::new()
+        .column("N", |l: &(usize, usize)| l.0.to_string())
+        .column("rule", |l| RULES[l.1].0.into())
+        .column("max |error| across (series)", |l| {
+            let s = Spread::of(
+                study
+                    .at(l.0)
+                    .flatten()
+                    .filter(|r| r.laminate && r.rule == l.1)
+                    .map(|r| r.errors()[0].abs()),
+            );
+            format!("{:.2e}", s.max)
+        })
+        .column("max |error| along (parallel)", |l| {
+            let s = Spread::of(
+                study
+                    .at(l.0)
+                    .flatten()
+                    .filter(|r| r.laminate && r.rule == l.1)
+                    .flat_map(|r| [r.errors()[1].abs(), r.errors()[2].abs()]),
+            );
+            format!("{:.2e}", s.max)
+        })
+        .table(
+            "Laminate image (16³, six layers, λ = 1, 10, 0.1): against the exact values",
+            &lam,
+        )
+}
+
+/// One chart: error against wall time, demcon (each N, list and images) and the FFT on the
+/// images, at the first contrast.
+fn error_time_chart(
+    ctx: &Ctx,
+    data: &Data,
+    study: &Study<Vec<Row>>,
+    voxels: &[usize],
+    out: &mut CaseOutcome,
+) -> anyhow::Result<()> {
     // One chart: error against wall time, demcon (each N, list and images) and the FFT on the images.
     let c0 = contrasts(data).first().copied().unwrap_or(10.0);
     let point = |n: usize, v: usize, rule: usize| {
@@ -609,7 +627,7 @@ fn report(
         voxels
             .iter()
             .filter_map(|&v| {
-                fft(c0, v).map(|(s, t)| {
+                fft_error(data, c0, v).map(|(s, t)| {
                     (
                         t.max(1e-3),
                         Spread::of(std::iter::once(s.mean.abs())).mean.max(1e-6),
@@ -631,14 +649,23 @@ fn report(
         &ctx.out.join(file),
     )?;
     out.charts.push(file.into());
-    out.note(format!(
-        "{} mode: {} packings per N (φ = 0.6, Gaussian radii CoV 0.3, seeds from {}), Laguerre cells, `Homogenize`. \
-         Images: .raw u8 written by the case from the data file's centres (label-1 counts checked). demcon's \
-         wall time is the whole build (packing, tessellation, reading and cutting the image) and the solve; the \
-         FFT's is its solve on the given image (one thread, scripts/images_fft_reference.py, same machine).",
-        ctx.mode.name(),
-        PACKINGS,
-        ctx.seed,
-    ));
     Ok(())
+}
+
+/// The voxel FFT's signed errors on the `v`³ images at contrast `c` against the continuum
+/// value, and its mean wall time (s); `None` without such images.
+fn fft_error(data: &Data, c: f64, v: usize) -> Option<(Spread, f64)> {
+    let mut errs = Vec::new();
+    let mut time = Vec::new();
+    for r in data
+        .micros
+        .iter()
+        .flat_map(|m| m.refs.iter().filter(|r| r.contrast == c))
+    {
+        for i in r.images.iter().filter(|i| i.0 == v) {
+            errs.extend([0, 1, 2].map(|a| i.2[a] / r.continuum[a] - 1.0));
+            time.push(i.3);
+        }
+    }
+    (!errs.is_empty()).then(|| (Spread::of(errs), time.iter().sum::<f64>() / time.len() as f64))
 }

@@ -21,7 +21,6 @@ use demcon_scene::config::*;
 use super::bar::{DIFFUSIVITY, L, LAMBDA, bar_scene};
 use super::common::*;
 use super::study::Study;
-use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
 
 const BETA: f64 = -2e-3;
@@ -169,22 +168,22 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let study = Study::run(&sizes, |_| 3, ctx.seed, |n, seed, _| measure(n, seed, &fine))?;
     let mut out = CaseOutcome::new("lambda-t", ctx.mode);
     out.n_particles = study.rows().map(|r| r.particles).max().unwrap_or(0);
-    let rows = study.indexed();
-    out.tables.push(
-        Columns::new()
-            .column("N", |(_, r): &(u64, &Row)| r.particles.to_string())
-            .column("packing", |(k, _)| k.to_string())
-            .column("steady vs Kirchhoff", |(_, r)| format!("{:.2e}", r.steady))
+    out.tables.push(study.packings_table(
+        format!(
+            "Bar with λ = λ0 (1 + β T), β = {BETA}: largest |T_p − T(x_p)| relative to the span; the 1-D \
+             reference's own error (800 vs 400 cells) {ref_error:.1e}"
+        ),
+        |r| r.particles,
+        |c| {
+            c.column("steady vs Kirchhoff", |(_, r): &(u64, &Row)| {
+                format!("{:.2e}", r.steady)
+            })
             .column("steady solves", |(_, r)| r.solves.to_string())
-            .column("transient vs 1-D reference", |(_, r)| format!("{:.3} %", 100.0 * r.transient))
-            .table(
-                format!(
-                    "Bar with λ = λ0 (1 + β T), β = {BETA}: largest |T_p − T(x_p)| relative to the span; the 1-D \
-                     reference's own error (800 vs 400 cells) {ref_error:.1e}"
-                ),
-                &rows,
-            ),
-    );
+            .column("transient vs 1-D reference", |(_, r)| {
+                format!("{:.3} %", 100.0 * r.transient)
+            })
+        },
+    ));
     out.compare(Comparison::at_most(
         "steady λ(T) bar vs the Kirchhoff profile",
         study.worst(|r| r.steady),

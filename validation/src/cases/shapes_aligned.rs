@@ -126,10 +126,12 @@ fn scene(n: usize, seed: u64, shapes: &[ShapeConfig], contrast: f64, rule: Phase
     shapes_scene(
         "shapes-aligned",
         seed,
-        CELL,
-        n,
-        LAMBDA_M,
-        contrast,
+        TwoPhaseCell {
+            edge: CELL,
+            count: n,
+            lambda_m: LAMBDA_M,
+            contrast,
+        },
         shapes.to_vec(),
         rule,
     )

@@ -36,7 +36,7 @@ use demcon_scene::config::*;
 use super::common::*;
 use super::study::Study;
 use crate::table::Columns;
-use crate::{CaseOutcome, Comparison, Ctx, Mode};
+use crate::{CaseOutcome, Comparison, Ctx, Mode, Table};
 
 /// The spheroid's volume (m³): f = 0.01 in the unit cell.
 const VOLUME: f64 = 0.01;
@@ -126,10 +126,12 @@ fn measure_rule(
                 let s = shapes_scene(
                     "shapes-dilute",
                     seed,
-                    edge,
-                    count,
-                    LAMBDA_M,
-                    contrast,
+                    TwoPhaseCell {
+                        edge,
+                        count,
+                        lambda_m: LAMBDA_M,
+                        contrast,
+                    },
                     vec![spheroid],
                     rule,
                 );
@@ -260,6 +262,24 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
         "dilute spheroid: (c − 1)/(1 + N_i (c − 1)), N_i in closed form",
     );
     let lines: Vec<(usize, usize, f64)> = (0..RULES.len()).flat_map(keys).collect();
+    out.tables.push(increment_table(&study, &lines));
+    out.note(format!(
+        "{} mode: one spheroid of volume 0.01 m³ along z at the centre of periodic cells of edge 1 and 2^(1/3) m, \
+         {n} and {} particles (φ = 0.6, Gaussian radii CoV 0.3, seeds {}…{}), Laguerre cells, conforming cells \
+         (the default) and the segment rule, `Homogenize`. Segment bounds chosen before any run: {:.0} % (--quick; \
+         missed, reported) / {:.0} % (--full, gated); conforming bounds in the module notes.",
+        ctx.mode.name(),
+        2 * n,
+        ctx.seed,
+        ctx.seed + PACKINGS - 1,
+        100.0 * BOUNDS[0],
+        100.0 * BOUNDS[1],
+    ));
+    Ok(out)
+}
+
+/// The extrapolated increments per rule, shape and contrast (`lines`), mean over the packings.
+fn increment_table(study: &Study<Vec<Row>>, lines: &[(usize, usize, f64)]) -> Table {
     let mean_of = |key: (usize, usize, f64), pick: fn(&Extrapolated) -> [f64; 3], axis: usize| {
         Spread::of(
             study
@@ -292,23 +312,10 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
                 format!("{:+.2} %", 100.0 * mean_of(*l, |e| e.error, axis))
             });
     }
-    out.tables.push(cols.table(
+    cols.table(
         "Dilute spheroid: increment per fraction I = (λ_ii/λ_m − 1)/f at f = 0.01 and 0.005, extrapolated to f → 0 (mean over 3 packings)",
-        &lines,
-    ));
-    out.note(format!(
-        "{} mode: one spheroid of volume 0.01 m³ along z at the centre of periodic cells of edge 1 and 2^(1/3) m, \
-         {n} and {} particles (φ = 0.6, Gaussian radii CoV 0.3, seeds {}…{}), Laguerre cells, conforming cells \
-         (the default) and the segment rule, `Homogenize`. Segment bounds chosen before any run: {:.0} % (--quick; \
-         missed, reported) / {:.0} % (--full, gated); conforming bounds in the module notes.",
-        ctx.mode.name(),
-        2 * n,
-        ctx.seed,
-        ctx.seed + PACKINGS - 1,
-        100.0 * BOUNDS[0],
-        100.0 * BOUNDS[1],
-    ));
-    Ok(out)
+        lines,
+    )
 }
 
 #[cfg(test)]

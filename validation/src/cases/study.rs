@@ -3,6 +3,8 @@
 //! loop every multi-packing case used to write by hand.
 
 use super::common::Spread;
+use crate::Table;
+use crate::table::Columns;
 
 /// One packing's measurement in a [`Study`].
 #[derive(Debug, Clone)]
@@ -91,6 +93,20 @@ impl<R> Study<R> {
     /// Every packing's rows with its index at its size (for a table of packings).
     pub fn indexed(&self) -> Vec<(u64, &R)> {
         self.packings.iter().map(|p| (p.k, &p.rows)).collect()
+    }
+
+    /// A table with a line per packing: its particles (`particles`), its index at its size,
+    /// then the `columns` a case adds.
+    pub fn packings_table<'a>(
+        &'a self,
+        title: impl Into<String>,
+        particles: impl Fn(&R) -> usize + 'a,
+        columns: impl FnOnce(Columns<'a, (u64, &'a R)>) -> Columns<'a, (u64, &'a R)>,
+    ) -> Table {
+        let cols = Columns::new()
+            .column("N", move |(_, r): &(u64, &R)| particles(r).to_string())
+            .column("packing", |(k, _)| k.to_string());
+        columns(cols).table(title, &self.indexed())
     }
 }
 

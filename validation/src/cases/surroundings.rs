@@ -47,7 +47,6 @@ use demcon_scene::config::*;
 use super::bar::{DIFFUSIVITY, L, LAMBDA, bar_scene};
 use super::common::*;
 use super::study::Study;
-use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
 
 /// Biot number hL/λ of the convecting faces.
@@ -389,27 +388,31 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let study = Study::run(&sizes, |_| 3, ctx.seed, |n, seed, _| measure(n, seed))?;
     let mut out = CaseOutcome::new("surroundings", ctx.mode);
     out.n_particles = study.rows().map(|r| r.particles).max().unwrap_or(0);
-    let rows = study.indexed();
-    out.tables.push(
-        Columns::new()
-            .column("N", |(_, r): &(u64, &Row)| r.particles.to_string())
-            .column("packing", |(k, _)| k.to_string())
-            .column("convection, steady", |(_, r)| format!("{:.2e}", r.convection))
+    out.tables.push(study.packings_table(
+        "Bar with a convecting / radiating end: largest |T_p − T(x_p)| over the particles, relative to the \
+         temperature span (steady) or θ₀ (transient)",
+        |r| r.particles,
+        |c| {
+            c.column("convection, steady", |(_, r): &(u64, &Row)| {
+                format!("{:.2e}", r.convection)
+            })
             .column("radiation, steady", |(_, r)| format!("{:.2e}", r.radiation))
             .column("both, steady", |(_, r)| format!("{:.2e}", r.both))
             .column("Newton solves", |(_, r)| r.newton.to_string())
-            .column("curved face (cylinder)", |(_, r)| format!("{:.3} %", 100.0 * r.curved))
+            .column("curved face (cylinder)", |(_, r)| {
+                format!("{:.3} %", 100.0 * r.curved)
+            })
             .column("radiating plate cooling, 1 000 / 2 000 steps", |(_, r)| {
                 format!("{:.3} / {:.3} %", 100.0 * r.cooling, 100.0 * r.cooling_fine)
             })
-            .column("transient (max over Fo)", |(_, r)| format!("{:.3} %", 100.0 * r.transient))
-            .column("solve: Robin / held face (s)", |(_, r)| format!("{:.3} / {:.3}", r.robin_s, r.held_s))
-            .table(
-                "Bar with a convecting / radiating end: largest |T_p − T(x_p)| over the particles, relative to the \
-                 temperature span (steady) or θ₀ (transient)",
-                &rows,
-            ),
-    );
+            .column("transient (max over Fo)", |(_, r)| {
+                format!("{:.3} %", 100.0 * r.transient)
+            })
+            .column("solve: Robin / held face (s)", |(_, r)| {
+                format!("{:.3} / {:.3}", r.robin_s, r.held_s)
+            })
+        },
+    ));
     let source = "exact 1-D solution";
     out.compare(Comparison::at_most(
         "steady convection, max error",

@@ -26,7 +26,6 @@ use demcon_scene::config::*;
 use super::bar::{DIFFUSIVITY, L, bar_scene};
 use super::common::*;
 use super::study::Study;
-use crate::table::Columns;
 use crate::{CaseOutcome, Comparison, Ctx};
 
 /// The step (K) and the ramp's slope (K per L²/a).
@@ -154,24 +153,24 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let study = Study::run(&sizes, |_| 3, ctx.seed, |n, seed, _| measure(n, seed, fo_end))?;
     let mut out = CaseOutcome::new("time-tables", ctx.mode);
     out.n_particles = study.rows().map(|r| r.particles).max().unwrap_or(0);
-    let rows = study.indexed();
-    out.tables.push(
-        Columns::new()
-            .column("N", |(_, r): &(u64, &Row)| r.particles.to_string())
-            .column("packing", |(k, _)| k.to_string())
-            .column("forward Euler (auto step)", |(_, r)| format!("{:.3} %", 100.0 * r.explicit))
-            .column("backward Euler (ΔFo = 10⁻³)", |(_, r)| format!("{:.3} %", 100.0 * r.implicit))
+    out.tables.push(study.packings_table(
+        format!(
+            "Bar held at a step then a ramp: largest |T_p − T(x_p, t)| over the particles at Fo = 0.05 … \
+             {fo_end}, relative to the largest held value, vs Duhamel's superposition"
+        ),
+        |r| r.particles,
+        |c| {
+            c.column("forward Euler (auto step)", |(_, r): &(u64, &Row)| {
+                format!("{:.3} %", 100.0 * r.explicit)
+            })
+            .column("backward Euler (ΔFo = 10⁻³)", |(_, r)| {
+                format!("{:.3} %", 100.0 * r.implicit)
+            })
             .column("time: forward / backward (s)", |(_, r)| {
                 format!("{:.2} / {:.2}", r.explicit_s, r.implicit_s)
             })
-            .table(
-                format!(
-                    "Bar held at a step then a ramp: largest |T_p − T(x_p, t)| over the particles at Fo = 0.05 … \
-                     {fo_end}, relative to the largest held value, vs Duhamel's superposition"
-                ),
-                &rows,
-            ),
-    );
+        },
+    ));
     let largest = study.largest();
     let source = "Duhamel superposition of the exact slab solution, 2000 terms";
     let e = study.spread(largest, |r| r.explicit);
