@@ -354,6 +354,12 @@ pub const TEXT_RULES: &[TextRule] = &[
         why: "a scene is converted once, by `Scene::from_config`: read `Scene::problem().model`",
     },
     TextRule {
+        pattern: "[..n]",
+        allowed: &["crates/demcon-graph/src/wall.rs"],
+        why: "the wall nodes follow the particles in node vectors: split them with `WallContacts::particle_part` \
+              or `WallContacts::split_nodes`",
+    },
+    TextRule {
         pattern: "Schedule::new(",
         allowed: &["crates/demcon-thermal/src/march.rs"],
         why: "one time march: implement `march::Stepper` and call `march::march`",

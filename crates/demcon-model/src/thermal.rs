@@ -1201,7 +1201,7 @@ impl<'a> StepSources<'a> {
             &setup.surface,
             self.problem.interface,
             walls,
-            Some(&temps[..n]),
+            Some(WallContacts::particle_part(temps, n)),
         )?;
         let mut now = setup.surroundings.clone();
         now.set_half(&half);
@@ -1356,8 +1356,13 @@ fn steady_run(
         iterations += 1;
         if varies {
             let n = model.particles.len();
-            let (contacts, half) =
-                conductances_at(model, &setup.surface, problem.interface, walls, Some(&temps[..n]))?;
+            let (contacts, half) = conductances_at(
+                model,
+                &setup.surface,
+                problem.interface,
+                walls,
+                Some(WallContacts::particle_part(&temps, n)),
+            )?;
             g[..first_link].copy_from_slice(&contacts);
             g[first_link..].copy_from_slice(&half);
             around.set_half(&half);
