@@ -24,6 +24,9 @@ pub enum Face {
     ZMax,
     /// The curved wall of a cylinder or a sphere.
     Outer,
+    /// The surface of the carving region a carved body was cut from (Laguerre cells only: the
+    /// cells clipped by it are its facets). Not a face of the container.
+    Carved,
 }
 
 impl Face {
@@ -37,17 +40,18 @@ impl Face {
             Face::ZMin => "ZMin",
             Face::ZMax => "ZMax",
             Face::Outer => "Outer",
+            Face::Carved => "Carved",
         }
     }
 
-    /// The axis a flat face is normal to; `None` for the curved `Outer` face.
+    /// The axis a flat face is normal to; `None` for the curved `Outer` and `Carved` faces.
     pub fn axis(self) -> Option<crate::Axis> {
         use crate::Axis;
         match self {
             Face::XMin | Face::XMax => Some(Axis::X),
             Face::YMin | Face::YMax => Some(Axis::Y),
             Face::ZMin | Face::ZMax => Some(Axis::Z),
-            Face::Outer => None,
+            Face::Outer | Face::Carved => None,
         }
     }
 
@@ -153,11 +157,17 @@ impl Selector {
     ) -> Result<Vec<u32>, CoreError> {
         if !container.faces().contains(&face) {
             let have: Vec<&str> = container.faces().iter().map(|f| f.name()).collect();
+            let carved = if face == Face::Carved {
+                " (the carved surface is a wall for WallTemperature, HeatFlux, Convection, Radiation and \
+                 face electrodes, not a particle selection: select particles near it with a Region)"
+            } else {
+                ""
+            };
             return Err(CoreError::invalid(
                 "face",
                 face.name(),
                 format!(
-                    "a {} container has the faces [{}]",
+                    "a {} container has the faces [{}]{carved}",
                     container.kind(),
                     have.join(", ")
                 ),

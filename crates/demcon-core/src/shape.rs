@@ -201,6 +201,7 @@ impl Container {
                 Container::Sphere { radius } => radius - p.norm(),
                 _ => unreachable!("only cylinders and spheres have an outer face"),
             },
+            Face::Carved => return None,
         })
     }
 
@@ -226,6 +227,7 @@ impl Container {
                 let l = r.norm();
                 if l > 0.0 { r / l } else { Vec3::x() }
             }
+            Face::Carved => return None,
         })
     }
 

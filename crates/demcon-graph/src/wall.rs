@@ -65,6 +65,14 @@ impl WallContacts {
             ..Default::default()
         };
         for &face in faces {
+            if face == Face::Carved {
+                return Err(CoreError::invalid(
+                    format!("wall {} ({context})", face.name()),
+                    face.name(),
+                    "a face of the container: the carved surface is a wall only under Laguerre cells \
+                     (`surface: Laguerre`), whose facets on it it is made of",
+                ));
+            }
             let ids = Selector::Face(face).select_nonempty(
                 particles,
                 container,
@@ -105,7 +113,7 @@ impl WallContacts {
             ..Default::default()
         };
         for &face in faces {
-            if !container.faces().contains(&face) {
+            if face != Face::Carved && !container.faces().contains(&face) {
                 return Err(CoreError::invalid(
                     format!("wall {} ({context})", face.name()),
                     face.name(),
@@ -117,7 +125,7 @@ impl WallContacts {
                 ));
             }
             let before = w.particle.len();
-            for f in cells.on_wall(CellWall::Face(face)) {
+            for f in cells.on_wall(CellWall::of(face)) {
                 w.particle.push(f.particle);
                 w.half_length.push(f.distance);
                 w.normal.push(f.normal);
@@ -128,7 +136,11 @@ impl WallContacts {
                 return Err(CoreError::invalid(
                     format!("wall {} ({context})", face.name()),
                     face.name(),
-                    "a face some Laguerre cell reaches (none does: carved away?)",
+                    if face == Face::Carved {
+                        "the surface of a carving region (`carve`) some Laguerre cell reaches"
+                    } else {
+                        "a face some Laguerre cell reaches (none does: carved away?)"
+                    },
                 ));
             }
             w.starts.push(w.particle.len());

@@ -767,14 +767,14 @@ fn boundary_conditions(
                 // Laguerre cells: each facet on the face receives the flux through its area.
                 let cells = model.graph.cells.as_deref().expect("checked by the guard");
                 let areas: Vec<(u32, f64)> = cells
-                    .on_wall(CellWall::Face(*face))
+                    .on_wall(CellWall::of(*face))
                     .map(|f| (f.particle, f.area))
                     .collect();
                 if areas.is_empty() {
                     return Err(ModelError::invalid(
                         &format!("{field}.face"),
                         face.name(),
-                        "a face of the container some Laguerre cell reaches",
+                        "a face of the container (or the carved surface) some Laguerre cell reaches",
                     ));
                 }
                 add_source(flux, areas, sources, timed);

@@ -720,6 +720,9 @@ pub enum FaceConfig {
     ZMax,
     /// Curved wall of a cylinder or sphere.
     Outer,
+    /// The surface of the carving region (`carve`) of a carved body, under `surface: Laguerre`:
+    /// a wall for WallTemperature, HeatFlux, Convection, Radiation and face electrodes.
+    Carved,
 }
 
 /// Which particles.

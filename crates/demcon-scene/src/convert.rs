@@ -105,6 +105,7 @@ pub fn face(f: FaceConfig) -> Face {
         FaceConfig::ZMin => Face::ZMin,
         FaceConfig::ZMax => Face::ZMax,
         FaceConfig::Outer => Face::Outer,
+        FaceConfig::Carved => Face::Carved,
     }
 }
 

@@ -606,8 +606,29 @@ fn positive_time(field: &str, v: f64) -> Result<(), SceneError> {
 }
 
 /// A face used by a boundary condition must exist on the container (when it is known).
-fn check_face(field: &str, f: FaceConfig, container: Option<&Container>) -> Result<(), SceneError> {
+fn check_face(
+    field: &str,
+    f: FaceConfig,
+    c: &SceneConfig,
+    container: Option<&Container>,
+) -> Result<(), SceneError> {
     let face = convert::face(f);
+    if face == Face::Carved {
+        return match (&c.carve, &c.surface) {
+            (Some(_), SurfaceConfig::Laguerre) => Ok(()),
+            (None, _) => Err(SceneError::invalid(
+                field,
+                face.name(),
+                "the surface of a carving region: set `carve` (the body is then cut from the container by it)",
+            )),
+            _ => Err(SceneError::invalid(
+                field,
+                face.name(),
+                "the carved surface is a wall only under Laguerre cells (`surface: Laguerre`), whose facets \
+                 on it it is made of",
+            )),
+        };
+    }
     match container {
         Some(c) if !c.faces().contains(&face) => Err(SceneError::invalid(
             field,
@@ -638,7 +659,7 @@ fn check_thermal(
     )?;
     let mut fixed = 0;
     for (i, bc) in t.bcs.iter().enumerate() {
-        check_thermal_bc(&format!("thermal.bcs[{i}]"), bc, &t.solver, container)?;
+        check_thermal_bc(&format!("thermal.bcs[{i}]"), bc, c, &t.solver, container)?;
         fixed += usize::from(!matches!(bc, ThermalBcConfig::HeatFlux { .. }));
     }
     for (i, s) in t.sources.iter().enumerate() {
@@ -661,6 +682,7 @@ fn check_thermal(
 fn check_thermal_bc(
     field: &str,
     bc: &ThermalBcConfig,
+    c: &SceneConfig,
     solver: &ThermalSolverConfig,
     container: Option<&Container>,
 ) -> Result<(), SceneError> {
@@ -676,7 +698,7 @@ fn check_thermal_bc(
                 None,
                 solver,
             )?;
-            check_face(&format!("{field}.face"), *face, container)?;
+            check_face(&format!("{field}.face"), *face, c, container)?;
         }
         ThermalBcConfig::HeatFlux { face, flux } => {
             check_timed(
@@ -686,7 +708,7 @@ fn check_thermal_bc(
                 None,
                 solver,
             )?;
-            check_face(&format!("{field}.face"), *face, container)?;
+            check_face(&format!("{field}.face"), *face, c, container)?;
         }
         ThermalBcConfig::Convection { face, h, t_inf } => {
             if !(h.is_finite() && *h > 0.0) {
@@ -703,7 +725,7 @@ fn check_thermal_bc(
                 Some(-KELVIN),
                 solver,
             )?;
-            check_face(&format!("{field}.face"), *face, container)?;
+            check_face(&format!("{field}.face"), *face, c, container)?;
         }
         ThermalBcConfig::Radiation {
             face,
@@ -724,7 +746,7 @@ fn check_thermal_bc(
                 Some(-KELVIN),
                 solver,
             )?;
-            check_face(&format!("{field}.face"), *face, container)?;
+            check_face(&format!("{field}.face"), *face, c, container)?;
         }
     }
     Ok(())
@@ -1073,7 +1095,7 @@ fn check_electric(
     }
     for (i, el) in e.electrodes.iter().enumerate() {
         if let Some(f) = el.face {
-            check_face(&format!("electric.electrodes[{i}].face"), f, container)?;
+            check_face(&format!("electric.electrodes[{i}].face"), f, c, container)?;
         }
         // One electrode per face: a face electrode and another electrode on the same face
         // (a face electrode or the particles touching it) would short the face.

@@ -345,3 +345,50 @@ fn the_etc_of_a_body_with_lambda_t_is_read_from_the_end_states_conductances() {
     assert!((e.lambda_e / 29.7 - 1.0).abs() < 1e-3, "{e:?}");
     assert!((e.hot_flow_w / e.cold_flow_w - 1.0).abs() < 1e-6, "{e:?}");
 }
+
+/// A carved rod in a box: its carved surface convects the heat of a uniform source away.
+fn carved_rod(surface: &str, carve: &str, face: &str) -> String {
+    format!(
+        r#"(
+    packing: Generate(container: Box(size: (0.012, 0.012, 0.01)), count: 3000, phi: 0.55, radius_cov: 0.3),
+    surface: {surface},
+    carve_rule: Centre,
+    {carve}
+    materials: [(name: "rod", conductivity: 10.0, density: 1000.0, specific_heat: 1000.0)],
+    thermal: (
+        initial_temperature: 20.0,
+        bcs: [Convection(face: {face}, h: 1000.0, t_inf: 20.0)],
+        sources: [(select: All, power_density: 1.0e6)],
+        solver: Steady,
+    ),
+    outputs: (vtk: false),
+)"#
+    )
+}
+
+const ROD: &str = "carve: Some(Cylinder(base: (0.006, 0.006, 0.0), axis: Z, radius: 0.005, length: 0.01)),";
+
+#[test]
+fn the_carved_surface_is_a_face_only_of_a_carved_body_under_laguerre_cells() {
+    let m = refused(&carved_rod("Laguerre", "", "Carved"));
+    assert!(m.contains("thermal.bcs[0].face") && m.contains("carve"), "{m}");
+    let m = refused(&carved_rod("TerrerosAlpha", ROD, "Carved"));
+    assert!(m.contains("thermal.bcs[0].face") && m.contains("Laguerre"), "{m}");
+}
+
+#[test]
+fn a_carved_surface_convects_what_the_body_generates() {
+    let scene = parse(&carved_rod("Laguerre", ROD, "Carved")).unwrap();
+    let r = run(&scene, &RunOptions::default()).unwrap();
+    let th = r.thermal.as_ref().unwrap();
+    let face = &th.report.faces[0];
+    assert_eq!(face.face, "Carved");
+    // The heat generated in the rod, q V, leaves through its carved surface (V: the cells'
+    // volumes, which miss the rod's by the tangent planes' tolerance, ~10⁻⁵).
+    let generated = 1.0e6 * std::f64::consts::PI * 0.005f64.powi(2) * 0.01;
+    assert!((face.convection_w / generated - 1.0).abs() < 1e-4, "{face:?}");
+    // The cells' facets on the surface make up its area (2πRL) to the tolerance of their
+    // tangent planes.
+    let area = 2.0 * std::f64::consts::PI * 0.005 * 0.01;
+    assert!((face.area_m2 / area - 1.0).abs() < 1e-3, "{face:?}");
+}

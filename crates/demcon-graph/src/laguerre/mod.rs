@@ -105,6 +105,16 @@ pub enum CellWall {
     Carved,
 }
 
+impl CellWall {
+    /// The wall a face names: [`Face::Carved`] is the carving region's surface.
+    pub fn of(face: Face) -> Self {
+        match face {
+            Face::Carved => CellWall::Carved,
+            f => CellWall::Face(f),
+        }
+    }
+}
+
 /// The part of a particle's cell on one wall.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WallFacet {
