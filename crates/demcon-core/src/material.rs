@@ -22,6 +22,10 @@ pub struct Material {
     /// scene's axes) that replaces λ in conduction, scaled by λ(T)/λ0 with a temperature
     /// coefficient; `None`: isotropic λ.
     pub conductivity_tensor: Option<[[f64; 3]; 3]>,
+    /// The tensor is given in each shaped inclusion's own frame (its z axis along the shape's
+    /// axis, turned there by the shortest rotation): a particle of this material inside a
+    /// shape conducts R K Rᵀ ([`Material::conductivity_along_in`]); `false`: the scene's axes.
+    pub tensor_in_shape_frame: bool,
     /// Density of the continuous material ρ_c (kg/m³).
     pub density: f64,
     /// Specific heat c (J/(kg·K)).
@@ -43,6 +47,7 @@ impl Material {
             conductivity_temp_coeff: 0.0,
             conductivity_ref_temp: 0.0,
             conductivity_tensor: None,
+            tensor_in_shape_frame: false,
             conductivity_table: None,
             density,
             specific_heat,
@@ -85,6 +90,17 @@ impl Material {
         }
     }
 
+    /// The conductivity along the unit vector `e` (W/(m·K)) of a particle whose shape has the
+    /// unit axis `axis` (`None`: in no shape): with [`Material::tensor_in_shape_frame`], eᵀ R K
+    /// Rᵀ e with R the shortest rotation taking z to the axis; [`Material::conductivity_along`]
+    /// otherwise.
+    pub fn conductivity_along_in(&self, e: &crate::Vec3, axis: Option<&crate::Vec3>) -> f64 {
+        match axis {
+            Some(a) if self.tensor_in_shape_frame => self.conductivity_along(&to_shape_frame(a, e)),
+            _ => self.conductivity_along(e),
+        }
+    }
+
     /// Resistivity (Ω·m) at temperature `t`; `None` when the material has none.
     pub fn resistivity_at(&self, t: f64) -> Option<f64> {
         self.resistivity
@@ -102,6 +118,12 @@ impl Material {
         }
         if let Some(k) = &self.conductivity_tensor {
             check_tensor(&f("conductivity_tensor"), k)?;
+        } else if self.tensor_in_shape_frame {
+            return Err(CoreError::invalid(
+                f("tensor_in_shape_frame"),
+                true,
+                "a `conductivity_tensor` to read in each shape's frame (an isotropic λ has none)",
+            ));
         }
         if let Some(crate::TimeValue::Table(points)) = &self.conductivity_table {
             for (i, &(t, lam)) in points.iter().enumerate() {
@@ -240,9 +262,58 @@ impl MaterialTable {
     }
 }
 
+/// Rᵀ `e`: the vector `e` in the frame whose z axis is the unit vector `axis`, R the shortest
+/// rotation taking z to ±`axis` (a shape's axis has no sign: the one with a z component ≥ 0 is
+/// taken, which keeps R away from the half turn).
+pub fn to_shape_frame(axis: &crate::Vec3, e: &crate::Vec3) -> crate::Vec3 {
+    let z = crate::Vec3::z();
+    let a = if z.dot(axis) < 0.0 { -axis } else { *axis };
+    let c = z.dot(&a);
+    // R = I + [k]× + [k]×² / (1 + c), k = z × a; Rᵀ e = e − k × e + k × (k × e) / (1 + c).
+    let k = z.cross(&a);
+    let kx = k.cross(e);
+    e - kx + k.cross(&kx) / (1.0 + c)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Vec3;
+
+    #[test]
+    fn the_shape_frame_puts_the_axis_on_z_and_keeps_lengths_and_angles() {
+        let axes = [
+            Vec3::z(),
+            -Vec3::z(),
+            Vec3::x(),
+            Vec3::new(1.0, -2.0, 0.5).normalize(),
+            Vec3::new(1e-9, 0.0, -1.0).normalize(),
+        ];
+        let e = Vec3::new(0.3, -0.4, 0.866).normalize();
+        for a in axes {
+            let sign = a.z.signum();
+            assert!(
+                (to_shape_frame(&a, &a) - sign * Vec3::z()).norm() < 1e-12,
+                "{a:?}"
+            );
+            let f = to_shape_frame(&a, &e);
+            assert!((f.norm() - 1.0).abs() < 1e-12);
+            assert!((f.z - sign * a.dot(&e)).abs() < 1e-12, "{a:?}");
+        }
+        // A tensor about z in the frame of a shape along x conducts as one about x.
+        let mut m = Material::thermal("fibre", 1.0, 1.0, 1.0);
+        m.conductivity_tensor = Some([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 10.0]]);
+        m.tensor_in_shape_frame = true;
+        assert!((m.conductivity_along_in(&Vec3::x(), Some(&Vec3::x())) - 10.0).abs() < 1e-12);
+        assert!((m.conductivity_along_in(&Vec3::x(), None) - 1.0).abs() < 1e-12);
+        m.conductivity_tensor = None;
+        assert!(
+            m.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("tensor_in_shape_frame")
+        );
+    }
 
     #[test]
     fn validation() {

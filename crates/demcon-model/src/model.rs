@@ -157,8 +157,11 @@ impl Model {
     /// the transmission surface, d the branch length, e its direction) — K itself where the
     /// bonds are K-orthogonal (a lattice along K's axes), about (tr K I + 2 K)/5 on random
     /// cells — and max |K_net,ij − K_ij| / |K| (Frobenius). `areas` are the contacts'
-    /// surfaces (m²). Materials without a tensor or without such contacts are left out.
+    /// surfaces (m²). Materials without a tensor or without such contacts are left out. A
+    /// tensor read in each shape's frame is compared there (each bond turned into the frame of
+    /// its first particle's shape).
     pub fn anisotropy_consistency(&self, areas: &[f64]) -> Vec<(String, f64)> {
+        let axes = self.shape_axes();
         let mut out = Vec::new();
         for (phase, m) in self.materials.materials.iter().enumerate() {
             let Some(k) = &m.conductivity_tensor else {
@@ -173,10 +176,14 @@ impl Model {
                 }
                 let geo = &self.graph.geometry[c];
                 let w = areas[c] * geo.distance;
-                let ke = m.conductivity_along(&geo.normal);
+                let e = match axes.get(p).copied().flatten() {
+                    Some(a) if m.tensor_in_shape_frame => demcon_core::to_shape_frame(&a, &geo.normal),
+                    _ => geo.normal,
+                };
+                let ke = m.conductivity_along(&e);
                 for (i, row) in net.iter_mut().enumerate() {
                     for (j, v) in row.iter_mut().enumerate() {
-                        *v += w * ke * geo.normal[i] * geo.normal[j];
+                        *v += w * ke * e[i] * e[j];
                     }
                 }
                 weight += w;
@@ -192,6 +199,18 @@ impl Model {
             out.push((m.name.clone(), err));
         }
         out
+    }
+
+    /// Per particle, the axis of the shape whose frame its material's tensor is read in
+    /// ([`crate::shapes::shape_axes`]; empty when no material reads its tensor so).
+    pub fn shape_axes(&self) -> Vec<Option<Vec3>> {
+        crate::shapes::shape_axes(
+            &self.particles,
+            &self.container,
+            &self.materials.materials,
+            &self.mixes,
+            &self.report.shapes,
+        )
     }
 
     /// Whether some material conducts anisotropically (a conductivity tensor).

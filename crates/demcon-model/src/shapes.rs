@@ -127,3 +127,120 @@ pub fn random_shapes(
         other => ModelError::Packing(format!("{field}: {other}")),
     })
 }
+
+/// Per particle, the unit axis of the shape whose frame its material's tensor is read in
+/// ([`demcon_core::Material::tensor_in_shape_frame`]): for a particle whose phase (or, cut by
+/// an interface, whose other phase) is such a material, the shape of that phase's entries
+/// nearest it by signed distance (minimum image); `None` elsewhere. Empty when no material
+/// reads its tensor in a shape's frame.
+pub fn shape_axes(
+    particles: &demcon_core::ParticleSet,
+    container: &Container,
+    materials: &[demcon_core::Material],
+    mixes: &[demcon_graph::Mix],
+    reports: &[ShapesReport],
+) -> Vec<Option<demcon_core::Vec3>> {
+    let framed = |phase: u16| {
+        materials
+            .get(phase as usize)
+            .is_some_and(|m| m.tensor_in_shape_frame)
+    };
+    if !reports.iter().any(|r| framed(r.phase)) {
+        return Vec::new();
+    }
+    let finders: Vec<(u16, ShapeFinder)> = reports
+        .iter()
+        .filter(|r| framed(r.phase))
+        .map(|r| (r.phase, ShapeFinder::new(&r.shapes, container)))
+        .collect();
+    let other: std::collections::HashMap<u32, u16> =
+        mixes.iter().map(|m| (m.particle, m.other_phase)).collect();
+    (0..particles.len())
+        .map(|p| {
+            let x = &particles.centres[p];
+            let phases = [Some(particles.phases[p]), other.get(&(p as u32)).copied()];
+            finders
+                .iter()
+                .filter(|(phase, _)| phases.contains(&Some(*phase)))
+                .filter_map(|(_, f)| f.nearest(x))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|(_, axis)| axis)
+        })
+        .collect()
+}
+
+/// The shapes of one entry binned by centre on a grid of cells no narrower than their largest
+/// diameter, so that a shape holding a point, or within a radius of it, is in one of the 27
+/// bins round the point's.
+struct ShapeFinder<'a> {
+    shapes: &'a [Inclusion],
+    lo: demcon_core::Vec3,
+    cell: f64,
+    dims: [i64; 3],
+    bins: std::collections::HashMap<[i64; 3], Vec<usize>>,
+    period: Option<[f64; 3]>,
+}
+
+impl<'a> ShapeFinder<'a> {
+    fn new(shapes: &'a [Inclusion], container: &Container) -> Self {
+        let b = container.bounds();
+        let extent = b.max - b.min;
+        let cell = shapes
+            .iter()
+            .map(|s| 2.0 * s.circumradius())
+            .fold(f64::MIN_POSITIVE, f64::max);
+        let dims = [0, 1, 2].map(|k| ((extent[k] / cell).floor() as i64).max(1));
+        let mut f = Self {
+            shapes,
+            lo: b.min,
+            cell,
+            dims,
+            bins: std::collections::HashMap::new(),
+            period: container.period(),
+        };
+        for (i, s) in shapes.iter().enumerate() {
+            let key = f.bin(&s.centre());
+            f.bins.entry(key).or_default().push(i);
+        }
+        f
+    }
+
+    fn bin(&self, x: &demcon_core::Vec3) -> [i64; 3] {
+        [0, 1, 2].map(|k| (((x[k] - self.lo[k]) / self.cell).floor() as i64).clamp(0, self.dims[k] - 1))
+    }
+
+    /// The signed distance (m) to the nearest shape of the 27 bins round `x`, and its axis.
+    fn nearest(&self, x: &demcon_core::Vec3) -> Option<(f64, demcon_core::Vec3)> {
+        let home = self.bin(x);
+        let mut keys = Vec::with_capacity(27);
+        for d in 0..27i64 {
+            let off = [d % 3 - 1, (d / 3) % 3 - 1, d / 9 - 1];
+            let key = [0, 1, 2].map(|k| {
+                let i = home[k] + off[k];
+                if self.period.is_some() {
+                    i.rem_euclid(self.dims[k])
+                } else {
+                    i
+                }
+            });
+            if !keys.contains(&key) {
+                keys.push(key);
+            }
+        }
+        keys.iter()
+            .filter_map(|key| self.bins.get(key))
+            .flatten()
+            .map(|&i| {
+                let s = &self.shapes[i];
+                let c = s.centre();
+                let mut d = x - c;
+                if let Some(l) = self.period {
+                    for k in 0..3 {
+                        d[k] -= l[k] * (d[k] / l[k]).round();
+                    }
+                }
+                (s.signed_distance(&(c + d)), s.axis())
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+    }
+}

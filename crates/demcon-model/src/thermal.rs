@@ -497,8 +497,10 @@ pub fn conductances_at(
             None => None,
         });
     }
+    let axes = model.shape_axes();
     let half_bond = |p: usize, e: &Vec3, half: f64| -> f64 {
-        let along = |phase: u16| materials[phase as usize].conductivity_along(e);
+        let axis = axes.get(p).and_then(Option::as_ref);
+        let along = |phase: u16| materials[phase as usize].conductivity_along_in(e, axis);
         let mine = own[p] * along(phases[p]);
         match (lam.get(p), other[p]) {
             (Some(m), Some(f)) => m.half_bond_value(mine, f * along(m.other_phase), e, half),

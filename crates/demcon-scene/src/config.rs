@@ -373,6 +373,12 @@ pub struct MaterialConfig {
     /// along the tensor's axes), an error otherwise (docs/heterogeneous.md).
     #[serde(default)]
     pub conductivity_tensor: Option<ConductivityTensorConfig>,
+    /// The tensor is given in each shape's own frame: its z axis along the shape's axis (a
+    /// fibre that conducts along itself: `Transverse(axis: (0.0, 0.0, 1.0), …)`). For the
+    /// material of a `Shapes` or `RandomShapes` phase; particles in no shape keep the scene's
+    /// axes.
+    #[serde(default)]
+    pub tensor_in_shape_frame: bool,
     /// ρ_c (kg/m³).
     pub density: f64,
     /// c (J/(kg·K)).

@@ -193,6 +193,7 @@ pub fn materials(ms: &[MaterialConfig]) -> Result<MaterialTable, SceneError> {
                     conductivity_temp_coeff: m.conductivity_temp_coeff,
                     conductivity_ref_temp: m.conductivity_ref_temp,
                     conductivity_tensor: m.conductivity_tensor.map(tensor),
+                    tensor_in_shape_frame: m.tensor_in_shape_frame,
                     conductivity_table: m
                         .conductivity_table
                         .clone()

@@ -106,6 +106,7 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<convert::Problem, Sc
     }
     r.check(check_outputs(c, container.as_ref()));
     check_names(c, &mut r);
+    check_shape_frames(c, &mut r);
     SceneError::all(r.0)?;
     problem.ok_or_else(|| SceneError::invalid("scene", "", "could not be converted"))
 }
@@ -218,6 +219,27 @@ pub fn scene_warnings(c: &SceneConfig) -> Vec<String> {
         }
     }
     w
+}
+
+/// A tensor read in each shape's frame belongs to a material that shapes are made of.
+fn check_shape_frames(c: &SceneConfig, r: &mut Refusals) {
+    for (k, m) in c.materials.iter().enumerate() {
+        let shaped = c.phases.iter().any(|ph| {
+            matches!(ph, PhaseConfig::Shapes { material, .. } | PhaseConfig::RandomShapes { material, .. }
+                if *material == m.name)
+        });
+        if m.tensor_in_shape_frame && !shaped {
+            r.push(SceneError::invalid(
+                &format!("materials[{k}].tensor_in_shape_frame"),
+                true,
+                format!(
+                    "the material of a `Shapes` or `RandomShapes` phase (no such phase is made of `{}`, so its \
+                     particles have no shape's frame)",
+                    m.name
+                ),
+            ));
+        }
+    }
 }
 
 /// Two probes or two profiles with one name: their rows could not be told apart.

@@ -392,3 +392,62 @@ fn a_carved_surface_convects_what_the_body_generates() {
     let area = 2.0 * std::f64::consts::PI * 0.005 * 0.01;
     assert!((face.area_m2 / area - 1.0).abs() < 1e-3, "{face:?}");
 }
+
+/// A periodic cell with three fibres along `dir` (a unit axis), homogenised; the fibres'
+/// material is `tensor`, read in each fibre's frame when `in_frame`.
+fn fibres(dir: (f64, f64, f64), tensor: &str, in_frame: bool) -> String {
+    let (x, y, z) = dir;
+    let fibre = |c: (f64, f64, f64)| {
+        format!(
+            "Cylinder(centre: ({}, {}, {}), axis: ({x}, {y}, {z}), radius: 0.0015, length: 0.006, ends: Round)",
+            c.0, c.1, c.2
+        )
+    };
+    format!(
+        r#"(
+    seed: 4,
+    packing: Generate(container: Periodic(size: (0.01, 0.01, 0.01)), count: 3000, phi: 0.55, radius_cov: 0.3),
+    surface: Laguerre,
+    materials: [
+        (name: "matrix", conductivity: 1.0, density: 1000.0, specific_heat: 1000.0),
+        (name: "fibre", conductivity: 1.0, density: 1000.0, specific_heat: 1000.0,
+         conductivity_tensor: Some({tensor}), tensor_in_shape_frame: {in_frame}),
+    ],
+    phases: [Shapes(material: "fibre", shapes: [{}, {}, {}])],
+    thermal: (bcs: [], solver: Homogenize),
+    outputs: (vtk: false),
+)"#,
+        fibre((0.005, 0.005, 0.005)),
+        fibre((0.002, 0.0075, 0.003)),
+        fibre((0.0078, 0.002, 0.0075)),
+    )
+}
+
+fn thermal_tensor(text: &str) -> [[f64; 3]; 3] {
+    let r = run(&parse(text).unwrap(), &RunOptions::default()).unwrap();
+    r.homogenization.unwrap().thermal.unwrap().report.tensor
+}
+
+#[test]
+fn a_tensor_in_the_shapes_frame_turns_with_each_shape() {
+    // Fibres along x: a tensor about z in their frame is the tensor about x in the scene's.
+    let along_z = "Transverse(axis: (0.0, 0.0, 1.0), along: 20.0, across: 2.0)";
+    let along_x = "Transverse(axis: (1.0, 0.0, 0.0), along: 20.0, across: 2.0)";
+    let framed = thermal_tensor(&fibres((1.0, 0.0, 0.0), along_z, true));
+    let global = thermal_tensor(&fibres((1.0, 0.0, 0.0), along_x, false));
+    for i in 0..3 {
+        for j in 0..3 {
+            assert!((framed[i][j] - global[i][j]).abs() <= 1e-9 * global[0][0], "{framed:?} vs {global:?}");
+        }
+    }
+    // Along x the fibres conduct better than across.
+    assert!(global[0][0] > 1.05 * global[1][1], "{global:?}");
+    // A material no shape is made of has no shape's frame.
+    let text = fibres((1.0, 0.0, 0.0), along_z, true).replace(r#"Shapes(material: "fibre""#, r#"Shapes(material: "matrix""#);
+    let m = refused(&text);
+    assert!(m.contains("materials[1].tensor_in_shape_frame"), "{m}");
+    // An isotropic material has no tensor to turn.
+    let text = fibres((1.0, 0.0, 0.0), along_z, true).replace(&format!("conductivity_tensor: Some({along_z}), "), "");
+    let m = refused(&text);
+    assert!(m.contains("tensor_in_shape_frame") && m.contains("conductivity_tensor"), "{m}");
+}

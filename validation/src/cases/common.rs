@@ -283,6 +283,7 @@ pub fn material(name: &str, conductivity: f64, density: f64, specific_heat: f64)
         conductivity_temp_coeff: 0.0,
         conductivity_ref_temp: 20.0,
         conductivity_tensor: None,
+        tensor_in_shape_frame: false,
         conductivity_table: None,
         density,
         specific_heat,

@@ -47,6 +47,7 @@ fn steel() -> MaterialConfig {
         conductivity_temp_coeff: 0.0,
         conductivity_ref_temp: 20.0,
         conductivity_tensor: None,
+        tensor_in_shape_frame: false,
         conductivity_table: None,
         density: 7900.0,
         specific_heat: 500.0,

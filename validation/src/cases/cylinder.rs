@@ -37,6 +37,7 @@ pub fn steel_304l() -> MaterialConfig {
         conductivity_temp_coeff: 0.0,
         conductivity_ref_temp: 20.0,
         conductivity_tensor: None,
+        tensor_in_shape_frame: false,
         conductivity_table: None,
         density: DENSITY,
         specific_heat: SPECIFIC_HEAT,
