@@ -437,17 +437,25 @@ fn a_tensor_in_the_shapes_frame_turns_with_each_shape() {
     let global = thermal_tensor(&fibres((1.0, 0.0, 0.0), along_x, false));
     for i in 0..3 {
         for j in 0..3 {
-            assert!((framed[i][j] - global[i][j]).abs() <= 1e-9 * global[0][0], "{framed:?} vs {global:?}");
+            assert!(
+                (framed[i][j] - global[i][j]).abs() <= 1e-9 * global[0][0],
+                "{framed:?} vs {global:?}"
+            );
         }
     }
     // Along x the fibres conduct better than across.
     assert!(global[0][0] > 1.05 * global[1][1], "{global:?}");
     // A material no shape is made of has no shape's frame.
-    let text = fibres((1.0, 0.0, 0.0), along_z, true).replace(r#"Shapes(material: "fibre""#, r#"Shapes(material: "matrix""#);
+    let text = fibres((1.0, 0.0, 0.0), along_z, true)
+        .replace(r#"Shapes(material: "fibre""#, r#"Shapes(material: "matrix""#);
     let m = refused(&text);
     assert!(m.contains("materials[1].tensor_in_shape_frame"), "{m}");
     // An isotropic material has no tensor to turn.
-    let text = fibres((1.0, 0.0, 0.0), along_z, true).replace(&format!("conductivity_tensor: Some({along_z}), "), "");
+    let text = fibres((1.0, 0.0, 0.0), along_z, true)
+        .replace(&format!("conductivity_tensor: Some({along_z}), "), "");
     let m = refused(&text);
-    assert!(m.contains("tensor_in_shape_frame") && m.contains("conductivity_tensor"), "{m}");
+    assert!(
+        m.contains("tensor_in_shape_frame") && m.contains("conductivity_tensor"),
+        "{m}"
+    );
 }

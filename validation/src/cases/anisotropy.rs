@@ -14,6 +14,10 @@
 //!   1/⟨1/λ∥⟩) = diag(3.5, 3.5, 1.818) (conforming cells follow the layers' planes). Compared:
 //!   max |K_e,ij − K_ij| / |K| (Frobenius), reported; it shrinks as the cells' facet normals
 //!   average out, but not to zero.
+//! - **Tensors in the shapes' frames** (`tensor_in_shape_frame`): six round-ended fibres along
+//!   x in a periodic cell, their material's tensor about z read in each fibre's frame, against
+//!   the same cell with the tensor about x in the scene's axes: the two must conduct alike
+//!   (the same bonds, the same eᵀ K e to round-off). Tolerance 10⁻⁹ of |K_e|.
 
 use demcon_scene::config::*;
 
@@ -166,6 +170,62 @@ fn homogenised(n: usize, seed: u64) -> anyhow::Result<Vec<(f64, f64)>> {
         .collect()
 }
 
+/// Six fibres along x in a periodic cell of `n` sites: max |K_framed − K_global|_ij / |K_global|
+/// between the tensor about z read in the fibres' frame and the tensor about x in the scene's.
+fn shape_frames(n: usize, seed: u64) -> anyhow::Result<f64> {
+    let edge = 1e-3;
+    let fibre = |(y, z): (f64, f64), x: f64| ShapeConfig::Cylinder {
+        centre: (x * edge, y * edge, z * edge),
+        axis: (1.0, 0.0, 0.0),
+        radius: 0.08 * edge,
+        length: 0.5 * edge,
+        ends: EndsConfig::Round,
+    };
+    let shapes: Vec<ShapeConfig> = [
+        (0.25, 0.25),
+        (0.25, 0.75),
+        (0.75, 0.25),
+        (0.75, 0.75),
+        (0.5, 0.5),
+        (0.1, 0.5),
+    ]
+    .iter()
+    .zip([0.3, 0.7, 0.5, 0.2, 0.6, 0.8])
+    .map(|(&yz, x)| fibre(yz, x))
+    .collect();
+    let cell = TwoPhaseCell {
+        edge,
+        count: n,
+        lambda_m: ACROSS,
+        contrast: 1.0,
+    };
+    let mut s = shapes_scene(
+        "anisotropy-frames",
+        seed,
+        cell,
+        shapes,
+        PhaseRuleConfig::Conforming,
+    );
+    let model = model_of(&s)?;
+    let mut tensor_of = |axis: (f64, f64, f64), in_frame: bool| {
+        s.materials[1].conductivity_tensor = Some(ConductivityTensorConfig::Transverse {
+            axis,
+            along: ALONG,
+            across: ACROSS,
+        });
+        s.materials[1].tensor_in_shape_frame = in_frame;
+        let mut m = model.clone();
+        m.materials = demcon_scene::convert::materials(&s.materials)?;
+        thermal_tensor(&s, &m)
+    };
+    let framed = tensor_of((0.0, 0.0, 1.0), true)?;
+    let global = tensor_of((1.0, 0.0, 0.0), false)?;
+    let norm = global.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
+    Ok((0..9)
+        .map(|k| (framed[k / 3][k % 3] - global[k / 3][k % 3]).abs() / norm)
+        .fold(0.0, f64::max))
+}
+
 /// Runs the case.
 pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
     let mut out = CaseOutcome::new("anisotropy", ctx.mode);
@@ -205,6 +265,13 @@ pub fn run(ctx: &Ctx) -> anyhow::Result<CaseOutcome> {
                 &lines,
             ),
     );
+    let framed = Study::run(&[sizes[0]], |_| 3, ctx.seed, |n, seed, _| shape_frames(n, seed))?;
+    out.compare(Comparison::at_most(
+        "fibres along x, tensor about z in their frame vs about x in the scene's: max |ΔK_e,ij| / |K_e|",
+        framed.worst(|r| *r),
+        EXACT_TOL,
+        "the same bonds: R K Rᵀ with R taking z to x is the tensor about x",
+    ));
     for (i, name) in names.iter().enumerate() {
         let s = study.spread(study.largest(), |r| r[i].0);
         out.metric(&format!("random_error_max_{i}"), s.max);
