@@ -1,7 +1,7 @@
 //! Materials (one per phase) and their validation.
 
 use crate::CoreError;
-use crate::error::positive;
+use crate::error::{positive, short_number};
 
 /// The bulk properties of one phase of the continuous material, SI units.
 #[derive(Debug, Clone, PartialEq)]
@@ -130,14 +130,18 @@ impl Material {
                 if !(lam.is_finite() && lam > 0.0) {
                     return Err(CoreError::invalid(
                         format!("{}[{i}]", f("conductivity_table")),
-                        format!("({t}, {lam})"),
+                        format!(
+                            "({}, {})",
+                            short_number(t.to_string()),
+                            short_number(lam.to_string())
+                        ),
                         "a conductivity > 0 (W/(m·K)) at every point",
                     ));
                 }
                 if i > 0 && t == points[i - 1].0 {
                     return Err(CoreError::invalid(
                         format!("{}[{i}]", f("conductivity_table")),
-                        format!("T = {t}"),
+                        format!("T = {}", short_number(t.to_string())),
                         "temperatures strictly increasing (λ(T) has no jump)",
                     ));
                 }

@@ -35,24 +35,24 @@ impl TimeValue {
             if !(t.is_finite() && v.is_finite()) {
                 return Err(CoreError::invalid(
                     format!("{field}[{i}]"),
-                    format!("({t}, {v})"),
+                    format!("({}, {})", n(t), n(v)),
                     "a finite time (s) and a finite value",
                 ));
             }
             if i > 0 && t < points[i - 1].0 {
                 return Err(CoreError::invalid(
                     format!("{field}[{i}]"),
-                    format!("t = {t}"),
+                    format!("t = {}", n(t)),
                     format!(
                         "times in increasing order (the point before is at t = {})",
-                        points[i - 1].0
+                        n(points[i - 1].0)
                     ),
                 ));
             }
             if i > 1 && t == points[i - 2].0 {
                 return Err(CoreError::invalid(
                     format!("{field}[{i}]"),
-                    format!("t = {t}"),
+                    format!("t = {}", n(t)),
                     "at most two points at one time (a jump from the first value to the second)",
                 ));
             }
@@ -108,8 +108,8 @@ impl TimeValue {
         if first > 0.0 || last < t_end {
             return Err(CoreError::invalid(
                 field,
-                format!("a table over [{first}, {last}] s"),
-                format!("a table covering the run, [0, t_end] = [0, {t_end}] s"),
+                format!("a table over [{}, {}] s", n(first), n(last)),
+                format!("a table covering the run, [0, t_end] = [0, {}] s", n(t_end)),
             ));
         }
         Ok(())
@@ -126,6 +126,11 @@ impl TimeValue {
                 }),
         }
     }
+}
+
+/// A number as messages show it ([`crate::error::short_number`]: no 300-digit decimals).
+fn n(x: f64) -> String {
+    crate::error::short_number(x.to_string())
 }
 
 #[cfg(test)]

@@ -550,29 +550,22 @@ fn laminate_table(study: &Study<Vec<Row>>) -> Table {
         .iter()
         .flat_map(|&n| (0..RULES.len()).map(move |r| (n, r)))
         .collect();
+    // The largest |error| on `axes` of the laminate rows of (N, rule) `l`.
+    let worst = move |l: &(usize, usize), axes: &'static [usize]| {
+        let s = Spread::of(
+            study
+                .at(l.0)
+                .flatten()
+                .filter(|r| r.laminate && r.rule == l.1)
+                .flat_map(|r| axes.iter().map(|&a| r.errors()[a].abs()).collect::<Vec<_>>()),
+        );
+        format!("{:.2e}", s.max)
+    };
     Columns::new()
         .column("N", |l: &(usize, usize)| l.0.to_string())
         .column("rule", |l| RULES[l.1].0.into())
-        .column("max |error| across (series)", |l| {
-            let s = Spread::of(
-                study
-                    .at(l.0)
-                    .flatten()
-                    .filter(|r| r.laminate && r.rule == l.1)
-                    .map(|r| r.errors()[0].abs()),
-            );
-            format!("{:.2e}", s.max)
-        })
-        .column("max |error| along (parallel)", |l| {
-            let s = Spread::of(
-                study
-                    .at(l.0)
-                    .flatten()
-                    .filter(|r| r.laminate && r.rule == l.1)
-                    .flat_map(|r| [r.errors()[1].abs(), r.errors()[2].abs()]),
-            );
-            format!("{:.2e}", s.max)
-        })
+        .column("max |error| across (series)", move |l| worst(l, &[0]))
+        .column("max |error| along (parallel)", move |l| worst(l, &[1, 2]))
         .table(
             "Laminate image (16³, six layers, λ = 1, 10, 0.1): against the exact values",
             &lam,
