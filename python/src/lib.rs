@@ -11,7 +11,7 @@ mod scene;
 use pyo3::prelude::*;
 
 pyo3::create_exception!(
-    _demcon,
+    demcon,
     SceneError,
     pyo3::exceptions::PyValueError,
     "A scene that cannot be read or run: the CLI's message, with the file, line and column or the \
