@@ -35,12 +35,12 @@ enum Event {
     /// Transient steps done of total.
     Steps(u64, u64),
     /// The run ended (or failed, or was stopped).
-    Done(Box<Outcome>),
+    Done(Outcome),
 }
 
 /// The end of a run on the worker.
 enum Outcome {
-    Ok(demcon_scene::RunResult),
+    Ok(Box<demcon_scene::RunResult>),
     Err(demcon_scene::SceneError),
     Stopped,
     Panicked(String),
@@ -131,18 +131,18 @@ pub(crate) fn run(
                 None => work(),
             }));
             let outcome = match caught {
-                Ok(Ok(r)) => Outcome::Ok(r),
+                Ok(Ok(r)) => Outcome::Ok(Box::new(r)),
                 Ok(Err(e)) => Outcome::Err(e),
                 Err(payload) if payload.is::<Cancelled>() => Outcome::Stopped,
                 Err(payload) => Outcome::Panicked(panic_text(payload.as_ref())),
             };
-            let _ = tx.send(Event::Done(Box::new(outcome)));
+            let _ = tx.send(Event::Done(outcome));
         });
         loop {
             match py.detach(|| recv(Some(POLL))) {
                 Ok(Event::Done(o)) => {
-                    return match *o {
-                        Outcome::Ok(r) => Ok(r),
+                    return match o {
+                        Outcome::Ok(r) => Ok(*r),
                         Outcome::Err(e) => Err(scene_err(e)),
                         Outcome::Stopped => Err(PyRuntimeError::new_err("the run was stopped")),
                         Outcome::Panicked(m) => Err(PyRuntimeError::new_err(format!(
@@ -158,12 +158,11 @@ pub(crate) fn run(
                 )),
             }
             .and_then(|()| py.check_signals())
-            .map_err(|e| {
+            .inspect_err(|_| {
                 // Ctrl-C (or an error in the progress callback): stop the worker at its next
                 // callback and wait for it, the GIL released.
                 stop.store(true, Ordering::Relaxed);
                 py.detach(|| while !matches!(recv(None), Ok(Event::Done(_)) | Err(_)) {});
-                e
             })?;
         }
     })?;
