@@ -1,11 +1,14 @@
 //! `cargo xtask ci`: the checks CI runs (`.ci/run` calls this).
 
+use std::process::Command;
+
 use anyhow::Result;
 
 use crate::cargo;
 
 /// Tidy checks (layers, file headers), format check, clippy with warnings as errors,
-/// workspace tests; `--quick-validate` also runs `cargo xtask validate --quick`; `--petsc`
+/// workspace tests; `--quick-validate` also runs `cargo xtask validate --quick`; `--python` the
+/// Python package (built into a fresh venv, its pytest suite, the example small); `--petsc`
 /// then the distributed solve's clippy and tests (needs PETSc, MPI and `mpirun`:
 /// docs/distributed.md).
 pub fn run(rest: &[String]) -> Result<()> {
@@ -15,6 +18,9 @@ pub fn run(rest: &[String]) -> Result<()> {
     crate::run(cargo().args(["test", "--workspace"]))?;
     if rest.iter().any(|a| a == "--quick-validate") {
         crate::validate(&["--quick".to_string()])?;
+    }
+    if rest.iter().any(|a| a == "--python") {
+        python()?;
     }
     if rest.iter().any(|a| a == "--petsc") {
         let crates = ["-p", "demcon-network", "-p", "demcon-scene", "-p", "demcon"];
@@ -31,4 +37,37 @@ pub fn run(rest: &[String]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The Python package (docs/python.md): a fresh virtual environment in `target/python-ci`,
+/// maturin, pytest and numpy from PyPI, `pip install ./python`, its tests, the example small.
+fn python() -> Result<()> {
+    let venv = std::path::Path::new("target/python-ci/venv");
+    if venv.exists() {
+        std::fs::remove_dir_all(venv)?;
+    }
+    crate::run(Command::new("python3").args(["-m", "venv"]).arg(venv))?;
+    let py = venv.join("bin/python");
+    let pip = |args: &[&str]| {
+        crate::run(
+            Command::new(&py)
+                .args(["-m", "pip", "install", "--quiet"])
+                .args(args),
+        )
+    };
+    pip(&["--upgrade", "pip"])?;
+    pip(&["maturin>=1.16,<2", "pytest", "numpy"])?;
+    pip(&["./python"])?;
+    crate::run(Command::new(&py).args(["-m", "pytest", "python/tests", "-q"]))?;
+    crate::run(Command::new(&py).args([
+        "examples/python/composite_sweep.py",
+        "--count",
+        "1500",
+        "--fractions",
+        "0.05",
+        "0.2",
+        "--seeds",
+        "1",
+        "2",
+    ]))
 }

@@ -36,6 +36,8 @@ const LAYERS: &[(&str, u32)] = &[
     // Layer 5 (siblings): the CLI | the validation cases.
     ("demcon", 6),
     ("validation", 6),
+    // The Python package (python/): beside the CLI, on the scene crate.
+    ("demcon-python", 6),
     // Tools: may use any crate; nothing uses them.
     ("xtask", 7),
     ("demcon-benches", 7),

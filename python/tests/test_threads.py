@@ -1,0 +1,53 @@
+"""The GIL is released during a run, progress is reported, Ctrl-C stops a run."""
+
+import _thread
+import threading
+import time
+
+import pytest
+
+import demcon
+
+
+def test_gil_is_released_during_a_run(homogeneous):
+    scene = demcon.Scene.from_file(homogeneous)
+    count = 0
+    done = threading.Event()
+
+    def spin():
+        nonlocal count
+        while not done.is_set():
+            count += 1
+            time.sleep(0.001)
+
+    t = threading.Thread(target=spin)
+    t.start()
+    try:
+        r = scene.run()
+    finally:
+        done.set()
+        t.join()
+    # a run of a few tenths of a second leaves the other thread dozens of turns at 1 ms each
+    assert r.wall_s > 0.0
+    assert count >= 10, (count, r.wall_s)
+
+
+def test_progress_callback_sees_the_stages(homogeneous):
+    seen = []
+    demcon.Scene.from_file(homogeneous).run(progress=lambda stage, done, total: seen.append(stage))
+    assert "packing" in seen and "solve" in seen, seen
+
+
+def test_keyboard_interrupt_stops_a_long_run(long_transient, tmp_path):
+    scene = demcon.Scene.from_file(long_transient)
+    timer = threading.Timer(1.5, _thread.interrupt_main)
+    timer.start()
+    out = tmp_path / "out"
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        scene.run(out=out)
+    elapsed = time.perf_counter() - t0
+    timer.cancel()
+    assert elapsed < 30.0, elapsed
+    # no partial output
+    assert not out.exists() or not any(out.iterdir())
