@@ -1,7 +1,7 @@
 """Type stubs of the compiled module demcon._demcon (python/src/*.rs)."""
 
 from os import PathLike
-from typing import Any, Callable, Optional, Union
+from typing import Any, Callable, Mapping, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -10,19 +10,68 @@ __version__: str
 
 _Path = Union[str, PathLike[str]]
 _Progress = Union[bool, None, Callable[[str, int, int], Any]]
+# a container in the scene schema: {"Box": {"size": (x, y, z)}}, {"Periodic": {"size": ...}},
+# {"Cylinder": {"radius": r, "length": l}}, {"Sphere": {"radius": r}} (m)
+_Container = Mapping[str, Mapping[str, Any]]
 
 class SceneError(ValueError):
     """A scene that cannot be read or run; the CLI's message with the field path."""
 
-class Scene:
-    """A RON scene, parsed and checked once."""
+class Packing:
+    """A sphere packing: centres and radii (m), a phase per sphere, its container."""
 
     @staticmethod
-    def from_file(path: _Path) -> Scene: ...
+    def from_arrays(
+        centres: npt.NDArray[np.floating[Any]],
+        radii: npt.NDArray[np.floating[Any]],
+        container: _Container,
+        phase: Optional[npt.NDArray[np.integer[Any]]] = None,
+    ) -> Packing: ...
+    @staticmethod
+    def load(path: _Path, container: Optional[_Container] = None) -> Packing: ...
+    def save(self, path: _Path) -> None: ...
+    @property
+    def centres(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def radii(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def phase(self) -> npt.NDArray[np.uint16]: ...
+    @property
+    def container(self) -> dict[str, Any]: ...
+    @property
+    def phi(self) -> float: ...
+    def info(self) -> dict[str, Any]: ...
+    def __len__(self) -> int: ...
+
+def pack(
+    container: _Container,
+    count: int,
+    phi: float,
+    radius_cov: float = 0.0,
+    radius_range: Optional[tuple[float, float]] = None,
+    seed: int = 1,
+    allow_short: bool = False,
+) -> Packing: ...
+
+class Scene:
+    """A scene (RON file, RON text or a dict of the same schema), parsed and checked once."""
+
+    def __init__(
+        self,
+        spec: Mapping[str, Any],
+        base_dir: Optional[_Path] = None,
+        packing: Optional[Packing] = None,
+    ) -> None: ...
+    @staticmethod
+    def from_file(path: _Path, packing: Optional[Packing] = None) -> Scene: ...
     @staticmethod
     def from_str(
-        text: str, base_dir: Optional[_Path] = None, path: Optional[_Path] = None
+        text: str,
+        base_dir: Optional[_Path] = None,
+        path: Optional[_Path] = None,
+        packing: Optional[Packing] = None,
     ) -> Scene: ...
+    def to_dict(self) -> dict[str, Any]: ...
     @property
     def name(self) -> str: ...
     @property
@@ -52,6 +101,10 @@ class RunResult:
     @property
     def heat_flux(self) -> Optional[npt.NDArray[np.float64]]: ...
     @property
+    def halo_flux(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def halo_cut(self) -> Optional[npt.NDArray[np.bool_]]: ...
+    @property
     def potential(self) -> Optional[npt.NDArray[np.float64]]: ...
     @property
     def current_density(self) -> Optional[npt.NDArray[np.float64]]: ...
@@ -64,4 +117,10 @@ class RunResult:
     @property
     def electric_tensor(self) -> Optional[npt.NDArray[np.float64]]: ...
     @property
+    def probes(self) -> dict[str, dict[str, npt.NDArray[Any]]]: ...
+    @property
+    def profiles(self) -> dict[str, dict[str, npt.NDArray[Any]]]: ...
+    @property
     def wall_s(self) -> float: ...
+    def contacts(self) -> dict[str, npt.NDArray[Any]]: ...
+    def to_pyvista(self) -> Any: ...

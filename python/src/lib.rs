@@ -5,8 +5,10 @@
 //! The package `demcon` (python/demcon/) re-exports everything here; docs/python.md is the
 //! user's page.
 
+mod packing;
 mod run;
 mod scene;
+mod values;
 
 use pyo3::prelude::*;
 
@@ -24,6 +26,8 @@ fn _demcon(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", m.py().get_type::<SceneError>())?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<run::PyRunResult>()?;
+    m.add_class::<packing::PyPacking>()?;
+    m.add_function(wrap_pyfunction!(packing::pack, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

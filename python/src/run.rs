@@ -19,6 +19,7 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::scene::{PyScene, scene_err};
 
@@ -150,8 +151,8 @@ pub(crate) fn run(
                         ))),
                     };
                 }
-                Ok(Event::Stage(stage)) => report.call(py, stage, 0, 0),
-                Ok(Event::Steps(done, total)) => report.call(py, "solve", done, total),
+                Ok(Event::Stage(stage)) => report.call(stage, 0, 0),
+                Ok(Event::Steps(done, total)) => report.call("solve", done, total),
                 Err(RecvTimeoutError::Timeout) => Ok(()),
                 Err(RecvTimeoutError::Disconnected) => Err(PyRuntimeError::new_err(
                     "the run's worker thread ended without a result",
@@ -165,8 +166,9 @@ pub(crate) fn run(
                 py.detach(|| while !matches!(recv(None), Ok(Event::Done(_)) | Err(_)) {});
             })?;
         }
-    })?;
-    let result = outcome;
+    });
+    report.close();
+    let result = outcome?;
     if let Some(dir) = out {
         demcon_scene::write_outputs(&scene.name, &scene.scene.config().outputs, &result, dir)
             .map_err(scene_err)?;
@@ -174,10 +176,44 @@ pub(crate) fn run(
     PyRunResult::new(py, &scene.name, result)
 }
 
-/// The run's progress reports: to a callable, to `sys.stderr`, or nowhere.
+/// Runs `f` on this thread with the GIL released, handing it a packing-progress callback that
+/// takes the GIL back at most every [`POLL`] to look for Ctrl-C; on Ctrl-C `f` is unwound
+/// (nothing it made is kept) and `KeyboardInterrupt` raised.
+pub(crate) fn checking_signals<R: Send>(
+    py: Python<'_>,
+    f: impl FnOnce(&(dyn Fn(&demcon_packing::PackProgress) + Sync)) -> R + Send,
+) -> PyResult<R> {
+    let interrupted: Mutex<Option<PyErr>> = Mutex::new(None);
+    let last = Mutex::new(std::time::Instant::now());
+    let check = |_: &demcon_packing::PackProgress| {
+        let mut last = last.lock().unwrap_or_else(|p| p.into_inner());
+        if last.elapsed() < POLL {
+            return;
+        }
+        *last = std::time::Instant::now();
+        if let Err(e) = Python::attach(|py| py.check_signals()) {
+            *interrupted.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+            resume_unwind(Box::new(Cancelled));
+        }
+    };
+    let caught = py.detach(|| catch_unwind(AssertUnwindSafe(|| f(&check))));
+    match caught {
+        Ok(r) => Ok(r),
+        Err(payload) if payload.is::<Cancelled>() => Err(interrupted
+            .into_inner()
+            .unwrap_or_else(|p| p.into_inner())
+            .unwrap_or_else(|| PyRuntimeError::new_err("stopped"))),
+        Err(payload) => Err(PyRuntimeError::new_err(format!(
+            "demcon failed (an internal error, please report it): {}",
+            panic_text(payload.as_ref())
+        ))),
+    }
+}
+
+/// The run's progress reports: to a callable, or nowhere. `True` is `demcon._progress`'s
+/// reporter (a tqdm bar when tqdm is installed, else lines on `sys.stderr`).
 enum Progress<'py> {
     None,
-    Print(Bound<'py, PyAny>),
     Call(Bound<'py, PyAny>),
 }
 
@@ -190,7 +226,9 @@ impl<'py> Progress<'py> {
             return Ok(Progress::Call(p));
         }
         match p.extract::<bool>() {
-            Ok(true) => Ok(Progress::Print(py.import("sys")?.getattr("stderr")?)),
+            Ok(true) => Ok(Progress::Call(
+                py.import("demcon._progress")?.call_method0("Reporter")?,
+            )),
             Ok(false) => Ok(Progress::None),
             Err(_) => Err(PyValueError::new_err(format!(
                 "progress = {}: allowed are True, False, None or a callable progress(stage, done, total)",
@@ -199,19 +237,19 @@ impl<'py> Progress<'py> {
         }
     }
 
-    fn call(&self, _py: Python<'py>, stage: &str, done: u64, total: u64) -> PyResult<()> {
+    fn call(&self, stage: &str, done: u64, total: u64) -> PyResult<()> {
         match self {
             Progress::None => Ok(()),
             Progress::Call(f) => f.call1((stage, done, total)).map(|_| ()),
-            Progress::Print(stderr) => {
-                let line = if total > 0 {
-                    format!("\rdemcon: {stage} {done}/{total} steps")
-                } else {
-                    format!("\ndemcon: {stage}")
-                };
-                stderr.call_method1("write", (line,))?;
-                stderr.call_method0("flush").map(|_| ())
-            }
+        }
+    }
+
+    /// Tells the reporter the run ended (closes a tqdm bar), when it listens for that.
+    fn close(&self) {
+        if let Progress::Call(f) = self
+            && f.hasattr("close").unwrap_or(false)
+        {
+            let _ = f.call_method0("close");
         }
     }
 }
@@ -227,38 +265,68 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
 
 /// The result of `Scene.run`: `summary` (summary.json as a dict) and the per-particle fields as
 /// numpy arrays (float64 unless said), each None when the run does not compute it.
-#[pyclass(name = "RunResult", module = "demcon", frozen, get_all)]
+#[pyclass(name = "RunResult", module = "demcon", frozen)]
 pub struct PyRunResult {
     /// `summary.json` of the run, as a dict.
+    #[pyo3(get)]
     summary: Py<PyAny>,
     /// Particle centres (m), shape (N, 3).
+    #[pyo3(get)]
     centres: Py<PyAny>,
     /// Particle radii (m), shape (N,).
+    #[pyo3(get)]
     radii: Py<PyAny>,
     /// Phase index of each particle (into the scene's `phases`, or 0), uint16, shape (N,).
+    #[pyo3(get)]
     phase: Py<PyAny>,
     /// Volume each particle stands for (m³): the Laguerre cell's, or the representative volume
     /// of the network, shape (N,).
+    #[pyo3(get)]
     volume: Py<PyAny>,
     /// End temperature (K or °C as the scene's values), shape (N,); None without thermal physics
     /// or in a periodic homogenisation.
+    #[pyo3(get)]
     temperature: Py<PyAny>,
     /// Heat flux density (W/m²), shape (N, 3), when the scene's outputs ask for it.
+    #[pyo3(get)]
     heat_flux: Py<PyAny>,
+    /// Halo-smoothed heat flux density (W/m²), shape (N, 3), when the outputs ask for it.
+    #[pyo3(get)]
+    halo_flux: Py<PyAny>,
+    /// Whether each particle's Halo is cut by the boundary (its `halo_flux` is biased), bool (N,).
+    #[pyo3(get)]
+    halo_cut: Py<PyAny>,
     /// Electric potential (V), shape (N,); None without electric physics.
+    #[pyo3(get)]
     potential: Py<PyAny>,
     /// Current density (A/m²), shape (N, 3); None without electric physics.
+    #[pyo3(get)]
     current_density: Py<PyAny>,
     /// Joule power of each particle (W), shape (N,); None without electric physics.
+    #[pyo3(get)]
     joule_power: Py<PyAny>,
     /// Effective thermal conductivity along the scene's `etc_axis` (W/(m·K)), a float, or None.
+    #[pyo3(get)]
     etc: Option<f64>,
     /// Effective conductivity tensor of a periodic homogenisation (W/(m·K)), shape (3, 3), or None.
+    #[pyo3(get)]
     etc_tensor: Py<PyAny>,
     /// Electric conductivity tensor of a periodic homogenisation (S/m), shape (3, 3), or None.
+    #[pyo3(get)]
     electric_tensor: Py<PyAny>,
+    /// Probe readings: {name: {"t": (K,) s, one (K,) array per field read (`temperature`,
+    /// `flux_magnitude`, …), "solved": (K,) bool}}.
+    #[pyo3(get)]
+    probes: Py<PyAny>,
+    /// Profiles: {name: {"t": (K,) s, "distance": (P,) m, one (K, P) array per field read,
+    /// "solved": (K, P) bool}}.
+    #[pyo3(get)]
+    profiles: Py<PyAny>,
     /// Wall time of the run (s).
+    #[pyo3(get)]
     wall_s: f64,
+    /// The contact arrays (`contacts()`).
+    contacts: Py<PyAny>,
 }
 
 impl PyRunResult {
@@ -288,17 +356,25 @@ impl PyRunResult {
         let etc_tensor = tensor(h.and_then(|h| h.thermal.as_ref()).map(|t| &t.report.tensor))?;
         let electric_tensor = tensor(h.and_then(|h| h.electric.as_ref()).map(|t| &t.report.tensor))?;
         let etc = r.etc.as_ref().map(|e| e.lambda_e);
+        let contacts = contact_arrays(py, &r)?;
+        let probes = probe_arrays(py, &r.probes)?;
+        let profiles = profile_arrays(py, &r.profiles)?;
         let wall_s = r.wall_s;
         let demcon_scene::RunResult {
             model,
             thermal,
             electric,
             flux,
+            halo,
             ..
         } = r;
         let particles = model.particles;
         let (potential, joule_power) = match electric {
             Some(e) => (scalars(py, Some(e.potentials)), scalars(py, Some(e.joule))),
+            None => (py.None(), py.None()),
+        };
+        let (halo_flux, halo_cut) = match halo {
+            Some((f, cut, _)) => (vectors(py, f)?, PyArray1::from_vec(py, cut).into_any().unbind()),
             None => (py.None(), py.None()),
         };
         Ok(PyRunResult {
@@ -309,26 +385,167 @@ impl PyRunResult {
             volume: scalars(py, Some(volume)),
             temperature: scalars(py, thermal.map(|t| t.temperatures)),
             heat_flux: flux.map_or_else(|| Ok(py.None()), |f| vectors(py, f))?,
+            halo_flux,
+            halo_cut,
             potential,
             current_density: current_density.map_or_else(|| Ok(py.None()), |j| vectors(py, j))?,
             joule_power,
             etc,
             etc_tensor,
             electric_tensor,
+            probes,
+            profiles,
             wall_s,
+            contacts,
         })
     }
 }
 
 #[pymethods]
 impl PyRunResult {
+    /// The contacts between particles (the network's edges; wall and electrode links are not
+    /// included) as a dict of arrays, one row per contact: `pairs` (M, 2) uint32 particle
+    /// indices; `distance` (M,) centre to centre (m; the periodic image's across a period);
+    /// with thermal physics `thermal_conductance` (M,) (W/K) and, unless homogenised,
+    /// `heat_flow` (M,) (W, from the first particle to the second); with electric physics
+    /// `electric_conductance` (M,) (S) and `current` (M,) (A, first to second).
+    fn contacts(&self, py: Python<'_>) -> Py<PyAny> {
+        self.contacts.clone_ref(py)
+    }
+
+    /// The run as a `pyvista.PolyData` of the particle centres, every per-particle array as
+    /// point data (needs PyVista: `pip install pyvista`).
+    fn to_pyvista(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
+        let helper = slf.py().import("demcon._pyvista")?;
+        Ok(helper.call_method1("to_pyvista", (slf,))?.unbind())
+    }
+
     fn __repr__(&self, py: Python<'_>) -> String {
         let n = self.radii.bind(py).len().unwrap_or(0);
-        format!(
-            "RunResult(particles={n}, etc={:?}, wall_s={:.3})",
-            self.etc, self.wall_s
-        )
+        let etc = self.etc.map_or_else(|| "None".to_string(), |x| x.to_string());
+        format!("RunResult(particles={n}, etc={etc}, wall_s={:.3})", self.wall_s)
     }
+}
+
+/// The contact arrays of `RunResult.contacts()`.
+fn contact_arrays(py: Python<'_>, r: &demcon_scene::RunResult) -> PyResult<Py<PyAny>> {
+    let g = &r.model.graph;
+    let m = g.pairs.len();
+    let d = PyDict::new(py);
+    let flat: Vec<u32> = g.pairs.iter().flatten().copied().collect();
+    let pairs = Array2::from_shape_vec((m, 2), flat)
+        .map_err(|e| PyRuntimeError::new_err(format!("an (M, 2) array of {m} rows: {e}")))?;
+    d.set_item("pairs", pairs.into_pyarray(py))?;
+    let distance: Vec<f64> = g.geometry.iter().map(|c| c.distance).collect();
+    d.set_item("distance", PyArray1::from_vec(py, distance))?;
+    if let Some(s) = &r.thermal_setup {
+        let gth = s.contact_conductances();
+        d.set_item("thermal_conductance", PyArray1::from_slice(py, gth))?;
+        if let Some(t) = &r.thermal {
+            let temps = &t.temperatures;
+            let flow: Vec<f64> = g
+                .pairs
+                .iter()
+                .zip(gth)
+                .map(|(&[p, q], gk)| gk * (temps[p as usize] - temps[q as usize]))
+                .collect();
+            d.set_item("heat_flow", PyArray1::from_vec(py, flow))?;
+        }
+    }
+    if let Some(e) = &r.electric {
+        d.set_item(
+            "electric_conductance",
+            PyArray1::from_slice(py, &e.conductances[..m]),
+        )?;
+        d.set_item("current", PyArray1::from_slice(py, &e.branch_currents[..m]))?;
+    }
+    Ok(d.into_any().unbind())
+}
+
+/// The names in order of first appearance.
+fn names_of<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
+    let mut out: Vec<&str> = Vec::new();
+    for n in names {
+        if !out.contains(&n) {
+            out.push(n);
+        }
+    }
+    out
+}
+
+/// `RunResult.probes`: per probe, its output times `t` (K,), one (K,) array per field it reads
+/// (`temperature`, `potential`, `flux_magnitude`, …) and `solved` (K,) (every reading from
+/// solved particles).
+fn probe_arrays(py: Python<'_>, probes: &[demcon_scene::run::ProbeValue]) -> PyResult<Py<PyAny>> {
+    let d = PyDict::new(py);
+    for name in names_of(probes.iter().map(|p| p.name.as_str())) {
+        let of: Vec<_> = probes.iter().filter(|p| p.name == name).collect();
+        let fields = names_of(of.iter().map(|p| p.field.as_str()));
+        let first: Vec<_> = of.iter().filter(|p| p.field == fields[0]).collect();
+        let e = PyDict::new(py);
+        e.set_item("t", PyArray1::from_iter(py, first.iter().map(|p| p.t)))?;
+        for field in &fields {
+            let values = of.iter().filter(|p| p.field == *field).map(|p| p.value);
+            e.set_item(*field, PyArray1::from_iter(py, values))?;
+        }
+        let solved = (0..first.len()).map(|k| {
+            fields.iter().all(|f| {
+                of.iter()
+                    .filter(|p| p.field == *f)
+                    .nth(k)
+                    .is_some_and(|p| p.solved)
+            })
+        });
+        e.set_item("solved", PyArray1::from_iter(py, solved))?;
+        d.set_item(name, e)?;
+    }
+    Ok(d.into_any().unbind())
+}
+
+/// `RunResult.profiles`: per profile, its output times `t` (K,), the points' `distance` (P,)
+/// from its start (m), one (K, P) array per field it reads and `solved` (K, P).
+fn profile_arrays(py: Python<'_>, profiles: &[demcon_scene::run::ProfileValues]) -> PyResult<Py<PyAny>> {
+    let d = PyDict::new(py);
+    for name in names_of(profiles.iter().map(|p| p.name.as_str())) {
+        let of: Vec<_> = profiles.iter().filter(|p| p.name == name).collect();
+        let fields = names_of(of.iter().map(|p| p.field.as_str()));
+        let first: Vec<_> = of.iter().filter(|p| p.field == fields[0]).collect();
+        let points = first[0].points.len();
+        let grid = |rows: &[&&demcon_scene::run::ProfileValues],
+                    f: &dyn Fn(&demcon_scene::run::ProfileValues, usize) -> f64|
+         -> PyResult<Bound<'_, PyAny>> {
+            let flat: Vec<f64> = rows
+                .iter()
+                .flat_map(|p| (0..points).map(move |i| if i < p.points.len() { f(p, i) } else { f64::NAN }))
+                .collect();
+            let a = Array2::from_shape_vec((rows.len(), points), flat)
+                .map_err(|e| PyRuntimeError::new_err(format!("profile {name}: {e}")))?;
+            Ok(a.into_pyarray(py).into_any())
+        };
+        let e = PyDict::new(py);
+        e.set_item("t", PyArray1::from_iter(py, first.iter().map(|p| p.t)))?;
+        e.set_item(
+            "distance",
+            PyArray1::from_iter(py, first[0].points.iter().map(|x| x.0)),
+        )?;
+        let mut solved = vec![true; first.len() * points];
+        for field in &fields {
+            let rows: Vec<_> = of.iter().filter(|p| p.field == *field).collect();
+            e.set_item(*field, grid(&rows, &|p, i| p.points[i].1)?)?;
+            for (k, p) in rows.iter().enumerate() {
+                for (i, &ok) in p.solved.iter().enumerate().take(points) {
+                    if let Some(s) = solved.get_mut(k * points + i) {
+                        *s &= ok;
+                    }
+                }
+            }
+        }
+        let solved = Array2::from_shape_vec((first.len(), points), solved)
+            .map_err(|e| PyRuntimeError::new_err(format!("profile {name}: {e}")))?;
+        e.set_item("solved", solved.into_pyarray(py))?;
+        d.set_item(name, e)?;
+    }
+    Ok(d.into_any().unbind())
 }
 
 /// A float64 array (N,) moved into numpy without a copy, or None.
@@ -340,7 +557,7 @@ fn scalars(py: Python<'_>, v: Option<Vec<f64>>) -> Py<PyAny> {
 }
 
 /// Vectors as a float64 array (N, 3) (one copy: nalgebra's vectors into one flat buffer).
-fn vectors(py: Python<'_>, v: Vec<Vec3>) -> PyResult<Py<PyAny>> {
+pub(crate) fn vectors(py: Python<'_>, v: Vec<Vec3>) -> PyResult<Py<PyAny>> {
     let n = v.len();
     let flat: Vec<f64> = v.iter().flat_map(|x| [x.x, x.y, x.z]).collect();
     let a = Array2::from_shape_vec((n, 3), flat)

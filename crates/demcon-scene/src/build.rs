@@ -18,11 +18,47 @@ use crate::scene::Scene;
 /// Particles and container from the scene's packing section (generated or read), with the
 /// packing report.
 pub fn make_particles(
-    cfg: &SceneConfig,
+    scene: &Scene,
+    progress: Option<&dyn Fn(&demcon_packing::PackProgress)>,
+) -> Result<(ParticleSet, Container, Option<PackingReport>, Option<String>), SceneError> {
+    let cfg = scene.config();
+    let source = Source {
+        seed: cfg.seed,
+        base_dir: &scene.base_dir,
+        progress,
+        materials: &cfg.materials,
+        given: scene.given_particles(),
+    };
+    source.particles_of(&cfg.packing)
+}
+
+/// The particles of a packing section on its own, outside a scene (the Python package's
+/// `demcon.pack`): generated, read or tiled. A `Given` section is refused (nothing is handed
+/// over); file labels need a scene's materials and are refused too.
+pub fn particles_of_section(
+    packing: &PackingConfig,
+    seed: u64,
     base_dir: &Path,
     progress: Option<&dyn Fn(&demcon_packing::PackProgress)>,
 ) -> Result<(ParticleSet, Container, Option<PackingReport>, Option<String>), SceneError> {
-    particles_of(&cfg.packing, cfg.seed, base_dir, progress, &cfg.materials)
+    let source = Source {
+        seed,
+        base_dir,
+        progress,
+        materials: &[],
+        given: None,
+    };
+    source.particles_of(packing)
+}
+
+/// What the packing sections draw on: the seed, the scene's folder, the caller's progress
+/// report, the materials (packing-file labels) and the particles handed over.
+struct Source<'a> {
+    seed: u64,
+    base_dir: &'a Path,
+    progress: Option<&'a dyn Fn(&demcon_packing::PackProgress)>,
+    materials: &'a [MaterialConfig],
+    given: Option<&'a ParticleSet>,
 }
 
 /// The phase of each particle from its label in a packing file (`x y z r label`): a material's
@@ -56,83 +92,101 @@ fn label_phases(
         .collect()
 }
 
-/// The particles of one packing section (a tiling holds another).
-fn particles_of(
-    packing: &PackingConfig,
-    seed: u64,
-    base_dir: &Path,
-    progress: Option<&dyn Fn(&demcon_packing::PackProgress)>,
-    materials: &[MaterialConfig],
-) -> Result<(ParticleSet, Container, Option<PackingReport>, Option<String>), SceneError> {
-    match packing {
-        PackingConfig::Generate {
-            container,
-            count,
-            phi,
-            radius_cov,
-            radius_range,
-            allow_short,
-        } => {
-            let container = convert::container(container, "packing.container")?;
-            let radii = match radius_range {
-                _ if *radius_cov == 0.0 => RadiusDistribution::Monodisperse,
-                None => RadiusDistribution::gaussian(*radius_cov),
-                Some((lo, hi)) => RadiusDistribution::Gaussian {
-                    cov: *radius_cov,
-                    min_ratio: *lo,
-                    max_ratio: *hi,
-                },
-            };
-            let params = PackingParams::new(container, *count, *phi, radii);
-            let (particles, report) =
-                pack(&params, seed, progress).map_err(|e| SceneError::Packing(format!("packing: {e}")))?;
-            if report.stop != StopReason::TargetReached && !allow_short {
-                return Err(SceneError::Packing(format!(
-                    "the packing stopped at φ = {:.4} ({:?}) short of the target {phi}; lower `packing.phi` \
+impl Source<'_> {
+    /// The particles of one packing section (a tiling holds another).
+    fn particles_of(
+        &self,
+        packing: &PackingConfig,
+    ) -> Result<(ParticleSet, Container, Option<PackingReport>, Option<String>), SceneError> {
+        let Source {
+            seed,
+            base_dir,
+            progress,
+            materials,
+            ..
+        } = *self;
+        match packing {
+            PackingConfig::Generate {
+                container,
+                count,
+                phi,
+                radius_cov,
+                radius_range,
+                allow_short,
+            } => {
+                let container = convert::container(container, "packing.container")?;
+                let radii = match radius_range {
+                    _ if *radius_cov == 0.0 => RadiusDistribution::Monodisperse,
+                    None => RadiusDistribution::gaussian(*radius_cov),
+                    Some((lo, hi)) => RadiusDistribution::Gaussian {
+                        cov: *radius_cov,
+                        min_ratio: *lo,
+                        max_ratio: *hi,
+                    },
+                };
+                let params = PackingParams::new(container, *count, *phi, radii);
+                let (particles, report) = pack(&params, seed, progress)
+                    .map_err(|e| SceneError::Packing(format!("packing: {e}")))?;
+                if report.stop != StopReason::TargetReached && !allow_short {
+                    return Err(SceneError::Packing(format!(
+                        "the packing stopped at φ = {:.4} ({:?}) short of the target {phi}; lower `packing.phi` \
                      or set `allow_short: true`",
-                    report.packing.phi, report.stop
-                )));
-            }
-            Ok((particles, container, Some(report), None))
-        }
-        PackingConfig::File { path, container } => {
-            let full = base_dir.join(path);
-            let file = read_xyzr_file(&full)
-                .map_err(|e| SceneError::Packing(format!("reading {}: {e}", full.display())))?;
-            let (mut particles, header) = (file.particles, file.container);
-            if let Some(labels) = &file.labels {
-                particles.phases = label_phases(labels, materials, &full)?;
-            }
-            let container = match (container, header) {
-                (Some(c), _) => convert::container(c, "packing.container")?,
-                (None, Some(c)) => c,
-                (None, None) => {
-                    return Err(SceneError::invalid(
-                        "packing.container",
-                        "none",
-                        format!(
-                            "{} has no container in its header: give `container` in the scene",
-                            full.display()
-                        ),
-                    ));
+                        report.packing.phi, report.stop
+                    )));
                 }
-            };
-            Ok((particles, container, None, Some(full.display().to_string())))
-        }
-        PackingConfig::Tile {
-            packing,
-            repeat,
-            walls,
-        } => {
-            let (particles, container, report, from) =
-                particles_of(packing, seed, base_dir, progress, materials)?;
-            let (tiled, container) = tile(&particles, &container, [repeat.0, repeat.1, repeat.2])
-                .map_err(|e| SceneError::Packing(format!("packing (Tile): {e}")))?;
-            let container = match (container, walls) {
-                (Container::Periodic { size }, true) => Container::Box { size },
-                (c, _) => c,
-            };
-            Ok((tiled, container, report, from))
+                Ok((particles, container, Some(report), None))
+            }
+            PackingConfig::File { path, container } => {
+                let full = base_dir.join(path);
+                let file = read_xyzr_file(&full)
+                    .map_err(|e| SceneError::Packing(format!("reading {}: {e}", full.display())))?;
+                let (mut particles, header) = (file.particles, file.container);
+                if let Some(labels) = &file.labels {
+                    particles.phases = label_phases(labels, materials, &full)?;
+                }
+                let container = match (container, header) {
+                    (Some(c), _) => convert::container(c, "packing.container")?,
+                    (None, Some(c)) => c,
+                    (None, None) => {
+                        return Err(SceneError::invalid(
+                            "packing.container",
+                            "none",
+                            format!(
+                                "{} has no container in its header: give `container` in the scene",
+                                full.display()
+                            ),
+                        ));
+                    }
+                };
+                Ok((particles, container, None, Some(full.display().to_string())))
+            }
+            PackingConfig::Tile {
+                packing,
+                repeat,
+                walls,
+            } => {
+                let (particles, container, report, from) = self.particles_of(packing)?;
+                let (tiled, container) = tile(&particles, &container, [repeat.0, repeat.1, repeat.2])
+                    .map_err(|e| SceneError::Packing(format!("packing (Tile): {e}")))?;
+                let container = match (container, walls) {
+                    (Container::Periodic { size }, true) => Container::Box { size },
+                    (c, _) => c,
+                };
+                Ok((tiled, container, report, from))
+            }
+            PackingConfig::Given { container, .. } => {
+                let container = convert::container(container, "packing.container")?;
+                // `Scene` refuses a `Given` packing without the particles.
+                let particles = self.given.cloned().ok_or_else(|| {
+                    SceneError::invalid("packing", "Given", "no particles were handed over")
+                })?;
+                Ok((
+                    particles,
+                    container,
+                    None,
+                    Some("particles handed over in memory".into()),
+                ))
+            }
         }
     }
 }
@@ -160,7 +214,7 @@ pub fn build_model_staged(
     }
     let t0 = Instant::now();
     let (particles, container, report, imported_from) =
-        stages.time("packing", || make_particles(cfg, base_dir, progress))?;
+        stages.time("packing", || make_particles(scene, progress))?;
     crate::validate::check_run_memory(particles.len(), cfg, Some(&container), "packing")?;
     let packed = Packed {
         particles,

@@ -181,6 +181,15 @@ pub enum PackingConfig {
         #[serde(default)]
         walls: bool,
     },
+    /// Particles handed over in memory by a program (the Python package's
+    /// `demcon.Scene(..., packing=p)` and `demcon.homogenize`, or [`crate::Scene::with_particles`]):
+    /// a scene file cannot give them, it reads a packing with `File`.
+    Given {
+        /// Number of particles handed over.
+        count: usize,
+        /// Their container.
+        container: ContainerConfig,
+    },
 }
 
 fn default_cov() -> f64 {

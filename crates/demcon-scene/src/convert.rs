@@ -70,6 +70,20 @@ fn positive(field: &str, v: f64) -> Result<f64, SceneError> {
     }
 }
 
+/// The scene's words for a container (the inverse of [`container`]).
+pub fn container_config(c: &Container) -> ContainerConfig {
+    match *c {
+        Container::Box { size } => ContainerConfig::Box {
+            size: (size[0], size[1], size[2]),
+        },
+        Container::Periodic { size } => ContainerConfig::Periodic {
+            size: (size[0], size[1], size[2]),
+        },
+        Container::Cylinder { radius, length } => ContainerConfig::Cylinder { radius, length },
+        Container::Sphere { radius } => ContainerConfig::Sphere { radius },
+    }
+}
+
 /// The container of a `ContainerConfig`, validated.
 pub fn container(c: &ContainerConfig, field: &str) -> Result<Container, SceneError> {
     let out = match *c {
@@ -959,7 +973,7 @@ pub fn container_of(
     base_dir: &Path,
 ) -> Result<Option<Container>, SceneError> {
     Ok(match p {
-        PackingConfig::Generate { container, .. } => {
+        PackingConfig::Generate { container, .. } | PackingConfig::Given { container, .. } => {
             Some(self::container(container, &format!("{field}.container"))?)
         }
         PackingConfig::File {

@@ -30,6 +30,15 @@ pub enum SceneError {
         /// What would be accepted.
         allowed: String,
     },
+    /// A scene given as a tree of values (a Python dict) has an unknown key, a missing one or
+    /// a value of the wrong type.
+    #[error("scene field `{field}`: {message}")]
+    Schema {
+        /// Field path, e.g. `thermal.bcs[0].value` (`.` for the scene itself).
+        field: String,
+        /// What is wrong, in the scene's words.
+        message: String,
+    },
     /// Several refusals of one scene, reported together (each as it would be alone).
     #[error("{} problems in the scene:{}", .0.len(), numbered(.0))]
     Several(Vec<SceneError>),

@@ -2,8 +2,11 @@
 //! follows ([`Problem`]); parser messages in the scene's own words.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
-use crate::config::SceneConfig;
+use demcon_core::ParticleSet;
+
+use crate::config::{PackingConfig, SceneConfig};
 use crate::convert::Problem;
 use crate::error::SceneError;
 
@@ -18,6 +21,8 @@ pub struct Scene {
     pub base_dir: PathBuf,
     problem: Problem,
     warnings: Vec<String>,
+    /// The particles of a `Given` packing (shared by the scene's copies and edits).
+    given: Option<Arc<ParticleSet>>,
 }
 
 impl Scene {
@@ -64,9 +69,72 @@ impl Scene {
         Scene::from_config(config, base_dir)
     }
 
+    /// A scene from a tree of values in the RON schema's shape (JSON's data model: a struct
+    /// is an object, an enum variant `{"Variant": {...}}` or `"Variant"`, a tuple a list,
+    /// `None` null): what the Python package's `demcon.Scene(dict)` hands over. An unknown key,
+    /// a missing one or a wrong type is refused with its field path (`thermal.bcs[0].value`).
+    pub fn from_value(value: serde_json::Value, base_dir: PathBuf) -> Result<Scene, SceneError> {
+        Scene::from_config(config_of_value(value)?, base_dir)
+    }
+
+    /// A configuration from a tree of values (see [`Scene::from_value`]), not yet checked.
+    pub fn config_of_value(value: serde_json::Value) -> Result<SceneConfig, SceneError> {
+        config_of_value(value)
+    }
+
     /// A scene from a configuration built in code (paths relative to `base_dir`): every value
     /// checked before any heavy work (`validate.rs`), then converted once.
     pub fn from_config(config: SceneConfig, base_dir: PathBuf) -> Result<Scene, SceneError> {
+        Scene::checked(config, base_dir, None)
+    }
+
+    /// A scene on particles handed over in memory: `config.packing` becomes
+    /// `Given { count, container }` (whatever it was), and the particles must lie in the
+    /// container (as a packing file's must; radii > 0, coordinates finite).
+    pub fn with_particles(
+        mut config: SceneConfig,
+        base_dir: PathBuf,
+        particles: ParticleSet,
+        container: crate::config::ContainerConfig,
+    ) -> Result<Scene, SceneError> {
+        let field = "packing.container";
+        demcon_packing::check_inside(&particles, &crate::convert::container(&container, field)?)
+            .map_err(|e| SceneError::invalid("packing", "the particles handed over", e.to_string()))?;
+        if let Some((i, &k)) = particles
+            .phases
+            .iter()
+            .enumerate()
+            .find(|&(_, &k)| usize::from(k) >= config.materials.len())
+        {
+            return Err(SceneError::invalid(
+                &format!("phase[{i}]"),
+                k,
+                format!(
+                    "a particle's phase is an index into `materials` (0..{})",
+                    config.materials.len()
+                ),
+            ));
+        }
+        config.packing = PackingConfig::Given {
+            count: particles.len(),
+            container,
+        };
+        Scene::checked(config, base_dir, Some(Arc::new(particles)))
+    }
+
+    fn checked(
+        config: SceneConfig,
+        base_dir: PathBuf,
+        given: Option<Arc<ParticleSet>>,
+    ) -> Result<Scene, SceneError> {
+        if given.is_none() && packs_given(&config.packing) {
+            return Err(SceneError::invalid(
+                "packing",
+                "Given",
+                "particles handed over in memory (the Python package's `demcon.Scene(..., packing=p)`); \
+                 a scene file reads a packing with `File(path: ...)` or generates one",
+            ));
+        }
         let problem = crate::validate::validate(&config, &base_dir)?;
         let warnings = crate::validate::scene_warnings(&config);
         Ok(Scene {
@@ -74,16 +142,26 @@ impl Scene {
             base_dir,
             problem,
             warnings,
+            given,
         })
     }
 
-    /// The scene with `change` applied to its configuration, checked and converted again.
+    /// The scene with `change` applied to its configuration, checked and converted again
+    /// (particles handed over stay).
     pub fn edit(self, change: impl FnOnce(&mut SceneConfig)) -> Result<Scene, SceneError> {
         let Scene {
-            mut config, base_dir, ..
+            mut config,
+            base_dir,
+            given,
+            ..
         } = self;
         change(&mut config);
-        Scene::from_config(config, base_dir)
+        Scene::checked(config, base_dir, given)
+    }
+
+    /// The particles handed over by [`Scene::with_particles`].
+    pub fn given_particles(&self) -> Option<&ParticleSet> {
+        self.given.as_deref()
     }
 
     /// The configuration as written.
@@ -99,6 +177,26 @@ impl Scene {
     /// What the scene asks for that is allowed but probably not meant (for `summary.json`).
     pub fn warnings(&self) -> &[String] {
         &self.warnings
+    }
+}
+
+/// [`Scene::config_of_value`].
+fn config_of_value(value: serde_json::Value) -> Result<SceneConfig, SceneError> {
+    serde_path_to_error::deserialize::<_, SceneConfig>(value).map_err(|e| {
+        let field = e.path().to_string();
+        SceneError::Schema {
+            field,
+            message: scene_words(&e.into_inner().to_string()),
+        }
+    })
+}
+
+/// Whether a packing section is (or tiles) a `Given` one.
+fn packs_given(p: &PackingConfig) -> bool {
+    match p {
+        PackingConfig::Given { .. } => true,
+        PackingConfig::Tile { packing, .. } => packs_given(packing),
+        PackingConfig::Generate { .. } | PackingConfig::File { .. } => false,
     }
 }
 
@@ -154,7 +252,10 @@ fn scene_words(message: &str) -> String {
         ("ProfileConfig", "a profile (`outputs.profiles`)"),
         ("OutputsConfig", "`outputs`"),
     ];
-    let mut text = message.replace("in enum `", "in `");
+    let mut text = message.replace("in enum `", "in `").replace(
+        "data did not match any variant of untagged enum TimedConfig",
+        "expected a number or a time table [(t, value), …]",
+    );
     for (rust, scene) in NAMES {
         // A variant first (`RegionConfig::Difference`, quoted or not), then the bare type.
         let variant = format!("{rust}::");

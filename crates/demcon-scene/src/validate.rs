@@ -341,7 +341,7 @@ fn check_tile_walls(c: &SceneConfig) -> Result<(), SceneError> {
 /// (a generated packing, or a tiling of one); errors on a tiling beyond 32-bit ids.
 fn known_count(p: &PackingConfig, field: &str) -> Result<Option<usize>, SceneError> {
     Ok(match p {
-        PackingConfig::Generate { count, .. } => Some(*count),
+        PackingConfig::Generate { count, .. } | PackingConfig::Given { count, .. } => Some(*count),
         PackingConfig::File { .. } => None,
         PackingConfig::Tile { packing, repeat, .. } => {
             match known_count(packing, &format!("{field}.packing"))? {

@@ -460,7 +460,7 @@ fn cached_packing(cfg: &SceneConfig) -> anyhow::Result<(Arc<CachedPacking>, bool
     }
     let t0 = std::time::Instant::now();
     let (particles, container, report, _) =
-        demcon_scene::build::make_particles(cfg, std::path::Path::new(""), None)?;
+        demcon_scene::build::particles_of_section(&cfg.packing, cfg.seed, std::path::Path::new(""), None)?;
     let entry = Arc::new((particles, container, report, t0.elapsed().as_secs_f64()));
     cache
         .lock()
@@ -803,8 +803,7 @@ mod tests {
             let scene = Scene::from_config(cfg.clone(), PathBuf::new()).unwrap();
             assert!(is_cached(scene.config()));
             let cached = model_of(cfg).unwrap();
-            let (direct, ..) =
-                demcon_scene::build::make_particles(scene.config(), std::path::Path::new(""), None).unwrap();
+            let (direct, ..) = demcon_scene::build::make_particles(&scene, None).unwrap();
             assert_eq!(cached.particles.centres, direct.centres);
             assert_eq!(cached.particles.radii, direct.radii);
         }
