@@ -4,7 +4,8 @@
 //! Stopping: the library has no cancel flag, but it calls back between stages and during the
 //! packing and the time march. On Ctrl-C the calling thread sets `stop`; the worker's next
 //! callback unwinds with [`Cancelled`] (`resume_unwind`: no panic message), caught at the top of
-//! the worker. Nothing is written: the outputs are written only after a complete run.
+//! the worker. Nothing is written: the outputs are written only after a complete run (a
+//! transient's checkpoint, when the scene schedules one and `out` is given, stays for `resume`).
 
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::path::Path;
@@ -16,7 +17,7 @@ use std::time::Duration;
 
 use demcon_core::{StageObserver, StageRecord, Vec3};
 use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1};
+use numpy::{IntoPyArray, PyArray1, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -82,9 +83,27 @@ pub(crate) fn run(
     out: Option<&Path>,
     threads: Option<usize>,
     progress: Option<Bound<'_, PyAny>>,
+    resume: bool,
 ) -> PyResult<PyRunResult> {
     if let Some(dir) = out {
         demcon_scene::output::check_output_dir(dir).map_err(scene_err)?;
+    }
+    // As `demcon run --out OUT`: a transient with `thermal.checkpoint` writes OUT.checkpoint.
+    let scheduled = scene
+        .scene
+        .config()
+        .thermal
+        .as_ref()
+        .is_some_and(|t| t.checkpoint.is_some());
+    let checkpoint = match out {
+        Some(dir) if scheduled => Some(demcon_scene::checkpoint::checkpoint_path(dir).map_err(scene_err)?),
+        _ => None,
+    };
+    if resume && checkpoint.is_none() {
+        return Err(PyValueError::new_err(
+            "resume = True: a run continues from the checkpoint beside its output folder; give out= \
+             (the interrupted run's) and a scene with thermal.checkpoint",
+        ));
     }
     let pool = match threads {
         Some(n) => Some(
@@ -112,6 +131,7 @@ pub(crate) fn run(
         tx: tx.clone(),
     });
     let inner = &scene.scene;
+    let checkpoint_at = checkpoint.as_deref();
     let outcome = std::thread::scope(|s| -> PyResult<demcon_scene::RunResult> {
         s.spawn(move || {
             let work = || {
@@ -123,7 +143,11 @@ pub(crate) fn run(
                         steps.send(Event::Steps(done, total))
                     })),
                     stages: Some(relay.clone() as Arc<dyn StageObserver>),
-                    checkpoint: None,
+                    checkpoint: checkpoint_at.map(|path| demcon_scene::CheckpointOptions {
+                        path: path.to_path_buf(),
+                        resume,
+                        after_write: None,
+                    }),
                 };
                 demcon_scene::run(inner, &opts)
             };
@@ -172,6 +196,9 @@ pub(crate) fn run(
     if let Some(dir) = out {
         demcon_scene::write_outputs(&scene.name, &scene.scene.config().outputs, &result, dir)
             .map_err(scene_err)?;
+    }
+    if let Some(path) = &checkpoint {
+        demcon_scene::checkpoint::remove_checkpoint(path).map_err(scene_err)?;
     }
     PyRunResult::new(py, &scene.name, result)
 }
@@ -322,24 +349,38 @@ pub struct PyRunResult {
     /// "solved": (K, P) bool}}.
     #[pyo3(get)]
     profiles: Py<PyAny>,
+    /// Where a resumed run continued from: {"steps": int, "t": float (s)}, or None.
+    #[pyo3(get)]
+    resumed: Py<PyAny>,
     /// Wall time of the run (s).
     #[pyo3(get)]
     wall_s: f64,
-    /// The contact arrays (`contacts()`).
-    contacts: Py<PyAny>,
+    /// What `contacts()` builds its arrays from.
+    contacts: ContactData,
+}
+
+/// What `RunResult.contacts()` builds its arrays from, moved out of the run: the arrays are made
+/// only when asked for (at 10⁶ particles, 7·10⁶ contacts, they take a few hundred ms).
+struct ContactData {
+    pairs: Vec<[u32; 2]>,
+    geometry: Vec<demcon_graph::ContactGeometry>,
+    /// Thermal conductances (W/K): the contacts, then the wall links.
+    thermal: Option<Vec<f64>>,
+    /// Electric conductances (S) and currents (A): the contacts, then the electrode links.
+    electric: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 impl PyRunResult {
-    fn new(py: Python<'_>, name: &str, r: demcon_scene::RunResult) -> PyResult<Self> {
+    fn new(py: Python<'_>, name: &str, mut r: demcon_scene::RunResult) -> PyResult<Self> {
         let summary_text = demcon_scene::summary_json(name, &r).to_string();
         let summary = py
             .import("json")?
             .call_method1("loads", (summary_text,))?
             .unbind();
         let n = r.model.particles.len();
-        let volume: Vec<f64> = match (&r.thermal_setup, &r.electric) {
-            (Some(s), _) => s.rep_volumes.clone(),
-            (None, Some(e)) => e.rep_volumes.clone(),
+        let volume: Vec<f64> = match (&mut r.thermal_setup, &mut r.electric) {
+            (Some(s), _) => std::mem::take(&mut s.rep_volumes),
+            (None, Some(e)) => std::mem::take(&mut e.rep_volumes),
             (None, None) => (0..n).map(|p| r.model.solid_volume_of(p)).collect(),
         };
         let current_density = r.electric.as_ref().map(|e| e.current_density(&r.model));
@@ -356,35 +397,61 @@ impl PyRunResult {
         let etc_tensor = tensor(h.and_then(|h| h.thermal.as_ref()).map(|t| &t.report.tensor))?;
         let electric_tensor = tensor(h.and_then(|h| h.electric.as_ref()).map(|t| &t.report.tensor))?;
         let etc = r.etc.as_ref().map(|e| e.lambda_e);
-        let contacts = contact_arrays(py, &r)?;
         let probes = probe_arrays(py, &r.probes)?;
         let profiles = profile_arrays(py, &r.profiles)?;
         let wall_s = r.wall_s;
-        let demcon_scene::RunResult {
-            model,
-            thermal,
-            electric,
-            flux,
-            halo,
-            ..
-        } = r;
-        let particles = model.particles;
-        let (potential, joule_power) = match electric {
-            Some(e) => (scalars(py, Some(e.potentials)), scalars(py, Some(e.joule))),
+        let resumed = match &r.resumed {
+            Some(x) => {
+                let d = PyDict::new(py);
+                d.set_item("steps", x.steps)?;
+                d.set_item("t", x.t)?;
+                d.into_any().unbind()
+            }
+            None => py.None(),
+        };
+        let graph = &mut r.model.graph;
+        let contacts = ContactData {
+            geometry: std::mem::take(&mut graph.geometry),
+            pairs: std::mem::take(&mut graph.pairs),
+            thermal: r
+                .thermal_setup
+                .as_mut()
+                .map(|s| std::mem::take(&mut s.conductances)),
+            electric: r.electric.as_mut().map(|e| {
+                (
+                    std::mem::take(&mut e.conductances),
+                    std::mem::take(&mut e.branch_currents),
+                )
+            }),
+        };
+        let particles = std::mem::take(&mut r.model.particles);
+        let (potential, joule_power) = match r.electric.as_mut() {
+            Some(e) => (
+                scalars(py, Some(std::mem::take(&mut e.potentials))),
+                scalars(py, Some(std::mem::take(&mut e.joule))),
+            ),
             None => (py.None(), py.None()),
         };
-        let (halo_flux, halo_cut) = match halo {
+        let (halo_flux, halo_cut) = match r.halo.take() {
             Some((f, cut, _)) => (vectors(py, f)?, PyArray1::from_vec(py, cut).into_any().unbind()),
             None => (py.None(), py.None()),
         };
+        let temperature = scalars(
+            py,
+            r.thermal.as_mut().map(|t| std::mem::take(&mut t.temperatures)),
+        );
+        let heat_flux = r.flux.take().map_or_else(|| Ok(py.None()), |f| vectors(py, f))?;
+        // The rest (the network, cells, solver state: most of the run's memory) is freed on a
+        // thread of its own: at 10⁶ particles that takes longer than making every array here.
+        std::thread::spawn(move || drop(r));
         Ok(PyRunResult {
             summary,
             centres: vectors(py, particles.centres)?,
             radii: scalars(py, Some(particles.radii)),
             phase: PyArray1::from_vec(py, particles.phases).into_any().unbind(),
             volume: scalars(py, Some(volume)),
-            temperature: scalars(py, thermal.map(|t| t.temperatures)),
-            heat_flux: flux.map_or_else(|| Ok(py.None()), |f| vectors(py, f))?,
+            temperature,
+            heat_flux,
             halo_flux,
             halo_cut,
             potential,
@@ -395,6 +462,7 @@ impl PyRunResult {
             electric_tensor,
             probes,
             profiles,
+            resumed,
             wall_s,
             contacts,
         })
@@ -409,8 +477,8 @@ impl PyRunResult {
     /// with thermal physics `thermal_conductance` (M,) (W/K) and, unless homogenised,
     /// `heat_flow` (M,) (W, from the first particle to the second); with electric physics
     /// `electric_conductance` (M,) (S) and `current` (M,) (A, first to second).
-    fn contacts(&self, py: Python<'_>) -> Py<PyAny> {
-        self.contacts.clone_ref(py)
+    fn contacts(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        contact_arrays(py, &self.contacts, self.temperature.bind(py))
     }
 
     /// The run as a `pyvista.PolyData` of the particle centres, every per-particle array as
@@ -427,37 +495,32 @@ impl PyRunResult {
     }
 }
 
-/// The contact arrays of `RunResult.contacts()`.
-fn contact_arrays(py: Python<'_>, r: &demcon_scene::RunResult) -> PyResult<Py<PyAny>> {
-    let g = &r.model.graph;
-    let m = g.pairs.len();
+/// The contact arrays of `RunResult.contacts()` (`temperature`: the run's, or None).
+fn contact_arrays(py: Python<'_>, c: &ContactData, temperature: &Bound<'_, PyAny>) -> PyResult<Py<PyAny>> {
+    let m = c.pairs.len();
     let d = PyDict::new(py);
-    let flat: Vec<u32> = g.pairs.iter().flatten().copied().collect();
-    let pairs = Array2::from_shape_vec((m, 2), flat)
-        .map_err(|e| PyRuntimeError::new_err(format!("an (M, 2) array of {m} rows: {e}")))?;
-    d.set_item("pairs", pairs.into_pyarray(py))?;
-    let distance: Vec<f64> = g.geometry.iter().map(|c| c.distance).collect();
-    d.set_item("distance", PyArray1::from_vec(py, distance))?;
-    if let Some(s) = &r.thermal_setup {
-        let gth = s.contact_conductances();
-        d.set_item("thermal_conductance", PyArray1::from_slice(py, gth))?;
-        if let Some(t) = &r.thermal {
-            let temps = &t.temperatures;
-            let flow: Vec<f64> = g
+    let flat: Vec<u32> = bytemuck::cast_slice(&c.pairs).to_vec();
+    d.set_item("pairs", PyArray1::from_vec(py, flat).reshape([m, 2])?)?;
+    let distance = c.geometry.iter().map(|g| g.distance);
+    d.set_item("distance", PyArray1::from_iter(py, distance))?;
+    if let Some(g) = &c.thermal {
+        let g = &g[..m];
+        d.set_item("thermal_conductance", PyArray1::from_slice(py, g))?;
+        if let Ok(t) = temperature.cast::<PyArray1<f64>>() {
+            let t = t.readonly();
+            let temps = t.as_slice()?;
+            let flow: Vec<f64> = c
                 .pairs
                 .iter()
-                .zip(gth)
+                .zip(g)
                 .map(|(&[p, q], gk)| gk * (temps[p as usize] - temps[q as usize]))
                 .collect();
             d.set_item("heat_flow", PyArray1::from_vec(py, flow))?;
         }
     }
-    if let Some(e) = &r.electric {
-        d.set_item(
-            "electric_conductance",
-            PyArray1::from_slice(py, &e.conductances[..m]),
-        )?;
-        d.set_item("current", PyArray1::from_slice(py, &e.branch_currents[..m]))?;
+    if let Some((g, i)) = &c.electric {
+        d.set_item("electric_conductance", PyArray1::from_slice(py, &g[..m]))?;
+        d.set_item("current", PyArray1::from_slice(py, &i[..m]))?;
     }
     Ok(d.into_any().unbind())
 }
@@ -556,11 +619,11 @@ fn scalars(py: Python<'_>, v: Option<Vec<f64>>) -> Py<PyAny> {
     }
 }
 
-/// Vectors as a float64 array (N, 3) (one copy: nalgebra's vectors into one flat buffer).
+/// Vectors as a float64 array (N, 3), moved into numpy without a copy (nalgebra's `Vec3` is
+/// three contiguous f64, so the buffer is already (N, 3) row-major).
 pub(crate) fn vectors(py: Python<'_>, v: Vec<Vec3>) -> PyResult<Py<PyAny>> {
     let n = v.len();
-    let flat: Vec<f64> = v.iter().flat_map(|x| [x.x, x.y, x.z]).collect();
-    let a = Array2::from_shape_vec((n, 3), flat)
-        .map_err(|e| PyRuntimeError::new_err(format!("an (N, 3) array of {n} rows: {e}")))?;
-    Ok(a.into_pyarray(py).into_any().unbind())
+    let flat: Vec<f64> = bytemuck::allocation::try_cast_vec(v)
+        .unwrap_or_else(|(_, v)| v.iter().flat_map(|x| [x.x, x.y, x.z]).collect());
+    Ok(PyArray1::from_vec(py, flat).reshape([n, 3])?.into_any().unbind())
 }

@@ -134,22 +134,27 @@ impl PyScene {
     ///   `sys.stderr`; a callable is called as `progress(stage: str, done: int, total: int)`
     ///   (`done`/`total` are time steps in stage "solve" of a transient, else 0).
     ///
+    /// - `resume`: continue the interrupted run whose checkpoint lies beside `out` (a
+    ///   transient with `thermal.checkpoint` writes `OUT.checkpoint` as it goes, as
+    ///   `demcon run --out OUT` does); the result equals the uninterrupted run's.
+    ///
     /// Ctrl-C (`KeyboardInterrupt`) stops the run at its next stage or progress report and
-    /// writes no output. Errors raise `demcon.SceneError`.
-    #[pyo3(signature = (out=None, threads=None, progress=None))]
+    /// writes no output (a checkpoint stays). Errors raise `demcon.SceneError`.
+    #[pyo3(signature = (out=None, threads=None, progress=None, resume=false))]
     fn run(
         &self,
         py: Python<'_>,
         out: Option<PathBuf>,
         threads: Option<usize>,
         progress: Option<Bound<'_, PyAny>>,
+        resume: bool,
     ) -> PyResult<crate::run::PyRunResult> {
         if threads == Some(0) {
             return Err(PyValueError::new_err(
                 "threads = 0: the number of worker threads must be at least 1 (or None for all cores)",
             ));
         }
-        crate::run::run(py, self, out.as_deref(), threads, progress)
+        crate::run::run(py, self, out.as_deref(), threads, progress, resume)
     }
 
     fn __repr__(&self) -> String {

@@ -5,6 +5,7 @@ import signal
 import threading
 import time
 
+import numpy as np
 import pytest
 
 import demcon
@@ -58,3 +59,29 @@ def test_keyboard_interrupt_stops_a_long_run(long_transient, tmp_path):
     assert elapsed < 30.0, elapsed
     # no partial output
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_an_interrupted_run_resumes_from_its_checkpoint(tmp_path):
+    from conftest import DATA
+
+    scene = demcon.Scene.from_file(DATA / "checkpointed.ron")
+    whole = scene.run(out=tmp_path / "whole")
+    assert not (tmp_path / "whole.checkpoint").exists()  # a completed run removes it
+    out = tmp_path / "cut"
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    timer = threading.Timer(0.4 * whole.wall_s, _thread.interrupt_main)
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            scene.run(out=out)
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGINT, previous)
+    assert (tmp_path / "cut.checkpoint").exists()
+    assert not out.exists() or not any(out.iterdir())
+    resumed = scene.run(out=out, resume=True)
+    assert resumed.resumed["steps"] > 0 and whole.resumed is None
+    assert np.array_equal(resumed.temperature, whole.temperature)
+    assert not (tmp_path / "cut.checkpoint").exists()
+    with pytest.raises(ValueError, match="resume = True"):
+        scene.run(resume=True)
