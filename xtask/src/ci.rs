@@ -40,7 +40,8 @@ pub fn run(rest: &[String]) -> Result<()> {
 }
 
 /// The Python package (docs/python.md): a fresh virtual environment in `target/python-ci`,
-/// maturin, pytest and numpy from PyPI, `pip install ./python`, its tests, the example small.
+/// maturin, pytest, numpy, tqdm and PyVista from PyPI, `pip install ./python`, its tests, the
+/// example small.
 fn python() -> Result<()> {
     let venv = std::path::Path::new("target/python-ci/venv");
     if venv.exists() {
@@ -56,7 +57,8 @@ fn python() -> Result<()> {
         )
     };
     pip(&["--upgrade", "pip"])?;
-    pip(&["maturin>=1.16,<2", "pytest", "numpy"])?;
+    // tqdm and PyVista (optional: progress bars, RunResult.to_pyvista) so their paths are tested
+    pip(&["maturin>=1.16,<2", "pytest", "numpy", "tqdm", "pyvista"])?;
     pip(&["./python"])?;
     crate::run(Command::new(&py).args(["-m", "pytest", "python/tests", "-q"]))?;
     crate::run(Command::new(&py).args([
