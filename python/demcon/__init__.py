@@ -51,5 +51,5 @@ def homogenize(
         spec["thermal"] = {"bcs": [], "solver": "Homogenize"}
     else:
         spec["electric"] = {"electrodes": [], "homogenize": True}
-    result = Scene(spec, packing=packing).run(threads=threads)
+    result = Scene(spec, packing=packing).run(threads=threads, progress=False)
     return result.etc_tensor if physics == "thermal" else result.electric_tensor

@@ -80,7 +80,7 @@ class Scene:
         self,
         out: Optional[_Path] = None,
         threads: Optional[int] = None,
-        progress: _Progress = None,
+        progress: _Progress = True,
         resume: bool = False,
     ) -> RunResult: ...
 

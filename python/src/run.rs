@@ -82,7 +82,7 @@ pub(crate) fn run(
     scene: &PyScene,
     out: Option<&Path>,
     threads: Option<usize>,
-    progress: Option<Bound<'_, PyAny>>,
+    progress: ProgressArg<'_>,
     resume: bool,
 ) -> PyResult<PyRunResult> {
     if let Some(dir) = out {
@@ -237,6 +237,20 @@ pub(crate) fn checking_signals<R: Send>(
     }
 }
 
+/// The `progress` argument of `Scene.run`: on (its default), or what the caller passed.
+pub(crate) enum ProgressArg<'py> {
+    On,
+    Given(Bound<'py, PyAny>),
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for ProgressArg<'py> {
+    type Error = PyErr;
+
+    fn extract(obj: pyo3::Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        Ok(ProgressArg::Given(obj.to_owned()))
+    }
+}
+
 /// The run's progress reports: to a callable, or nowhere. `True` is `demcon._progress`'s
 /// reporter (a tqdm bar when tqdm is installed, else lines on `sys.stderr`).
 enum Progress<'py> {
@@ -245,9 +259,11 @@ enum Progress<'py> {
 }
 
 impl<'py> Progress<'py> {
-    fn new(py: Python<'py>, progress: Option<Bound<'py, PyAny>>) -> PyResult<Self> {
-        let Some(p) = progress else {
-            return Ok(Progress::None);
+    fn new(py: Python<'py>, progress: ProgressArg<'py>) -> PyResult<Self> {
+        let p = match progress {
+            ProgressArg::On => pyo3::types::PyBool::new(py, true).to_owned().into_any(),
+            ProgressArg::Given(p) if p.is_none() => return Ok(Progress::None),
+            ProgressArg::Given(p) => p,
         };
         if p.is_callable() {
             return Ok(Progress::Call(p));

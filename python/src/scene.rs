@@ -130,23 +130,23 @@ impl PyScene {
     ///   VTK, plots); None writes nothing.
     /// - `threads`: worker threads of the run (a pool of its own); None uses rayon's global
     ///   pool (all cores, or `RAYON_NUM_THREADS`).
-    /// - `progress`: False/None says nothing; True prints stages and transient steps to
-    ///   `sys.stderr`; a callable is called as `progress(stage: str, done: int, total: int)`
+    /// - `progress`: True (the default) reports the stages on `sys.stderr` and a transient's
+    ///   steps as a tqdm bar (when tqdm is installed, else a counter); False/None says
+    ///   nothing; a callable is called as `progress(stage: str, done: int, total: int)`
     ///   (`done`/`total` are time steps in stage "solve" of a transient, else 0).
-    ///
     /// - `resume`: continue the interrupted run whose checkpoint lies beside `out` (a
     ///   transient with `thermal.checkpoint` writes `OUT.checkpoint` as it goes, as
     ///   `demcon run --out OUT` does); the result equals the uninterrupted run's.
     ///
     /// Ctrl-C (`KeyboardInterrupt`) stops the run at its next stage or progress report and
     /// writes no output (a checkpoint stays). Errors raise `demcon.SceneError`.
-    #[pyo3(signature = (out=None, threads=None, progress=None, resume=false))]
+    #[pyo3(signature = (out=None, threads=None, progress=crate::run::ProgressArg::On, resume=false))]
     fn run(
         &self,
         py: Python<'_>,
         out: Option<PathBuf>,
         threads: Option<usize>,
-        progress: Option<Bound<'_, PyAny>>,
+        progress: crate::run::ProgressArg<'_>,
         resume: bool,
     ) -> PyResult<crate::run::PyRunResult> {
         if threads == Some(0) {
