@@ -40,21 +40,26 @@ def test_progress_callback_sees_the_stages(homogeneous):
     assert "packing" in seen and "solve" in seen, seen
 
 
-def test_keyboard_interrupt_stops_a_long_run(long_transient, tmp_path):
-    scene = demcon.Scene.from_file(long_transient)
+def interrupted_after(seconds, call):
+    """Runs `call` with a Ctrl-C (SIGINT) sent `seconds` later; it must raise KeyboardInterrupt."""
     # A process started in the background (a CI job) may inherit SIGINT ignored, and then
-    # `interrupt_main` does nothing: give SIGINT Python's own handler for this test.
+    # `interrupt_main` does nothing: give SIGINT Python's own handler meanwhile.
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    timer = threading.Timer(1.5, _thread.interrupt_main)
+    timer = threading.Timer(seconds, _thread.interrupt_main)
     timer.start()
-    out = tmp_path / "out"
-    t0 = time.perf_counter()
     try:
         with pytest.raises(KeyboardInterrupt):
-            scene.run(out=out)
+            call()
     finally:
         timer.cancel()
         signal.signal(signal.SIGINT, previous)
+
+
+def test_keyboard_interrupt_stops_a_long_run(long_transient, tmp_path):
+    scene = demcon.Scene.from_file(long_transient)
+    out = tmp_path / "out"
+    t0 = time.perf_counter()
+    interrupted_after(1.5, lambda: scene.run(out=out))
     elapsed = time.perf_counter() - t0
     assert elapsed < 30.0, elapsed
     # no partial output
@@ -68,15 +73,7 @@ def test_an_interrupted_run_resumes_from_its_checkpoint(tmp_path):
     whole = scene.run(out=tmp_path / "whole")
     assert not (tmp_path / "whole.checkpoint").exists()  # a completed run removes it
     out = tmp_path / "cut"
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    timer = threading.Timer(0.4 * whole.wall_s, _thread.interrupt_main)
-    timer.start()
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            scene.run(out=out)
-    finally:
-        timer.cancel()
-        signal.signal(signal.SIGINT, previous)
+    interrupted_after(0.4 * whole.wall_s, lambda: scene.run(out=out))
     assert (tmp_path / "cut.checkpoint").exists()
     assert not out.exists() or not any(out.iterdir())
     resumed = scene.run(out=out, resume=True)
@@ -85,3 +82,11 @@ def test_an_interrupted_run_resumes_from_its_checkpoint(tmp_path):
     assert not (tmp_path / "cut.checkpoint").exists()
     with pytest.raises(ValueError, match="resume = True"):
         scene.run(resume=True)
+
+
+def test_keyboard_interrupt_stops_a_packing():
+    # 10⁵ spheres to φ = 0.6 take about ten seconds; Ctrl-C stops them within a fraction of one
+    t0 = time.perf_counter()
+    interrupted_after(0.5, lambda: demcon.pack({"Periodic": {"size": (1.0, 1.0, 1.0)}}, count=100_000, phi=0.6))
+    elapsed = time.perf_counter() - t0
+    assert elapsed < 5.0, elapsed
