@@ -83,11 +83,11 @@ def main() -> None:
                 )
                 cli.append(time.perf_counter() - t0)
                 t0 = time.perf_counter()
-                r = demcon.Scene.from_file(scene).run(out=b)
+                r = demcon.Scene.from_file(scene).run(out=b, progress=False)
                 py.append(time.perf_counter() - t0)
                 # the run itself (wall_s) excluded: the worker thread, summary dict and arrays
                 t1 = time.perf_counter()
-                r2 = demcon.Scene.from_file(scene).run()
+                r2 = demcon.Scene.from_file(scene).run(progress=False)
                 handover.append(time.perf_counter() - t1 - r2.wall_s)
                 n = r.radii.shape[0]
                 same = same and same_outputs(a, b)
