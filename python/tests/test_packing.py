@@ -101,3 +101,21 @@ def test_bad_pack_arguments():
         demcon.Packing.load("nope.xyzr")
     with pytest.raises(ValueError, match="physics = 'heat'"):
         demcon.homogenize(demcon.pack(CELL, count=50, phi=0.5), [], physics="heat")
+
+
+def test_homogenize_takes_phases_as_an_array_and_materials_by_name(packing):
+    phase = (packing.centres[:, 0] > 5e-4).astype(np.int64)
+    p = demcon.Packing.from_arrays(packing.centres, packing.radii, packing.container, phase=phase)
+    as_lists = demcon.homogenize(p, [{"name": "a", "conductivity": 1.0}, {"name": "b", "conductivity": 10.0}])
+    by_name = demcon.homogenize(packing, {"a": 1.0, "b": 10.0}, phase)
+    assert np.array_equal(as_lists, by_name)
+    with pytest.raises(TypeError, match=r"materials\['a'\] = 'x'"):
+        demcon.homogenize(packing, {"a": "x"})
+    with pytest.raises(ValueError, match=r"phase: shape \[2\]"):
+        demcon.homogenize(packing, {"a": 1.0}, np.array([0, 0]))
+
+
+def test_electric_homogenization_of_a_homogeneous_packing_is_exact(packing):
+    # σ = 1/ρ = 100 S/m in every direction
+    t = demcon.homogenize(packing, [{"name": "carbon", "conductivity": 1.0, "resistivity": 0.01}], physics="electric")
+    assert np.allclose(t, 100.0 * np.eye(3), rtol=0, atol=100.0 * 1e-8)
