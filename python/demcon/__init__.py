@@ -76,7 +76,7 @@ def homogenize(
         raise ValueError(f"physics = {physics!r}: allowed are 'thermal' and 'electric'")
     scene_phases: list = []
     if isinstance(phases, np.ndarray) or (
-        isinstance(phases, Sequence) and len(phases) > 0 and all(isinstance(k, (int, np.integer)) for k in phases)
+        isinstance(phases, Sequence) and len(phases) > 0 and all(isinstance(k, (int, np.integer, np.bool_)) for k in phases)
     ):
         # one material index per sphere
         packing = Packing.from_arrays(packing.centres, packing.radii, packing.container, phase=np.asarray(phases))

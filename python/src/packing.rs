@@ -94,7 +94,7 @@ impl PyPacking {
 impl PyPacking {
     /// A packing from arrays: `centres` (N, 3) and `radii` (N,) in metres (float64 or float32),
     /// `container` a dict as in a scene (`{"Box": {"size": (0.1, 0.1, 0.1)}}`), `phase` an
-    /// optional (N,) array of material indices (integers ≥ 0; the scene's `materials` order).
+    /// optional (N,) array of material indices (integers ≥ 0, or bools; the scene's `materials` order).
     ///
     /// Raises `TypeError`/`ValueError` naming the argument on a wrong shape or dtype, a NaN, a
     /// radius ≤ 0 or a sphere outside the container (by more than 1 % of its radius).
@@ -251,7 +251,7 @@ impl PyPacking {
     }
 }
 
-/// The `phase` argument: integers ≥ 0 below 65 536, one per sphere.
+/// The `phase` argument: integers ≥ 0 below 65 536 (or bools: 0 and 1), one per sphere.
 fn phase_array(obj: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<u16>> {
     let arr = obj
         .cast::<PyUntypedArray>()
@@ -262,9 +262,9 @@ fn phase_array(obj: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<u16>> {
             arr.shape()
         )));
     }
-    if !matches!(arr.dtype().kind(), b'i' | b'u') {
+    if !matches!(arr.dtype().kind(), b'i' | b'u' | b'b') {
         return Err(PyTypeError::new_err(format!(
-            "phase: dtype {}; allowed: an integer dtype (material indices)",
+            "phase: dtype {}; allowed: an integer dtype (material indices) or bool (False: 0, True: 1)",
             arr.dtype()
         )));
     }

@@ -109,6 +109,8 @@ def test_homogenize_takes_phases_as_an_array_and_materials_by_name(packing):
     as_lists = demcon.homogenize(p, [{"name": "a", "conductivity": 1.0}, {"name": "b", "conductivity": 10.0}])
     by_name = demcon.homogenize(packing, {"a": 1.0, "b": 10.0}, phase)
     assert np.array_equal(as_lists, by_name)
+    by_mask = demcon.homogenize(packing, {"a": 1.0, "b": 10.0}, phase > 0)  # bools: 0 and 1
+    assert np.array_equal(as_lists, by_mask)
     with pytest.raises(TypeError, match=r"materials\['a'\] = 'x'"):
         demcon.homogenize(packing, {"a": "x"})
     with pytest.raises(ValueError, match=r"phase: shape \[2\]"):
