@@ -8,7 +8,7 @@
 //! transient's checkpoint, when the scene schedules one and `out` is given, stays for `resume`).
 
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -88,23 +88,7 @@ pub(crate) fn run(
     if let Some(dir) = out {
         demcon_scene::output::check_output_dir(dir).map_err(scene_err)?;
     }
-    // As `demcon run --out OUT`: a transient with `thermal.checkpoint` writes OUT.checkpoint.
-    let scheduled = scene
-        .scene
-        .config()
-        .thermal
-        .as_ref()
-        .is_some_and(|t| t.checkpoint.is_some());
-    let checkpoint = match out {
-        Some(dir) if scheduled => Some(demcon_scene::checkpoint::checkpoint_path(dir).map_err(scene_err)?),
-        _ => None,
-    };
-    if resume && checkpoint.is_none() {
-        return Err(PyValueError::new_err(
-            "resume = True: a run continues from the checkpoint beside its output folder; give out= \
-             (the interrupted run's) and a scene with thermal.checkpoint",
-        ));
-    }
+    let checkpoint = checkpoint_of(scene, out, resume)?;
     let pool = match threads {
         Some(n) => Some(
             rayon::ThreadPoolBuilder::new()
@@ -201,6 +185,29 @@ pub(crate) fn run(
         demcon_scene::checkpoint::remove_checkpoint(path).map_err(scene_err)?;
     }
     PyRunResult::new(py, &scene.name, result)
+}
+
+/// The checkpoint file of a run, as `demcon run --out OUT` has it: `OUT.checkpoint` when `out`
+/// is given and the scene schedules checkpoints (`thermal.checkpoint`), else none — and then
+/// `resume` is refused.
+fn checkpoint_of(scene: &PyScene, out: Option<&Path>, resume: bool) -> PyResult<Option<PathBuf>> {
+    let scheduled = scene
+        .scene
+        .config()
+        .thermal
+        .as_ref()
+        .is_some_and(|t| t.checkpoint.is_some());
+    let checkpoint = match out {
+        Some(dir) if scheduled => Some(demcon_scene::checkpoint::checkpoint_path(dir).map_err(scene_err)?),
+        _ => None,
+    };
+    if resume && checkpoint.is_none() {
+        return Err(PyValueError::new_err(
+            "resume = True: a run continues from the checkpoint beside its output folder; give out= \
+             (the interrupted run's) and a scene with thermal.checkpoint",
+        ));
+    }
+    Ok(checkpoint)
 }
 
 /// Runs `f` on this thread with the GIL released, handing it a packing-progress callback that
