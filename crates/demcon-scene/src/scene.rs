@@ -100,11 +100,10 @@ impl Scene {
         let field = "packing.container";
         demcon_packing::check_inside(&particles, &crate::convert::container(&container, field)?)
             .map_err(|e| SceneError::invalid("packing", "the particles handed over", e.to_string()))?;
-        if let Some((i, &k)) = particles
-            .phases
-            .iter()
-            .enumerate()
-            .find(|&(_, &k)| usize::from(k) >= config.materials.len())
+        // (no materials at all: the scene's own check says so)
+        let out_of_range = |&(_, &k): &(usize, &u16)| usize::from(k) >= config.materials.len();
+        if let Some((i, &k)) = particles.phases.iter().enumerate().find(out_of_range)
+            && !config.materials.is_empty()
         {
             return Err(SceneError::invalid(
                 &format!("phase[{i}]"),
