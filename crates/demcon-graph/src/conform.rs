@@ -429,7 +429,7 @@ impl Conformed {
     }
 }
 
-/// A sample of a shape's surface: point, outward normal and ring step (m).
+/// A sample of a shape's surface: point, outward normal and its pair's room along the meridian (m).
 type ShapeSample = (Vec3, Vec3, f64);
 
 /// The shapes' samples (point, outward normal, ring step; m) at `sample` spacing (m), each
@@ -448,7 +448,7 @@ fn moved_shape_samples(shapes: &[demcon_core::Inclusion], sample: f64) -> (Vec<V
                     // curvature (a platelet's rim) the linear estimate would overshoot.
                     let inward =
                         (shrink * smp.area * smp.curvature).clamp(0.0, 0.1 / smp.curvature.max(1e-300));
-                    (smp.at - smp.normal * inward, smp.normal, smp.step)
+                    (smp.at - smp.normal * inward, smp.normal, smp.room)
                 })
                 .collect()
         })
@@ -592,6 +592,30 @@ fn tangent_shrink() -> f64 {
     delta / (4.0 * std::f64::consts::PI / n as f64)
 }
 
+/// The shape's thickness (m) behind a sample: twice the depth of the middle of the chord from
+/// `at` inwards along `-normal` (the inscribed ball there; the chord itself where shorter), or
+/// `reach` (m) when the chord is longer than that. A thin part (a platelet's faces, a fibre's
+/// sides) is a gap its two faces' pairs share, as two nearly touching spheres share theirs:
+/// each pair then sits within `NARROW` × the thickness of its face and the two fit side by side.
+fn thickness(shape: &demcon_core::Inclusion, at: &Vec3, normal: &Vec3, reach: f64) -> f64 {
+    let depth = |t: f64| -shape.signed_distance(&(at - normal * t));
+    if depth(reach) > 0.0 && depth(0.5 * reach) >= 0.5 * reach {
+        return reach;
+    }
+    // Convex shapes: one crossing in (0, reach], found by bisection to 2⁻⁴⁰ of `reach`.
+    let (mut lo, mut hi) = (0.0, reach);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if depth(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let chord = 0.5 * (lo + hi);
+    chord.min(2.0 * depth(0.5 * chord))
+}
+
 /// The distance (m) from `at` to the surfaces of `shape`'s periodic images (+∞ without a
 /// period): a long shape meets its own images.
 fn self_gap(shape: &demcon_core::Inclusion, at: &Vec3, period: Option<[f64; 3]>) -> f64 {
@@ -707,8 +731,9 @@ impl Seeder<'_> {
     }
 
     /// A pair at each sample of every shape: δ, or less where another shape, its own periodic
-    /// image, or another surface (`others_gap(at)`, m) comes close, or where the rings are
-    /// closer than the spacing (a sharp rim: pairs within half a step).
+    /// image, or another surface (`others_gap(at)`, m) comes close, where the rings are closer
+    /// than the spacing (a sharp rim: pairs within half the room between rings), or where the
+    /// shape is thin (its two faces share the thickness).
     fn seed_shapes(
         &mut self,
         shaped: &ShapeSurfaces,
@@ -719,7 +744,7 @@ impl Seeder<'_> {
             report.max_radius_correction = report
                 .max_radius_correction
                 .max(shaped.moved[k] / shape.circumradius());
-            for (j, &(at, normal, step)) in shaped.samples[k].iter().enumerate() {
+            for (j, &(at, normal, room)) in shaped.samples[k].iter().enumerate() {
                 if self.body.depth(&at) < 0.0 {
                     report.dropped_seeds += 2;
                     continue;
@@ -727,7 +752,8 @@ impl Seeder<'_> {
                 let gap = others_gap(&at)
                     .min(shaped.gap(&at, Some(k)))
                     .min(self_gap(shape, &at, self.period))
-                    .min(0.5 * step / NARROW);
+                    .min(0.5 * room / NARROW)
+                    .min(thickness(shape, &at, &normal, self.delta / NARROW));
                 self.place(wrap_into(self.period, at), normal, gap, j, report);
             }
         }
