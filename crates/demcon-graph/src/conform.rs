@@ -429,10 +429,10 @@ impl Conformed {
     }
 }
 
-/// A sample of a shape's surface: point, outward normal and its pair's room along the meridian (m).
+/// A sample of a shape's surface: point, outward normal and its pair's room (m; `Sample::room`).
 type ShapeSample = (Vec3, Vec3, f64);
 
-/// The shapes' samples (point, outward normal, ring step; m) at `sample` spacing (m), each
+/// The shapes' samples (point, outward normal, room; m) at `sample` spacing (m), each
 /// tangent plane moved in by the polyhedron's excess volume for its area and curvature, and
 /// each shape's largest move (m).
 fn moved_shape_samples(shapes: &[demcon_core::Inclusion], sample: f64) -> (Vec<Vec<ShapeSample>>, Vec<f64>) {
@@ -469,7 +469,7 @@ fn moved_shape_samples(shapes: &[demcon_core::Inclusion], sample: f64) -> (Vec<V
 struct ShapeSurfaces<'a> {
     shapes: &'a [demcon_core::Inclusion],
     index: SphereIndex,
-    /// Per shape: its samples (point, outward normal, ring step; m), moved in.
+    /// Per shape: its samples (point, outward normal, room; m), moved in.
     samples: Vec<Vec<ShapeSample>>,
     /// Per shape: its samples' largest inward move (m).
     moved: Vec<f64>,

@@ -170,7 +170,7 @@ fn shapes_thinner_than_one_and_a_half_site_spacings_are_warned_of() {
 #[test]
 fn thin_shapes_keep_their_volume_in_the_cells() {
     // 3000 sites in the unit cell: h = 0.069 m. A platelet 2.3 h thick (its rim's radius of
-    // curvature h / 9) and a needle 1.75 h across (its tips' h / 40), along z and oblique:
+    // curvature h / 4) and a needle 1.75 h across (its tips' h / 8), along z and oblique:
     // the two faces of a thin part share its thickness, every ring closes round the axis, so
     // no pair is dropped off the tips' caps and the cells carry the shape's own volume.
     for (shape, bound) in [
