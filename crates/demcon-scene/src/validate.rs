@@ -113,7 +113,7 @@ pub fn validate(c: &SceneConfig, base_dir: &Path) -> Result<convert::Problem, Sc
 
 /// Warns of shapes thinner than 1.5 mean site spacings h (known before packing for a generated
 /// count): the cells then resolve them poorly. Measured under conforming cells on aligned
-/// fibres (`shapes-aligned`): 0.6 % at 1.75 h across, 1.6 % at 1.2 h, 4.5 % at 0.8 h.
+/// fibres (`shapes-aligned`): 0.7 % at 1.75 h across, 1.6 % at 1.2 h, 4.3 % at 0.8 h.
 fn thin_shapes(c: &SceneConfig, w: &mut Vec<String>) {
     let (PackingConfig::Generate { count, .. }, Ok(Some(k))) = (
         &c.packing,
@@ -150,7 +150,7 @@ fn thin_shapes(c: &SceneConfig, w: &mut Vec<String>) {
             w.push(format!(
                 "phases[{i}]: the thinnest shape is {thinnest:.3e} m across, {:.2} mean site spacings (h = {h:.3e} m at \
                  this count): the cells resolve it poorly and its conductivity may be off by a few % (aligned fibres: \
-                 1.6 % at 1.2 h across, 4.5 % at 0.8 h); use more particles (h falls as N^(-1/3)) for shapes at least \
+                 1.6 % at 1.2 h across, 4.3 % at 0.8 h); use more particles (h falls as N^(-1/3)) for shapes at least \
                  1.5 h across",
                 thinnest / h
             ));
