@@ -43,7 +43,7 @@ pub use diagnostic::Diagnostic;
 pub use error::{CoreError, short_number};
 pub use inclusion::{Ends, Inclusion, unit_axis};
 pub use material::{Material, MaterialTable, to_shape_frame};
-pub use morton::morton_order;
+pub use morton::{MortonCurve, morton_order};
 pub use particles::{ParticleSet, RadiusStats};
 pub use region::Region;
 pub use selector::{DEFAULT_FACE_GAP, Face, Selector};

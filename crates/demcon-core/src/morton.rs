@@ -14,20 +14,41 @@ fn spread(v: u64) -> u64 {
     x
 }
 
+/// A Morton curve over a box: each point's key, 21 bits per axis (points outside the box are
+/// clamped onto it).
+#[derive(Debug, Clone, Copy)]
+pub struct MortonCurve {
+    min: Vec3,
+    /// The box's extent per axis (m; 1 where it is flat).
+    ext: Vec3,
+}
+
+impl MortonCurve {
+    /// The curve over `bounds`.
+    pub fn new(bounds: &Aabb) -> Self {
+        Self {
+            min: bounds.min,
+            ext: bounds.extent().map(|e| if e > 0.0 { e } else { 1.0 }),
+        }
+    }
+
+    /// The key of `c` (m) along the curve.
+    pub fn key(&self, c: &Vec3) -> u64 {
+        let scale = ((1u64 << 21) - 1) as f64;
+        let q = |k: usize| (((c[k] - self.min[k]) / self.ext[k]).clamp(0.0, 1.0) * scale) as u64;
+        spread(q(0)) | (spread(q(1)) << 1) | (spread(q(2)) << 2)
+    }
+}
+
 /// The permutation that sorts `centres` along a Morton curve over `bounds`:
 /// new index `k` holds old index `order[k]`. Ties keep the original order, so the result is
 /// deterministic.
 pub fn morton_order(centres: &[Vec3], bounds: &Aabb) -> Vec<u32> {
-    let ext = bounds.extent().map(|e| if e > 0.0 { e } else { 1.0 });
-    let scale = ((1u64 << 21) - 1) as f64;
-    let key = |c: &Vec3| {
-        let q = |k: usize| (((c[k] - bounds.min[k]) / ext[k]).clamp(0.0, 1.0) * scale) as u64;
-        spread(q(0)) | (spread(q(1)) << 1) | (spread(q(2)) << 2)
-    };
+    let curve = MortonCurve::new(bounds);
     let mut keyed: Vec<(u64, u32)> = centres
         .iter()
         .enumerate()
-        .map(|(i, c)| (key(c), i as u32))
+        .map(|(i, c)| (curve.key(c), i as u32))
         .collect();
     keyed.sort_unstable();
     keyed.into_iter().map(|(_, i)| i).collect()

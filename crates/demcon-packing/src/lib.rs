@@ -23,6 +23,7 @@
 //! ```
 #![warn(missing_docs)]
 
+mod block;
 mod carve;
 mod error;
 mod import;
@@ -35,6 +36,7 @@ mod stress;
 mod tile;
 mod xyzr;
 
+pub use block::{Block, tile_block};
 pub use carve::carve;
 pub use error::PackingError;
 pub use import::{
