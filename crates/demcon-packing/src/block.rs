@@ -329,14 +329,11 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{PackingParams, RadiusDistribution, pack, tile};
+    use crate::tile;
 
+    /// `tile`'s test packing with three phases.
     fn small() -> (ParticleSet, Container) {
-        let c = Container::Periodic {
-            size: [1e-3, 1.2e-3, 0.9e-3],
-        };
-        let params = PackingParams::new(c, 300, 0.6, RadiusDistribution::gaussian(0.3));
-        let (mut p, _) = pack(&params, 5, None).unwrap();
+        let (mut p, c) = crate::tile::tests::small();
         p.phases = (0..p.len()).map(|i| (i % 3) as u16).collect();
         (p, c)
     }

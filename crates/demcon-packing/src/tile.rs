@@ -116,11 +116,12 @@ pub fn tile(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::{PackingParams, RadiusDistribution, max_overlap, pack};
 
-    fn small() -> (ParticleSet, Container) {
+    /// A 300-particle periodic packing in a box of unequal sides (m).
+    pub(crate) fn small() -> (ParticleSet, Container) {
         let c = Container::Periodic {
             size: [1e-3, 1.2e-3, 0.9e-3],
         };
