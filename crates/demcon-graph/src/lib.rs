@@ -90,7 +90,8 @@ pub use demcon_core::Components;
 pub use error::GraphError;
 pub use interface::{InterfaceRule, conductances, contact_property, interface_value, interface_value_split};
 pub use laguerre::{
-    CellWall, Cells, LaguerreParams, TessellationReport, WallFacet, cell_polyhedra, tessellate,
+    CellWall, Cells, LaguerreParams, TessellationReport, WallFacet, cell_polyhedra, ghost_width_needed,
+    tessellate, tessellate_part,
 };
 pub use laminate::{
     HalfBond, Laminates, Mix, assign_phase_laminate, contact_property_laminate, inside_fraction,

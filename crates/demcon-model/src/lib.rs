@@ -68,8 +68,8 @@ pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogeniz
 pub use image::check_conformable as check_image_conformable;
 pub use model::{
     CarveRule, ConformSummary, ContactSummary, InclusionReport, Model, ModelParams, ModelReport, Packed,
-    PhaseRule, PhaseSpec, TessellationSummary, build_model, build_model_staged, place_inclusions,
-    set_region_phases, spheres_region, with_defects,
+    PhaseRule, PhaseSpec, TessellationSummary, build_block_model, build_model, build_model_staged,
+    place_inclusions, set_region_phases, spheres_region, with_defects,
 };
 pub use shapes::ShapesReport;
 pub use thermal::{

@@ -9,7 +9,7 @@ use demcon_core::{Container, Face, Inclusion, MaterialTable, ParticleSet, Region
 use demcon_graph::{
     ConformParams, ConformReport, ContactGraph, ContactParams, ContactReport, HalfBond, LaguerreParams,
     Laminates, Mix, PlanePatch, SphereSurface, TessellationReport, WallContacts, assign_phase,
-    assign_phase_laminate, conforming_sites, detect_contacts, tessellate,
+    assign_phase_laminate, conforming_sites, detect_contacts, tessellate, tessellate_part,
 };
 use demcon_network::Network;
 use demcon_packing::{
@@ -753,6 +753,54 @@ pub fn build_model_staged(
     params: &ModelParams,
     stages: &mut Stages,
 ) -> Result<Model, ModelError> {
+    build(packed, params, None, stages)
+}
+
+/// Builds the model of one MPI rank's block (`docs/distributed.md`): the first `owned`
+/// particles are the rank's, the others its ghosts, read-only. Only the owned particles'
+/// Laguerre cells are built (their facets towards ghosts included); the ghosts' cells are empty
+/// and their facets among themselves absent, so only the owned particles' rows of the network
+/// are the whole model's. Returns the model and each owned cell's reach
+/// ([`demcon_graph::tessellate_part`]), with which the caller checks that its ghosts were
+/// enough.
+///
+/// Errors: those of [`build_model`]; a model that is not the Laguerre cells', or that carves
+/// or places conforming seeds (steps over the whole body, not one block).
+pub fn build_block_model(
+    packed: Packed,
+    params: &ModelParams,
+    owned: usize,
+    stages: &mut Stages,
+) -> Result<(Model, Vec<f64>), ModelError> {
+    let why = if params.laguerre.is_none() {
+        Some("the Laguerre cells (`surface: Laguerre`)")
+    } else if params.carve.is_some() {
+        Some("no carving")
+    } else if params.phase_rule == PhaseRule::Conforming {
+        Some(
+            "the `Centre`, `Laminate` or `Segment` phase rule (conforming seeds are placed over the whole body)",
+        )
+    } else {
+        None
+    };
+    if let Some(allowed) = why {
+        return Err(ModelError::invalid(
+            "block model",
+            "this scene",
+            format!("a model built per MPI block needs {allowed}"),
+        ));
+    }
+    let mut reach = Vec::new();
+    let model = build(packed, params, Some((owned, &mut reach)), stages)?;
+    Ok((model, reach))
+}
+
+fn build(
+    packed: Packed,
+    params: &ModelParams,
+    mut owned: Option<(usize, &mut Vec<f64>)>,
+    stages: &mut Stages,
+) -> Result<Model, ModelError> {
     let Packed {
         particles,
         container,
@@ -778,9 +826,17 @@ pub fn build_model_staged(
     } = stages.time("phases", || phases(params, particles, &container, &materials))?;
     let t1 = Instant::now();
     let graph = match &params.laguerre {
-        Some(lp) => stages.time("tessellation", || {
-            tessellate(&particles, &container, params.carve.as_ref().map(|c| &c.0), lp)
-        })?,
+        Some(lp) => match owned.as_mut() {
+            Some((n, reach)) => stages.time("tessellation", || {
+                tessellate_part(&particles, &container, None, lp, *n).map(|(g, r)| {
+                    **reach = r;
+                    g
+                })
+            })?,
+            None => stages.time("tessellation", || {
+                tessellate(&particles, &container, params.carve.as_ref().map(|c| &c.0), lp)
+            })?,
+        },
         None => stages.time("contacts", || {
             detect_contacts(&particles, &container, &params.contacts)
         })?,

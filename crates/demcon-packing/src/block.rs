@@ -137,7 +137,9 @@ impl Copies<'_> {
 }
 
 /// Rank `rank`'s block of `particles` (a periodic packing in `container`) tiled `repeat` times
-/// among `ranks` ranks, with ghosts within `ghost_width` (m) of its particles' centres.
+/// among `ranks` ranks, with ghosts within `ghost_width` (m) of its particles' centres. With
+/// `walls` the tiled box is walled (`Container::Box`, as the scene's `Tile(walls: true)`): the
+/// same particles, ghosts found without periodic images.
 ///
 /// # Errors
 /// A walled container, a zero repeat, `rank ≥ ranks`, more ranks than particles, and a ghost
@@ -148,6 +150,7 @@ pub fn tile_block(
     particles: &ParticleSet,
     container: &Container,
     repeat: Repeat,
+    walls: bool,
     rank: usize,
     ranks: usize,
     ghost_width: f64,
@@ -172,8 +175,11 @@ pub fn tile_block(
     if rank >= ranks {
         return Err(CoreError::invalid("rank", rank, format!("must be below the {ranks} ranks")).into());
     }
-    let tiled = Container::Periodic {
-        size: [0, 1, 2].map(|k| size[k] * repeat[k] as f64),
+    let tiled_size = [0, 1, 2].map(|k| size[k] * repeat[k] as f64);
+    let tiled = if walls {
+        Container::Box { size: tiled_size }
+    } else {
+        Container::Periodic { size: tiled_size }
     };
     let block_edge = (tiled.volume() / ranks as f64).cbrt();
     if !(ghost_width.is_finite() && ghost_width > 0.0 && ghost_width <= 0.5 * block_edge) {
@@ -218,11 +224,11 @@ pub fn tile_block(
     debug_assert_eq!(owned.len(), end - first);
     let owned = copies.set(&owned)?;
 
-    // The ghosts: every other copy within the width of an owned centre (minimum image); none
-    // for a single block.
+    // The ghosts: every other copy within the width of an owned centre (minimum image unless
+    // walled); none for a single block.
     let mut ghosts: Vec<Place> = Vec::new();
     if ranks > 1 {
-        let grid = Grid::new(tiled.period().unwrap_or(size), ghost_width, &owned.centres);
+        let grid = Grid::new(tiled_size, !walls, ghost_width, &owned.centres);
         copies.sweep(|place, x, _| {
             if !owns(&place) && grid.near(&x, &owned.centres, ghost_width) {
                 ghosts.push(place);
@@ -251,23 +257,25 @@ pub fn tile_block(
     })
 }
 
-/// The owned centres on a periodic grid of cells at least the ghost width wide (and no more
-/// cells than owned centres), stored as compressed rows: cell k holds
-/// `members[start[k]..start[k + 1]]`.
+/// The owned centres on a grid of cells at least the ghost width wide (and no more cells than
+/// owned centres) over the tiled box, stored as compressed rows: cell k holds
+/// `members[start[k]..start[k + 1]]`. Distances are minimum-image when `wrap`.
 struct Grid {
     period: [f64; 3],
+    wrap: bool,
     cells: [usize; 3],
     start: Vec<u32>,
     members: Vec<u32>,
 }
 
 impl Grid {
-    fn new(period: [f64; 3], width: f64, centres: &[Vec3]) -> Self {
+    fn new(period: [f64; 3], wrap: bool, width: f64, centres: &[Vec3]) -> Self {
         let volume: f64 = period.iter().product();
         let side = width.max((volume / centres.len().max(1) as f64).cbrt());
         let cells = period.map(|l| ((l / side).floor() as usize).max(1));
         let mut grid = Self {
             period,
+            wrap,
             cells,
             start: vec![0; cells.iter().product::<usize>() + 1],
             members: vec![0; centres.len()],
@@ -314,7 +322,7 @@ impl Grid {
             seen[d] = k;
             for &i in &self.members[self.start[k] as usize..self.start[k + 1] as usize] {
                 let mut d = centres[i as usize] - x;
-                for a in 0..3 {
+                for a in (0..3).filter(|_| self.wrap) {
                     d[a] -= self.period[a] * (d[a] / self.period[a]).round();
                 }
                 if d.norm() < width {
@@ -346,7 +354,7 @@ mod tests {
         for ranks in 1..=4 {
             let mut next = 0;
             for rank in 0..ranks {
-                let b = tile_block(&p, &c, repeat, rank, ranks, 1e-4).unwrap();
+                let b = tile_block(&p, &c, repeat, false, rank, ranks, 1e-4).unwrap();
                 assert_eq!(b.first, next);
                 assert_eq!(b.total, whole.len());
                 assert_eq!(b.container.period(), wc.period());
@@ -369,30 +377,34 @@ mod tests {
         let (whole, wc) = tile(&p, &c, repeat).unwrap();
         let l = wc.period().unwrap();
         let width = 1.5e-4;
-        let dist = |a: &Vec3, b: &Vec3| {
-            let mut d = a - b;
-            for k in 0..3 {
-                d[k] -= l[k] * (d[k] / l[k]).round();
-            }
-            d.norm()
-        };
-        for rank in 0..3 {
-            let b = tile_block(&p, &c, repeat, rank, 3, width).unwrap();
-            let owned = b.first..b.first + b.owned.len();
-            let want: Vec<usize> = (0..whole.len())
-                .filter(|g| !owned.contains(g))
-                .filter(|&g| {
-                    owned
-                        .clone()
-                        .any(|o| dist(&whole.centres[g], &whole.centres[o]) < width)
-                })
-                .collect();
-            assert!(!want.is_empty());
-            assert_eq!(b.ghost_ids, want, "rank {rank}");
-            for (i, &g) in b.ghost_ids.iter().enumerate() {
-                assert_eq!(b.ghosts.centres[i], whole.centres[g]);
-                assert_eq!(b.ghosts.radii[i], whole.radii[g]);
-                assert_eq!(b.ghosts.phases[i], whole.phases[g]);
+        for walls in [false, true] {
+            // Minimum image in the periodic tiling, plain distance in the walled box.
+            let dist = |a: &Vec3, b: &Vec3| {
+                let mut d = a - b;
+                for k in (0..3).filter(|_| !walls) {
+                    d[k] -= l[k] * (d[k] / l[k]).round();
+                }
+                d.norm()
+            };
+            for rank in 0..3 {
+                let b = tile_block(&p, &c, repeat, walls, rank, 3, width).unwrap();
+                assert_eq!(matches!(b.container, Container::Box { .. }), walls);
+                let owned = b.first..b.first + b.owned.len();
+                let want: Vec<usize> = (0..whole.len())
+                    .filter(|g| !owned.contains(g))
+                    .filter(|&g| {
+                        owned
+                            .clone()
+                            .any(|o| dist(&whole.centres[g], &whole.centres[o]) < width)
+                    })
+                    .collect();
+                assert!(!want.is_empty());
+                assert_eq!(b.ghost_ids, want, "rank {rank}, walls {walls}");
+                for (i, &g) in b.ghost_ids.iter().enumerate() {
+                    assert_eq!(b.ghosts.centres[i], whole.centres[g]);
+                    assert_eq!(b.ghosts.radii[i], whole.radii[g]);
+                    assert_eq!(b.ghosts.phases[i], whole.phases[g]);
+                }
             }
         }
     }
@@ -401,24 +413,25 @@ mod tests {
     fn bad_ranks_widths_and_containers_are_refused_by_name() {
         let (p, c) = small();
         let e = |r: Result<Block, PackingError>| r.unwrap_err().to_string();
-        let s = e(tile_block(&p, &c, [2, 2, 2], 2, 2, 1e-4));
+        let s = e(tile_block(&p, &c, [2, 2, 2], false, 2, 2, 1e-4));
         assert!(s.contains("rank = 2") && s.contains("below the 2 ranks"), "{s}");
-        let s = e(tile_block(&p, &c, [1, 1, 1], 0, 301, 1e-4));
+        let s = e(tile_block(&p, &c, [1, 1, 1], false, 0, 301, 1e-4));
         assert!(s.contains("ranks = 301") && s.contains("300 particles"), "{s}");
-        let s = e(tile_block(&p, &c, [2, 2, 2], 0, 4, 1e-3));
+        let s = e(tile_block(&p, &c, [2, 2, 2], false, 0, 4, 1e-3));
         assert!(s.contains("ghost_width") && s.contains("half a block"), "{s}");
-        let s = e(tile_block(&p, &c, [2, 2, 2], 0, 4, f64::NAN));
+        let s = e(tile_block(&p, &c, [2, 2, 2], false, 0, 4, f64::NAN));
         assert!(s.contains("ghost_width"), "{s}");
         let s = e(tile_block(
             &p,
             &Container::Box { size: [1e-3; 3] },
             [2, 2, 2],
+            false,
             0,
             2,
             1e-4,
         ));
         assert!(s.contains("container") && s.contains("periodic"), "{s}");
-        let s = e(tile_block(&p, &c, [2, 0, 2], 0, 2, 1e-4));
+        let s = e(tile_block(&p, &c, [2, 0, 2], false, 0, 2, 1e-4));
         assert!(s.contains("repeat[1]"), "{s}");
     }
 }

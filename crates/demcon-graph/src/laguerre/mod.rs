@@ -402,6 +402,8 @@ struct CellOut {
     layers: usize,
     tried: u64,
     cut: u64,
+    /// Distance from the site to the cell's farthest vertex (m).
+    far: f64,
 }
 
 /// The state of one cell's neighbour search.
@@ -554,6 +556,7 @@ impl Setup<'_> {
         }
         self.curve_clip(x, rp, cell, &mut out, false)?;
         self.faces(p, cell, cands, &mut out)?;
+        out.far = cell.max_radius_sq().sqrt();
         out.up.sort_unstable_by_key(|f| f.0);
         out.down.sort_unstable_by_key(|f| f.0);
         if out.up.windows(2).any(|w| w[0].0 == w[1].0) || out.down.windows(2).any(|w| w[0].0 == w[1].0) {
@@ -872,9 +875,37 @@ pub fn tessellate(
     carve: Option<&Region>,
     params: &LaguerreParams,
 ) -> Result<ContactGraph, GraphError> {
+    tessellate_part(particles, container, carve, params, particles.len()).map(|(g, _)| g)
+}
+
+/// The Laguerre cells of the first `owned` particles only, the others being read-only
+/// neighbours (an MPI rank's ghosts, `docs/distributed.md`): the graph holds every facet of an
+/// owned cell (towards owned or other particles), each area as the owned side computes it;
+/// the other particles' cells are empty (volume 0, no wall facet) and their facets among
+/// themselves absent. Also returns each owned cell's reach ρ_p, the distance from its site to
+/// its farthest vertex (m): a sphere j of radius ≤ R_max can cut cell p only if
+/// |x_j − x_p| < ρ_p + √(ρ_p² − R_p² + R_max²), so when every sphere within that distance of
+/// an owned site is among `particles`, the owned cells are those of the whole packing.
+///
+/// Errors: those of [`tessellate`]; `owned` above the particle count.
+pub fn tessellate_part(
+    particles: &ParticleSet,
+    container: &Container,
+    carve: Option<&Region>,
+    params: &LaguerreParams,
+    owned: usize,
+) -> Result<(ContactGraph, Vec<f64>), GraphError> {
+    if owned > particles.len() {
+        return Err(CoreError::invalid(
+            "owned",
+            owned,
+            format!("at most the particle count ({})", particles.len()),
+        )
+        .into());
+    }
     let start = Instant::now();
     with_setup(particles, container, carve, params, |setup| {
-        let results: Vec<Result<CellOut, CellFail>> = (0..particles.len())
+        let results: Vec<Result<CellOut, CellFail>> = (0..owned)
             .into_par_iter()
             .map_init(
                 || (Cell::default(), Vec::new(), Vec::new()),
@@ -885,9 +916,28 @@ pub fn tessellate(
         for (p, r) in results.into_iter().enumerate() {
             cells.push(r.map_err(|e| setup.error(p, e))?);
         }
+        let reach: Vec<f64> = if owned < particles.len() {
+            cells.iter().map(|c| c.far).collect()
+        } else {
+            Vec::new()
+        };
+        cells.resize_with(particles.len(), CellOut::default);
         let r_mean = particles.radii.iter().sum::<f64>() / particles.len() as f64;
-        assemble(particles, container, carve, cells, params, r_mean, start)
+        let graph = assemble(particles, container, carve, cells, params, (r_mean, owned), start)?;
+        Ok((graph, reach))
     })
+}
+
+/// The ghost width (m) that certifies cells built by [`tessellate_part`]: the largest
+/// ρ_p + √(ρ_p² − R_p² + R_max²) over the owned cells (`radii` and `reach` theirs, `r_max` the
+/// largest radius of the whole packing). When every sphere within this distance of an owned
+/// centre was among the particles, no missing sphere could have cut an owned cell.
+pub fn ghost_width_needed(radii: &[f64], reach: &[f64], r_max: f64) -> f64 {
+    radii
+        .iter()
+        .zip(reach)
+        .map(|(&r, &rho)| rho + (rho * rho - r * r + r_max * r_max).max(0.0).sqrt())
+        .fold(0.0, f64::max)
 }
 
 /// A convex polyhedron: its vertices (m) and its faces as loops of indices into them.
@@ -1273,7 +1323,7 @@ fn assemble(
     carve: Option<&Region>,
     cells: Vec<CellOut>,
     params: &LaguerreParams,
-    r_mean: f64,
+    (r_mean, owned): (f64, usize),
     start: Instant,
 ) -> Result<ContactGraph, GraphError> {
     let n = particles.len();
@@ -1291,7 +1341,9 @@ fn assemble(
     };
     // One facet as p records it: (area, centroid relative to p, area mismatch, one-sided),
     // or None if dropped.
+    // Facets towards particles whose cells are not built (`owned` and above) have one side.
     let facet = |p: usize, q: u32, a1: f64, c1: Vec3| match ((a1 >= threshold).then_some(a1), side(p, q)) {
+        (a, _) if q as usize >= owned => a.map(|a| (a, c1, 0.0, false)),
         (None, None) => None,
         (Some(a), Some(b)) => Some((0.5 * (a + b), c1, (a - b).abs() / a.max(b), false)),
         (Some(a), None) | (None, Some(a)) => Some((a, c1, 1.0, true)),
