@@ -103,6 +103,19 @@ impl WallContacts {
         faces: &[Face],
         context: &str,
     ) -> Result<Self, CoreError> {
+        Self::for_graph_part(graph, particles, container, faces, context, false)
+    }
+
+    /// [`WallContacts::for_graph`] on a part of the body (an MPI rank's block) when
+    /// `part`: a face none of its cells reaches then gets no link instead of an error.
+    pub fn for_graph_part(
+        graph: &ContactGraph,
+        particles: &ParticleSet,
+        container: &Container,
+        faces: &[Face],
+        context: &str,
+        part: bool,
+    ) -> Result<Self, CoreError> {
         let Some(cells) = graph.cells.as_deref() else {
             return Self::build(particles, container, faces, context);
         };
@@ -132,7 +145,7 @@ impl WallContacts {
                 w.facet_area.push(f.area);
                 w.lever.push(f.centroid);
             }
-            if w.particle.len() == before {
+            if w.particle.len() == before && !part {
                 return Err(CoreError::invalid(
                     format!("wall {} ({context})", face.name()),
                     face.name(),

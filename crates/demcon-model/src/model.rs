@@ -67,6 +67,9 @@ pub struct Model {
     /// The caller's names for its input ([`ModelParams::fields`]), which this model's refusals
     /// use.
     pub fields: FieldNames,
+    /// Particles whose cells this model holds, when it is one MPI rank's block (the first
+    /// ones; [`build_block_model`]); `None` for a whole model.
+    pub owned: Option<usize>,
 }
 
 impl Model {
@@ -122,9 +125,16 @@ impl Model {
     /// particles touching each face); errors are named `context` (e.g. `thermal.bcs`).
     /// The links an open crack crosses (centre to face) are dropped.
     pub fn wall_contacts(&self, faces: &[Face], context: &str) -> Result<WallContacts, ModelError> {
-        let mut walls =
-            WallContacts::for_graph(&self.graph, &self.particles, &self.container, faces, context)
-                .map_err(|e| ModelError::at(context, e))?;
+        // A block may hold no cell on a face another rank's cells reach.
+        let mut walls = WallContacts::for_graph_part(
+            &self.graph,
+            &self.particles,
+            &self.container,
+            faces,
+            context,
+            self.owned.is_some(),
+        )
+        .map_err(|e| ModelError::at(context, e))?;
         cut_wall_links(&self.defects, &mut walls, &self.particles, &self.container);
         Ok(walls)
     }
@@ -921,6 +931,7 @@ fn build(
         defects,
         bridges,
         fields: params.fields,
+        owned: owned.map(|(n, _)| n),
     })
 }
 
@@ -1569,5 +1580,6 @@ pub fn with_defects(model: &Model, spec: &DefectSpec) -> Result<Model, ModelErro
         bridges: model.bridges.clone(),
         report,
         fields: model.fields,
+        owned: model.owned,
     })
 }

@@ -32,6 +32,66 @@ pub fn make_particles(
     source.particles_of(&cfg.packing)
 }
 
+/// The periodic packing a scene's `Tile` packing copies, with the repeat and whether the
+/// tiled box is walled (`demcon run --distributed`: each rank makes only its own block of the
+/// copies, `demcon_packing::tile_block`). Errors: a packing that is not a `Tile`, or whose
+/// inner packing is not periodic.
+pub fn tile_source(
+    scene: &Scene,
+    progress: Option<&dyn Fn(&demcon_packing::PackProgress)>,
+) -> Result<TileSource, SceneError> {
+    let cfg = scene.config();
+    let PackingConfig::Tile {
+        packing,
+        repeat,
+        walls,
+    } = &cfg.packing
+    else {
+        return Err(SceneError::invalid(
+            "packing",
+            "not a Tile",
+            "a Tile packing (the blocks of a distributed model are copies of a periodic packing)",
+        ));
+    };
+    let source = Source {
+        seed: cfg.seed,
+        base_dir: &scene.base_dir,
+        progress,
+        materials: &cfg.materials,
+        given: scene.given_particles(),
+    };
+    let (particles, container, report, _) = source.particles_of(packing)?;
+    if container.period().is_none() {
+        return Err(SceneError::invalid(
+            "packing.packing",
+            container.kind(),
+            "a periodic packing to tile",
+        ));
+    }
+    Ok(TileSource {
+        particles,
+        container,
+        repeat: [repeat.0, repeat.1, repeat.2],
+        walls: *walls,
+        report,
+    })
+}
+
+/// A scene's `Tile` packing before tiling ([`tile_source`]).
+#[derive(Debug, Clone)]
+pub struct TileSource {
+    /// The periodic packing copied.
+    pub particles: ParticleSet,
+    /// Its periodic container.
+    pub container: Container,
+    /// Copies along x, y and z.
+    pub repeat: [usize; 3],
+    /// Whether the tiled box is walled.
+    pub walls: bool,
+    /// The packing's report, when generated.
+    pub report: Option<PackingReport>,
+}
+
 /// The particles of a packing section on its own, outside a scene (the Python package's
 /// `demcon.pack`): generated, read or tiled. A `Given` section is refused (nothing is handed
 /// over); file labels need a scene's materials and are refused too.

@@ -33,6 +33,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod blocks;
 pub mod build;
 pub mod checkpoint;
 pub mod config;

@@ -17,7 +17,7 @@ use serde_json::json;
 use crate::error::SceneError;
 use crate::run::{RunResult, SeriesEntry};
 
-fn io(path: &Path) -> impl FnOnce(std::io::Error) -> SceneError + '_ {
+pub(crate) fn io(path: &Path) -> impl FnOnce(std::io::Error) -> SceneError + '_ {
     move |source| SceneError::Io {
         path: path.into(),
         source,
@@ -97,7 +97,7 @@ fn summary_with(name: &str, r: &RunResult, stages: &[StageRecord]) -> serde_json
 
 /// The distributed solves of this process (`demcon run --distributed`): ranks, systems,
 /// iterations and this rank's assembly, set-up, solve and gather times (s); null when none ran.
-fn distributed_json() -> serde_json::Value {
+pub(crate) fn distributed_json() -> serde_json::Value {
     let s = demcon_network::distributed::stats();
     if s.ranks == 0 {
         return serde_json::Value::Null;

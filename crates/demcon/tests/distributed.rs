@@ -83,6 +83,41 @@ const IMPLICIT: &str = r#"(
 )"#;
 
 /// `mpirun -n ranks demcon run scene --out out --distributed --quiet --threads 1 extra…`.
+/// A composite on a tiled packing: by blocks under `--distributed` (every rank its own part of
+/// the model).
+const TILED: &str = r#"(
+    name: "tiled",
+    seed: 7,
+    packing: Tile(
+        packing: Generate(container: Periodic(size: (0.002, 0.002, 0.002)), count: 500, phi: 0.62, radius_cov: 0.3),
+        repeat: REPEAT,
+        walls: true,
+    ),
+    surface: Laguerre,
+    phase_rule: Centre,
+    materials: [
+        (name: "epoxy", conductivity: 0.195, density: 1200.0, specific_heat: 1000.0),
+        (name: "silica", conductivity: 1.5, density: 2200.0, specific_heat: 740.0),
+    ],
+    phases: [Inclusions(material: "silica", fraction: 0.2, size_ratio: 4.0)],
+    interface: Harmonic,
+    linear_solver: (rel_tol: 1e-10),
+    thermal: (
+        initial_temperature: 25.0,
+        bcs: [WallTemperature(face: YMin, value: 25.0), WallTemperature(face: YMax, value: 35.0)],
+        solver: Steady,
+    ),
+    outputs: (
+        etc_axis: Y,
+        particles_csv: true,
+        vtk: true,
+        probes: [
+            (name: "centre", point: (0.002, 0.002, 0.002)),
+            (name: "ball", point: (0.001, 0.003, 0.002), method: Ball(0.0003)),
+        ],
+    ),
+)"#;
+
 fn mpirun(ranks: usize, scene: &Path, out: &Path, extra: &[&str]) -> Output {
     Command::new("mpirun")
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
@@ -225,6 +260,128 @@ fn implicit_transient_distributed_equals_serial() {
         &["/electric/resistance_ohm", "/electric/joule_w"],
         &["temperature", "potential"],
     );
+}
+
+/// The named columns of a block run's `particles_<r>.csv`, ranks in order (the serial order).
+fn block_columns(out: &Path, ranks: usize, names: &[&str]) -> Vec<Vec<f64>> {
+    let mut cols = vec![Vec::new(); names.len()];
+    for r in 0..ranks {
+        let piece = out.join(format!("piece-{r}"));
+        std::fs::create_dir_all(&piece).unwrap();
+        std::fs::copy(
+            out.join(format!("particles_{r}.csv")),
+            piece.join("particles.csv"),
+        )
+        .unwrap();
+        for (c, part) in cols.iter_mut().zip(columns(&piece, names)) {
+            c.extend(part);
+        }
+    }
+    cols
+}
+
+#[test]
+fn tiled_composite_by_blocks_equals_serial() {
+    let d = scratch("distributed", "blocks");
+    let s = scene(&d, "tiled", &TILED.replace("REPEAT", "(2, 2, 2)"));
+    let serial_out = d.join("serial");
+    let o = common::demcon(&[
+        "run",
+        s.to_str().unwrap(),
+        "--out",
+        serial_out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", common::text(&o));
+    let serial = summary(&serial_out);
+    let fields = ["x", "y", "z", "radius", "phase", "temperature", "volume"];
+    let serial_cols = columns(&serial_out, &fields);
+    let serial_vtu = std::fs::read(serial_out.join("particles.vtu")).unwrap();
+    for ranks in [1, 2, 4] {
+        let out = d.join(format!("ranks-{ranks}"));
+        let o = mpirun(ranks, &s, &out, &["--distributed"]);
+        assert!(o.status.success(), "{ranks} ranks: {}", common::text(&o));
+        let dist = summary(&out);
+        assert_eq!(dist["model"], "blocks");
+        assert_eq!(dist["ranks"], ranks);
+        assert_eq!(dist["n_particles"], 4000);
+        let owned: u64 = dist["owned_per_rank"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .sum();
+        assert_eq!(owned, 4000, "every particle owned once");
+        for v in [
+            "/etc/lambda_e",
+            "/etc/heat_flow_w",
+            "/etc/hot_flow_w",
+            "/etc/cold_flow_w",
+        ] {
+            close(
+                &format!("{ranks} ranks, {v}"),
+                serial.pointer(v).and_then(|x| x.as_f64()).unwrap(),
+                dist.pointer(v).and_then(|x| x.as_f64()).unwrap(),
+            );
+        }
+        for k in 0..2 {
+            let v = format!("/probes/{k}/value");
+            close(
+                &format!("{ranks} ranks, probe {k}"),
+                serial.pointer(&v).and_then(|x| x.as_f64()).unwrap(),
+                dist.pointer(&v).and_then(|x| x.as_f64()).unwrap(),
+            );
+        }
+        // Every particle: the same place, size and phase, and its temperature and cell volume.
+        let cols = block_columns(&out, ranks, &fields);
+        for (name, (a, b)) in fields.iter().zip(serial_cols.iter().zip(&cols)) {
+            assert_eq!(a.len(), b.len(), "{name}");
+            for (p, (x, y)) in a.iter().zip(b).enumerate() {
+                if ["x", "y", "z", "radius", "phase"].contains(name) {
+                    assert_eq!(x, y, "{ranks} ranks, {name} of particle {p}");
+                } else {
+                    close(&format!("{ranks} ranks, {name} of particle {p}"), *x, *y);
+                }
+            }
+        }
+        // The `.pvtu` names one piece per rank and the serial file's point fields.
+        let pvtu = std::fs::read_to_string(out.join("particles.pvtu")).unwrap();
+        assert_eq!(pvtu.matches("<Piece ").count(), ranks);
+        for r in 0..ranks {
+            let piece = std::fs::read(out.join(format!("particles/particles_{r}.vtu"))).unwrap();
+            assert!(piece.starts_with(b"<?xml"));
+        }
+        for name in [
+            "radius",
+            "phase",
+            "coordination",
+            "solved",
+            "temperature",
+            "volume",
+        ] {
+            let tag = format!("Name=\"{name}\"");
+            assert!(pvtu.contains(&tag), "{name} in the pvtu");
+            assert!(
+                serial_vtu.windows(tag.len()).any(|w| w == tag.as_bytes()),
+                "{name} in the serial particles.vtu"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn blocks_thinner_than_the_ghost_layer_are_refused() {
+    let d = scratch("distributed", "thin-blocks");
+    // One copy of 500 particles on 4 ranks: blocks about 5 diameters across, ghost layer 3.4.
+    let text = TILED
+        .replace("REPEAT", "(1, 1, 1)")
+        .replace("(0.001, 0.003, 0.002)", "(0.001, 0.001, 0.001)");
+    let s = scene(&d, "tiled", &text);
+    let out = d.join("out");
+    let o = mpirun(4, &s, &out, &["--distributed"]);
+    fails_once(&o, &out, "`MPI ranks` = 4: at most 1 for this tiling");
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 /// A failed launch: non-zero, the error once (rank 0 only), no output folder.

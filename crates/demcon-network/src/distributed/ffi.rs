@@ -41,6 +41,8 @@ pub type Ksp = *mut c_void;
 pub type Pc = *mut c_void;
 /// `VecScatter`.
 pub type VecScatter = *mut c_void;
+/// `IS` (an index set).
+pub type Is = *mut c_void;
 
 pub const PETSC_TRUE: PetscBool = 1;
 /// `PETSC_DEFAULT` as a real argument.
@@ -61,6 +63,11 @@ pub const KSP_NORM_UNPRECONDITIONED: c_int = 2;
 pub const KSP_DIVERGED_ITS: c_int = -3;
 /// `KSPConvergedReason::KSP_DIVERGED_NANORINF`.
 pub const KSP_DIVERGED_NANORINF: c_int = -9;
+
+/// `PetscCopyMode::PETSC_COPY_VALUES`.
+pub const PETSC_COPY_VALUES: c_int = 0;
+/// `NormType::NORM_2`.
+pub const NORM_2: c_int = 1;
 
 pub const MATMPIAIJ: &std::ffi::CStr = c"mpiaij";
 pub const KSPCG: &std::ffi::CStr = c"cg";
@@ -110,6 +117,7 @@ unsafe extern "C" {
 
     pub fn VecCreateMPI(comm: MpiComm, n: PetscInt, big_n: PetscInt, v: *mut Vec_) -> PetscErrorCode;
     pub fn VecSet(v: Vec_, alpha: PetscScalar) -> PetscErrorCode;
+    pub fn VecCopy(x: Vec_, y: Vec_) -> PetscErrorCode;
     pub fn VecGetArray(v: Vec_, a: *mut *mut PetscScalar) -> PetscErrorCode;
     pub fn VecRestoreArray(v: Vec_, a: *mut *mut PetscScalar) -> PetscErrorCode;
     pub fn VecGetArrayRead(v: Vec_, a: *mut *const PetscScalar) -> PetscErrorCode;
@@ -119,6 +127,21 @@ unsafe extern "C" {
     pub fn VecScatterBegin(ctx: VecScatter, x: Vec_, y: Vec_, mode: c_int, dir: c_int) -> PetscErrorCode;
     pub fn VecScatterEnd(ctx: VecScatter, x: Vec_, y: Vec_, mode: c_int, dir: c_int) -> PetscErrorCode;
     pub fn VecScatterDestroy(ctx: *mut VecScatter) -> PetscErrorCode;
+    pub fn VecScatterCreate(x: Vec_, ix: Is, y: Vec_, iy: Is, ctx: *mut VecScatter) -> PetscErrorCode;
+    pub fn ISCreateGeneral(
+        comm: MpiComm,
+        n: PetscInt,
+        idx: *const PetscInt,
+        mode: c_int,
+        is: *mut Is,
+    ) -> PetscErrorCode;
+    pub fn ISDestroy(is: *mut Is) -> PetscErrorCode;
+    pub fn VecGetOwnershipRange(v: Vec_, lo: *mut PetscInt, hi: *mut PetscInt) -> PetscErrorCode;
+    pub fn VecDuplicate(v: Vec_, w: *mut Vec_) -> PetscErrorCode;
+    pub fn VecNorm(v: Vec_, t: c_int, norm: *mut PetscReal) -> PetscErrorCode;
+    pub fn VecAXPY(y: Vec_, alpha: PetscScalar, x: Vec_) -> PetscErrorCode;
+    pub fn VecAYPX(y: Vec_, beta: PetscScalar, x: Vec_) -> PetscErrorCode;
+    pub fn MatMult(a: Mat, x: Vec_, y: Vec_) -> PetscErrorCode;
 
     pub fn KSPCreate(comm: MpiComm, ksp: *mut Ksp) -> PetscErrorCode;
     pub fn KSPSetOperators(ksp: Ksp, a: Mat, p: Mat) -> PetscErrorCode;

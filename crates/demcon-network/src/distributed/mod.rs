@@ -104,7 +104,7 @@ impl Session {
     pub fn gather_peak_memory(&self, bytes: f64) -> Result<Vec<f64>, SolveError> {
         #[cfg(feature = "petsc")]
         {
-            let all = petsc::all_gather(bytes)?;
+            let all = petsc::all_gather(&[bytes])?;
             let lo = all.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = all.iter().copied().fold(0.0, f64::max);
             record(|s| s.peak_rss_bytes = (lo, hi));
@@ -115,6 +115,40 @@ impl Session {
             let _ = bytes;
             Err(unavailable())
         }
+    }
+
+    /// Every rank's `values` (the same count on each), concatenated in rank order, on every
+    /// rank. Collective.
+    ///
+    /// # Errors
+    /// [`SolveError::Petsc`] when the exchange fails.
+    pub fn all_gather(&self, values: &[f64]) -> Result<Vec<f64>, SolveError> {
+        #[cfg(feature = "petsc")]
+        {
+            petsc::all_gather(values)
+        }
+        #[cfg(not(feature = "petsc"))]
+        {
+            let _ = values;
+            Err(unavailable())
+        }
+    }
+
+    /// The sums over the ranks of `values` (the same count on each), added in rank order so
+    /// that every rank gets the same bits whatever the timing. Collective.
+    ///
+    /// # Errors
+    /// [`SolveError::Petsc`] when the exchange fails.
+    pub fn sum(&self, values: &[f64]) -> Result<Vec<f64>, SolveError> {
+        let all = self.all_gather(values)?;
+        let m = values.len();
+        let mut out = vec![0.0; m];
+        for part in all.chunks(m.max(1)) {
+            for (o, v) in out.iter_mut().zip(part) {
+                *o += v;
+            }
+        }
+        Ok(out)
     }
 
     /// Resident memory of this process now (bytes), as PETSc measures it; `None` when it
@@ -133,6 +167,146 @@ impl Drop for Session {
     fn drop(&mut self) {
         #[cfg(feature = "petsc")]
         petsc::finalize();
+    }
+}
+
+/// The ghost exchange of a vector laid out by blocks: rank r owns a run of consecutive global
+/// entries (ranks in order) and reads the entries of other ranks at its ghosts' global indices.
+/// Made once per layout (a PETSc scatter), used for every vector laid out so.
+pub struct Halo {
+    #[cfg(feature = "petsc")]
+    inner: petsc::Exchange,
+}
+
+impl std::fmt::Debug for Halo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Halo")
+    }
+}
+
+impl Halo {
+    /// This rank owns `owned` entries and reads `ghosts` (global indices). Collective.
+    ///
+    /// # Errors
+    /// Without the feature; an index past PETSc's `PetscInt`; PETSc's failures (an index past
+    /// the global length among them).
+    pub fn new(_session: &Session, owned: usize, ghosts: &[usize]) -> Result<Self, SolveError> {
+        #[cfg(feature = "petsc")]
+        {
+            Ok(Self {
+                inner: petsc::Exchange::new(owned, ghosts)?,
+            })
+        }
+        #[cfg(not(feature = "petsc"))]
+        {
+            let _ = (owned, ghosts);
+            Err(unavailable())
+        }
+    }
+
+    /// The ghosts' values (in the order given to [`Halo::new`]) of the vector whose owned
+    /// entries on this rank are `owned`. Collective.
+    ///
+    /// # Errors
+    /// `owned` of the wrong length; PETSc's failures.
+    pub fn exchange(&self, owned: &[f64]) -> Result<Vec<f64>, SolveError> {
+        #[cfg(feature = "petsc")]
+        {
+            self.inner.exchange(owned)
+        }
+        #[cfg(not(feature = "petsc"))]
+        {
+            let _ = owned;
+            Err(unavailable())
+        }
+    }
+}
+
+/// A symmetric positive definite system assembled by blocks: each rank gives its own rows
+/// (consecutive global rows, ranks in order) with the global indices of their columns, and
+/// gets back its own part of the solution; no rank holds the whole system or solution
+/// (KSPCG + PCGAMG, the true residual ‖b − A x‖ ≤ rel_tol ‖b‖ by PETSc's product).
+pub struct BlockSystem {
+    #[cfg(feature = "petsc")]
+    inner: petsc::BlockSolver,
+}
+
+impl std::fmt::Debug for BlockSystem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("BlockSystem")
+    }
+}
+
+/// Writes global row k of a [`BlockSystem`]: its columns' global indices and their values
+/// (both cleared first; the diagonal among them, each column once).
+pub type BlockRow<'a> = dyn Fn(usize, &mut Vec<i64>, &mut Vec<f64>) + 'a;
+
+/// What [`BlockSystem::solve`] did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlockSolveReport {
+    /// CG iterations over all KSP solves.
+    pub iterations: usize,
+    /// KSP solves (restarts from the true residual count).
+    pub ksp_solves: usize,
+    /// The true relative residual reached, ‖b − A x‖ / ‖b‖.
+    pub relative_residual: f64,
+}
+
+impl BlockSystem {
+    /// Assembles this rank's rows `first..first + rows` of a `total`-row system and sets up
+    /// the solver; `row(k, columns, values)` writes global row k (clearing both vectors first:
+    /// the diagonal among the columns, each column once). Collective.
+    ///
+    /// # Errors
+    /// Without the feature; sizes past `PetscInt`; PETSc's failures.
+    pub fn new(
+        _session: &Session,
+        first: usize,
+        rows: usize,
+        total: usize,
+        row: &BlockRow<'_>,
+    ) -> Result<Self, SolveError> {
+        #[cfg(feature = "petsc")]
+        {
+            Ok(Self {
+                inner: petsc::BlockSolver::new(first, rows, total, row)?,
+            })
+        }
+        #[cfg(not(feature = "petsc"))]
+        {
+            let _ = (first, rows, total, row);
+            Err(unavailable())
+        }
+    }
+
+    /// Solves A x = b (`b` and the x returned: this rank's rows) to `rel_tol` in at most
+    /// `max_iter` CG iterations. Collective.
+    ///
+    /// # Errors
+    /// [`SolveError::NotConverged`]; PETSc's failures.
+    pub fn solve(
+        &self,
+        b: &[f64],
+        rel_tol: f64,
+        max_iter: usize,
+    ) -> Result<(Vec<f64>, BlockSolveReport), SolveError> {
+        #[cfg(feature = "petsc")]
+        {
+            let (x, d) = self.inner.solve(b, rel_tol, max_iter)?;
+            Ok((
+                x,
+                BlockSolveReport {
+                    iterations: d.iterations,
+                    ksp_solves: d.ksp_solves,
+                    relative_residual: d.rel_residual,
+                },
+            ))
+        }
+        #[cfg(not(feature = "petsc"))]
+        {
+            let _ = (b, rel_tol, max_iter);
+            Err(unavailable())
+        }
     }
 }
 

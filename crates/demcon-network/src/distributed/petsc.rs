@@ -85,37 +85,25 @@ pub(super) fn memory_bytes() -> Option<f64> {
     (unsafe { ffi::PetscMemoryGetCurrentUsage(&mut bytes) } == 0 && bytes > 0.0).then_some(bytes)
 }
 
-/// `value` of every rank, in rank order, on every rank (collective).
-pub(super) fn all_gather(value: f64) -> Result<Vec<f64>, SolveError> {
+/// `values` of every rank (the same count on each), concatenated in rank order, on every rank
+/// (collective).
+pub(super) fn all_gather(values: &[f64]) -> Result<Vec<f64>, SolveError> {
+    let m = to_int(values.len(), "values gathered per rank")?;
     let (mut v, mut all, mut sc): (Vec_, Vec_, VecScatter) =
         (ptr::null_mut(), ptr::null_mut(), ptr::null_mut());
-    // SAFETY: one entry per rank; the three objects are destroyed below on every path.
+    // SAFETY: `m` entries per rank; the three objects are destroyed below on every path.
     let result = unsafe {
         (|| {
-            check(ffi::VecCreateMPI(world(), 1, -1, &mut v), "VecCreateMPI")?;
-            let mut a: *mut f64 = ptr::null_mut();
-            check(ffi::VecGetArray(v, &mut a), "VecGetArray")?;
-            *a = value;
-            check(ffi::VecRestoreArray(v, &mut a), "VecRestoreArray")?;
+            check(ffi::VecCreateMPI(world(), m, -1, &mut v), "VecCreateMPI")?;
+            write_local(v, values)?;
             check(
                 ffi::VecScatterCreateToAll(v, &mut sc, &mut all),
                 "VecScatterCreateToAll",
             )?;
-            check(
-                ffi::VecScatterBegin(sc, v, all, ffi::INSERT_VALUES, ffi::SCATTER_FORWARD),
-                "VecScatterBegin",
-            )?;
-            check(
-                ffi::VecScatterEnd(sc, v, all, ffi::INSERT_VALUES, ffi::SCATTER_FORWARD),
-                "VecScatterEnd",
-            )?;
+            scatter(sc, v, all)?;
             let mut size: c_int = 0;
             check(ffi::MPI_Comm_size(world(), &mut size), "MPI_Comm_size")?;
-            let mut b: *const f64 = ptr::null();
-            check(ffi::VecGetArrayRead(all, &mut b), "VecGetArrayRead")?;
-            let out = std::slice::from_raw_parts(b, size.max(0) as usize).to_vec();
-            check(ffi::VecRestoreArrayRead(all, &mut b), "VecRestoreArrayRead")?;
-            Ok(out)
+            read_local(all, size.max(0) as usize * values.len())
         })()
     };
     // SAFETY: created above or null (accepted by the Destroy functions).
@@ -127,6 +115,169 @@ pub(super) fn all_gather(value: f64) -> Result<Vec<f64>, SolveError> {
     result
 }
 
+/// Copies `values` into this rank's entries of `v` (exactly that many).
+///
+/// # Safety
+/// `v` is a live vector with `values.len()` local entries.
+unsafe fn write_local(v: Vec_, values: &[f64]) -> Result<(), SolveError> {
+    let mut a: *mut f64 = ptr::null_mut();
+    // SAFETY: VecGetArray hands out the local entries until VecRestoreArray.
+    unsafe {
+        check(ffi::VecGetArray(v, &mut a), "VecGetArray")?;
+        if !values.is_empty() {
+            std::slice::from_raw_parts_mut(a, values.len()).copy_from_slice(values);
+        }
+        check(ffi::VecRestoreArray(v, &mut a), "VecRestoreArray")
+    }
+}
+
+/// This rank's `n` entries of `v`.
+///
+/// # Safety
+/// `v` is a live vector with `n` local entries.
+unsafe fn read_local(v: Vec_, n: usize) -> Result<Vec<f64>, SolveError> {
+    let mut a: *const f64 = ptr::null();
+    // SAFETY: VecGetArrayRead hands out the local entries until VecRestoreArrayRead.
+    unsafe {
+        check(ffi::VecGetArrayRead(v, &mut a), "VecGetArrayRead")?;
+        let out = if n > 0 {
+            std::slice::from_raw_parts(a, n).to_vec()
+        } else {
+            Vec::new()
+        };
+        check(ffi::VecRestoreArrayRead(v, &mut a), "VecRestoreArrayRead")?;
+        Ok(out)
+    }
+}
+
+/// A forward scatter of `x` into `y` by `sc`.
+///
+/// # Safety
+/// Live handles that `sc` was made for.
+unsafe fn scatter(sc: VecScatter, x: Vec_, y: Vec_) -> Result<(), SolveError> {
+    // SAFETY: as the caller promises.
+    unsafe {
+        check(
+            ffi::VecScatterBegin(sc, x, y, ffi::INSERT_VALUES, ffi::SCATTER_FORWARD),
+            "VecScatterBegin",
+        )?;
+        check(
+            ffi::VecScatterEnd(sc, x, y, ffi::INSERT_VALUES, ffi::SCATTER_FORWARD),
+            "VecScatterEnd",
+        )
+    }
+}
+
+/// The objects of a ghost exchange: this rank's owned entries, its ghosts' copies, the scatter.
+struct HaloHandles {
+    owned: Vec_,
+    ghosts: Vec_,
+    sc: VecScatter,
+}
+
+// SAFETY: as `Handles`: used by one thread at a time behind the Mutex of `Exchange`.
+unsafe impl Send for HaloHandles {}
+
+impl Drop for HaloHandles {
+    fn drop(&mut self) {
+        if !running() {
+            return;
+        }
+        // SAFETY: created by PETSc or null; destroyed once, on every rank in the same order.
+        unsafe {
+            ffi::VecScatterDestroy(&mut self.sc);
+            ffi::VecDestroy(&mut self.ghosts);
+            ffi::VecDestroy(&mut self.owned);
+        }
+    }
+}
+
+/// The ghost exchange of a vector laid out by blocks ([`super::Halo`]).
+pub(crate) struct Exchange {
+    h: Mutex<HaloHandles>,
+    owned: usize,
+    ghosts: usize,
+}
+
+impl Exchange {
+    /// Rank r owns `owned` consecutive entries (ranks in order) and reads those at the global
+    /// indices `ghosts`. Collective.
+    pub(crate) fn new(owned: usize, ghosts: &[usize]) -> Result<Self, SolveError> {
+        let mut h = HaloHandles {
+            owned: ptr::null_mut(),
+            ghosts: ptr::null_mut(),
+            sc: ptr::null_mut(),
+        };
+        let idx: Vec<PetscInt> = ghosts
+            .iter()
+            .map(|&g| to_int(g, "ghost index"))
+            .collect::<Result<_, _>>()?;
+        let ng = to_int(ghosts.len(), "ghosts of a rank")?;
+        let (mut ix, mut iy) = (ptr::null_mut(), ptr::null_mut());
+        // SAFETY: index arrays of the stated lengths, copied by PETSc; the index sets are
+        // destroyed below on every path, the rest by `HaloHandles::drop`.
+        let made = unsafe {
+            (|| {
+                check(
+                    ffi::VecCreateMPI(world(), to_int(owned, "owned entries")?, -1, &mut h.owned),
+                    "VecCreateMPI",
+                )?;
+                check(ffi::VecCreateMPI(world(), ng, -1, &mut h.ghosts), "VecCreateMPI")?;
+                let (mut lo, mut hi): (PetscInt, PetscInt) = (0, 0);
+                check(
+                    ffi::VecGetOwnershipRange(h.ghosts, &mut lo, &mut hi),
+                    "VecGetOwnershipRange",
+                )?;
+                let to: Vec<PetscInt> = (lo..hi).collect();
+                check(
+                    ffi::ISCreateGeneral(world(), ng, idx.as_ptr(), ffi::PETSC_COPY_VALUES, &mut ix),
+                    "ISCreateGeneral",
+                )?;
+                check(
+                    ffi::ISCreateGeneral(world(), ng, to.as_ptr(), ffi::PETSC_COPY_VALUES, &mut iy),
+                    "ISCreateGeneral",
+                )?;
+                check(
+                    ffi::VecScatterCreate(h.owned, ix, h.ghosts, iy, &mut h.sc),
+                    "VecScatterCreate",
+                )
+            })()
+        };
+        // SAFETY: created above or null.
+        unsafe {
+            ffi::ISDestroy(&mut ix);
+            ffi::ISDestroy(&mut iy);
+        }
+        made?;
+        Ok(Self {
+            h: Mutex::new(h),
+            owned,
+            ghosts: ghosts.len(),
+        })
+    }
+
+    /// The ghosts' values, given this rank's owned ones. Collective.
+    pub(crate) fn exchange(&self, owned: &[f64]) -> Result<Vec<f64>, SolveError> {
+        if owned.len() != self.owned {
+            return Err(SolveError::LengthMismatch {
+                what: "owned values of a ghost exchange".into(),
+                expected: self.owned,
+                got: owned.len(),
+            });
+        }
+        let h = match self.h.lock() {
+            Ok(h) => h,
+            Err(p) => p.into_inner(),
+        };
+        // SAFETY: live handles of the stated local sizes.
+        unsafe {
+            write_local(h.owned, owned)?;
+            scatter(h.sc, h.owned, h.ghosts)?;
+            read_local(h.ghosts, self.ghosts)
+        }
+    }
+}
+
 /// PETSc's objects of one system.
 struct Handles {
     a: Mat,
@@ -135,6 +286,9 @@ struct Handles {
     scatter: VecScatter,
     x_all: Vec_,
     ksp: Ksp,
+    /// Residual and correction of a block system's restarts (null for a replicated one).
+    r: Vec_,
+    d: Vec_,
 }
 
 // SAFETY: PETSc objects are not tied to the thread that created them; the Mutex around them
@@ -150,6 +304,8 @@ impl Drop for Handles {
         // accept) and is destroyed once; every rank destroys the same objects in the same order.
         unsafe {
             ffi::KSPDestroy(&mut self.ksp);
+            ffi::VecDestroy(&mut self.d);
+            ffi::VecDestroy(&mut self.r);
             ffi::VecScatterDestroy(&mut self.scatter);
             ffi::VecDestroy(&mut self.x_all);
             ffi::VecDestroy(&mut self.x);
@@ -268,10 +424,6 @@ fn assemble(
         )?;
         check(ffi::VecCreateMPI(world(), m, big_n, &mut h.b), "VecCreateMPI")?;
         check(ffi::VecCreateMPI(world(), m, big_n, &mut h.x), "VecCreateMPI")?;
-        check(
-            ffi::VecScatterCreateToAll(h.x, &mut h.scatter, &mut h.x_all),
-            "VecScatterCreateToAll",
-        )?;
     }
     Ok(())
 }
@@ -407,8 +559,17 @@ impl Solver {
             scatter: ptr::null_mut(),
             x_all: ptr::null_mut(),
             ksp: ptr::null_mut(),
+            r: ptr::null_mut(),
+            d: ptr::null_mut(),
         };
         assemble(&mut h, (m, big_n), lo..hi, (&d_nnz, &o_nnz), &row)?;
+        // SAFETY: `h.x` was created by `assemble`.
+        unsafe {
+            check(
+                ffi::VecScatterCreateToAll(h.x, &mut h.scatter, &mut h.x_all),
+                "VecScatterCreateToAll",
+            )?;
+        }
         drop((d_nnz, o_nnz, index));
         let assembly_s = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
@@ -457,84 +618,19 @@ impl Solver {
         };
         let maxits = to_int(max_iter.min(i32::MAX as usize), "max_iter")?;
         let t0 = Instant::now();
-        let own = &rc[self.lo..self.hi];
-        // SAFETY: VecGetArray hands out this rank's `hi − lo` entries until VecRestoreArray.
-        unsafe {
-            let mut a: *mut f64 = ptr::null_mut();
-            check(ffi::VecGetArray(h.b, &mut a), "VecGetArray")?;
-            if !own.is_empty() {
-                std::slice::from_raw_parts_mut(a, own.len()).copy_from_slice(own);
-            }
-            check(ffi::VecRestoreArray(h.b, &mut a), "VecRestoreArray")?;
-            check(ffi::VecSet(h.x, 0.0), "VecSet")?;
-        }
+        // SAFETY: `h.b` holds this rank's `hi − lo` rows.
+        unsafe { write_local(h.b, &rc[self.lo..self.hi])? };
         let mut gather_s = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let (mut reason, mut its): (c_int, PetscInt) = (0, 0);
-        // SAFETY: live handles; scalars written by PETSc.
-        unsafe {
-            check(
-                ffi::KSPSetTolerances(
-                    h.ksp,
-                    rtol.clamp(1e-300, 1.0),
-                    0.0,
-                    ffi::PETSC_DEFAULT_REAL,
-                    maxits.max(1),
-                ),
-                "KSPSetTolerances",
-            )?;
-            check(ffi::KSPSolve(h.ksp, h.b, h.x), "KSPSolve")?;
-            check(
-                ffi::KSPGetConvergedReason(h.ksp, &mut reason),
-                "KSPGetConvergedReason",
-            )?;
-            check(
-                ffi::KSPGetIterationNumber(h.ksp, &mut its),
-                "KSPGetIterationNumber",
-            )?;
-        }
+        // SAFETY: live handles of this system.
+        let iterations = unsafe { run_ksp(&h, h.b, h.x, rtol, maxits)? };
         let solve_s = t1.elapsed().as_secs_f64();
-        let iterations = its.max(0) as usize;
-        if reason < 0 && reason != ffi::KSP_DIVERGED_ITS {
-            let mut rnorm = f64::NAN;
-            // SAFETY: writes one double.
-            unsafe { ffi::KSPGetResidualNorm(h.ksp, &mut rnorm) };
-            if reason == ffi::KSP_DIVERGED_NANORINF {
-                return Err(SolveError::NonFinite {
-                    method: super::METHOD,
-                    iteration: iterations,
-                    what: "KSP residual norm",
-                    value: rnorm,
-                });
-            }
-            return Err(SolveError::Breakdown {
-                method: super::METHOD,
-                iteration: iterations,
-                detail: format!(
-                    "KSPConvergedReason {reason} ({}), residual norm {rnorm:.3e}",
-                    reason_name(reason)
-                ),
-            });
-        }
         let t2 = Instant::now();
-        let mut delta = vec![0.0; self.n];
-        // SAFETY: the scattered copy holds all n entries on every rank until restored.
-        unsafe {
-            check(
-                ffi::VecScatterBegin(h.scatter, h.x, h.x_all, ffi::INSERT_VALUES, ffi::SCATTER_FORWARD),
-                "VecScatterBegin",
-            )?;
-            check(
-                ffi::VecScatterEnd(h.scatter, h.x, h.x_all, ffi::INSERT_VALUES, ffi::SCATTER_FORWARD),
-                "VecScatterEnd",
-            )?;
-            let mut a: *const f64 = ptr::null();
-            check(ffi::VecGetArrayRead(h.x_all, &mut a), "VecGetArrayRead")?;
-            if self.n > 0 {
-                delta.copy_from_slice(std::slice::from_raw_parts(a, self.n));
-            }
-            check(ffi::VecRestoreArrayRead(h.x_all, &mut a), "VecRestoreArrayRead")?;
-        }
+        // SAFETY: the scattered copy holds all n entries on every rank.
+        let delta = unsafe {
+            scatter(h.scatter, h.x, h.x_all)?;
+            read_local(h.x_all, self.n)?
+        };
         gather_s += t2.elapsed().as_secs_f64();
         record(|s| {
             s.ksp_solves += 1;
@@ -543,6 +639,234 @@ impl Solver {
             s.gather_s += gather_s;
         });
         Ok((delta, iterations))
+    }
+}
+
+/// KSPSolve of A x = b from x = 0 to the relative reduction `rtol` of the unpreconditioned
+/// residual in at most `maxits` iterations; returns the iterations. Running out of iterations
+/// is not an error (the caller judges the true residual); a breakdown is.
+///
+/// # Safety
+/// Live handles: `h`'s KSP set up, `b` and `x` laid out as its matrix's rows.
+unsafe fn run_ksp(h: &Handles, b: Vec_, x: Vec_, rtol: f64, maxits: PetscInt) -> Result<usize, SolveError> {
+    let (mut reason, mut its): (c_int, PetscInt) = (0, 0);
+    // SAFETY: as the caller promises; scalars written by PETSc.
+    unsafe {
+        check(ffi::VecSet(x, 0.0), "VecSet")?;
+        check(
+            ffi::KSPSetTolerances(
+                h.ksp,
+                rtol.clamp(1e-300, 1.0),
+                0.0,
+                ffi::PETSC_DEFAULT_REAL,
+                maxits.max(1),
+            ),
+            "KSPSetTolerances",
+        )?;
+        check(ffi::KSPSolve(h.ksp, b, x), "KSPSolve")?;
+        check(
+            ffi::KSPGetConvergedReason(h.ksp, &mut reason),
+            "KSPGetConvergedReason",
+        )?;
+        check(
+            ffi::KSPGetIterationNumber(h.ksp, &mut its),
+            "KSPGetIterationNumber",
+        )?;
+    }
+    let iterations = its.max(0) as usize;
+    if reason < 0 && reason != ffi::KSP_DIVERGED_ITS {
+        let mut rnorm = f64::NAN;
+        // SAFETY: writes one double.
+        unsafe { ffi::KSPGetResidualNorm(h.ksp, &mut rnorm) };
+        if reason == ffi::KSP_DIVERGED_NANORINF {
+            return Err(SolveError::NonFinite {
+                method: super::METHOD,
+                iteration: iterations,
+                what: "KSP residual norm",
+                value: rnorm,
+            });
+        }
+        return Err(SolveError::Breakdown {
+            method: super::METHOD,
+            iteration: iterations,
+            detail: format!(
+                "KSPConvergedReason {reason} ({}), residual norm {rnorm:.3e}",
+                reason_name(reason)
+            ),
+        });
+    }
+    Ok(iterations)
+}
+
+/// What a block system's solve did ([`BlockSolver::solve`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BlockSolve {
+    pub iterations: usize,
+    pub ksp_solves: usize,
+    pub rel_residual: f64,
+}
+
+/// A system whose rows each rank assembles from its own block of the model, with the
+/// columns' global indices: the rows of rank r are `first..first + m`, ranks in order.
+pub(crate) struct BlockSolver {
+    h: Mutex<Handles>,
+    m: usize,
+}
+
+impl BlockSolver {
+    /// Assembles this rank's rows `first..first + m` of the `total` (`row(k, columns,
+    /// values)` for a global row k) and sets up KSPCG + PCGAMG. Collective.
+    pub(crate) fn new(
+        first: usize,
+        m: usize,
+        total: usize,
+        row64: &super::BlockRow<'_>,
+    ) -> Result<Self, SolveError> {
+        let wide = std::cell::RefCell::new(Vec::new());
+        let row = |k: usize, c: &mut Vec<PetscInt>, v: &mut Vec<f64>| {
+            let mut w = wide.borrow_mut();
+            row64(k, &mut w, v);
+            c.clear();
+            // Checked against the total below (`to_int`), so every column fits.
+            c.extend(w.iter().map(|&j| j as PetscInt));
+        };
+        let row: &Row<'_> = &row;
+        if !running() {
+            return Err(SolveError::DistributedUnavailable {
+                why: "PETSc is not initialised: create a demcon_network::distributed::Session first".into(),
+            });
+        }
+        let t0 = Instant::now();
+        let (d_nnz, o_nnz, n_ghosts) = preallocation(first..first + m, row);
+        let mut h = Handles {
+            a: ptr::null_mut(),
+            b: ptr::null_mut(),
+            x: ptr::null_mut(),
+            scatter: ptr::null_mut(),
+            x_all: ptr::null_mut(),
+            ksp: ptr::null_mut(),
+            r: ptr::null_mut(),
+            d: ptr::null_mut(),
+        };
+        let sizes = (to_int(m, "rows of a rank")?, to_int(total, "unknowns")?);
+        assemble(&mut h, sizes, first..first + m, (&d_nnz, &o_nnz), row)?;
+        drop((d_nnz, o_nnz));
+        // SAFETY: `h.x` was created by `assemble`.
+        unsafe {
+            check(ffi::VecDuplicate(h.x, &mut h.r), "VecDuplicate")?;
+            check(ffi::VecDuplicate(h.x, &mut h.d), "VecDuplicate")?;
+        }
+        let assembly_s = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let solver = set_up_ksp(&mut h)?;
+        let setup_s = t1.elapsed().as_secs_f64();
+        let rows = all_gather(&[m as f64])?;
+        record(|s| {
+            s.systems += 1;
+            s.solver = solver;
+            s.assembly_s += assembly_s;
+            s.setup_s += setup_s;
+            if total >= s.max_unknowns {
+                s.max_unknowns = total;
+                let lo = rows.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = rows.iter().copied().fold(0.0, f64::max);
+                s.rows_per_rank = (lo as usize, hi as usize);
+                s.ghosts = n_ghosts;
+            }
+        });
+        Ok(Self { h: Mutex::new(h), m })
+    }
+
+    /// Solves A x = b (`b` this rank's rows) until ‖b − A x‖ ≤ `rel_tol` ‖b‖, the true
+    /// residual computed by PETSc's product with the assembled rows; returns this rank's x.
+    /// A KSP solve that stops short is restarted from the true residual (as the serial
+    /// methods' restart loop does) while each restart at least halves it, in at most
+    /// `max_iter` iterations in all. Collective.
+    ///
+    /// Errors: [`SolveError::NotConverged`] when the tolerance is not met; PETSc's failures.
+    pub(crate) fn solve(
+        &self,
+        b: &[f64],
+        rel_tol: f64,
+        max_iter: usize,
+    ) -> Result<(Vec<f64>, BlockSolve), SolveError> {
+        if b.len() != self.m {
+            return Err(SolveError::LengthMismatch {
+                what: "block right-hand side".into(),
+                expected: self.m,
+                got: b.len(),
+            });
+        }
+        let h = match self.h.lock() {
+            Ok(h) => h,
+            Err(p) => p.into_inner(),
+        };
+        let t0 = Instant::now();
+        let mut done = BlockSolve {
+            iterations: 0,
+            ksp_solves: 0,
+            rel_residual: 0.0,
+        };
+        let (mut b_norm, mut r_norm) = (0.0, 0.0);
+        // SAFETY: live handles of this system; vectors of `m` local rows.
+        unsafe {
+            write_local(h.b, b)?;
+            check(ffi::VecNorm(h.b, ffi::NORM_2, &mut b_norm), "VecNorm")?;
+            check(ffi::VecSet(h.x, 0.0), "VecSet")?;
+            check(ffi::VecCopy(h.b, h.r), "VecCopy")?;
+        }
+        if b_norm == 0.0 {
+            return Ok((vec![0.0; self.m], done));
+        }
+        let mut current = 1.0;
+        loop {
+            let left = max_iter.saturating_sub(done.iterations);
+            if current <= rel_tol || left == 0 {
+                break;
+            }
+            let maxits = to_int(left.min(i32::MAX as usize), "max_iter")?;
+            // SAFETY: as above.
+            unsafe {
+                done.iterations += run_ksp(&h, h.r, h.d, rel_tol / current, maxits)?.max(1);
+                check(ffi::VecAXPY(h.x, 1.0, h.d), "VecAXPY")?;
+                check(ffi::MatMult(h.a, h.x, h.r), "MatMult")?;
+                check(ffi::VecAYPX(h.r, -1.0, h.b), "VecAYPX")?;
+                check(ffi::VecNorm(h.r, ffi::NORM_2, &mut r_norm), "VecNorm")?;
+            }
+            done.ksp_solves += 1;
+            let next = r_norm / b_norm;
+            if !next.is_finite() {
+                return Err(SolveError::NonFinite {
+                    method: super::METHOD,
+                    iteration: done.iterations,
+                    what: "true residual norm",
+                    value: next,
+                });
+            }
+            let stalled = next > 0.5 * current;
+            current = next;
+            if stalled {
+                break;
+            }
+        }
+        done.rel_residual = current;
+        let solve_s = t0.elapsed().as_secs_f64();
+        record(|s| {
+            s.ksp_solves += done.ksp_solves;
+            s.iterations += done.iterations;
+            s.solve_s += solve_s;
+        });
+        if current > rel_tol {
+            return Err(SolveError::NotConverged {
+                method: super::METHOD,
+                iterations: done.iterations,
+                relative_residual: current,
+                tolerance: rel_tol,
+            });
+        }
+        // SAFETY: as above.
+        let x = unsafe { read_local(h.x, self.m)? };
+        Ok((x, done))
     }
 }
 
