@@ -33,7 +33,7 @@ use crate::thermal::{FixedSet, FixedTarget, ThermalBcs, ThermalSetup};
 
 /// Relative mismatch of the heat through the two held sets above which it is reported (the
 /// steady solves stop at a relative residual of 1e-10 and keep the two within ~1e-8).
-const FLOW_MISMATCH_WARNING: f64 = 1e-6;
+pub const FLOW_MISMATCH_WARNING: f64 = 1e-6;
 
 /// Relative difference between a held face's area and the mean section above which the
 /// section is reported as varying (a Laguerre prism matches to round-off; a cylinder's

@@ -62,7 +62,7 @@ pub use electric::{
     electric_surface_model, particle_conductivities, solve_electric,
 };
 pub use error::{FieldNames, ModelError};
-pub use etc::{EtcValue, effective_conductivity};
+pub use etc::{EtcValue, FLOW_MISMATCH_WARNING, effective_conductivity};
 pub use flux::{flux_density, flux_dipoles};
 pub use homogenize::{HomogenizeRun, TensorReport, homogenize_electric, homogenize_thermal};
 pub use image::check_conformable as check_image_conformable;

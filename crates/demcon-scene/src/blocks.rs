@@ -18,11 +18,16 @@ use std::path::Path;
 use std::time::Instant;
 
 use demcon_core::{Container, ParticleSet, Stages, Vec3};
-use demcon_graph::ghost_width_needed;
-use demcon_model::{Packed, PhaseRule, ThermalBc, ThermalSolver, build_block_model, thermal_setup};
+use demcon_graph::{ghost_width_needed, tessellate_part};
+use demcon_model::{
+    FLOW_MISMATCH_WARNING, Packed, PhaseRule, ThermalBc, ThermalSolver, TimeStepSpec, build_block_model,
+    thermal_setup,
+};
 use demcon_network::distributed::{BlockSystem, Halo, Session};
+use demcon_network::{FloatingPolicy, resolve_fixed};
 use demcon_packing::tile_block;
-use demcon_post::{Field, ProbeMethod, write_csv, write_vtu};
+use demcon_post::{Field, ProbeMethod, write_csv, write_pvd, write_vtu};
+use demcon_thermal::{ExplicitParams, SourceUpdate, ThermalSystem, TimeStep, TransientInput, run_explicit};
 use serde_json::json;
 
 use crate::build::tile_source;
@@ -31,11 +36,10 @@ use crate::error::SceneError;
 use crate::output::{RUN_MARKER, check_output_dir, io, split_dir, write_atomic};
 use crate::scene::Scene;
 
-/// The first ghost width tried, in mean particle diameters; the cells' reach widens it when
-/// needed (on the packings tried, 1.5 diameters is about the reach of a dense LS packing's cells).
-const FIRST_GHOST_WIDTH: f64 = 1.5;
+/// A ghost width is the cells' need × (1 + this): a margin against round-off in the reach.
+const GHOST_MARGIN: f64 = 0.01;
 
-/// Most ghost widths tried before giving up (each the last one's need × 1.05).
+/// Most ghost widths tried before giving up (each the last one's need with the margin).
 const GHOST_ROUNDS: usize = 4;
 
 /// Why a scene cannot be run by blocks (`None`: it can): its packing is not a tiling, or it
@@ -59,8 +63,10 @@ pub fn block_support(scene: &Scene) -> Option<String> {
         "conforming cells place seeds over the whole body (set `phase_rule: Centre`, `Laminate` or `Segment`)"
     } else if !p.model.defects.is_empty() {
         "cracks, damage and interface resistances are not distributed by blocks yet"
-    } else if thermal.is_none_or(|t| !matches!(t.solver, ThermalSolver::Steady)) {
-        "only a steady thermal solve is distributed by blocks yet"
+    } else if thermal.is_none_or(|t| matches!(t.solver, ThermalSolver::Implicit { .. })) {
+        "only the steady and the explicit thermal solves are distributed by blocks yet"
+    } else if !o.times.is_empty() {
+        "a transient's time series (`outputs.times`) is not written by blocks yet"
     } else if thermal.is_some_and(|t| {
         !t.sources.is_empty()
             || t.bcs
@@ -89,6 +95,7 @@ pub struct BlockOutcome {
 
 /// The block's sites (owned, then ghosts) with their global indices.
 struct Sites {
+    /// The sites until the model takes them.
     particles: ParticleSet,
     global: Vec<usize>,
     owned: usize,
@@ -130,18 +137,30 @@ pub fn run_blocks(
         report: pack_report,
     } = stages.time("packing", || tile_source(scene, None))?;
     let r_max = base.radii.iter().copied().fold(0.0, f64::max);
-    let d_mean = 2.0 * base.radii.iter().sum::<f64>() / base.len() as f64;
 
-    // The block, its model, and the ghost width its cells ask for (widened until enough).
-    let mut width = FIRST_GHOST_WIDTH * d_mean;
+    // The block, its model, and the ghost width its cells ask for (widened until enough). The
+    // first guess is what the periodic packing's own cells ask for: the tiling's interior
+    // cells are their copies (walls may enlarge a cell they cut: the check below then widens).
+    let lp = p.model.laguerre.as_ref().expect("block_support checked it");
+    // Walled, the packing's own cells in a walled box stand for the cells the walls cut.
+    let mut first = 0.0f64;
+    let walled = Container::Box {
+        size: base_c.period().expect("tile_source checked it"),
+    };
+    for c in std::iter::once(&base_c).chain(walls.then_some(&walled)) {
+        let (_, reach) = stages.time("tessellation", || tessellate_part(&base, c, None, lp, base.len()))?;
+        first = first.max(ghost_width_needed(&base.radii, &reach, r_max));
+    }
+    let mut width = (1.0 + GHOST_MARGIN) * first;
     let mut rounds = 0;
     let (sites, mut model) = loop {
         rounds += 1;
-        let sites = stages.time("packing", || {
+        let mut sites = stages.time("packing", || {
             block_sites(&base, &base_c, repeat, walls, (rank, ranks), width)
         })?;
         let packed = Packed {
-            particles: sites.particles.clone(),
+            // The model holds the sites from here on.
+            particles: std::mem::take(&mut sites.particles),
             container: sites.container,
             report: None,
             imported_from: None,
@@ -160,7 +179,7 @@ pub fn run_blocks(
                 format!("the cells still reach {need:.4e} m after {GHOST_ROUNDS} widenings"),
             ));
         }
-        width = 1.05 * need;
+        width = (1.0 + GHOST_MARGIN) * need;
     };
     drop(base);
     let n_owned = sites.owned;
@@ -230,21 +249,54 @@ pub fn run_blocks(
         v.push(diag);
     };
     let solve = &thermal.solve;
-    let (temps, report) = stages.time("solve", || -> Result<_, SceneError> {
-        let system = BlockSystem::new(session, sites.first, n_owned, sites.total, &row)?;
-        Ok(system.solve(&rhs, solve.rel_tol, solve.max_iter)?)
-    })?;
-    let ghost_temps = halo.exchange(&temps)?;
+    let (temps, solve_report) = match thermal.solver {
+        ThermalSolver::Explicit { t_end, dt } => stages.time("solve", || {
+            explicit(
+                session,
+                (&halo, n_owned),
+                (&model, &setup),
+                thermal,
+                &wall_t,
+                (t_end, dt),
+            )
+        })?,
+        _ => stages.time("solve", || -> Result<_, SceneError> {
+            let system = BlockSystem::new(session, sites.first, n_owned, sites.total, &row)?;
+            let (t, r) = system.solve(&rhs, solve.rel_tol, solve.max_iter)?;
+            let report = json!({
+                "scheme": "steady",
+                "method": demcon_network::distributed::METHOD,
+                "rel_tol": solve.rel_tol,
+                "iterations": r.iterations,
+                "ksp_solves": r.ksp_solves,
+                "relative_residual": r.relative_residual,
+            });
+            Ok((t, report))
+        })?,
+    };
 
     // The effective conductivity and the probes: sums over the ranks in rank order.
     let flows = wall_flows(&setup.walls, setup.wall_conductances(), &temps, &wall_t, n_local);
     let flows = session.sum(&flows)?;
+    let mut warnings = Vec::new();
     let etc = match etc_axis {
-        Some(axis) => Some(block_etc(&plan.faces, &wall_t, &flows, &sites.container, axis)?),
+        Some(axis) => {
+            let (etc, w) = block_etc(&plan.faces, &wall_t, &flows, &sites.container, axis)?;
+            warnings.extend(w);
+            Some(etc)
+        }
         None => None,
     };
     let volumes = &setup.rep_volumes[..n_owned];
-    let probes = stages.time("probes", || probe_values(session, p, &sites, &temps, volumes))?;
+    let probes = stages.time("probes", || {
+        probe_values(
+            session,
+            (p, thermal.solver.final_time()),
+            (&sites, &model.particles),
+            &temps,
+            volumes,
+        )
+    })?;
 
     // Outputs: each rank its pieces, rank 0 the summary and the `.pvtu`.
     let degree: Vec<i32> = (0..n_owned)
@@ -255,6 +307,7 @@ pub fn run_blocks(
         })
         .collect();
     let peak = stages.peak_rss_bytes().unwrap_or(0) as f64;
+    session.gather_peak_memory(peak)?;
     let peaks = session.all_gather(&[peak, n_owned as f64, sites.ghost_ids.len() as f64])?;
     let tmp = partial_dir(out)?;
     if rank == 0 {
@@ -268,14 +321,27 @@ pub fn run_blocks(
         phases: model.particles.phases[..n_owned].to_vec(),
     };
     let solved = vec![1i32; n_owned];
+    // The serial `particles.vtu`'s fields, in its order (the laminate rule's two included).
+    let lam = model.laminates();
+    let fraction: Vec<f64> = (0..n_owned)
+        .map(|q| lam.get(q).map_or(1.0, |x| 1.0 - x.other_fraction))
+        .collect();
+    let other: Vec<f64> = (0..n_owned)
+        .map(|q| f64::from(lam.get(q).map_or(owned.phases[q], |x| x.other_phase)))
+        .collect();
+    let scalars: [(&str, &[f64]); 4] = [
+        ("phase_fraction", &fraction),
+        ("other_phase", &other),
+        ("temperature", &temps),
+        ("volume", volumes),
+    ];
     let o = &scene.config().outputs;
     if o.vtk {
-        let fields = [
+        let mut fields = vec![
             Field::ints("coordination", &degree),
             Field::ints("solved", &solved),
-            Field::scalars("temperature", &temps),
-            Field::scalars("volume", volumes),
         ];
+        fields.extend(scalars.iter().map(|(name, v)| Field::scalars(name, v)));
         write_vtu(
             tmp.join(format!("particles/particles_{rank}.vtu")),
             &owned,
@@ -284,22 +350,16 @@ pub fn run_blocks(
     }
     if o.particles_csv {
         let c = |k: usize| -> Vec<f64> { owned.centres.iter().map(|x| x[k]).collect() };
+        let (x, y, z) = (c(0), c(1), c(2));
         let phase: Vec<f64> = owned.phases.iter().map(|&q| f64::from(q)).collect();
         let ones = vec![1.0; n_owned];
-        write_csv(
-            tmp.join(format!("particles_{rank}.csv")),
-            &[
-                "x",
-                "y",
-                "z",
-                "radius",
-                "phase",
-                "solved",
-                "temperature",
-                "volume",
-            ],
-            &[&c(0), &c(1), &c(2), &owned.radii, &phase, &ones, &temps, volumes],
-        )?;
+        let mut header = vec!["x", "y", "z", "radius", "phase", "solved"];
+        let mut cols: Vec<&[f64]> = vec![&x, &y, &z, &owned.radii, &phase, &ones];
+        for (name, v) in &scalars {
+            header.push(name);
+            cols.push(v);
+        }
+        write_csv(tmp.join(format!("particles_{rank}.csv")), &header, &cols)?;
     }
     session.all_gather(&[0.0])?;
     let summary = json!({
@@ -313,25 +373,24 @@ pub fn run_blocks(
         "ghosts_per_rank": peaks.chunks(3).map(|c| c[2] as usize).collect::<Vec<_>>(),
         "peak_rss_bytes_per_rank": peaks.chunks(3).map(|c| c[0]).collect::<Vec<_>>(),
         "packing": pack_report.as_ref().map(|r| json!({"tile_particles": r.packing.n, "phi": r.packing.phi, "stop": format!("{:?}", r.stop)})),
-        "solve": {
-            "method": demcon_network::distributed::METHOD,
-            "rel_tol": solve.rel_tol,
-            "iterations": report.iterations,
-            "ksp_solves": report.ksp_solves,
-            "relative_residual": report.relative_residual,
-        },
+        "solve": solve_report,
         "etc": etc,
         "probes": probes.clone(),
         "distributed": crate::output::distributed_json(),
         "stages_rank0": stages.records().iter().map(|s| json!({"stage": s.stage, "wall_s": s.wall_s, "peak_rss_bytes": s.peak_rss_bytes})).collect::<Vec<_>>(),
         "wall_s": t0.elapsed().as_secs_f64(),
-        "warnings": Vec::<String>::new(),
+        "warnings": warnings,
     });
     let mut files = Vec::new();
     if rank == 0 {
         if o.vtk {
             write_pvtu(&tmp.join("particles.pvtu"), ranks)?;
             files.push("particles.pvtu".into());
+            // A transient's end state, at its time, as the serial run's series names it.
+            if let ThermalSolver::Explicit { t_end, .. } = thermal.solver {
+                write_pvd(tmp.join("particles.pvd"), &[(t_end, "particles.pvtu".into())])?;
+                files.push("particles.pvd".into());
+            }
             files.push(format!("particles/particles_{{0..{}}}.vtu", ranks - 1));
         }
         if o.particles_csv {
@@ -341,8 +400,9 @@ pub fn run_blocks(
             let mut t = String::from("probe,field,t_s,value,solved\n");
             for p in &probes {
                 t.push_str(&format!(
-                    "{},temperature,0,{:.10e},1\n",
+                    "{},temperature,{},{:.10e},1\n",
                     p["name"].as_str().unwrap_or(""),
+                    p["t"],
                     p["value"].as_f64().unwrap_or(f64::NAN)
                 ));
             }
@@ -358,8 +418,112 @@ pub fn run_blocks(
         }
         std::fs::rename(&tmp, out).map_err(io(out))?;
     }
-    drop(ghost_temps);
     Ok(BlockOutcome { files, summary })
+}
+
+/// The explicit transient of a block: the serial time march on the block's network (owned,
+/// ghosts and walls), the ghosts' temperatures brought from their owners after every step; the
+/// step is the whole body's (the smallest bound over the ranks). Returns the owned particles'
+/// temperatures at `t_end` and what the march did.
+fn explicit(
+    session: &Session,
+    (halo, owned): (&Halo, usize),
+    (model, setup): (&demcon_model::Model, &demcon_model::ThermalSetup),
+    thermal: &demcon_model::ThermalProblem,
+    wall_t: &[f64],
+    (t_end, dt): (f64, TimeStepSpec),
+) -> Result<(Vec<f64>, serde_json::Value), SceneError> {
+    let net = setup.network(model);
+    let sets: Vec<(Vec<u32>, f64)> = (0..wall_t.len())
+        .map(|w| (vec![setup.walls.node(w)], wall_t[w]))
+        .collect();
+    // A transient is well posed on every cluster: a block's part away from the walls is kept.
+    let constraints = resolve_fixed(net, &sets, FloatingPolicy::Keep)?;
+    let system = ThermalSystem::new(net, &setup.conductances, &setup.capacities, &constraints)?;
+    // The whole body's bound: each node's C/ΣH is exact on its owner and no smaller elsewhere
+    // (a ghost lacks some of its links), so the smallest over the ranks is the serial one.
+    let local = system.stable_dt_bound().dt_max;
+    let bound = session
+        .all_gather(&[local])?
+        .into_iter()
+        .fold(f64::INFINITY, f64::min);
+    let step = match dt {
+        TimeStepSpec::Auto { safety } => TimeStep::Fixed {
+            dt: (safety * bound).min(t_end),
+            allow_unstable: false,
+        },
+        TimeStepSpec::Fixed { dt, allow_unstable } => TimeStep::Fixed { dt, allow_unstable },
+        TimeStepSpec::Paper { .. } => {
+            return Err(SceneError::invalid(
+                "thermal.solver.dt",
+                "Paper",
+                "the paper's estimate needs the Calibrated surface model",
+            ));
+        }
+    };
+    // The march checks a fixed step against this block's bound only.
+    if let TimeStep::Fixed {
+        dt,
+        allow_unstable: false,
+    } = step
+        && dt > bound
+    {
+        return Err(SceneError::invalid(
+            "thermal.solver.dt",
+            format!("{dt:e} s"),
+            format!("at most the positivity bound {bound:e} s (min C/ΣH over the body)"),
+        ));
+    }
+    let mut t0 = vec![thermal.initial_temperature; net.n_nodes()];
+    constraints.impose(&mut t0);
+    let sources = vec![0.0; net.n_nodes()];
+    let params = ExplicitParams {
+        t_end,
+        dt: step,
+        output_times: thermal.output_times.clone(),
+        ..ExplicitParams::default()
+    };
+    let mut ghosts = Ghosts { halo, owned };
+    let run = run_explicit(
+        &system,
+        TransientInput {
+            temperatures: &t0,
+            sources: &sources,
+        },
+        &params,
+        |_, _| {},
+        &mut ghosts,
+    )?;
+    let r = &run.report;
+    let report = json!({
+        "scheme": "forward-euler",
+        "t_end_s": t_end,
+        "dt_s": r.dt,
+        "steps": r.steps,
+        "dt_bound_s": bound,
+        "ghost_exchanges": r.steps,
+    });
+    Ok((run.temperatures[..ghosts.owned].to_vec(), report))
+}
+
+/// Brings the ghosts' temperatures from their owners after every step of a march.
+struct Ghosts<'a> {
+    halo: &'a Halo,
+    owned: usize,
+}
+
+impl SourceUpdate for Ghosts<'_> {
+    type Error = SceneError;
+
+    fn update(&mut self, _t: f64, _temps: &[f64]) -> Result<Option<Vec<f64>>, SceneError> {
+        Ok(None)
+    }
+
+    fn exchange(&mut self, temps: &mut [f64]) -> Result<(), SceneError> {
+        let ghosts = self.halo.exchange(&temps[..self.owned])?;
+        temps[self.owned..self.owned + ghosts.len()].copy_from_slice(&ghosts);
+        Ok(())
+    }
 }
 
 /// The hidden sibling folder the ranks write their pieces into before rank 0 moves it to `out`.
@@ -436,7 +600,7 @@ fn block_etc(
     flows: &[f64],
     container: &Container,
     axis: AxisConfig,
-) -> Result<serde_json::Value, SceneError> {
+) -> Result<(serde_json::Value, Vec<String>), SceneError> {
     use demcon_core::Face;
     let k = match axis {
         AxisConfig::X => 0,
@@ -474,7 +638,17 @@ fn block_etc(
     let length = e[k];
     let section = e.x * e.y * e.z / length;
     let q = 0.5 * (q_in + q_out);
-    Ok(json!({
+    let mismatch = (q_in - q_out).abs() / q_in.abs().max(q_out.abs()).max(f64::MIN_POSITIVE);
+    let warnings: Vec<String> = (mismatch > FLOW_MISMATCH_WARNING)
+        .then(|| {
+            format!(
+                "ETC: the heat entering through the hot face ({q_in:.6e} W) and leaving through the cold one \
+                 ({q_out:.6e} W) differ by {mismatch:.2e} (relative): λ_e uses their mean"
+            )
+        })
+        .into_iter()
+        .collect();
+    let etc = json!({
         "axis": format!("{axis:?}"),
         "lambda_e": q * length / (section * dt.abs()),
         "heat_flow_w": q,
@@ -482,15 +656,17 @@ fn block_etc(
         "cold_flow_w": q_out,
         "length_m": length,
         "section_m2": section,
-    }))
+        "warnings": warnings,
+    });
+    Ok((etc, warnings))
 }
 
 /// Each probe's temperature: the nearest particle's (ties: lowest global index), or the
 /// ball average weighted by the cells' volumes, gathered over the ranks.
 fn probe_values(
     session: &Session,
-    p: &crate::convert::Problem,
-    sites: &Sites,
+    (p, t): (&crate::convert::Problem, f64),
+    (sites, particles): (&Sites, &ParticleSet),
     temps: &[f64],
     volumes: &[f64],
 ) -> Result<Vec<serde_json::Value>, SceneError> {
@@ -504,7 +680,7 @@ fn probe_values(
         }
         d.norm()
     };
-    let centres = &sites.particles.centres[..sites.owned];
+    let centres = &particles.centres[..sites.owned];
     let mut out = Vec::new();
     for (i, probe) in p.post.probes.iter().enumerate() {
         let value = match probe.method {
@@ -543,9 +719,7 @@ fn probe_values(
                 s[0] / s[1]
             }
         };
-        out.push(
-            json!({"name": probe.name, "field": "temperature", "t": 0.0, "value": value, "solved": true}),
-        );
+        out.push(json!({"name": probe.name, "field": "temperature", "t": t, "value": value, "solved": true}));
     }
     Ok(out)
 }
@@ -561,6 +735,8 @@ fn write_pvtu(path: &Path, ranks: usize) -> Result<(), SceneError> {
         ("UInt16", "phase", 1),
         ("Int32", "coordination", 1),
         ("Int32", "solved", 1),
+        ("Float64", "phase_fraction", 1),
+        ("Float64", "other_phase", 1),
         ("Float64", "temperature", 1),
         ("Float64", "volume", 1),
     ] {

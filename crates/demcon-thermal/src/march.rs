@@ -473,6 +473,7 @@ pub(crate) fn march<S: Stepper, U: SourceUpdate>(
         let k0 = if seg == first_segment { first_step } else { 0 };
         for k in k0..segment.n_steps {
             let t_now = run.step(segment, k, t_start, stop - t_start)?;
+            update.exchange(&mut run.cur)?;
             if let Some(new) = update.update(t_now, &run.cur)? {
                 run.set_sources(t_now, new)?;
             }

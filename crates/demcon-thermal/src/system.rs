@@ -122,6 +122,17 @@ pub trait SourceUpdate {
     /// # Errors
     /// Any error stops the run and is returned by the solver.
     fn update(&mut self, t: f64, temps: &[f64]) -> Result<Option<Vec<f64>>, Self::Error>;
+
+    /// Called after every step, before [`SourceUpdate::update`], with the temperatures
+    /// reached: may overwrite the nodes this process does not own with their owners' values
+    /// (an MPI rank's ghosts, `demcon run --distributed` by blocks). Does nothing by default.
+    ///
+    /// # Errors
+    /// Any error stops the run and is returned by the solver.
+    fn exchange(&mut self, temps: &mut [f64]) -> Result<(), Self::Error> {
+        let _ = temps;
+        Ok(())
+    }
 }
 
 /// Sources that never change.
@@ -176,6 +187,10 @@ impl<U: SourceUpdate + ?Sized> SourceUpdate for &mut U {
 
     fn update(&mut self, t: f64, temps: &[f64]) -> Result<Option<Vec<f64>>, U::Error> {
         (**self).update(t, temps)
+    }
+
+    fn exchange(&mut self, temps: &mut [f64]) -> Result<(), U::Error> {
+        (**self).exchange(temps)
     }
 }
 

@@ -339,11 +339,32 @@ fn print_blocks(name: &str, s: &serde_json::Value, wall_s: f64) {
         per_rank("ghosts_per_rank"),
         s["ghost_width_m"].as_f64().unwrap_or(0.0)
     );
-    println!(
-        "  solve: {} iterations, relative residual {:.2e}",
-        s["solve"]["iterations"],
-        s["solve"]["relative_residual"].as_f64().unwrap_or(f64::NAN)
-    );
+    let solve = &s["solve"];
+    if solve["scheme"] == "forward-euler" {
+        println!(
+            "  thermal forward-euler: {} steps of {:.3e} s to t = {} s (bound {:.3e} s), ghosts exchanged after each",
+            solve["steps"],
+            solve["dt_s"].as_f64().unwrap_or(f64::NAN),
+            solve["t_end_s"],
+            solve["dt_bound_s"].as_f64().unwrap_or(f64::NAN)
+        );
+    } else {
+        println!(
+            "  thermal steady: {} iterations, relative residual {:.2e}",
+            solve["iterations"],
+            solve["relative_residual"].as_f64().unwrap_or(f64::NAN)
+        );
+    }
+    if let Some(probes) = s["probes"].as_array() {
+        for p in probes {
+            println!(
+                "  probe {} temperature at t = {} s: {:.6}",
+                p["name"].as_str().unwrap_or("?"),
+                p["t"],
+                p["value"].as_f64().unwrap_or(f64::NAN)
+            );
+        }
+    }
     if let Some(l) = s["etc"]["lambda_e"].as_f64() {
         println!(
             "  ETC along {}: {l:.6} W/(m·K)",

@@ -875,14 +875,28 @@ pub fn tessellate(
     carve: Option<&Region>,
     params: &LaguerreParams,
 ) -> Result<ContactGraph, GraphError> {
-    tessellate_part(particles, container, carve, params, particles.len()).map(|(g, _)| g)
+    let start = Instant::now();
+    with_setup(particles, container, carve, params, |setup| {
+        let cells = build_cells(setup, particles.len())?;
+        let r_mean = particles.radii.iter().sum::<f64>() / particles.len() as f64;
+        assemble(
+            particles,
+            container,
+            carve,
+            cells,
+            params,
+            (r_mean, particles.len()),
+            start,
+        )
+    })
 }
 
 /// The Laguerre cells of the first `owned` particles only, the others being read-only
 /// neighbours (an MPI rank's ghosts, `docs/distributed.md`): the graph holds every facet of an
 /// owned cell (towards owned or other particles), each area as the owned side computes it;
 /// the other particles' cells are empty (volume 0, no wall facet) and their facets among
-/// themselves absent. Also returns each owned cell's reach ρ_p, the distance from its site to
+/// themselves absent (all particles owned: the graph of [`tessellate`]). Also returns each
+/// owned cell's reach ρ_p, the distance from its site to
 /// its farthest vertex (m): a sphere j of radius ≤ R_max can cut cell p only if
 /// |x_j − x_p| < ρ_p + √(ρ_p² − R_p² + R_max²), so when every sphere within that distance of
 /// an owned site is among `particles`, the owned cells are those of the whole packing.
@@ -905,27 +919,29 @@ pub fn tessellate_part(
     }
     let start = Instant::now();
     with_setup(particles, container, carve, params, |setup| {
-        let results: Vec<Result<CellOut, CellFail>> = (0..owned)
-            .into_par_iter()
-            .map_init(
-                || (Cell::default(), Vec::new(), Vec::new()),
-                |(cell, cands, near), p| setup.cell(p, cell, cands, near),
-            )
-            .collect();
-        let mut cells = Vec::with_capacity(particles.len());
-        for (p, r) in results.into_iter().enumerate() {
-            cells.push(r.map_err(|e| setup.error(p, e))?);
-        }
-        let reach: Vec<f64> = if owned < particles.len() {
-            cells.iter().map(|c| c.far).collect()
-        } else {
-            Vec::new()
-        };
+        let mut cells = build_cells(setup, owned)?;
+        let reach: Vec<f64> = cells.iter().map(|c| c.far).collect();
         cells.resize_with(particles.len(), CellOut::default);
         let r_mean = particles.radii.iter().sum::<f64>() / particles.len() as f64;
         let graph = assemble(particles, container, carve, cells, params, (r_mean, owned), start)?;
         Ok((graph, reach))
     })
+}
+
+/// The cells of the first `owned` sites, in parallel (each depends only on its own inputs).
+fn build_cells(setup: &Setup<'_>, owned: usize) -> Result<Vec<CellOut>, GraphError> {
+    let results: Vec<Result<CellOut, CellFail>> = (0..owned)
+        .into_par_iter()
+        .map_init(
+            || (Cell::default(), Vec::new(), Vec::new()),
+            |(cell, cands, near), p| setup.cell(p, cell, cands, near),
+        )
+        .collect();
+    let mut cells = Vec::with_capacity(setup.pos.len());
+    for (p, r) in results.into_iter().enumerate() {
+        cells.push(r.map_err(|e| setup.error(p, e))?);
+    }
+    Ok(cells)
 }
 
 /// The ghost width (m) that certifies cells built by [`tessellate_part`]: the largest
