@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reads a VTK XML file (.vtu, .vtp) or a ParaView collection (.pvd) with VTK's own readers
+"""Reads a VTK XML file (.vtu, .vtp, a parallel .pvtu with its pieces) or a ParaView collection (.pvd) with VTK's own readers
 (the library ParaView is built on) and prints what it found as JSON: point and cell counts,
 cell types, points, and every point and cell array with its values. The tests of demcon's
 writers compare this with what they wrote: an independent reader, not our own parser.
@@ -29,7 +29,11 @@ def arrays(data):
 
 
 def read_dataset(path):
-    readers = {".vtu": vtk.vtkXMLUnstructuredGridReader, ".vtp": vtk.vtkXMLPolyDataReader}
+    readers = {
+        ".vtu": vtk.vtkXMLUnstructuredGridReader,
+        ".pvtu": vtk.vtkXMLPUnstructuredGridReader,
+        ".vtp": vtk.vtkXMLPolyDataReader,
+    }
     reader = readers[path.suffix]()
     reader.SetFileName(str(path))
     errors = vtk.vtkStringOutputWindow()

@@ -474,6 +474,8 @@ fn explicit(
             format!("at most the positivity bound {bound:e} s (min C/ΣH over the body)"),
         ));
     }
+    // One initial temperature and every held wall in every block (linked or not): each rank's
+    // maximum-principle envelope is the whole body's.
     let mut t0 = vec![thermal.initial_temperature; net.n_nodes()];
     constraints.impose(&mut t0);
     let sources = vec![0.0; net.n_nodes()];

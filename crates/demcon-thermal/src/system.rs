@@ -125,7 +125,9 @@ pub trait SourceUpdate {
 
     /// Called after every step, before [`SourceUpdate::update`], with the temperatures
     /// reached: may overwrite the nodes this process does not own with their owners' values
-    /// (an MPI rank's ghosts, `demcon run --distributed` by blocks). Does nothing by default.
+    /// (an MPI rank's ghosts, `demcon run --distributed` by blocks). The march's maximum-principle
+    /// envelope stays this process's own (its initial and fixed values): give every process
+    /// the whole range. Does nothing by default.
     ///
     /// # Errors
     /// Any error stops the run and is returned by the solver.

@@ -495,3 +495,93 @@ fn sources_updated_during_a_run_follow_the_hook_and_keep_the_ledger() {
     );
     assert!(matches!(stop, Err(ThermalError::InvalidParameter { ref field, .. }) if field == "hook"));
 }
+
+/// Brings a block's ghost temperature from its neighbour block after every step (the
+/// `SourceUpdate::exchange` of `demcon run --distributed` by blocks, here over a channel).
+struct Neighbour {
+    /// Local node whose value the other block needs, and the local ghost node it fills.
+    send: usize,
+    ghost: usize,
+    tx: std::sync::mpsc::Sender<f64>,
+    rx: std::sync::mpsc::Receiver<f64>,
+}
+
+impl demcon_thermal::SourceUpdate for Neighbour {
+    type Error = ThermalError;
+
+    fn update(&mut self, _t: f64, _temps: &[f64]) -> Result<Option<Vec<f64>>, ThermalError> {
+        Ok(None)
+    }
+
+    fn exchange(&mut self, temps: &mut [f64]) -> Result<(), ThermalError> {
+        self.tx.send(temps[self.send]).unwrap();
+        temps[self.ghost] = self.rx.recv().unwrap();
+        Ok(())
+    }
+}
+
+#[test]
+fn two_blocks_exchanging_their_ghosts_every_step_march_as_the_whole_chain() {
+    // A chain of 12 nodes, blocks 0..6 and 6..12, each with one ghost across the cut.
+    let n = 12;
+    let k = 6;
+    let chain =
+        |m: usize| Network::new(m, &(0..m as u32 - 1).map(|i| [i, i + 1]).collect::<Vec<_>>()).unwrap();
+    // Each block's initial range is the whole chain's: the march's maximum-principle envelope
+    // is each process's own (its initial and fixed values).
+    let t0: Vec<f64> = (0..n).map(|i| [20.0, 45.0, 31.5, 27.25][i % 4]).collect();
+    let params = ExplicitParams {
+        t_end: 3.0,
+        dt: TimeStep::Fixed {
+            dt: 0.4,
+            allow_unstable: false,
+        },
+        ..Default::default()
+    };
+    let march = |net: &Network, t: &[f64], update: Option<Neighbour>| {
+        let m = net.n_nodes();
+        let free = resolve_fixed(net, &[], FloatingPolicy::Keep).unwrap();
+        let g = vec![1.0; m - 1];
+        let c = vec![1.0; m];
+        let system = ThermalSystem::new(net, &g, &c, &free).unwrap();
+        let input = TransientInput {
+            temperatures: t,
+            sources: &vec![0.0; m],
+        };
+        match update {
+            Some(u) => run_explicit(&system, input, &params, |_, _| {}, u),
+            None => run_explicit(&system, input, &params, |_, _| {}, ()),
+        }
+        .unwrap()
+        .temperatures
+    };
+    let whole = march(&chain(n), &t0, None);
+    let (a_tx, b_rx) = std::sync::mpsc::channel();
+    let (b_tx, a_rx) = std::sync::mpsc::channel();
+    // Block A: global 0..=k (k its ghost); block B: global k-1..n (local 0 its ghost).
+    let a = Neighbour {
+        send: k - 1,
+        ghost: k,
+        tx: a_tx,
+        rx: a_rx,
+    };
+    let b = Neighbour {
+        send: 1,
+        ghost: 0,
+        tx: b_tx,
+        rx: b_rx,
+    };
+    let (ta, tb) = (t0[..=k].to_vec(), t0[k - 1..].to_vec());
+    let (left, right) = std::thread::scope(|s| {
+        let left = s.spawn(|| march(&chain(k + 1), &ta, Some(a)));
+        let right = s.spawn(|| march(&chain(n - k + 1), &tb, Some(b)));
+        (left.join().unwrap(), right.join().unwrap())
+    });
+    let joined: Vec<f64> = left[..k].iter().chain(&right[1..]).copied().collect();
+    assert_eq!(
+        joined, whole,
+        "the owned nodes of the two blocks are the whole chain's, bit for bit"
+    );
+    // The march moved them (otherwise the test proves nothing).
+    assert!((whole[0] - t0[0]).abs() > 1.0);
+}
