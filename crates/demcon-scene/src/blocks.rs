@@ -18,7 +18,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use demcon_core::{Container, ParticleSet, Stages, Vec3};
-use demcon_graph::{ghost_width_needed, tessellate_part};
+use demcon_graph::{CellWall, ghost_width_needed, tessellate_part};
 use demcon_model::{
     FLOW_MISMATCH_WARNING, Packed, PhaseRule, ThermalBc, ThermalSolver, TimeStepSpec, build_block_model,
     thermal_setup,
@@ -69,11 +69,15 @@ pub fn block_support(scene: &Scene) -> Option<String> {
         "a transient's time series (`outputs.times`) is not written by blocks yet"
     } else if thermal.is_some_and(|t| {
         !t.sources.is_empty()
-            || t.bcs
-                .iter()
-                .any(|b| !matches!(b, ThermalBc::WallTemperature { value, .. } if value.is_constant()))
+            || t.bcs.iter().any(|b| match b {
+                ThermalBc::WallTemperature { value, .. } => !value.is_constant(),
+                ThermalBc::HeatFlux { flux, .. } => !flux.is_constant(),
+                ThermalBc::Convection { t_inf, .. } => !t_inf.is_constant(),
+                ThermalBc::FixedTemperature { .. } | ThermalBc::Radiation { .. } => true,
+            })
     }) {
-        "only constant `WallTemperature` conditions are distributed by blocks yet"
+        "only constant `WallTemperature`, `HeatFlux` and `Convection` conditions are distributed by blocks \
+         yet (no radiation, no time tables, no volume sources)"
     } else if !p.post.profiles.is_empty() || p.post.halo.is_some() || p.post.flux {
         "profiles, the heat flux and its Halo are not distributed by blocks yet"
     } else if o.contacts_vtk || o.cells_vtk || o.plots {
@@ -199,12 +203,27 @@ pub fn run_blocks(
             wall_t[*w] = value.at(0.0);
         }
     }
+    // A face exchanging heat by convection is a wall held at the surroundings' temperature,
+    // behind the film (in its links' conductances: `thermal_setup`).
+    for x in &setup.surroundings.faces {
+        wall_t[x.wall] = x.reference();
+    }
     if wall_t.is_empty() {
         return Err(SceneError::invalid(
             "thermal.bcs",
-            "no WallTemperature",
-            "a steady solve by blocks needs at least one face held at a temperature",
+            "no WallTemperature or Convection",
+            "a steady solve by blocks needs at least one face held at a temperature or exchanging heat",
         ));
+    }
+    // Imposed fluxes: each owned cell's facet on the face receives the flux through its area (W).
+    let mut sources = vec![0.0; net_nodes(&setup, &model)];
+    let cells = model.graph.cells.as_deref().expect("a Laguerre model");
+    for bc in &thermal.bcs {
+        if let ThermalBc::HeatFlux { face, flux } = bc {
+            for f in cells.on_wall(CellWall::of(*face)) {
+                sources[f.particle as usize] += flux.at(0.0) * f.area;
+            }
+        }
     }
 
     // This rank's rows: its owned particles, every column a particle's global index; the walls'
@@ -215,7 +234,7 @@ pub fn run_blocks(
     let g = &setup.conductances;
     let n_local = model.particles.len();
     let global = |j: usize| sites.global[j] as i64;
-    let mut rhs = vec![0.0; n_owned];
+    let mut rhs = sources[..n_owned].to_vec();
     for (i, b) in rhs.iter_mut().enumerate() {
         for e in row_ptr[i]..row_ptr[i + 1] {
             let j = cols[e] as usize;
@@ -256,7 +275,7 @@ pub fn run_blocks(
                 (&halo, n_owned),
                 (&model, &setup),
                 thermal,
-                &wall_t,
+                (&wall_t, &sources),
                 (t_end, dt),
             )
         })?,
@@ -430,7 +449,7 @@ fn explicit(
     (halo, owned): (&Halo, usize),
     (model, setup): (&demcon_model::Model, &demcon_model::ThermalSetup),
     thermal: &demcon_model::ThermalProblem,
-    wall_t: &[f64],
+    (wall_t, sources): (&[f64], &[f64]),
     (t_end, dt): (f64, TimeStepSpec),
 ) -> Result<(Vec<f64>, serde_json::Value), SceneError> {
     let net = setup.network(model);
@@ -478,7 +497,6 @@ fn explicit(
     // maximum-principle envelope is the whole body's.
     let mut t0 = vec![thermal.initial_temperature; net.n_nodes()];
     constraints.impose(&mut t0);
-    let sources = vec![0.0; net.n_nodes()];
     let params = ExplicitParams {
         t_end,
         dt: step,
@@ -490,7 +508,7 @@ fn explicit(
         &system,
         TransientInput {
             temperatures: &t0,
-            sources: &sources,
+            sources,
         },
         &params,
         |_, _| {},
@@ -526,6 +544,11 @@ impl SourceUpdate for Ghosts<'_> {
         temps[self.owned..self.owned + ghosts.len()].copy_from_slice(&ghosts);
         Ok(())
     }
+}
+
+/// Nodes of a block's thermal network: its particles, then its walls.
+fn net_nodes(setup: &demcon_model::ThermalSetup, model: &demcon_model::Model) -> usize {
+    setup.network(model).n_nodes()
 }
 
 /// The hidden sibling folder the ranks write their pieces into before rank 0 moves it to `out`.

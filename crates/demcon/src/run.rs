@@ -345,7 +345,7 @@ fn print_blocks(name: &str, s: &serde_json::Value, wall_s: f64) {
             "  thermal forward-euler: {} steps of {:.3e} s to t = {} s (bound {:.3e} s), ghosts exchanged after each",
             solve["steps"],
             solve["dt_s"].as_f64().unwrap_or(f64::NAN),
-            solve["t_end_s"],
+            solve["t_end_s"].as_f64().unwrap_or(f64::NAN),
             solve["dt_bound_s"].as_f64().unwrap_or(f64::NAN)
         );
     } else {
@@ -360,7 +360,7 @@ fn print_blocks(name: &str, s: &serde_json::Value, wall_s: f64) {
             println!(
                 "  probe {} temperature at t = {} s: {:.6}",
                 p["name"].as_str().unwrap_or("?"),
-                p["t"],
+                p["t"].as_f64().unwrap_or(0.0),
                 p["value"].as_f64().unwrap_or(f64::NAN)
             );
         }

@@ -448,6 +448,51 @@ fn explicit_transient_by_blocks_equals_serial_to_round_off() {
 }
 
 #[test]
+fn convection_and_heat_flux_by_blocks_equal_serial() {
+    let d = scratch("distributed", "blocks-conditions");
+    let text = TILED
+        .replace("REPEAT", "(2, 2, 2)")
+        .replace(
+            "bcs: [WallTemperature(face: YMin, value: 25.0), WallTemperature(face: YMax, value: 35.0)],",
+            "bcs: [Convection(face: YMin, h: 50.0, t_inf: 20.0), HeatFlux(face: YMax, flux: 300.0), \
+             WallTemperature(face: XMin, value: 30.0)],",
+        )
+        .replace("etc_axis: Y,", "");
+    assert!(text.contains("Convection"));
+    let s = scene(&d, "conditions", &text);
+    let serial_out = d.join("serial");
+    let o = common::demcon(&[
+        "run",
+        s.to_str().unwrap(),
+        "--out",
+        serial_out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", common::text(&o));
+    let serial = summary(&serial_out);
+    let serial_t = &columns(&serial_out, &["temperature"])[0];
+    for ranks in [2, 4] {
+        let out = d.join(format!("ranks-{ranks}"));
+        let o = mpirun(ranks, &s, &out, &["--distributed"]);
+        assert!(o.status.success(), "{ranks} ranks: {}", common::text(&o));
+        assert_eq!(summary(&out)["model"], "blocks");
+        let t = &block_columns(&out, ranks, &["temperature"])[0];
+        for (p, (a, b)) in serial_t.iter().zip(t).enumerate() {
+            close(&format!("{ranks} ranks, temperature of particle {p}"), *a, *b);
+        }
+        for k in 0..2 {
+            let v = format!("/probes/{k}/value");
+            close(
+                &format!("{ranks} ranks, probe {k}"),
+                serial.pointer(&v).and_then(|x| x.as_f64()).unwrap(),
+                summary(&out).pointer(&v).and_then(|x| x.as_f64()).unwrap(),
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
 fn a_tiled_scene_that_needs_the_whole_body_runs_replicated_and_says_so() {
     let d = scratch("distributed", "replicated-tile");
     // Conforming cells place their seeds over the whole body: not a block's job.
