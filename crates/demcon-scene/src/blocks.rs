@@ -26,7 +26,9 @@ use demcon_model::{
 use demcon_network::distributed::{BlockSystem, Halo, Session};
 use demcon_network::{FloatingPolicy, resolve_fixed};
 use demcon_packing::tile_block;
-use demcon_post::{Field, ProbeMethod, write_csv, write_pvd, write_vtu};
+use demcon_post::{
+    Domain, Field, HaloParams, ProbeMethod, halo_flux_blocked, write_csv, write_pvd, write_vtu,
+};
 use demcon_thermal::{ExplicitParams, SourceUpdate, ThermalSystem, TimeStep, TransientInput, run_explicit};
 use serde_json::json;
 
@@ -34,6 +36,7 @@ use crate::build::tile_source;
 use crate::config::{AxisConfig, PackingConfig};
 use crate::error::SceneError;
 use crate::output::{RUN_MARKER, check_output_dir, io, split_dir, write_atomic};
+use crate::run::Halo as HaloAverage;
 use crate::scene::Scene;
 
 /// A ghost width is the cells' need × (1 + this): a margin against round-off in the reach.
@@ -78,8 +81,8 @@ pub fn block_support(scene: &Scene) -> Option<String> {
     }) {
         "only constant `WallTemperature`, `HeatFlux` and `Convection` conditions are distributed by blocks \
          yet (no radiation, no time tables, no volume sources)"
-    } else if !p.post.profiles.is_empty() || p.post.halo.is_some() || p.post.flux {
-        "profiles, the heat flux and its Halo are not distributed by blocks yet"
+    } else if !p.post.profiles.is_empty() {
+        "profiles are not distributed by blocks yet"
     } else if o.contacts_vtk || o.cells_vtk || o.plots {
         "`contacts_vtk`, `cells_vtk` and `plots` need the whole model"
     } else {
@@ -155,7 +158,9 @@ pub fn run_blocks(
         let (_, reach) = stages.time("tessellation", || tessellate_part(&base, c, None, lp, base.len()))?;
         first = first.max(ghost_width_needed(&base.radii, &reach, r_max));
     }
-    let mut width = (1.0 + GHOST_MARGIN) * first;
+    // A Halo reads every particle within k·R_p of its own: the ghosts must hold them too.
+    let halo_reach = p.post.halo.as_ref().map_or(0.0, |h| h.ratio * r_max);
+    let mut width = (1.0 + GHOST_MARGIN) * first.max(halo_reach);
     let mut rounds = 0;
     let (sites, mut model) = loop {
         rounds += 1;
@@ -172,7 +177,10 @@ pub fn run_blocks(
         };
         let (model, reach) = build_block_model(packed, &p.model, sites.owned, &mut stages)?;
         let local = ghost_width_needed(&model.particles.radii[..sites.owned], &reach, r_max);
-        let need = session.all_gather(&[local])?.into_iter().fold(0.0, f64::max);
+        let need = session
+            .all_gather(&[local])?
+            .into_iter()
+            .fold(halo_reach, f64::max);
         if need <= width {
             break (sites, model);
         }
@@ -195,7 +203,7 @@ pub fn run_blocks(
     cells.volume[n_owned..].copy_from_slice(&ghost_volumes);
     let setup = stages.time("thermal setup", || thermal_setup(&model, thermal))?;
 
-    // The walls held and their temperatures (constant `WallTemperature`: `block_support`).
+    // The walls held and their temperatures (constant: `block_support`).
     let plan = thermal.walls();
     let mut wall_t = vec![f64::NAN; setup.walls.n_walls()];
     for (bc, w) in thermal.bcs.iter().zip(&plan.of_bc) {
@@ -208,7 +216,7 @@ pub fn run_blocks(
     for x in &setup.surroundings.faces {
         wall_t[x.wall] = x.reference();
     }
-    if wall_t.is_empty() {
+    if wall_t.is_empty() && matches!(thermal.solver, ThermalSolver::Steady) {
         return Err(SceneError::invalid(
             "thermal.bcs",
             "no WallTemperature or Convection",
@@ -216,7 +224,7 @@ pub fn run_blocks(
         ));
     }
     // Imposed fluxes: each owned cell's facet on the face receives the flux through its area (W).
-    let mut sources = vec![0.0; net_nodes(&setup, &model)];
+    let mut sources = vec![0.0; setup.network(&model).n_nodes()];
     let cells = model.graph.cells.as_deref().expect("a Laguerre model");
     for bc in &thermal.bcs {
         if let ThermalBc::HeatFlux { face, flux } = bc {
@@ -300,6 +308,26 @@ pub fn run_blocks(
     let mut warnings = Vec::new();
     let etc = match etc_axis {
         Some(axis) => {
+            // As the serial ETC: heat in and out through the two held faces only.
+            let refuse = |why: String| SceneError::invalid("outputs.etc_axis", format!("{axis:?}"), why);
+            if let Some(x) = setup.surroundings.faces.first() {
+                return Err(refuse(format!(
+                    "face {} exchanges heat with its surroundings (Convection): heat leaves elsewhere than \
+                     through the two held faces and no single λ_e describes the body",
+                    x.face.name()
+                )));
+            }
+            if thermal
+                .bcs
+                .iter()
+                .any(|b| matches!(b, ThermalBc::HeatFlux { .. }))
+            {
+                return Err(refuse(
+                    "a HeatFlux adds heat: the heat through the two held faces then differs and no single λ_e \
+                     describes it; remove it for an ETC run"
+                        .into(),
+                ));
+            }
             let (etc, w) = block_etc(&plan.faces, &wall_t, &flows, &sites.container, axis)?;
             warnings.extend(w);
             Some(etc)
@@ -307,15 +335,50 @@ pub fn run_blocks(
         None => None,
     };
     let volumes = &setup.rep_volumes[..n_owned];
+    let t_end = thermal.solver.final_time();
+    let (flux, halo_flux) = match p.post.flux {
+        true => {
+            let nodes: Vec<f64> = temps
+                .iter()
+                .chain(&halo.exchange(&temps)?)
+                .chain(&wall_t)
+                .copied()
+                .collect();
+            let (f, h) = stages.time("flux", || {
+                block_flux(
+                    (&halo, n_owned),
+                    (&model, &setup),
+                    (t_end, &nodes),
+                    (p.post.halo.as_ref(), &sites.container),
+                )
+            })?;
+            (Some(f), h)
+        }
+        false => (None, None),
+    };
+    let magnitude = |v: &[Vec3]| v.iter().map(|x| x.norm()).collect::<Vec<f64>>();
+    let flux_norm = flux.as_deref().map(magnitude);
+    let halo_norm = halo_flux.as_ref().map(|h| magnitude(&h.0));
+    let mut sampled: Vec<(&str, &[f64])> = vec![("temperature", &temps)];
+    if let Some(f) = &flux_norm {
+        sampled.push(("flux_magnitude", f));
+    }
+    if let Some(h) = &halo_norm {
+        sampled.push(("halo_flux_magnitude", h));
+    }
     let probes = stages.time("probes", || {
-        probe_values(
-            session,
-            (p, thermal.solver.final_time()),
-            (&sites, &model.particles),
-            &temps,
-            volumes,
-        )
+        probe_values(session, (p, t_end), (&sites, &model.particles), &sampled, volumes)
     })?;
+    let halo_report = match &halo_flux {
+        Some((_, _, r)) => {
+            let truncated = session.sum(&[r.n_truncated as f64])?[0] as usize;
+            Some(
+                json!({"ratio": r.ratio, "n_truncated": truncated, "mean_members_rank0": r.mean_members,
+                "min_members_rank0": r.min_members, "max_members_rank0": r.max_members, "wall_s_rank0": r.wall_s}),
+            )
+        }
+        None => None,
+    };
 
     // Outputs: each rank its pieces, rank 0 the summary and the `.pvtu`.
     let degree: Vec<i32> = (0..n_owned)
@@ -354,6 +417,16 @@ pub fn run_blocks(
         ("temperature", &temps),
         ("volume", volumes),
     ];
+    let mut vectors: Vec<(&str, &[Vec3])> = Vec::new();
+    if let Some(f) = &flux {
+        vectors.push(("heat_flux", f));
+    }
+    if let Some((h, _, _)) = &halo_flux {
+        vectors.push(("halo_flux", h));
+    }
+    let halo_cut: Option<Vec<i32>> = halo_flux
+        .as_ref()
+        .map(|(_, cut, _)| cut.iter().map(|&b| i32::from(b)).collect());
     let o = &scene.config().outputs;
     if o.vtk {
         let mut fields = vec![
@@ -361,6 +434,10 @@ pub fn run_blocks(
             Field::ints("solved", &solved),
         ];
         fields.extend(scalars.iter().map(|(name, v)| Field::scalars(name, v)));
+        fields.extend(vectors.iter().map(|(name, v)| Field::vectors(name, v)));
+        if let Some(c) = &halo_cut {
+            fields.push(Field::ints("halo_truncated", c));
+        }
         write_vtu(
             tmp.join(format!("particles/particles_{rank}.vtu")),
             &owned,
@@ -375,6 +452,21 @@ pub fn run_blocks(
         let mut header = vec!["x", "y", "z", "radius", "phase", "solved"];
         let mut cols: Vec<&[f64]> = vec![&x, &y, &z, &owned.radii, &phase, &ones];
         for (name, v) in &scalars {
+            header.push(name);
+            cols.push(v);
+        }
+        let comps: Vec<(String, Vec<f64>)> = vectors
+            .iter()
+            .flat_map(|(name, v)| {
+                (0..3).map(move |k| {
+                    (
+                        format!("{name}_{}", ["x", "y", "z"][k]),
+                        v.iter().map(|u| u[k]).collect(),
+                    )
+                })
+            })
+            .collect();
+        for (name, v) in &comps {
             header.push(name);
             cols.push(v);
         }
@@ -394,6 +486,7 @@ pub fn run_blocks(
         "packing": pack_report.as_ref().map(|r| json!({"tile_particles": r.packing.n, "phi": r.packing.phi, "stop": format!("{:?}", r.stop)})),
         "solve": solve_report,
         "etc": etc,
+        "halo": halo_report,
         "probes": probes.clone(),
         "distributed": crate::output::distributed_json(),
         "stages_rank0": stages.records().iter().map(|s| json!({"stage": s.stage, "wall_s": s.wall_s, "peak_rss_bytes": s.peak_rss_bytes})).collect::<Vec<_>>(),
@@ -403,7 +496,18 @@ pub fn run_blocks(
     let mut files = Vec::new();
     if rank == 0 {
         if o.vtk {
-            write_pvtu(&tmp.join("particles.pvtu"), ranks)?;
+            let mut arrays = vec![
+                ("Float64", "radius", 1),
+                ("UInt16", "phase", 1),
+                ("Int32", "coordination", 1),
+                ("Int32", "solved", 1),
+            ];
+            arrays.extend(scalars.iter().map(|(name, _)| ("Float64", *name, 1)));
+            arrays.extend(vectors.iter().map(|(name, _)| ("Float64", *name, 3)));
+            if halo_cut.is_some() {
+                arrays.push(("Int32", "halo_truncated", 1));
+            }
+            write_pvtu(&tmp.join("particles.pvtu"), ranks, &arrays)?;
             files.push("particles.pvtu".into());
             // A transient's end state, at its time, as the serial run's series names it.
             if let ThermalSolver::Explicit { t_end, .. } = thermal.solver {
@@ -419,9 +523,10 @@ pub fn run_blocks(
             let mut t = String::from("probe,field,t_s,value,solved\n");
             for p in &probes {
                 t.push_str(&format!(
-                    "{},temperature,{},{:.10e},1\n",
+                    "{},{},{},{:.10e},1\n",
                     p["name"].as_str().unwrap_or(""),
-                    p["t"],
+                    p["field"].as_str().unwrap_or(""),
+                    p["t"].as_f64().unwrap_or(f64::NAN),
                     p["value"].as_f64().unwrap_or(f64::NAN)
                 ));
             }
@@ -544,11 +649,6 @@ impl SourceUpdate for Ghosts<'_> {
         temps[self.owned..self.owned + ghosts.len()].copy_from_slice(&ghosts);
         Ok(())
     }
-}
-
-/// Nodes of a block's thermal network: its particles, then its walls.
-fn net_nodes(setup: &demcon_model::ThermalSetup, model: &demcon_model::Model) -> usize {
-    setup.network(model).n_nodes()
 }
 
 /// The hidden sibling folder the ranks write their pieces into before rank 0 moves it to `out`.
@@ -686,13 +786,14 @@ fn block_etc(
     Ok((etc, warnings))
 }
 
-/// Each probe's temperature: the nearest particle's (ties: lowest global index), or the
-/// ball average weighted by the cells' volumes, gathered over the ranks.
+/// Each probe's value of every field in `fields` (name, one value per owned particle): the
+/// nearest particle's (ties: the lowest global index), or the ball average weighted by the
+/// cells' volumes, gathered over the ranks; in the serial order (per probe, per field).
 fn probe_values(
     session: &Session,
     (p, t): (&crate::convert::Problem, f64),
     (sites, particles): (&Sites, &ParticleSet),
-    temps: &[f64],
+    fields: &[(&str, &[f64])],
     volumes: &[f64],
 ) -> Result<Vec<serde_json::Value>, SceneError> {
     let period = sites.container.period();
@@ -708,7 +809,7 @@ fn probe_values(
     let centres = &particles.centres[..sites.owned];
     let mut out = Vec::new();
     for (i, probe) in p.post.probes.iter().enumerate() {
-        let value = match probe.method {
+        let values: Vec<f64> = match probe.method {
             ProbeMethod::Nearest => {
                 let best = centres
                     .iter()
@@ -716,55 +817,80 @@ fn probe_values(
                     .map(|(j, c)| (dist(c, &probe.point), j))
                     .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 let (d, j) = best.unwrap_or((f64::INFINITY, 0));
-                let all = session.all_gather(&[
-                    d,
-                    (sites.first + j) as f64,
-                    temps.get(j).copied().unwrap_or(0.0),
-                ])?;
-                all.chunks(3)
+                let mut mine = vec![d, (sites.first + j) as f64];
+                mine.extend(fields.iter().map(|(_, v)| v.get(j).copied().unwrap_or(0.0)));
+                let all = session.all_gather(&mine)?;
+                all.chunks(mine.len())
                     .min_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])))
-                    .map_or(f64::NAN, |c| c[2])
+                    .map_or(vec![f64::NAN; fields.len()], |c| c[2..].to_vec())
             }
             ProbeMethod::BallAverage { radius } => {
-                let (mut vt, mut v) = (0.0, 0.0);
+                // Σ V, then Σ V·value per field.
+                let mut sums = vec![0.0; 1 + fields.len()];
                 for (j, c) in centres.iter().enumerate() {
                     if dist(c, &probe.point) <= radius {
-                        vt += volumes[j] * temps[j];
-                        v += volumes[j];
+                        sums[0] += volumes[j];
+                        for (k, (_, v)) in fields.iter().enumerate() {
+                            sums[1 + k] += volumes[j] * v[j];
+                        }
                     }
                 }
-                let s = session.sum(&[vt, v])?;
-                if s[1] == 0.0 {
+                let s = session.sum(&sums)?;
+                if s[0] == 0.0 {
                     return Err(SceneError::invalid(
                         &format!("outputs.probes[{i}] ({})", probe.name),
                         format!("radius {radius:e} m"),
                         "a ball that holds a particle centre",
                     ));
                 }
-                s[0] / s[1]
+                s[1..].iter().map(|x| x / s[0]).collect()
             }
         };
-        out.push(json!({"name": probe.name, "field": "temperature", "t": t, "value": value, "solved": true}));
+        for ((name, _), value) in fields.iter().zip(values) {
+            out.push(json!({"name": probe.name, "field": name, "t": t, "value": value, "solved": true}));
+        }
     }
     Ok(out)
 }
 
+/// The owned particles' heat flux (W/m²) and, with `halo`, its Halo average (W/m²) and whether
+/// each Halo is cut by the box, with the Halo's report. `nodes`: the block's temperatures
+/// (owned, ghosts, walls). The dipoles of the owned cells are complete; the ghosts' come from
+/// their owners, so that every Halo within the ghost width reads the serial values.
+fn block_flux(
+    (halo, owned): (&Halo, usize),
+    (model, setup): (&demcon_model::Model, &demcon_model::ThermalSetup),
+    (t, nodes): (f64, &[f64]),
+    (params, container): (Option<&HaloParams>, &Container),
+) -> Result<(Vec<Vec3>, Option<HaloAverage>), SceneError> {
+    let mut d = setup.heat_dipoles(model, t, nodes);
+    let flux = demcon_model::flux_density(&d[..owned], &setup.rep_volumes[..owned]);
+    let Some(params) = params else {
+        return Ok((flux, None));
+    };
+    for k in 0..3 {
+        let mine: Vec<f64> = d[..owned].iter().map(|v| v[k]).collect();
+        for (g, x) in d[owned..].iter_mut().zip(halo.exchange(&mine)?) {
+            g[k] = x;
+        }
+    }
+    let domain = Domain::of_container(container)?;
+    let h = halo_flux_blocked(&model.particles, &d, &setup.rep_volumes, &domain, params, None)?;
+    let mut report = h.report;
+    report.n_truncated = h.truncated[..owned].iter().filter(|&&b| b).count();
+    Ok((
+        flux,
+        Some((h.flux[..owned].to_vec(), h.truncated[..owned].to_vec(), report)),
+    ))
+}
+
 /// Writes the `.pvtu` that joins the ranks' `particles/particles_<r>.vtu` pieces, with the
-/// fields each piece holds.
-fn write_pvtu(path: &Path, ranks: usize) -> Result<(), SceneError> {
+/// point arrays each piece holds (VTK type, name, components).
+fn write_pvtu(path: &Path, ranks: usize, arrays: &[(&str, &str, usize)]) -> Result<(), SceneError> {
     let mut s = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <PUnstructuredGrid GhostLevel=\"0\">\n    <PPointData>\n",
     );
-    for (ty, name, n) in [
-        ("Float64", "radius", 1),
-        ("UInt16", "phase", 1),
-        ("Int32", "coordination", 1),
-        ("Int32", "solved", 1),
-        ("Float64", "phase_fraction", 1),
-        ("Float64", "other_phase", 1),
-        ("Float64", "temperature", 1),
-        ("Float64", "volume", 1),
-    ] {
+    for (ty, name, n) in arrays {
         s.push_str(&format!(
             "      <PDataArray type=\"{ty}\" Name=\"{name}\" NumberOfComponents=\"{n}\"/>\n"
         ));

@@ -21,15 +21,7 @@ pub fn make_particles(
     scene: &Scene,
     progress: Option<&dyn Fn(&demcon_packing::PackProgress)>,
 ) -> Result<(ParticleSet, Container, Option<PackingReport>, Option<String>), SceneError> {
-    let cfg = scene.config();
-    let source = Source {
-        seed: cfg.seed,
-        base_dir: &scene.base_dir,
-        progress,
-        materials: &cfg.materials,
-        given: scene.given_particles(),
-    };
-    source.particles_of(&cfg.packing)
+    Source::of(scene, progress).particles_of(&scene.config().packing)
 }
 
 /// The periodic packing a scene's `Tile` packing copies, with the repeat and whether the
@@ -53,14 +45,7 @@ pub fn tile_source(
             "a Tile packing (the blocks of a distributed model are copies of a periodic packing)",
         ));
     };
-    let source = Source {
-        seed: cfg.seed,
-        base_dir: &scene.base_dir,
-        progress,
-        materials: &cfg.materials,
-        given: scene.given_particles(),
-    };
-    let (particles, container, report, _) = source.particles_of(packing)?;
+    let (particles, container, report, _) = Source::of(scene, progress).particles_of(packing)?;
     if container.period().is_none() {
         return Err(SceneError::invalid(
             "packing.packing",
@@ -152,7 +137,19 @@ fn label_phases(
         .collect()
 }
 
-impl Source<'_> {
+impl<'a> Source<'a> {
+    /// What `scene`'s packing sections draw on.
+    fn of(scene: &'a Scene, progress: Option<&'a dyn Fn(&demcon_packing::PackProgress)>) -> Self {
+        let cfg = scene.config();
+        Source {
+            seed: cfg.seed,
+            base_dir: &scene.base_dir,
+            progress,
+            materials: &cfg.materials,
+            given: scene.given_particles(),
+        }
+    }
+
     /// The particles of one packing section (a tiling holds another).
     fn particles_of(
         &self,

@@ -358,8 +358,9 @@ fn print_blocks(name: &str, s: &serde_json::Value, wall_s: f64) {
     if let Some(probes) = s["probes"].as_array() {
         for p in probes {
             println!(
-                "  probe {} temperature at t = {} s: {:.6}",
+                "  probe {} {} at t = {} s: {:.6}",
                 p["name"].as_str().unwrap_or("?"),
+                p["field"].as_str().unwrap_or("?"),
                 p["t"].as_f64().unwrap_or(0.0),
                 p["value"].as_f64().unwrap_or(f64::NAN)
             );

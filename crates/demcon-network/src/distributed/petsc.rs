@@ -291,6 +291,22 @@ struct Handles {
     d: Vec_,
 }
 
+impl Handles {
+    /// No object yet (each is created by PETSc later; null is what the Destroy functions skip).
+    fn empty() -> Self {
+        Self {
+            a: ptr::null_mut(),
+            b: ptr::null_mut(),
+            x: ptr::null_mut(),
+            scatter: ptr::null_mut(),
+            x_all: ptr::null_mut(),
+            ksp: ptr::null_mut(),
+            r: ptr::null_mut(),
+            d: ptr::null_mut(),
+        }
+    }
+}
+
 // SAFETY: PETSc objects are not tied to the thread that created them; the Mutex around them
 // in `Solver` keeps their use to one thread at a time.
 unsafe impl Send for Handles {}
@@ -552,16 +568,7 @@ impl Solver {
         let (lo, hi) = (bounds[rank], bounds[rank + 1]);
         let m = to_int(hi - lo, "rows of a rank")?;
         let (d_nnz, o_nnz, n_ghosts) = preallocation(lo..hi, &row);
-        let mut h = Handles {
-            a: ptr::null_mut(),
-            b: ptr::null_mut(),
-            x: ptr::null_mut(),
-            scatter: ptr::null_mut(),
-            x_all: ptr::null_mut(),
-            ksp: ptr::null_mut(),
-            r: ptr::null_mut(),
-            d: ptr::null_mut(),
-        };
+        let mut h = Handles::empty();
         assemble(&mut h, (m, big_n), lo..hi, (&d_nnz, &o_nnz), &row)?;
         // SAFETY: `h.x` was created by `assemble`.
         unsafe {
@@ -738,16 +745,7 @@ impl BlockSolver {
         }
         let t0 = Instant::now();
         let (d_nnz, o_nnz, n_ghosts) = preallocation(first..first + m, row);
-        let mut h = Handles {
-            a: ptr::null_mut(),
-            b: ptr::null_mut(),
-            x: ptr::null_mut(),
-            scatter: ptr::null_mut(),
-            x_all: ptr::null_mut(),
-            ksp: ptr::null_mut(),
-            r: ptr::null_mut(),
-            d: ptr::null_mut(),
-        };
+        let mut h = Handles::empty();
         let sizes = (to_int(m, "rows of a rank")?, to_int(total, "unknowns")?);
         assemble(&mut h, sizes, first..first + m, (&d_nnz, &o_nnz), row)?;
         drop((d_nnz, o_nnz));
