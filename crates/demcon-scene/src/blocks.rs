@@ -64,6 +64,15 @@ pub fn block_support(scene: &Scene) -> Option<String> {
         "carving cuts the whole body"
     } else if p.model.phase_rule == PhaseRule::Conforming {
         "conforming cells place seeds over the whole body (set `phase_rule: Centre`, `Laminate` or `Segment`)"
+    } else if p
+        .model
+        .materials
+        .materials
+        .iter()
+        .any(|m| m.conductivity_varies())
+    {
+        "a conductivity λ(T) needs the nonlinear loop (steady) or conductances re-evaluated every step, \
+         not distributed by blocks yet"
     } else if !p.model.defects.is_empty() {
         "cracks, damage and interface resistances are not distributed by blocks yet"
     } else if thermal.is_none_or(|t| matches!(t.solver, ThermalSolver::Implicit { .. })) {

@@ -44,10 +44,12 @@ pub struct RunArgs {
     /// killed run would (no outputs, the checkpoint left).
     #[arg(long, hide = true, value_name = "N")]
     pub exit_after_checkpoints: Option<u64>,
-    /// Solve every linear system (steady, implicit steps, electric) with PETSc over MPI:
-    /// `mpirun -n K demcon run SCENE.ron --distributed` (a demcon built with `--features
-    /// petsc`; docs/distributed.md). Every rank runs the scene; rank 0 writes the outputs.
-    /// Without mpirun it is one rank. Checkpoints are not written.
+    /// Run on MPI ranks with PETSc: `mpirun -n K demcon run SCENE.ron --distributed` (a demcon
+    /// built with `--features petsc`; docs/distributed.md). With a `Tile` packing each rank
+    /// builds and keeps only its block of the model and writes its piece of the outputs (rank 0
+    /// `summary.json`, `particles.pvtu`); other scenes run whole on every rank with the linear
+    /// solves distributed, rank 0 writing the outputs. Without mpirun it is one rank.
+    /// Checkpoints are not written.
     #[arg(long)]
     pub distributed: bool,
 }
