@@ -308,19 +308,27 @@ fn solve_at_current(
     Ok((unit.rescaled(ground, factor), vec![ground + factor, ground]))
 }
 
-/// Solves the potential with the problem's electrodes; `temperatures` (°C) feed ρ_e(T).
-///
-/// Face electrodes add one node per face to the network, held at the potential and linked to
-/// the particles touching the face by half-contacts σ_p S_p / h_p ([`WallContacts`], the
-/// construction of the thermal `WallTemperature`). The Joule power of such a link goes wholly
-/// to its particle (the face is not a particle).
-pub fn solve_electric(
+/// The electric network of a model: the conductances of its contacts and of its face
+/// electrodes' links, and the network extended by one node per face electrode.
+#[derive(Debug, Clone)]
+pub struct ElectricNetwork {
+    /// The network with the face electrodes' nodes (`None`: no face electrode, the model's).
+    pub network: Option<demcon_network::Network>,
+    /// Conductances 1/R (S): the contacts, then the face-electrode links.
+    pub conductances: Vec<f64>,
+    /// The face electrodes and their links.
+    pub walls: WallContacts,
+    /// The transmission-surface model (C_t resolved).
+    pub surface: SurfaceModel,
+}
+
+/// The electric network of `model` under `problem` (`temperatures`, °C, feed ρ_e(T)): what
+/// [`solve_electric`] solves, for a caller that assembles it itself (an MPI rank's block).
+pub fn electric_network(
     model: &Model,
     problem: &ElectricProblem,
     temperatures: Option<&[f64]>,
-) -> Result<ElectricRun, ModelError> {
-    let start = std::time::Instant::now();
-    let n = model.particles.len();
+) -> Result<ElectricNetwork, ModelError> {
     let sm = electric_surface_model(model, &problem.surface)?;
     let sigma = particle_conductivities(model, temperatures)?;
     let g = conductances_with_defects(model, &sm, problem.interface, &sigma)?;
@@ -335,8 +343,35 @@ pub fn solve_electric(
         &mut wall_g,
         Physics::Electric,
     );
-    let m = g.len();
-    let (ext, g) = network_with_walls(model, &walls, g, wall_g)?;
+    let (network, conductances) = network_with_walls(model, &walls, g, wall_g)?;
+    Ok(ElectricNetwork {
+        network,
+        conductances,
+        walls,
+        surface: sm,
+    })
+}
+
+/// Solves the potential with the problem's electrodes; `temperatures` (°C) feed ρ_e(T).
+///
+/// Face electrodes add one node per face to the network, held at the potential and linked to
+/// the particles touching the face by half-contacts σ_p S_p / h_p ([`WallContacts`], the
+/// construction of the thermal `WallTemperature`). The Joule power of such a link goes wholly
+/// to its particle (the face is not a particle).
+pub fn solve_electric(
+    model: &Model,
+    problem: &ElectricProblem,
+    temperatures: Option<&[f64]>,
+) -> Result<ElectricRun, ModelError> {
+    let start = std::time::Instant::now();
+    let n = model.particles.len();
+    let m = model.graph.len();
+    let ElectricNetwork {
+        network: ext,
+        conductances: g,
+        walls,
+        surface: sm,
+    } = electric_network(model, problem, temperatures)?;
     let net = ext.as_ref().unwrap_or_else(|| model.network());
     let mut electrodes = electrode_nodes(model, problem, &walls)?;
     let params = ElectricParams {

@@ -58,8 +58,8 @@ pub use defects::{
     InterfaceResistance, MARK_DAMAGED, MARK_FILLED_CRACK, MARK_INTERFACE, MARK_PARTLY_CUT,
 };
 pub use electric::{
-    ElectricProblem, ElectricReport, ElectricRun, Electrode, ElectrodeAt, electric_conductances,
-    electric_surface_model, particle_conductivities, solve_electric,
+    ElectricNetwork, ElectricProblem, ElectricReport, ElectricRun, Electrode, ElectrodeAt,
+    electric_conductances, electric_network, electric_surface_model, particle_conductivities, solve_electric,
 };
 pub use error::{FieldNames, ModelError};
 pub use etc::{EtcValue, FLOW_MISMATCH_WARNING, effective_conductivity};

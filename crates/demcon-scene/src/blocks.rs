@@ -18,10 +18,11 @@ use std::path::Path;
 use std::time::Instant;
 
 use demcon_core::{Container, ParticleSet, Stages, Vec3};
+use demcon_electric::{give_link_joule_to_particles, joule_power};
 use demcon_graph::{CellWall, ghost_width_needed, tessellate_part};
 use demcon_model::{
-    FLOW_MISMATCH_WARNING, Packed, PhaseRule, ThermalBc, ThermalSolver, TimeStepSpec, build_block_model,
-    thermal_setup,
+    ElectrodeAt, FLOW_MISMATCH_WARNING, ModelError, Packed, PhaseRule, ThermalBc, ThermalSolver,
+    TimeStepSpec, build_block_model, electric_network, thermal_setup,
 };
 use demcon_network::distributed::{BlockSystem, Halo, Session};
 use demcon_network::{FloatingPolicy, resolve_fixed};
@@ -56,8 +57,19 @@ pub fn block_support(scene: &Scene) -> Option<String> {
         "the packing is not a `Tile` (a generated or read packing is made whole, on every rank)"
     } else if p.homogenize.is_some() {
         "a periodic homogenisation is not distributed"
-    } else if p.electric.is_some() {
-        "the electric physics is not distributed by blocks yet"
+    } else if p.electric.is_some() && thermal.is_some() {
+        "the electric physics with heat (Joule heating, ρ_e(T)) is not distributed by blocks yet"
+    } else if p.electric.as_ref().is_some_and(|e| {
+        e.current.is_some()
+            || e.recouple_tolerance.is_some()
+            || e.electrodes
+                .iter()
+                .any(|x| !matches!(x.at, ElectrodeAt::Face(_)) || !x.potential.is_constant())
+    }) {
+        "by blocks, electrodes hold constant potentials on the container's faces (no imposed current, no \
+         electrodes on selected particles, no time tables)"
+    } else if thermal.is_none() && p.electric.is_none() {
+        "there is no physics to solve"
     } else if p.model.laguerre.is_none() {
         "the blocks need the Laguerre cells (`surface: Laguerre`)"
     } else if p.model.carve.is_some() {
@@ -75,7 +87,7 @@ pub fn block_support(scene: &Scene) -> Option<String> {
          not distributed by blocks yet"
     } else if !p.model.defects.is_empty() {
         "cracks, damage and interface resistances are not distributed by blocks yet"
-    } else if thermal.is_none_or(|t| matches!(t.solver, ThermalSolver::Implicit { .. })) {
+    } else if thermal.is_some_and(|t| matches!(t.solver, ThermalSolver::Implicit { .. })) {
         "only the steady and the explicit thermal solves are distributed by blocks yet"
     } else if !o.times.is_empty() {
         "a transient's time series (`outputs.times`) is not written by blocks yet"
@@ -138,9 +150,7 @@ pub fn run_blocks(
     }
     check_output_dir(out)?;
     let p = scene.problem();
-    let thermal = p.thermal.as_ref().expect("block_support checked it");
     let (rank, ranks) = (session.rank(), session.size());
-    let etc_axis = scene.config().outputs.etc_axis;
     let t0 = Instant::now();
     let mut stages = Stages::default();
 
@@ -210,193 +220,42 @@ pub fn run_blocks(
     let cells = model.graph.cells.as_mut().expect("a Laguerre model");
     let ghost_volumes = halo.exchange(&cells.volume[..n_owned])?;
     cells.volume[n_owned..].copy_from_slice(&ghost_volumes);
-    let setup = stages.time("thermal setup", || thermal_setup(&model, thermal))?;
 
-    // The walls held and their temperatures (constant: `block_support`).
-    let plan = thermal.walls();
-    let mut wall_t = vec![f64::NAN; setup.walls.n_walls()];
-    for (bc, w) in thermal.bcs.iter().zip(&plan.of_bc) {
-        if let (ThermalBc::WallTemperature { value, .. }, Some(w)) = (bc, w) {
-            wall_t[*w] = value.at(0.0);
-        }
-    }
-    // A face exchanging heat by convection is a wall held at the surroundings' temperature,
-    // behind the film (in its links' conductances: `thermal_setup`).
-    for x in &setup.surroundings.faces {
-        wall_t[x.wall] = x.reference();
-    }
-    if wall_t.is_empty() && matches!(thermal.solver, ThermalSolver::Steady) {
-        return Err(SceneError::invalid(
-            "thermal.bcs",
-            "no WallTemperature or Convection",
-            "a steady solve by blocks needs at least one face held at a temperature or exchanging heat",
-        ));
-    }
-    // Imposed fluxes: each owned cell's facet on the face receives the flux through its area (W).
-    let mut sources = vec![0.0; setup.network(&model).n_nodes()];
-    let cells = model.graph.cells.as_deref().expect("a Laguerre model");
-    for bc in &thermal.bcs {
-        if let ThermalBc::HeatFlux { face, flux } = bc {
-            for f in cells.on_wall(CellWall::of(*face)) {
-                sources[f.particle as usize] += flux.at(0.0) * f.area;
-            }
-        }
-    }
-
-    // This rank's rows: its owned particles, every column a particle's global index; the walls'
-    // temperatures move to the right-hand side. The Laguerre cells tile the box, so every
-    // particle is connected and solved.
-    let net = setup.network(&model);
-    let (row_ptr, cols, entry_edges) = (net.row_ptr(), net.cols(), net.entry_edges());
-    let g = &setup.conductances;
-    let n_local = model.particles.len();
-    let global = |j: usize| sites.global[j] as i64;
-    let mut rhs = sources[..n_owned].to_vec();
-    for (i, b) in rhs.iter_mut().enumerate() {
-        for e in row_ptr[i]..row_ptr[i + 1] {
-            let j = cols[e] as usize;
-            if j >= n_local {
-                *b += g[entry_edges[e] as usize] * wall_t[j - n_local];
-            }
-        }
-    }
-    let row = |k: usize, c: &mut Vec<i64>, v: &mut Vec<f64>| {
-        c.clear();
-        v.clear();
-        let i = k - sites.first;
-        let mut diag = 0.0;
-        for e in row_ptr[i]..row_ptr[i + 1] {
-            let j = cols[e] as usize;
-            let ge = g[entry_edges[e] as usize];
-            diag += ge;
-            if j >= n_local {
-                continue;
-            }
-            let col = global(j);
-            match c.last() {
-                Some(&last) if last == col => *v.last_mut().expect("paired with c") -= ge,
-                _ => {
-                    c.push(col);
-                    v.push(-ge);
-                }
-            }
-        }
-        c.push(k as i64);
-        v.push(diag);
+    let block = BlockModel {
+        session,
+        halo: &halo,
+        sites: &sites,
+        model: &model,
     };
-    let solve = &thermal.solve;
-    let (temps, solve_report) = match thermal.solver {
-        ThermalSolver::Explicit { t_end, dt } => stages.time("solve", || {
-            explicit(
-                session,
-                (&halo, n_owned),
-                (&model, &setup),
-                thermal,
-                (&wall_t, &sources),
-                (t_end, dt),
-            )
-        })?,
-        _ => stages.time("solve", || -> Result<_, SceneError> {
-            let system = BlockSystem::new(session, sites.first, n_owned, sites.total, &row)?;
-            let (t, r) = system.solve(&rhs, solve.rel_tol, solve.max_iter)?;
-            let report = json!({
-                "scheme": "steady",
-                "method": demcon_network::distributed::METHOD,
-                "rel_tol": solve.rel_tol,
-                "iterations": r.iterations,
-                "ksp_solves": r.ksp_solves,
-                "relative_residual": r.relative_residual,
-            });
-            Ok((t, report))
-        })?,
-    };
-
-    // The effective conductivity and the probes: sums over the ranks in rank order.
-    let flows = wall_flows(&setup.walls, setup.wall_conductances(), &temps, &wall_t, n_local);
-    let flows = session.sum(&flows)?;
-    let mut warnings = Vec::new();
-    let etc = match etc_axis {
-        Some(axis) => {
-            // As the serial ETC: heat in and out through the two held faces only.
-            let refuse = |why: String| SceneError::invalid("outputs.etc_axis", format!("{axis:?}"), why);
-            if let Some(x) = setup.surroundings.faces.first() {
-                return Err(refuse(format!(
-                    "face {} exchanges heat with its surroundings (Convection): heat leaves elsewhere than \
-                     through the two held faces and no single λ_e describes the body",
-                    x.face.name()
-                )));
-            }
-            if thermal
-                .bcs
-                .iter()
-                .any(|b| matches!(b, ThermalBc::HeatFlux { .. }))
-            {
-                return Err(refuse(
-                    "a HeatFlux adds heat: the heat through the two held faces then differs and no single λ_e \
-                     describes it; remove it for an ETC run"
-                        .into(),
-                ));
-            }
-            let (etc, w) = block_etc(&plan.faces, &wall_t, &flows, &sites.container, axis)?;
-            warnings.extend(w);
-            Some(etc)
+    let solved = match (&p.thermal, &p.electric) {
+        (Some(thermal), _) => thermal_block(&block, scene, thermal, &mut stages)?,
+        (None, Some(electric)) => electric_block(&block, electric, &mut stages)?,
+        (None, None) => {
+            return Err(SceneError::invalid(
+                "thermal",
+                "none",
+                "a thermal or an electric section to solve by blocks",
+            ));
         }
-        None => None,
     };
-    let volumes = &setup.rep_volumes[..n_owned];
-    let t_end = thermal.solver.final_time();
-    let (flux, halo_flux) = match p.post.flux {
-        true => {
-            let nodes: Vec<f64> = temps
-                .iter()
-                .chain(&halo.exchange(&temps)?)
-                .chain(&wall_t)
-                .copied()
-                .collect();
-            let (f, h) = stages.time("flux", || {
-                block_flux(
-                    (&halo, n_owned),
-                    (&model, &setup),
-                    (t_end, &nodes),
-                    (p.post.halo.as_ref(), &sites.container),
-                )
-            })?;
-            (Some(f), h)
-        }
-        false => (None, None),
-    };
-    let magnitude = |v: &[Vec3]| v.iter().map(|x| x.norm()).collect::<Vec<f64>>();
-    let flux_norm = flux.as_deref().map(magnitude);
-    let halo_norm = halo_flux.as_ref().map(|h| magnitude(&h.0));
-    let mut sampled: Vec<(&str, &[f64])> = vec![("temperature", &temps)];
-    if let Some(f) = &flux_norm {
-        sampled.push(("flux_magnitude", f));
-    }
-    if let Some(h) = &halo_norm {
-        sampled.push(("halo_flux_magnitude", h));
-    }
+    let probe_fields: Vec<(&str, &[f64])> = solved
+        .probed
+        .iter()
+        .map(|(name, v)| (*name, v.as_slice()))
+        .collect();
     let probes = stages.time("probes", || {
-        probe_values(session, (p, t_end), (&sites, &model.particles), &sampled, volumes)
+        probe_values(
+            session,
+            (p, solved.t),
+            (&sites, &model.particles),
+            &probe_fields,
+            &solved.volumes,
+        )
     })?;
-    let halo_report = match &halo_flux {
-        Some((_, _, r)) => {
-            let truncated = session.sum(&[r.n_truncated as f64])?[0] as usize;
-            Some(
-                json!({"ratio": r.ratio, "n_truncated": truncated, "mean_members_rank0": r.mean_members,
-                "min_members_rank0": r.min_members, "max_members_rank0": r.max_members, "wall_s_rank0": r.wall_s}),
-            )
-        }
-        None => None,
-    };
 
     // Outputs: each rank its pieces, rank 0 the summary and the `.pvtu`.
-    let degree: Vec<i32> = (0..n_owned)
-        .map(|i| {
-            (row_ptr[i]..row_ptr[i + 1])
-                .filter(|&e| (cols[e] as usize) < n_local)
-                .count() as i32
-        })
-        .collect();
+    let net = model.network();
+    let degree: Vec<i32> = (0..n_owned).map(|i| net.degree(i) as i32).collect();
     let peak = stages.peak_rss_bytes().unwrap_or(0) as f64;
     session.gather_peak_memory(peak)?;
     let peaks = session.all_gather(&[peak, n_owned as f64, sites.ghost_ids.len() as f64])?;
@@ -411,8 +270,8 @@ pub fn run_blocks(
         radii: model.particles.radii[..n_owned].to_vec(),
         phases: model.particles.phases[..n_owned].to_vec(),
     };
-    let solved = vec![1i32; n_owned];
-    // The serial `particles.vtu`'s fields, in its order (the laminate rule's two included).
+    let solved_flag = vec![1i32; n_owned];
+    // The serial `particles.vtu`'s fields, in its order (the laminate rule's two first).
     let lam = model.laminates();
     let fraction: Vec<f64> = (0..n_owned)
         .map(|q| lam.get(q).map_or(1.0, |x| 1.0 - x.other_fraction))
@@ -420,31 +279,23 @@ pub fn run_blocks(
     let other: Vec<f64> = (0..n_owned)
         .map(|q| f64::from(lam.get(q).map_or(owned.phases[q], |x| x.other_phase)))
         .collect();
-    let scalars: [(&str, &[f64]); 4] = [
-        ("phase_fraction", &fraction),
-        ("other_phase", &other),
-        ("temperature", &temps),
-        ("volume", volumes),
-    ];
-    let mut vectors: Vec<(&str, &[Vec3])> = Vec::new();
-    if let Some(f) = &flux {
-        vectors.push(("heat_flux", f));
-    }
-    if let Some((h, _, _)) = &halo_flux {
-        vectors.push(("halo_flux", h));
-    }
-    let halo_cut: Option<Vec<i32>> = halo_flux
-        .as_ref()
-        .map(|(_, cut, _)| cut.iter().map(|&b| i32::from(b)).collect());
+    let mut scalars: Vec<(&str, &[f64])> = vec![("phase_fraction", &fraction), ("other_phase", &other)];
+    scalars.extend(solved.scalars.iter().map(|(name, v)| (*name, v.as_slice())));
+    scalars.push(("volume", &solved.volumes));
+    let vectors: Vec<(&str, &[Vec3])> = solved
+        .vectors
+        .iter()
+        .map(|(name, v)| (*name, v.as_slice()))
+        .collect();
     let o = &scene.config().outputs;
     if o.vtk {
         let mut fields = vec![
             Field::ints("coordination", &degree),
-            Field::ints("solved", &solved),
+            Field::ints("solved", &solved_flag),
         ];
         fields.extend(scalars.iter().map(|(name, v)| Field::scalars(name, v)));
         fields.extend(vectors.iter().map(|(name, v)| Field::vectors(name, v)));
-        if let Some(c) = &halo_cut {
+        if let Some(c) = &solved.halo_cut {
             fields.push(Field::ints("halo_truncated", c));
         }
         write_vtu(
@@ -482,7 +333,7 @@ pub fn run_blocks(
         write_csv(tmp.join(format!("particles_{rank}.csv")), &header, &cols)?;
     }
     session.all_gather(&[0.0])?;
-    let summary = json!({
+    let mut summary = json!({
         "name": name,
         "model": "blocks",
         "ranks": ranks,
@@ -493,15 +344,15 @@ pub fn run_blocks(
         "ghosts_per_rank": peaks.chunks(3).map(|c| c[2] as usize).collect::<Vec<_>>(),
         "peak_rss_bytes_per_rank": peaks.chunks(3).map(|c| c[0]).collect::<Vec<_>>(),
         "packing": pack_report.as_ref().map(|r| json!({"tile_particles": r.packing.n, "phi": r.packing.phi, "stop": format!("{:?}", r.stop)})),
-        "solve": solve_report,
-        "etc": etc,
-        "halo": halo_report,
         "probes": probes.clone(),
         "distributed": crate::output::distributed_json(),
         "stages_rank0": stages.records().iter().map(|s| json!({"stage": s.stage, "wall_s": s.wall_s, "peak_rss_bytes": s.peak_rss_bytes})).collect::<Vec<_>>(),
         "wall_s": t0.elapsed().as_secs_f64(),
-        "warnings": warnings,
+        "warnings": solved.warnings,
     });
+    for (key, value) in solved.summary {
+        summary[key] = value;
+    }
     let mut files = Vec::new();
     if rank == 0 {
         if o.vtk {
@@ -513,13 +364,13 @@ pub fn run_blocks(
             ];
             arrays.extend(scalars.iter().map(|(name, _)| ("Float64", *name, 1)));
             arrays.extend(vectors.iter().map(|(name, _)| ("Float64", *name, 3)));
-            if halo_cut.is_some() {
+            if solved.halo_cut.is_some() {
                 arrays.push(("Int32", "halo_truncated", 1));
             }
             write_pvtu(&tmp.join("particles.pvtu"), ranks, &arrays)?;
             files.push("particles.pvtu".into());
             // A transient's end state, at its time, as the serial run's series names it.
-            if let ThermalSolver::Explicit { t_end, .. } = thermal.solver {
+            if let Some(t_end) = solved.transient_end {
                 write_pvd(tmp.join("particles.pvd"), &[(t_end, "particles.pvtu".into())])?;
                 files.push("particles.pvd".into());
             }
@@ -552,6 +403,329 @@ pub fn run_blocks(
         std::fs::rename(&tmp, out).map_err(io(out))?;
     }
     Ok(BlockOutcome { files, summary })
+}
+
+/// A rank's block once built: its session, ghost exchange, sites and model.
+struct BlockModel<'a> {
+    session: &'a Session,
+    halo: &'a Halo,
+    sites: &'a Sites,
+    model: &'a demcon_model::Model,
+}
+
+/// What a block's physics gave, for the outputs: per owned particle.
+struct Solved {
+    /// Fields after the phase fractions, in the serial file's order (volume excluded).
+    scalars: Vec<(&'static str, Vec<f64>)>,
+    /// Vector fields, in the serial order.
+    vectors: Vec<(&'static str, Vec<Vec3>)>,
+    /// Whether each Halo is cut by the box, when a Halo was asked for.
+    halo_cut: Option<Vec<i32>>,
+    /// The fields the probes read, in the serial order.
+    probed: Vec<(&'static str, Vec<f64>)>,
+    /// Each owned particle's representative volume (m³): its cell's.
+    volumes: Vec<f64>,
+    /// The time of the state (s).
+    t: f64,
+    /// A transient's end time (s).
+    transient_end: Option<f64>,
+    /// `summary.json` entries of the physics.
+    summary: Vec<(&'static str, serde_json::Value)>,
+    /// Warnings.
+    warnings: Vec<String>,
+}
+
+/// The rows of a block's owned nodes (particles `first..first + owned`, then its walls), every
+/// column a particle's global index, the walls' values `wall_u` moved to the right-hand side
+/// with `sources` (per node): each rank's part of the system, solved distributed.
+fn steady_rows(
+    b: &BlockModel<'_>,
+    (net, g): (&demcon_network::Network, &[f64]),
+    (wall_u, sources): (&[f64], &[f64]),
+    solve: &demcon_network::SolveParams,
+) -> Result<(Vec<f64>, serde_json::Value), SceneError> {
+    let (row_ptr, cols, entry_edges) = (net.row_ptr(), net.cols(), net.entry_edges());
+    let n_local = b.model.particles.len();
+    let (first, owned) = (b.sites.first, b.sites.owned);
+    let mut rhs = sources[..owned].to_vec();
+    for (i, r) in rhs.iter_mut().enumerate() {
+        for e in row_ptr[i]..row_ptr[i + 1] {
+            let j = cols[e] as usize;
+            if j >= n_local {
+                *r += g[entry_edges[e] as usize] * wall_u[j - n_local];
+            }
+        }
+    }
+    let row = |k: usize, c: &mut Vec<i64>, v: &mut Vec<f64>| {
+        c.clear();
+        v.clear();
+        let i = k - first;
+        let mut diag = 0.0;
+        for e in row_ptr[i]..row_ptr[i + 1] {
+            let j = cols[e] as usize;
+            let ge = g[entry_edges[e] as usize];
+            diag += ge;
+            if j >= n_local {
+                continue;
+            }
+            let col = b.sites.global[j] as i64;
+            match c.last() {
+                Some(&last) if last == col => *v.last_mut().expect("paired with c") -= ge,
+                _ => {
+                    c.push(col);
+                    v.push(-ge);
+                }
+            }
+        }
+        c.push(k as i64);
+        v.push(diag);
+    };
+    let system = BlockSystem::new(b.session, first, owned, b.sites.total, &row)?;
+    let (u, r) = system.solve(&rhs, solve.rel_tol, solve.max_iter)?;
+    let report = json!({
+        "scheme": "steady",
+        "method": demcon_network::distributed::METHOD,
+        "rel_tol": solve.rel_tol,
+        "iterations": r.iterations,
+        "ksp_solves": r.ksp_solves,
+        "relative_residual": r.relative_residual,
+    });
+    Ok((u, report))
+}
+
+/// The thermal physics of a block: conductances, walls, imposed fluxes, the steady or explicit
+/// solve, the ETC, the flux and its Halo.
+fn thermal_block(
+    b: &BlockModel<'_>,
+    scene: &Scene,
+    thermal: &demcon_model::ThermalProblem,
+    stages: &mut Stages,
+) -> Result<Solved, SceneError> {
+    let (session, halo, sites, model) = (b.session, b.halo, b.sites, b.model);
+    let p = scene.problem();
+    let n_owned = sites.owned;
+    let setup = stages.time("thermal setup", || thermal_setup(model, thermal))?;
+    // The walls held and their temperatures (constant: `block_support`).
+    let plan = thermal.walls();
+    let mut wall_t = vec![f64::NAN; setup.walls.n_walls()];
+    for (bc, w) in thermal.bcs.iter().zip(&plan.of_bc) {
+        if let (ThermalBc::WallTemperature { value, .. }, Some(w)) = (bc, w) {
+            wall_t[*w] = value.at(0.0);
+        }
+    }
+    // A face exchanging heat by convection is a wall held at the surroundings' temperature,
+    // behind the film (in its links' conductances: `thermal_setup`).
+    for x in &setup.surroundings.faces {
+        wall_t[x.wall] = x.reference();
+    }
+    if wall_t.is_empty() && matches!(thermal.solver, ThermalSolver::Steady) {
+        return Err(SceneError::invalid(
+            "thermal.bcs",
+            "no WallTemperature or Convection",
+            "a steady solve by blocks needs at least one face held at a temperature or exchanging heat",
+        ));
+    }
+    // Imposed fluxes: each owned cell's facet on the face receives the flux through its area (W).
+    let net = setup.network(model);
+    let mut sources = vec![0.0; net.n_nodes()];
+    let cells = model.graph.cells.as_deref().expect("a Laguerre model");
+    for bc in &thermal.bcs {
+        if let ThermalBc::HeatFlux { face, flux } = bc {
+            for f in cells.on_wall(CellWall::of(*face)) {
+                sources[f.particle as usize] += flux.at(0.0) * f.area;
+            }
+        }
+    }
+    let (temps, solve_report) = match thermal.solver {
+        ThermalSolver::Explicit { t_end, dt } => stages.time("solve", || {
+            explicit(
+                session,
+                (halo, n_owned),
+                (model, &setup),
+                thermal,
+                (&wall_t, &sources),
+                (t_end, dt),
+            )
+        })?,
+        _ => stages.time("solve", || {
+            steady_rows(b, (net, &setup.conductances), (&wall_t, &sources), &thermal.solve)
+        })?,
+    };
+
+    // The effective conductivity: the heat through each held face, summed over the ranks.
+    let n_local = model.particles.len();
+    let flows = wall_flows(&setup.walls, setup.wall_conductances(), &temps, &wall_t, n_local);
+    let flows = session.sum(&flows)?;
+    let mut warnings = Vec::new();
+    let etc = match scene.config().outputs.etc_axis {
+        Some(axis) => {
+            // As the serial ETC: heat in and out through the two held faces only.
+            let refuse = |why: String| SceneError::invalid("outputs.etc_axis", format!("{axis:?}"), why);
+            if let Some(x) = setup.surroundings.faces.first() {
+                return Err(refuse(format!(
+                    "face {} exchanges heat with its surroundings (Convection): heat leaves elsewhere than \
+                     through the two held faces and no single λ_e describes the body",
+                    x.face.name()
+                )));
+            }
+            if thermal
+                .bcs
+                .iter()
+                .any(|b| matches!(b, ThermalBc::HeatFlux { .. }))
+            {
+                return Err(refuse(
+                    "a HeatFlux adds heat: the heat through the two held faces then differs and no single λ_e \
+                     describes it; remove it for an ETC run"
+                        .into(),
+                ));
+            }
+            let (etc, w) = block_etc(&plan.faces, &wall_t, &flows, &sites.container, axis)?;
+            warnings.extend(w);
+            Some(etc)
+        }
+        None => None,
+    };
+    let t_end = thermal.solver.final_time();
+    let (flux, halo_flux) = match p.post.flux {
+        true => {
+            let nodes: Vec<f64> = temps
+                .iter()
+                .chain(&halo.exchange(&temps)?)
+                .chain(&wall_t)
+                .copied()
+                .collect();
+            let (f, h) = stages.time("flux", || {
+                block_flux(
+                    (halo, n_owned),
+                    (model, &setup),
+                    (t_end, &nodes),
+                    (p.post.halo.as_ref(), &sites.container),
+                )
+            })?;
+            (Some(f), h)
+        }
+        false => (None, None),
+    };
+    let magnitude = |v: &[Vec3]| v.iter().map(|x| x.norm()).collect::<Vec<f64>>();
+    let mut probed = vec![("temperature", temps.clone())];
+    let mut vectors = Vec::new();
+    if let Some(f) = flux {
+        probed.push(("flux_magnitude", magnitude(&f)));
+        vectors.push(("heat_flux", f));
+    }
+    let mut halo_cut = None;
+    let mut halo_report = serde_json::Value::Null;
+    if let Some((h, cut, r)) = halo_flux {
+        probed.push(("halo_flux_magnitude", magnitude(&h)));
+        vectors.push(("halo_flux", h));
+        halo_cut = Some(cut.iter().map(|&c| i32::from(c)).collect());
+        let truncated = session.sum(&[r.n_truncated as f64])?[0] as usize;
+        halo_report = json!({"ratio": r.ratio, "n_truncated": truncated, "mean_members_rank0": r.mean_members,
+            "min_members_rank0": r.min_members, "max_members_rank0": r.max_members, "wall_s_rank0": r.wall_s});
+    }
+    Ok(Solved {
+        scalars: vec![("temperature", temps)],
+        vectors,
+        halo_cut,
+        probed,
+        volumes: setup.rep_volumes[..n_owned].to_vec(),
+        t: t_end,
+        transient_end: thermal.solver.is_transient().then_some(t_end),
+        summary: vec![
+            ("solve", solve_report),
+            ("etc", json!(etc)),
+            ("halo", halo_report),
+        ],
+        warnings,
+    })
+}
+
+/// The electric physics of a block: conductances and face electrodes, the potential solve,
+/// the electrodes' currents, the resistance, the Joule power and the current density.
+fn electric_block(
+    b: &BlockModel<'_>,
+    electric: &demcon_model::ElectricProblem,
+    stages: &mut Stages,
+) -> Result<Solved, SceneError> {
+    let (session, halo, sites, model) = (b.session, b.halo, b.sites, b.model);
+    let n_owned = sites.owned;
+    let n_local = model.particles.len();
+    let en = stages.time("electric setup", || electric_network(model, electric, None))?;
+    let net = en.network.as_ref().unwrap_or_else(|| model.network());
+    let g = &en.conductances;
+    // Face electrodes only, constant (`block_support`), in the order of their walls.
+    let wall_v: Vec<f64> = electric.electrodes.iter().map(|e| e.potential.at(0.0)).collect();
+    let sources = vec![0.0; net.n_nodes()];
+    let (v_owned, solve_report) = stages.time("solve", || {
+        steady_rows(b, (net, g), (&wall_v, &sources), &electric.solve)
+    })?;
+    let v_ghost = halo.exchange(&v_owned)?;
+    let nodes: Vec<f64> = v_owned.iter().chain(&v_ghost).chain(&wall_v).copied().collect();
+    // Each electrode's current into the body, Σ G (V_w − V_p) over its links, summed over the
+    // ranks; the resistance between two electrodes as serially.
+    let m = model.graph.len();
+    let mut currents = vec![0.0; en.walls.n_walls()];
+    for ((k, [p, node]), w) in en.walls.edges().enumerate().zip(en.walls.wall_of_links()) {
+        currents[w] += g[m + k] * (nodes[node as usize] - nodes[p as usize]);
+    }
+    let currents = session.sum(&currents)?;
+    let current_in: f64 = currents.iter().filter(|&&i| i > 0.0).sum();
+    let current_out: f64 = -currents.iter().filter(|&&i| i < 0.0).sum::<f64>();
+    let resistance = match wall_v.as_slice() {
+        [va, vb] if va != vb && currents[0] != 0.0 => Some((va - vb) / currents[0]),
+        _ => None,
+    };
+    // The Joule power: each branch's half to each end (the electrode links' wholly to their
+    // particle), as serially; the power dissipated counts a branch between two blocks once.
+    let mut joule = joule_power(net, g, &nodes, electric.eta).map_err(ModelError::from)?;
+    let links = en
+        .walls
+        .wall_of_links()
+        .enumerate()
+        .map(|(k, w)| (en.walls.particle[k], en.walls.node(w), g[m + k]));
+    give_link_joule_to_particles(&mut joule, &nodes, electric.eta, links);
+    joule.truncate(n_owned);
+    let mut dissipated = 0.0;
+    for (&[p, q], ge) in net.edges().iter().zip(g) {
+        let (p, q) = (p as usize, q as usize);
+        let share = match (p < n_owned, q < n_owned || q >= n_local) {
+            (true, true) => 1.0,
+            (true, false) => 0.5,
+            _ => 0.0,
+        };
+        let du = nodes[p] - nodes[q];
+        dissipated += share * ge * du * du;
+    }
+    let sums = session.sum(&[dissipated, joule.iter().sum()])?;
+    let volumes = model.graph.cells.as_deref().expect("a Laguerre model").volume[..n_owned].to_vec();
+    let density: Vec<f64> = joule.iter().zip(&volumes).map(|(w, v)| w / v).collect();
+    let d = demcon_model::flux_dipoles(model, &en.walls, g, &nodes);
+    let current_density = demcon_model::flux_density(&d[..n_owned], &volumes);
+    let report = json!({
+        "resistance_ohm": resistance,
+        "electrode_potentials": wall_v,
+        "electrode_currents_a": currents,
+        "current_in": current_in,
+        "current_out": current_out,
+        "current_mismatch": if current_in > 0.0 { (current_in - current_out).abs() / current_in } else { 0.0 },
+        "joule_w": sums[0],
+        "joule_heat_w": sums[1],
+    });
+    Ok(Solved {
+        scalars: vec![
+            ("potential", v_owned.clone()),
+            ("joule_power", joule),
+            ("joule_power_density", density),
+        ],
+        vectors: vec![("current_density", current_density)],
+        halo_cut: None,
+        probed: vec![("potential", v_owned)],
+        volumes,
+        t: 0.0,
+        transient_end: None,
+        summary: vec![("solve", solve_report), ("electric", report)],
+        warnings: Vec::new(),
+    })
 }
 
 /// The explicit transient of a block: the serial time march on the block's network (owned,

@@ -352,9 +352,24 @@ fn print_blocks(name: &str, s: &serde_json::Value, wall_s: f64) {
         );
     } else {
         println!(
-            "  thermal steady: {} iterations, relative residual {:.2e}",
+            "  {} steady: {} iterations, relative residual {:.2e}",
+            if s["electric"].is_object() {
+                "electric"
+            } else {
+                "thermal"
+            },
             solve["iterations"],
             solve["relative_residual"].as_f64().unwrap_or(f64::NAN)
+        );
+    }
+    let e = &s["electric"];
+    if e.is_object() {
+        println!(
+            "  electric: R = {:.6e} Ω, I = {:.4e} A (in/out mismatch {:.1e}), Joule {:.4e} W",
+            e["resistance_ohm"].as_f64().unwrap_or(f64::NAN),
+            e["current_in"].as_f64().unwrap_or(f64::NAN),
+            e["current_mismatch"].as_f64().unwrap_or(f64::NAN),
+            e["joule_w"].as_f64().unwrap_or(f64::NAN)
         );
     }
     if let Some(probes) = s["probes"].as_array() {

@@ -496,6 +496,90 @@ fn convection_and_heat_flux_by_blocks_equal_serial() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// A steel with 20 % carbide inclusions between two face electrodes, on a tiled packing.
+const TILED_ELECTRIC: &str = r#"(
+    name: "tiled-electric",
+    seed: 7,
+    packing: Tile(
+        packing: Generate(container: Periodic(size: (0.002, 0.002, 0.002)), count: 500, phi: 0.62, radius_cov: 0.3),
+        repeat: (2, 2, 2),
+        walls: true,
+    ),
+    surface: Laguerre,
+    phase_rule: Centre,
+    materials: [
+        (name: "steel", conductivity: 15.0, density: 7900.0, specific_heat: 500.0, resistivity: 0.73e-6),
+        (name: "carbide", conductivity: 60.0, density: 15600.0, specific_heat: 200.0, resistivity: 0.2e-6),
+    ],
+    phases: [Inclusions(material: "carbide", fraction: 0.2, size_ratio: 4.0)],
+    interface: Harmonic,
+    linear_solver: (rel_tol: 1e-10),
+    electric: (
+        electrodes: [(face: YMin, potential: 0.0), (face: YMax, potential: 0.05)],
+        eta: 1.0,
+        surface: Laguerre,
+    ),
+    outputs: (
+        particles_csv: true,
+        vtk: false,
+        probes: [
+            (name: "centre", point: (0.002, 0.002, 0.002)),
+            (name: "ball", point: (0.001, 0.003, 0.002), method: Ball(0.0003)),
+        ],
+    ),
+)"#;
+
+#[test]
+fn electric_by_blocks_equals_serial() {
+    let d = scratch("distributed", "blocks-electric");
+    let s = scene(&d, "electric", TILED_ELECTRIC);
+    let serial_out = d.join("serial");
+    let serial = serial_run(&s, &serial_out);
+    let fields = [
+        "potential",
+        "joule_power",
+        "joule_power_density",
+        "current_density_y",
+    ];
+    let serial_cols = columns(&serial_out, &fields);
+    for ranks in [1, 2, 4] {
+        let out = d.join(format!("ranks-{ranks}"));
+        let o = mpirun(ranks, &s, &out, &["--distributed"]);
+        assert!(o.status.success(), "{ranks} ranks: {}", common::text(&o));
+        let dist = summary(&out);
+        assert_eq!(dist["model"], "blocks");
+        for v in [
+            "/electric/resistance_ohm",
+            "/electric/current_in",
+            "/electric/current_out",
+            "/electric/joule_w",
+            "/electric/joule_heat_w",
+            "/probes/0/value",
+            "/probes/1/value",
+        ] {
+            close(
+                &format!("{ranks} ranks, {v}"),
+                serial.pointer(v).and_then(|x| x.as_f64()).unwrap(),
+                dist.pointer(v).and_then(|x| x.as_f64()).unwrap(),
+            );
+        }
+        // Potentials and Joule powers within 1e-8; the current density (a difference of
+        // potentials) within 1e-7 of its largest.
+        let cols = block_columns(&out, ranks, &fields);
+        for (name, (a, b)) in fields.iter().zip(serial_cols.iter().zip(&cols)) {
+            let scale = a.iter().fold(0.0f64, |m, u| m.max(u.abs()));
+            for (p, (x, y)) in a.iter().zip(b).enumerate() {
+                let tol = if name.starts_with("current") { 1e-7 } else { 1e-8 };
+                assert!(
+                    (x - y).abs() <= tol * scale,
+                    "{ranks} ranks, {name} of particle {p}: {x} vs {y}"
+                );
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 #[test]
 fn a_tiled_scene_that_needs_the_whole_body_runs_replicated_and_says_so() {
     let d = scratch("distributed", "replicated-tile");
