@@ -315,17 +315,7 @@ pub fn run_blocks(
             header.push(name);
             cols.push(v);
         }
-        let comps: Vec<(String, Vec<f64>)> = vectors
-            .iter()
-            .flat_map(|(name, v)| {
-                (0..3).map(move |k| {
-                    (
-                        format!("{name}_{}", ["x", "y", "z"][k]),
-                        v.iter().map(|u| u[k]).collect(),
-                    )
-                })
-            })
-            .collect();
+        let comps = crate::output::vector_columns(vectors.iter().copied());
         for (name, v) in &comps {
             header.push(name);
             cols.push(v);

@@ -532,18 +532,7 @@ impl<'a> ParticleFields<'a> {
             header.push(name);
             cols.push(v);
         }
-        let comps: Vec<(String, Vec<f64>)> = self
-            .vectors
-            .iter()
-            .flat_map(|(name, v)| {
-                (0..3).map(move |k| {
-                    (
-                        format!("{name}_{}", ["x", "y", "z"][k]),
-                        v.iter().map(|u| u[k]).collect(),
-                    )
-                })
-            })
-            .collect();
+        let comps = vector_columns(self.vectors.iter().map(|(name, v)| (*name, &**v)));
         for (name, v) in &comps {
             header.push(name);
             cols.push(v);
@@ -551,6 +540,22 @@ impl<'a> ParticleFields<'a> {
         write_csv(path, &header, &cols)?;
         Ok(())
     }
+}
+
+/// The CSV columns of vector fields: `<name>_x`, `<name>_y`, `<name>_z` of each.
+pub(crate) fn vector_columns<'v>(
+    vectors: impl Iterator<Item = (&'v str, &'v [Vec3])>,
+) -> Vec<(String, Vec<f64>)> {
+    vectors
+        .flat_map(|(name, v)| {
+            (0..3).map(move |k| {
+                (
+                    format!("{name}_{}", ["x", "y", "z"][k]),
+                    v.iter().map(|u| u[k]).collect(),
+                )
+            })
+        })
+        .collect()
 }
 
 /// Pieces of each shape's meridian in `inclusions.vtp` (a spheroid: 2 · 16 · 7 triangles).
